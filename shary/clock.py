@@ -1,0 +1,82 @@
+"""The engine's clock: time and timers, with no threads.
+
+Every timeout of a scheme (``after 10s``) and every delayed send is a timer on
+a :class:`Clock`.  Headless runs and tests use :class:`SimulatedClock`, which
+only moves when whoever drives the world calls :meth:`SimulatedClock.advance`,
+as fast as the CPU allows and in a deterministic order (due time, then the
+order timers were set).
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+from collections.abc import Callable
+from typing import Any, Protocol
+
+
+class Timer:
+    """A pending call; cancelling it only marks it (it is dropped when due)."""
+
+    __slots__ = ("due", "seq", "callback", "args", "cancelled")
+
+    def __init__(self, due: float, seq: int, callback: Callable[..., Any], args: tuple):
+        self.due = due
+        self.seq = seq
+        self.callback = callback
+        self.args = args
+        self.cancelled = False
+
+    def cancel(self) -> None:
+        self.cancelled = True
+
+    def __lt__(self, other: Timer) -> bool:
+        return (self.due, self.seq) < (other.due, other.seq)
+
+
+class Clock(Protocol):
+    """What the engine needs of a clock."""
+
+    def now(self) -> float: ...
+
+    def call_later(self, delay: float, callback: Callable[..., Any], *args: Any) -> Timer: ...
+
+
+class SimulatedClock:
+    """A clock that advances only when told to, firing due timers in order."""
+
+    def __init__(self, start: float = 0.0):
+        self._now = start
+        self._heap: list[Timer] = []
+        self._seq = itertools.count()
+
+    def now(self) -> float:
+        return self._now
+
+    def call_later(self, delay: float, callback: Callable[..., Any], *args: Any) -> Timer:
+        timer = Timer(self._now + max(0.0, delay), next(self._seq), callback, args)
+        heapq.heappush(self._heap, timer)
+        return timer
+
+    def next_due(self) -> float | None:
+        """When the next live timer is due, or None when none is pending."""
+        while self._heap and self._heap[0].cancelled:
+            heapq.heappop(self._heap)
+        return self._heap[0].due if self._heap else None
+
+    def advance(self, seconds: float) -> int:
+        """Move time forward by ``seconds``, firing every timer due meanwhile; return how many."""
+        return self.advance_to(self._now + seconds)
+
+    def advance_to(self, when: float) -> int:
+        """Move time forward to ``when``, firing every timer due by then; return how many."""
+        fired = 0
+        while self._heap and self._heap[0].due <= when:
+            timer = heapq.heappop(self._heap)
+            if timer.cancelled:
+                continue
+            self._now = max(self._now, timer.due)
+            timer.callback(*timer.args)
+            fired += 1
+        self._now = max(self._now, when)
+        return fired

@@ -1,0 +1,434 @@
+"""Loading communication schemes from YAML: schema first, then meaning.
+
+:func:`parse_scheme` turns a located document into a :class:`~shary.model.Scheme`
+and collects every problem of the file before refusing it: schema violations,
+unknown acts, roles and guards, dangling targets, missing initial states,
+transitions that can never be taken because an earlier unguarded one of the
+same state takes the same events, and states that nothing can reach.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from typing import Any
+
+import networkx as nx
+
+from shary import builtin
+from shary.acts import ACT_TYPES, ActRegistry, acts_from_data, act_type, builtin_acts
+from shary.conditions import ConditionRegistry
+from shary.errors import FileError, Problem
+from shary.io import schema, yamlsafe
+from shary.io.schema import did_you_mean
+from shary.model import (
+    ATOMIC,
+    COMPOUND,
+    FINAL,
+    HISTORY,
+    PARALLEL,
+    Action,
+    Cancel,
+    Log,
+    Raise,
+    Scheme,
+    Send,
+    State,
+    Transition,
+    descriptor_matches,
+    parse_duration,
+)
+
+DEFAULT_ROLES = {"robot": "robot", "partner": "human"}
+"""Roles of a scheme that declares none: one robot and its human partner."""
+
+EVENTLESS_KEY = "always"
+_AFTER = re.compile(r"^after\s+(\S+)$")
+_ACT_WORD = re.compile(r"^[A-Z][A-Z0-9]*(-[A-Z0-9]+)*$")
+_DESCRIPTOR = re.compile(r"^(\*|[A-Za-z0-9_][A-Za-z0-9_:-]*(\.[A-Za-z0-9_:-]+)*(\.\*)?)$")
+
+
+def load_scheme(name_or_path: str | os.PathLike[str], *, acts: ActRegistry | None = None,
+                conditions: ConditionRegistry | None = None) -> Scheme:
+    """Load a scheme by built-in name (``give-object``) or by path, fully checked."""
+    path = resolve(name_or_path)
+    return parse_scheme(yamlsafe.load_file(path), acts=acts, conditions=conditions)
+
+
+def resolve(name_or_path: str | os.PathLike[str]) -> str:
+    """The file a scheme name or path designates (a built-in name wins over nothing)."""
+    text = os.fspath(name_or_path)
+    if os.path.exists(text) or text.endswith((".yaml", ".yml")) or os.sep in text:
+        return text
+    found = builtin.find("schemes", text)
+    if found is None:
+        names = [p.stem for p in builtin.files("schemes") if p.stem != "acts"]
+        raise FileError([Problem(text, 1, 1, f"no such file, and no built-in scheme {text!r}"
+                                 f"{did_you_mean(text, names)}; built-in schemes: "
+                                 f"{', '.join(names)}")])
+    return str(found)
+
+
+def parse_scheme(located: yamlsafe.Located, *, acts: ActRegistry | None = None,
+                 conditions: ConditionRegistry | None = None) -> Scheme:
+    """Build and check a scheme from a located document; raise :class:`FileError`."""
+    if not isinstance(located.data, dict):
+        raise FileError([located.problem((), "expected a mapping with 'scheme' and 'states' "
+                                         "at the top of a scheme file")])
+    builder = _Builder(located, acts or builtin_acts(), conditions)
+    scheme = builder.build()
+    if builder.problems:
+        raise FileError(builder.problems)
+    return scheme
+
+
+class _Builder:
+    def __init__(self, located: yamlsafe.Located, acts: ActRegistry,
+                 conditions: ConditionRegistry | None):
+        self.located = located
+        self.data: dict[str, Any] = located.data
+        self.problems: list[Problem] = schema.check(located, "scheme")
+        self.acts = acts
+        self.conditions = conditions
+        self.states: dict[str, State] = {}
+        self.paths: dict[str, tuple] = {}
+        self.order = 0
+        self.transition_order = 0
+
+    def problem(self, path: tuple, message: str, *, key: bool = False) -> None:
+        self.problems.append(self.located.problem(path, message, key=key))
+
+    # -- building --------------------------------------------------------
+
+    def build(self) -> Scheme:
+        data = self.data
+        own_acts = data.get("acts")
+        if isinstance(own_acts, dict) and all(isinstance(k, str) for k in own_acts):
+            for name in own_acts:
+                if name in ACT_TYPES:
+                    self.problem(("acts", name), f"{name!r} is an act type, not an act name",
+                                 key=True)
+            self.acts = self.acts.extended(
+                acts_from_data({k: v if isinstance(v, dict) else None
+                                for k, v in own_acts.items()}, self.located.file))
+        roles = data.get("roles")
+        self.roles = dict(roles) if isinstance(roles, dict) and roles else dict(DEFAULT_ROLES)
+        root = State("", COMPOUND, mark=self.located.at(()))
+        root.initial = self._targets(data.get("initial"))
+        states = data.get("states")
+        if isinstance(states, dict):
+            self._children(root, states, ("states",))
+        name = data.get("scheme") if isinstance(data.get("scheme"), str) else "scheme"
+        doc = data.get("doc") if isinstance(data.get("doc"), str) else ""
+        scheme = Scheme(name, root, self.states, self.roles, self.acts, doc, self.located.file)
+        self._check_initial(root, ())
+        for state in self.states.values():
+            self._check_initial(state, self.paths[state.name])
+            self._check_state(state)
+            for index, transition in enumerate(state.transitions):
+                self._check_transition(state, index, transition)
+        self._check_reachable(scheme)
+        return scheme
+
+    def _children(self, parent: State, states: dict[str, Any], path: tuple) -> None:
+        for name, spec in states.items():
+            spec_path = path + (name,)
+            spec = spec if isinstance(spec, dict) else {}
+            if name in self.states:
+                first = self.located.key_at(self.paths[name])
+                self.problem(spec_path, f"duplicate state name {name!r} (first defined at line "
+                             f"{first[0]}, column {first[1]}); state names are unique in a "
+                             "scheme", key=True)
+                continue
+            self.order += 1
+            state = State(name, self._kind(spec), parent=parent, order=self.order,
+                          depth=parent.depth + 1, mark=self.located.key_at(spec_path))
+            parent.children.append(state)
+            self.states[name] = state
+            self.paths[name] = spec_path
+            state.doc = spec.get("doc", "") if isinstance(spec.get("doc"), str) else ""
+            state.initial = self._targets(spec.get("initial"))
+            state.default = self._targets(spec.get("default"))
+            if spec.get("history") in ("shallow", "deep"):
+                state.history = spec["history"]
+            self._act(state, spec, spec_path)
+            state.on_entry = self._actions(spec.get("on_entry"), spec_path + ("on_entry",))
+            state.on_exit = self._actions(spec.get("on_exit"), spec_path + ("on_exit",))
+            if isinstance(spec.get("on"), dict):
+                self._transitions(state, spec["on"], spec_path + ("on",))
+            if isinstance(spec.get("states"), dict):
+                self._children(state, spec["states"], spec_path + ("states",))
+
+    @staticmethod
+    def _kind(spec: dict[str, Any]) -> str:
+        if "history" in spec:
+            return HISTORY
+        if spec.get("final") is True:
+            return FINAL
+        if spec.get("parallel") is True:
+            return PARALLEL
+        return COMPOUND if isinstance(spec.get("states"), dict) and spec["states"] else ATOMIC
+
+    def _act(self, state: State, spec: dict[str, Any], path: tuple) -> None:
+        act = spec.get("act")
+        by = spec.get("by")
+        if isinstance(by, str) and by not in self.roles:
+            self.problem(path + ("by",), f"unknown role {by!r}{did_you_mean(by, self.roles)}; "
+                         f"roles of this scheme: {', '.join(self.roles)}")
+            by = None
+        if not isinstance(act, str):
+            if isinstance(by, str):
+                self.problem(path + ("by",), "'by' names who carries out the act; this state "
+                             "has no 'act'")
+            return
+        if act not in self.acts:
+            self.problem(path + ("act",), f"unknown act {act!r}"
+                         f"{did_you_mean(act, self.acts.acts)}; declare it under 'acts:'")
+            return
+        state.act = act
+        state.by = by if isinstance(by, str) else next(iter(self.roles))
+        state.act_type = act_type(self.roles[state.by])
+
+    def _targets(self, value: Any) -> tuple[str, ...]:
+        if isinstance(value, str):
+            return (value,)
+        if isinstance(value, list):
+            return tuple(v for v in value if isinstance(v, str))
+        return ()
+
+    def _transitions(self, state: State, on: dict[str, Any], path: tuple) -> None:
+        for key, value in on.items():
+            key_path = path + (key,)
+            items = value if isinstance(value, list) else [value]
+            after = _AFTER.match(key)
+            for index, item in enumerate(items):
+                item_path = key_path + (index,) if isinstance(value, list) else key_path
+                self.transition_order += 1
+                t = Transition(state, None, order=self.transition_order,
+                               mark=self.located.key_at(key_path))
+                if after:
+                    try:
+                        t.after = parse_duration(after.group(1))
+                    except ValueError:
+                        self.problem(key_path, f"{after.group(1)!r} is not a duration "
+                                     "(write e.g. 250ms, 10s, 1.5min, 2h)", key=True)
+                        continue
+                    t.events = (f"after {after.group(1)}@{state.name}",)
+                elif key != EVENTLESS_KEY:
+                    descriptors = tuple(key.split())
+                    if not self._descriptors_ok(descriptors, key_path):
+                        continue
+                    t.events = descriptors
+                if isinstance(item, str):
+                    t.targets = (item,)
+                elif isinstance(item, dict):
+                    t.targets = self._targets(item.get("target"))
+                    guard = item.get("guard")
+                    t.guard = guard if isinstance(guard, str) else None
+                    t.internal = item.get("type") == "internal"
+                    t.actions = self._actions(item.get("do"), item_path + ("do",))
+                else:
+                    continue
+                state.transitions.append(t)
+
+    def _descriptors_ok(self, descriptors: tuple[str, ...], path: tuple) -> bool:
+        ok = True
+        for d in descriptors:
+            if d in (EVENTLESS_KEY, "after"):
+                self.problem(path, f"{d!r} is reserved: write 'always' alone for an eventless "
+                             "transition and 'after 10s' for a timeout", key=True)
+                ok = False
+            elif not _DESCRIPTOR.match(d):
+                self.problem(path, f"{d!r} is not an event descriptor (names of letters, digits "
+                             "and _ : - joined by dots, optionally ending in .*, or *)", key=True)
+                ok = False
+            else:
+                word = d.split(".")[0]
+                if _ACT_WORD.match(word) and not self.acts.is_act_word(word):
+                    self.problem(path, f"unknown act {word!r}"
+                                 f"{did_you_mean(word, self.acts.vocabulary())}; names in "
+                                 "capitals are communication acts or act types", key=True)
+                    ok = False
+        return ok
+
+    def _actions(self, value: Any, path: tuple) -> tuple[Action, ...]:
+        if not isinstance(value, list):
+            return ()
+        out: list[Action] = []
+        for index, item in enumerate(value):
+            if not isinstance(item, dict):
+                continue
+            if isinstance(item.get("raise"), str):
+                out.append(Raise(item["raise"]))
+            elif isinstance(item.get("send"), str):
+                delay = item.get("delay")
+                try:
+                    seconds = parse_duration(delay) if isinstance(delay, str) else 0.0
+                except ValueError:
+                    continue  # the schema reported it
+                ident = item.get("id") if isinstance(item.get("id"), str) else None
+                out.append(Send(item["send"], seconds, ident))
+            elif isinstance(item.get("cancel"), str):
+                out.append(Cancel(item["cancel"]))
+            elif isinstance(item.get("log"), str):
+                out.append(Log(item["log"]))
+        return tuple(out)
+
+    # -- meaning ---------------------------------------------------------
+
+    def _path(self, state: State) -> tuple:
+        return self.paths.get(state.name, ())
+
+    def _check_initial(self, state: State, path: tuple) -> None:
+        where = "the scheme" if state.parent is None else f"state {state.name!r}"
+        proper = state.proper_children()
+        if state.kind == PARALLEL:
+            if state.initial:
+                self.problem(path + ("initial",), "a parallel state enters all its regions; "
+                             "it takes no 'initial'")
+            return
+        if state.kind != COMPOUND:
+            if state.initial:
+                self.problem(path + ("initial",), f"{where} has no child states; 'initial' "
+                             "makes no sense here")
+            return
+        if not state.initial:
+            if len(proper) > 1:
+                self.problem(path if path else (), f"{where} has {len(proper)} child states but "
+                             f"no 'initial': say which one is entered first (one of: "
+                             f"{', '.join(c.name for c in proper)})", key=bool(path))
+            elif proper:
+                state.initial = (proper[0].name,)
+            return
+        for name in state.initial:
+            target = self.states.get(name)
+            if target is None:
+                self.problem(path + ("initial",), f"initial state {name!r} does not exist"
+                             f"{did_you_mean(name, self._descendant_names(state))}")
+            elif not target.is_descendant_of(state) or target.kind == HISTORY:
+                self.problem(path + ("initial",), f"initial state {name!r} is not a child "
+                             f"state of {where}")
+
+    def _descendant_names(self, state: State) -> list[str]:
+        return [s.name for s in self.states.values() if s.is_descendant_of(state)]
+
+    def _check_state(self, state: State) -> None:
+        path = self._path(state)
+        spec = _at(self.data, path)
+        spec = spec if isinstance(spec, dict) else {}
+        if state.kind == FINAL:
+            for key in ("states", "on", "parallel", "history"):
+                if key in spec:
+                    self.problem(path + (key,), f"a final state cannot have {key!r}", key=True)
+        if state.kind == HISTORY:
+            for key in ("states", "on", "act", "parallel", "final", "on_entry", "on_exit"):
+                if key in spec:
+                    self.problem(path + (key,), f"a history state is a pseudo-state and cannot "
+                                 f"have {key!r}", key=True)
+            if state.parent is None or state.parent.parent is None:
+                self.problem(path, "a history state belongs inside a compound or parallel "
+                             "state, not at the top of the scheme", key=True)
+            for name in state.default:
+                target = self.states.get(name)
+                if target is None:
+                    self.problem(path + ("default",), f"history default {name!r} does not "
+                                 f"exist{did_you_mean(name, self.states)}")
+                elif not target.is_descendant_of(state.parent):
+                    self.problem(path + ("default",), f"history default {name!r} is not inside "
+                                 f"{state.parent.name!r}")
+        elif "default" in spec:
+            self.problem(path + ("default",), "'default' belongs to history states only",
+                         key=True)
+        if state.kind == PARALLEL and not state.proper_children():
+            self.problem(path, "a parallel state needs at least one region (child state)",
+                         key=True)
+
+    def _check_transition(self, state: State, index: int, t: Transition) -> None:
+        at = Problem(self.located.file, *t.mark, "")
+        for name in t.targets:
+            if name not in self.states:
+                self._at(at, f"unknown target state {name!r}{did_you_mean(name, self.states)}")
+        if t.condition is not None and self.conditions is not None \
+                and t.condition not in self.conditions:
+            self._at(at, f"guard names an unknown condition {t.condition!r}"
+                     f"{did_you_mean(t.condition, self.conditions)}; known conditions: "
+                     f"{', '.join(sorted(self.conditions)) or 'none registered'}")
+        if t.internal and not t.targets:
+            self._at(at, "'type: internal' needs a target (a targetless transition never "
+                     "leaves its state anyway)")
+        if len(t.targets) > 1:
+            targets = [self.states[n] for n in t.targets if n in self.states]
+            for i, a in enumerate(targets):
+                for b in targets[i + 1:]:
+                    if a is b or a.is_descendant_of(b) or b.is_descendant_of(a) \
+                            or not _in_parallel_regions(a, b):
+                        self._at(at, f"targets {a.name!r} and {b.name!r} cannot be active "
+                                 "together (several targets must lie in distinct regions of a "
+                                 "parallel state)")
+        for earlier in state.transitions[:index]:
+            if earlier.guard is None and _shadows(earlier, t):
+                self._at(at, f"transition on {_trigger(t)!r} is never taken: the unguarded "
+                         f"transition on {_trigger(earlier)!r} at line {earlier.mark[0]}, column "
+                         f"{earlier.mark[1]} of the same state takes the same events first")
+                break
+
+    def _at(self, where: Problem, message: str) -> None:
+        self.problems.append(Problem(where.file, where.line, where.col, message))
+
+    def _check_reachable(self, scheme: Scheme) -> None:
+        graph = nx.DiGraph()
+        graph.add_node(scheme.root)
+        for state in self.states.values():
+            graph.add_edge(state, state.parent)
+            if state.kind == PARALLEL:
+                for child in state.proper_children():
+                    graph.add_edge(state, child)
+            for name in state.initial + state.default:
+                if name in self.states:
+                    graph.add_edge(state, self.states[name])
+            for t in state.transitions:
+                for name in t.targets:
+                    if name in self.states:
+                        graph.add_edge(state, self.states[name])
+        for name in scheme.root.initial:
+            if name in self.states:
+                graph.add_edge(scheme.root, self.states[name])
+        reached = nx.descendants(graph, scheme.root) | {scheme.root}
+        for state in self.states.values():
+            if state not in reached and state.kind != HISTORY:
+                self.problem(self._path(state), f"state {state.name!r} is unreachable: no "
+                             "transition or initial state leads to it", key=True)
+
+
+def _at(data: Any, path: tuple) -> Any:
+    for key in path:
+        if not isinstance(data, dict) or key not in data:
+            return None
+        data = data[key]
+    return data
+
+
+def _in_parallel_regions(a: State, b: State) -> bool:
+    """True when the nearest common ancestor of ``a`` and ``b`` is a parallel state."""
+    ancestors_a = a.ancestors()
+    for anc in b.ancestors():
+        if anc in ancestors_a:
+            return anc.kind == PARALLEL
+    return False
+
+
+def _trigger(t: Transition) -> str:
+    if t.after is not None:
+        return t.events[0].split("@")[0] if t.events else "after"
+    return " ".join(t.events) if t.events is not None else EVENTLESS_KEY
+
+
+def _shadows(earlier: Transition, later: Transition) -> bool:
+    """True when every event ``later`` takes is taken first by ``earlier``."""
+    if later.events is None or earlier.events is None:
+        return later.events is None and earlier.events is None
+    if later.after is not None or earlier.after is not None:
+        return False
+    return all(any(descriptor_matches(d1, d2[:-2] if d2.endswith(".*") else d2)
+                   and d2 != "*" or d1 == "*" for d1 in earlier.events)
+               for d2 in later.events)

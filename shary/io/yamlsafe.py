@@ -1,0 +1,218 @@
+"""Safe, located YAML: every value of a user's file keeps its line and column.
+
+PyYAML's ``safe_load`` throws the positions away and expands aliases without
+limit.  Here a file goes through three gates before anything else sees it:
+
+1. bytes: at most :data:`MAX_BYTES`, valid UTF-8, not empty;
+2. the event stream (PyYAML's parser is iterative, so hostile nesting cannot
+   overflow the stack here): nesting depth at most :data:`MAX_DEPTH`, one
+   document, no tag outside YAML's core schema (nothing is ever constructed
+   from a tag);
+3. the node graph, converted to plain ``dict``/``list``/scalars while counting
+   expanded nodes, so an alias bomb stops at :data:`MAX_NODES` instead of
+   eating the memory; duplicate keys are refused.
+
+The result, :class:`Located`, maps every path (a tuple of keys and indices) to
+the position of its value and of its key, which is what turns a JSON Schema
+error or a meaning check into ``FILE:LINE:COL: error: …``.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from typing import Any
+
+import yaml
+from yaml.constructor import SafeConstructor
+
+from shary.errors import FileError, Problem
+
+MAX_BYTES = 1024 * 1024
+"""Largest file accepted (1 MiB): a scheme of a thousand states is about 100 KB."""
+MAX_DEPTH = 64
+"""Deepest nesting of mappings and sequences, aliases expanded."""
+MAX_NODES = 200_000
+"""Most values a document may expand to, aliases expanded (stops alias bombs)."""
+
+Path = tuple[Any, ...]
+Mark = tuple[int, int]
+
+_CORE_TAGS = {
+    "tag:yaml.org,2002:" + name
+    for name in ("str", "int", "float", "bool", "null", "map", "seq")
+}
+_PLAIN_SCALARS = {
+    "tag:yaml.org,2002:" + name for name in ("null", "bool", "int", "float", "str")
+}
+
+
+@dataclass
+class Located:
+    """A loaded YAML document with the position of every value and key."""
+
+    file: str
+    data: Any
+    marks: dict[Path, Mark] = field(default_factory=dict)
+    key_marks: dict[Path, Mark] = field(default_factory=dict)
+
+    def at(self, path: Path) -> Mark:
+        """Position of the value at ``path``, or of its nearest located ancestor."""
+        path = tuple(path)
+        while path not in self.marks and path:
+            path = path[:-1]
+        return self.marks.get(path, (1, 1))
+
+    def key_at(self, path: Path) -> Mark:
+        """Position of the key that introduces ``path`` (falls back on the value)."""
+        return self.key_marks.get(tuple(path)) or self.at(path)
+
+    def problem(self, path: Path, message: str, *, key: bool = False) -> Problem:
+        line, col = self.key_at(path) if key else self.at(path)
+        return Problem(self.file, line, col, message)
+
+
+def read_text(path: str | os.PathLike[str], *, max_bytes: int = MAX_BYTES) -> str:
+    """Read a user's file as UTF-8 text, refusing huge, binary or empty files."""
+    name = os.fspath(path)
+    try:
+        size = os.stat(name).st_size
+        if size > max_bytes:
+            raise FileError([Problem(name, 1, 1, f"file is {size} bytes; the limit is "
+                                     f"{max_bytes} bytes")])
+        with open(name, "rb") as handle:
+            raw = handle.read(max_bytes + 1)
+    except OSError as err:
+        raise FileError([Problem(name, 1, 1, f"cannot read file: {err.strerror}")]) from None
+    if len(raw) > max_bytes:
+        raise FileError([Problem(name, 1, 1, f"file is larger than {max_bytes} bytes")])
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as err:
+        before = raw[: err.start]
+        line = before.count(b"\n") + 1
+        col = err.start - (before.rfind(b"\n") + 1) + 1
+        raise FileError([Problem(name, line, col, f"not UTF-8 text (byte 0x{raw[err.start]:02x})")])
+    if "\x00" in text:
+        at = text.index("\x00")
+        line = text.count("\n", 0, at) + 1
+        raise FileError([Problem(name, line, at - (text.rfind("\n", 0, at) + 1) + 1,
+                                 "NUL character: this is not a text file")])
+    return text
+
+
+def load_file(path: str | os.PathLike[str]) -> Located:
+    """Load one YAML file safely, with positions (see the module's docstring)."""
+    return load_text(read_text(path), os.fspath(path))
+
+
+def load_text(text: str, file: str = "<string>") -> Located:
+    """Load YAML text safely, with positions; raise :class:`FileError` when refused."""
+    if len(text.encode("utf-8", "surrogatepass")) > MAX_BYTES:
+        raise FileError([Problem(file, 1, 1, f"text is larger than {MAX_BYTES} bytes")])
+    _check_events(text, file)
+    try:
+        node = yaml.compose(text, Loader=yaml.SafeLoader)
+    except yaml.YAMLError as err:
+        raise FileError([_yaml_problem(err, file)]) from None
+    if node is None:
+        raise FileError([Problem(file, 1, 1, "empty file: expected a YAML mapping")])
+    located = Located(file, None)
+    converter = _Converter(located)
+    located.data = converter.convert(node, ())
+    if converter.problems:
+        raise FileError(converter.problems)
+    return located
+
+
+def _yaml_problem(err: yaml.YAMLError, file: str) -> Problem:
+    mark = getattr(err, "problem_mark", None) or getattr(err, "context_mark", None)
+    line, col = (mark.line + 1, mark.column + 1) if mark is not None else (1, 1)
+    what = getattr(err, "problem", None) or str(err)
+    context = getattr(err, "context", None)
+    message = f"YAML syntax: {what}" + (f" ({context})" if context else "")
+    return Problem(file, line, col, message)
+
+
+def _check_events(text: str, file: str) -> None:
+    depth = 0
+    documents = 0
+    try:
+        for event in yaml.parse(text, Loader=yaml.SafeLoader):
+            tag = getattr(event, "tag", None)
+            if tag is not None and tag != "!" and tag not in _CORE_TAGS:
+                mark = event.start_mark
+                raise FileError([Problem(file, mark.line + 1, mark.column + 1,
+                                         f"tag {tag!r} is not allowed: files are data, "
+                                         "nothing is constructed from a tag")])
+            if isinstance(event, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
+                depth += 1
+                if depth > MAX_DEPTH:
+                    mark = event.start_mark
+                    raise FileError([Problem(file, mark.line + 1, mark.column + 1,
+                                             f"nesting deeper than {MAX_DEPTH} levels")])
+            elif isinstance(event, (yaml.MappingEndEvent, yaml.SequenceEndEvent)):
+                depth -= 1
+            elif isinstance(event, yaml.DocumentStartEvent):
+                documents += 1
+                if documents > 1:
+                    mark = event.start_mark
+                    raise FileError([Problem(file, mark.line + 1, mark.column + 1,
+                                             "more than one YAML document in the file")])
+    except yaml.YAMLError as err:
+        raise FileError([_yaml_problem(err, file)]) from None
+
+
+class _Converter:
+    """Turns a composed node graph into plain data, counting expanded nodes."""
+
+    def __init__(self, located: Located):
+        self.located = located
+        self.count = 0
+        self.scalars = SafeConstructor()
+        self.problems: list[Problem] = []
+
+    def convert(self, node: yaml.Node, path: Path, depth: int = 0) -> Any:
+        self.count += 1
+        if self.count > MAX_NODES or depth > MAX_DEPTH:
+            limit = (f"more than {MAX_NODES} values" if self.count > MAX_NODES
+                     else f"nesting deeper than {MAX_DEPTH} levels")
+            raise FileError([Problem(self.located.file, node.start_mark.line + 1,
+                                     node.start_mark.column + 1,
+                                     f"document expands to {limit} once aliases are "
+                                     "followed (an alias bomb?)")])
+        self.located.marks[path] = (node.start_mark.line + 1, node.start_mark.column + 1)
+        if isinstance(node, yaml.MappingNode):
+            return self._mapping(node, path, depth)
+        if isinstance(node, yaml.SequenceNode):
+            return [self.convert(item, path + (i,), depth + 1)
+                    for i, item in enumerate(node.value)]
+        if node.tag in _PLAIN_SCALARS:
+            return self.scalars.construct_object(node)
+        return node.value  # e.g. a timestamp: kept as the text the user wrote
+
+    def _mapping(self, node: yaml.MappingNode, path: Path, depth: int) -> dict[str, Any]:
+        result: dict[str, Any] = {}
+        first: dict[str, Mark] = {}
+        problems: list[Problem] = []
+        file = self.located.file
+        for key_node, value_node in node.value:
+            mark = (key_node.start_mark.line + 1, key_node.start_mark.column + 1)
+            if key_node.tag == "tag:yaml.org,2002:merge":
+                problems.append(Problem(file, *mark, "merge keys ('<<') are not supported; "
+                                        "write the keys out"))
+                continue
+            if not isinstance(key_node, yaml.ScalarNode):
+                problems.append(Problem(file, *mark, "a key must be a plain scalar"))
+                continue
+            key = key_node.value
+            if key in first:
+                line, col = first[key]
+                problems.append(Problem(file, *mark, f"duplicate key {key!r} "
+                                        f"(first given at line {line}, column {col})"))
+                continue
+            first[key] = mark
+            self.located.key_marks[path + (key,)] = mark
+            result[key] = self.convert(value_node, path + (key,), depth + 1)
+        self.problems.extend(problems)
+        return result

@@ -1,0 +1,194 @@
+"""The model of a communication scheme: states, transitions and actions.
+
+This is the statechart as the user wrote it, with names resolved and document
+order recorded (SCXML's semantics depend on it).  It knows nothing of
+execution: :mod:`shary.statechart` computes steps from it and
+:mod:`shary.compiler` puts them onto ``transitions``.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+
+from shary.acts import ActRegistry, ActType
+
+ATOMIC, COMPOUND, PARALLEL, FINAL, HISTORY = "atomic", "compound", "parallel", "final", "history"
+
+_DURATION = re.compile(r"^([0-9]+(?:\.[0-9]+)?)(ms|s|min|h)$")
+_UNIT = {"ms": 0.001, "s": 1.0, "min": 60.0, "h": 3600.0}
+
+
+def parse_duration(text: str) -> float:
+    """Seconds in a duration such as ``250ms``, ``10s``, ``1.5min`` or ``2h``."""
+    match = _DURATION.match(text)
+    if not match:
+        raise ValueError(f"not a duration: {text!r}")
+    return float(match.group(1)) * _UNIT[match.group(2)]
+
+
+def descriptor_matches(descriptor: str, event: str) -> bool:
+    """SCXML event matching: ``foo`` matches ``foo`` and ``foo.bar``; ``*`` matches all."""
+    if descriptor == "*":
+        return True
+    if descriptor.endswith(".*"):
+        descriptor = descriptor[:-2]
+    return event == descriptor or event.startswith(descriptor + ".")
+
+
+@dataclass(frozen=True)
+class Raise:
+    """Put an event on the instance's internal queue (handled before any outside event)."""
+
+    event: str
+
+
+@dataclass(frozen=True)
+class Send:
+    """Send an event to the instance itself, after ``delay`` seconds on its clock."""
+
+    event: str
+    delay: float = 0.0
+    id: str | None = None
+
+
+@dataclass(frozen=True)
+class Cancel:
+    """Cancel a delayed send by its id."""
+
+    id: str
+
+
+@dataclass(frozen=True)
+class Log:
+    """Tell the instance's listener something (for traces and tests)."""
+
+    text: str
+
+
+Action = Raise | Send | Cancel | Log
+
+
+@dataclass(eq=False)
+class Transition:
+    """A transition of a state: on events (or none: eventless), guarded, to targets."""
+
+    source: State
+    events: tuple[str, ...] | None
+    targets: tuple[str, ...] = ()
+    guard: str | None = None
+    internal: bool = False
+    actions: tuple[Action, ...] = ()
+    after: float | None = None
+    order: int = 0
+    mark: tuple[int, int] = (1, 1)
+
+    @property
+    def negated(self) -> bool:
+        return self.guard is not None and self.guard.startswith("not ")
+
+    @property
+    def condition(self) -> str | None:
+        """The registered condition the guard names (without ``not``)."""
+        return self.guard[4:] if self.negated else self.guard
+
+    def matches(self, event: str | None) -> bool:
+        if self.events is None or event is None:
+            return self.events is None and event is None
+        return any(descriptor_matches(d, event) for d in self.events)
+
+    def label(self) -> str:
+        """How diagrams name the transition: ``event [guard] / actions``."""
+        if self.after is not None:
+            trigger = self.events[0].split("@")[0] if self.events else ""
+        else:
+            trigger = " ".join(self.events) if self.events is not None else "always"
+        text = trigger + (f" [{self.guard}]" if self.guard else "")
+        if self.actions:
+            text += " / " + "; ".join(_action_label(a) for a in self.actions)
+        return text
+
+
+def _action_label(action: Action) -> str:
+    if isinstance(action, Raise):
+        return f"raise {action.event}"
+    if isinstance(action, Send):
+        return f"send {action.event}" + (f" after {action.delay:g}s" if action.delay else "")
+    if isinstance(action, Cancel):
+        return f"cancel {action.id}"
+    return f"log {action.text!r}"
+
+
+@dataclass(eq=False)
+class State:
+    """A state of a scheme; ``act`` and ``act_type`` say which act it carries out, by whom."""
+
+    name: str
+    kind: str
+    parent: State | None = None
+    children: list[State] = field(default_factory=list)
+    initial: tuple[str, ...] = ()
+    history: str | None = None
+    default: tuple[str, ...] = ()
+    act: str | None = None
+    by: str | None = None
+    act_type: ActType | None = None
+    doc: str = ""
+    transitions: list[Transition] = field(default_factory=list)
+    on_entry: tuple[Action, ...] = ()
+    on_exit: tuple[Action, ...] = ()
+    order: int = 0
+    depth: int = 0
+    mark: tuple[int, int] = (1, 1)
+
+    def __repr__(self) -> str:
+        return f"<State {self.name or '(root)'} {self.kind}>"
+
+    def ancestors(self) -> list[State]:
+        """Proper ancestors, nearest first, the root included."""
+        out = []
+        node = self.parent
+        while node is not None:
+            out.append(node)
+            node = node.parent
+        return out
+
+    def is_descendant_of(self, other: State) -> bool:
+        node = self.parent
+        while node is not None:
+            if node is other:
+                return True
+            node = node.parent
+        return False
+
+    @property
+    def is_atomic(self) -> bool:
+        return self.kind in (ATOMIC, FINAL)
+
+    @property
+    def is_compound(self) -> bool:
+        return self.kind == COMPOUND
+
+    def proper_children(self) -> list[State]:
+        """Children that are real states (history pseudo-states left out)."""
+        return [c for c in self.children if c.kind != HISTORY]
+
+
+@dataclass(eq=False)
+class Scheme:
+    """A whole communication scheme: its root state and everything below it."""
+
+    name: str
+    root: State
+    states: dict[str, State]
+    roles: dict[str, str]
+    acts: ActRegistry
+    doc: str = ""
+    file: str = "<string>"
+
+    def state(self, name: str) -> State:
+        return self.states[name]
+
+    def all_states(self) -> list[State]:
+        """Every state in document order (the root left out)."""
+        return sorted(self.states.values(), key=lambda s: s.order)
