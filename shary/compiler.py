@@ -86,7 +86,7 @@ class StepTransition(FlatTransition):
     def _compile(self, key: tuple[bool, ...]) -> tuple[Step, str] | None:
         semantics = self.compiled.semantics
         enabled = semantics.select(self.snapshot, self.candidates,
-                                   dict(zip(self.condition_names, key)))
+                                   dict(zip(self.condition_names, key, strict=True)))
         if not enabled:
             return None
         step = semantics.microstep(self.snapshot, enabled)

@@ -36,6 +36,18 @@ def descriptor_matches(descriptor: str, event: str) -> bool:
     return event == descriptor or event.startswith(descriptor + ".")
 
 
+def covers(earlier: tuple[str, ...] | None, later: tuple[str, ...] | None) -> bool:
+    """True when descriptors ``earlier`` match every event that ``later`` matches.
+
+    ``None`` stands for an eventless transition, which only another eventless
+    one covers.  Used to find transitions that can never be taken.
+    """
+    if later is None or earlier is None:
+        return later is None and earlier is None
+    return all(any(d1 == "*" or (d2 != "*" and descriptor_matches(
+        d1, d2[:-2] if d2.endswith(".*") else d2)) for d1 in earlier) for d2 in later)
+
+
 @dataclass(frozen=True)
 class Raise:
     """Put an event on the instance's internal queue (handled before any outside event)."""

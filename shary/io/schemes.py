@@ -16,7 +16,7 @@ from typing import Any
 import networkx as nx
 
 from shary import builtin
-from shary.acts import ACT_TYPES, ActRegistry, acts_from_data, act_type, builtin_acts
+from shary.acts import ACT_TYPES, ActRegistry, act_type, acts_from_data, builtin_acts
 from shary.conditions import ConditionRegistry
 from shary.errors import FileError, Problem
 from shary.io import schema, yamlsafe
@@ -35,7 +35,7 @@ from shary.model import (
     Send,
     State,
     Transition,
-    descriptor_matches,
+    covers,
     parse_duration,
 )
 
@@ -70,12 +70,17 @@ def resolve(name_or_path: str | os.PathLike[str]) -> str:
 
 
 def parse_scheme(located: yamlsafe.Located, *, acts: ActRegistry | None = None,
-                 conditions: ConditionRegistry | None = None) -> Scheme:
-    """Build and check a scheme from a located document; raise :class:`FileError`."""
+                 conditions: ConditionRegistry | None = None,
+                 check_reachable: bool = True) -> Scheme:
+    """Build and check a scheme from a located document; raise :class:`FileError`.
+
+    ``check_reachable=False`` is for tools that prune unreachable states
+    themselves (the SCXML importer); every other check still applies.
+    """
     if not isinstance(located.data, dict):
         raise FileError([located.problem((), "expected a mapping with 'scheme' and 'states' "
                                          "at the top of a scheme file")])
-    builder = _Builder(located, acts or builtin_acts(), conditions)
+    builder = _Builder(located, acts or builtin_acts(), conditions, check_reachable)
     scheme = builder.build()
     if builder.problems:
         raise FileError(builder.problems)
@@ -84,8 +89,9 @@ def parse_scheme(located: yamlsafe.Located, *, acts: ActRegistry | None = None,
 
 class _Builder:
     def __init__(self, located: yamlsafe.Located, acts: ActRegistry,
-                 conditions: ConditionRegistry | None):
+                 conditions: ConditionRegistry | None, check_reachable: bool):
         self.located = located
+        self.check_reachable = check_reachable
         self.data: dict[str, Any] = located.data
         self.problems: list[Problem] = schema.check(located, "scheme")
         self.acts = acts
@@ -127,7 +133,8 @@ class _Builder:
             self._check_state(state)
             for index, transition in enumerate(state.transitions):
                 self._check_transition(state, index, transition)
-        self._check_reachable(scheme)
+        if self.check_reachable:
+            self._check_reachable(scheme)
         return scheme
 
     def _children(self, parent: State, states: dict[str, Any], path: tuple) -> None:
@@ -152,8 +159,8 @@ class _Builder:
             if spec.get("history") in ("shallow", "deep"):
                 state.history = spec["history"]
             self._act(state, spec, spec_path)
-            state.on_entry = self._actions(spec.get("on_entry"), spec_path + ("on_entry",))
-            state.on_exit = self._actions(spec.get("on_exit"), spec_path + ("on_exit",))
+            state.on_entry = self._actions(spec.get("on_entry"))
+            state.on_exit = self._actions(spec.get("on_exit"))
             if isinstance(spec.get("on"), dict):
                 self._transitions(state, spec["on"], spec_path + ("on",))
             if isinstance(spec.get("states"), dict):
@@ -201,8 +208,7 @@ class _Builder:
             key_path = path + (key,)
             items = value if isinstance(value, list) else [value]
             after = _AFTER.match(key)
-            for index, item in enumerate(items):
-                item_path = key_path + (index,) if isinstance(value, list) else key_path
+            for item in items:
                 self.transition_order += 1
                 t = Transition(state, None, order=self.transition_order,
                                mark=self.located.key_at(key_path))
@@ -226,7 +232,7 @@ class _Builder:
                     guard = item.get("guard")
                     t.guard = guard if isinstance(guard, str) else None
                     t.internal = item.get("type") == "internal"
-                    t.actions = self._actions(item.get("do"), item_path + ("do",))
+                    t.actions = self._actions(item.get("do"))
                 else:
                     continue
                 state.transitions.append(t)
@@ -251,11 +257,11 @@ class _Builder:
                     ok = False
         return ok
 
-    def _actions(self, value: Any, path: tuple) -> tuple[Action, ...]:
+    def _actions(self, value: Any) -> tuple[Action, ...]:
         if not isinstance(value, list):
             return ()
         out: list[Action] = []
-        for index, item in enumerate(value):
+        for item in value:
             if not isinstance(item, dict):
                 continue
             if isinstance(item.get("raise"), str):
@@ -305,7 +311,8 @@ class _Builder:
             if target is None:
                 self.problem(path + ("initial",), f"initial state {name!r} does not exist"
                              f"{did_you_mean(name, self._descendant_names(state))}")
-            elif not target.is_descendant_of(state) or target.kind == HISTORY:
+            elif not target.is_descendant_of(state) or (target.kind == HISTORY
+                                                         and target.parent is not state):
                 self.problem(path + ("initial",), f"initial state {name!r} is not a child "
                              f"state of {where}")
 
@@ -376,28 +383,30 @@ class _Builder:
         self.problems.append(Problem(where.file, where.line, where.col, message))
 
     def _check_reachable(self, scheme: Scheme) -> None:
-        graph = nx.DiGraph()
-        graph.add_node(scheme.root)
-        for state in self.states.values():
-            graph.add_edge(state, state.parent)
-            if state.kind == PARALLEL:
-                for child in state.proper_children():
-                    graph.add_edge(state, child)
-            for name in state.initial + state.default:
-                if name in self.states:
-                    graph.add_edge(state, self.states[name])
-            for t in state.transitions:
-                for name in t.targets:
-                    if name in self.states:
-                        graph.add_edge(state, self.states[name])
-        for name in scheme.root.initial:
-            if name in self.states:
-                graph.add_edge(scheme.root, self.states[name])
-        reached = nx.descendants(graph, scheme.root) | {scheme.root}
-        for state in self.states.values():
-            if state not in reached and state.kind != HISTORY:
-                self.problem(self._path(state), f"state {state.name!r} is unreachable: no "
-                             "transition or initial state leads to it", key=True)
+        for state in unreachable(scheme):
+            self.problem(self._path(state), f"state {state.name!r} is unreachable: no "
+                         "transition or initial state leads to it", key=True)
+
+
+def unreachable(scheme: Scheme) -> list[State]:
+    """States (history pseudo-states aside) that no run of the scheme can ever enter."""
+    graph = nx.DiGraph()
+    graph.add_node(scheme.root)
+    states = scheme.states
+    for state in states.values():
+        graph.add_edge(state, state.parent)
+        if state.kind == PARALLEL:
+            for child in state.proper_children():
+                graph.add_edge(state, child)
+        targets = [n for t in state.transitions for n in t.targets]
+        for name in (*state.initial, *state.default, *targets):
+            if name in states:
+                graph.add_edge(state, states[name])
+    for name in scheme.root.initial:
+        if name in states:
+            graph.add_edge(scheme.root, states[name])
+    reached = nx.descendants(graph, scheme.root)
+    return [s for s in scheme.all_states() if s not in reached and s.kind != HISTORY]
 
 
 def _at(data: Any, path: tuple) -> Any:
@@ -425,10 +434,6 @@ def _trigger(t: Transition) -> str:
 
 def _shadows(earlier: Transition, later: Transition) -> bool:
     """True when every event ``later`` takes is taken first by ``earlier``."""
-    if later.events is None or earlier.events is None:
-        return later.events is None and earlier.events is None
     if later.after is not None or earlier.after is not None:
         return False
-    return all(any(descriptor_matches(d1, d2[:-2] if d2.endswith(".*") else d2)
-                   and d2 != "*" or d1 == "*" for d1 in earlier.events)
-               for d2 in later.events)
+    return covers(earlier.events, later.events)

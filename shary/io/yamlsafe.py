@@ -92,7 +92,8 @@ def read_text(path: str | os.PathLike[str], *, max_bytes: int = MAX_BYTES) -> st
         before = raw[: err.start]
         line = before.count(b"\n") + 1
         col = err.start - (before.rfind(b"\n") + 1) + 1
-        raise FileError([Problem(name, line, col, f"not UTF-8 text (byte 0x{raw[err.start]:02x})")])
+        raise FileError([Problem(name, line, col,
+                                 f"not UTF-8 text (byte 0x{raw[err.start]:02x})")]) from None
     if "\x00" in text:
         at = text.index("\x00")
         line = text.count("\n", 0, at) + 1
