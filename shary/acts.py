@@ -96,12 +96,13 @@ def load_acts(path: str | os.PathLike[str]) -> dict[str, Act]:
     if not isinstance(located.data, dict):
         raise FileError([located.problem((), "expected a mapping with an 'acts' key")])
     problems = schema.check(located, "acts")
+    acts = located.data.get("acts")
+    if isinstance(acts, dict):
+        problems += [Problem(located.file, *located.key_at(("acts", n)),
+                             f"{n!r} is an act type, not an act name")
+                     for n in acts if n in ACT_TYPES]
     if problems:
         raise FileError(problems)
-    clash = [n for n in located.data["acts"] if n in ACT_TYPES]
-    if clash:
-        raise FileError([Problem(located.file, *located.key_at(("acts", n)),
-                                 f"{n!r} is an act type, not an act name") for n in clash])
     return acts_from_data(located.data["acts"], os.fspath(path))
 
 

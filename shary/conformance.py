@@ -55,7 +55,8 @@ def run_test(chart: Path, root: Path | None = None) -> Outcome:
         text = import_scxml(chart)
         scheme = parse_scheme(load_text(text, f"{chart} (imported)"))
     except FileError as err:
-        return Outcome(name, False, "refused: " + "; ".join(p.message for p in err.problems))
+        reasons = dict.fromkeys(p.message for p in err.problems)
+        return Outcome(name, False, "refused: " + "; ".join(reasons))
     compiled = compile_scheme(scheme)
     clock = SimulatedClock()
     instance = compiled.start(clock=clock)

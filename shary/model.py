@@ -94,6 +94,7 @@ class Transition:
     after: float | None = None
     order: int = 0
     mark: tuple[int, int] = (1, 1)
+    target_mark: tuple[int, int] = (1, 1)
 
     @property
     def negated(self) -> bool:

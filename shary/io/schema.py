@@ -48,8 +48,8 @@ def did_you_mean(word: str, choices: Any) -> str:
 
 
 def check(located: Located, name: str) -> list[Problem]:
-    """Every violation of schema ``name`` in ``located``, one problem each."""
-    problems: list[Problem] = []
+    """Every violation of schema ``name`` in ``located`` (and its loading problems)."""
+    problems: list[Problem] = list(located.problems)
     for error in _validator(name).iter_errors(located.data):
         problems.extend(_explain(located, error))
     return problems
@@ -58,7 +58,10 @@ def check(located: Located, name: str) -> list[Problem]:
 def _explain(located: Located, error: ValidationError) -> list[Problem]:
     path = tuple(error.absolute_path)
     if error.validator in ("anyOf", "oneOf") and error.context:
-        return _explain(located, best_match(error.context))
+        # A branch that fails on the type of the value itself was not the one meant.
+        meant = [e for e in error.context
+                 if not (e.validator == "type" and not e.relative_path)]
+        return _explain(located, best_match(meant or error.context))
     if error.validator == "additionalProperties" and isinstance(error.instance, dict):
         known = list(error.schema.get("properties", {}))
         allowed = set(known)

@@ -44,6 +44,7 @@ DEFAULT_ROLES = {"robot": "robot", "partner": "human"}
 
 EVENTLESS_KEY = "always"
 _AFTER = re.compile(r"^after\s+(\S+)$")
+_GUARD = re.compile(r"^(not )?[a-z][a-z0-9_-]*$")
 _ACT_WORD = re.compile(r"^[A-Z][A-Z0-9]*(-[A-Z0-9]+)*$")
 _DESCRIPTOR = re.compile(r"^(\*|[A-Za-z0-9_][A-Za-z0-9_:-]*(\.[A-Za-z0-9_:-]+)*(\.\*)?)$")
 
@@ -208,7 +209,8 @@ class _Builder:
             key_path = path + (key,)
             items = value if isinstance(value, list) else [value]
             after = _AFTER.match(key)
-            for item in items:
+            for index, item in enumerate(items):
+                item_path = key_path + (index,) if isinstance(value, list) else key_path
                 self.transition_order += 1
                 t = Transition(state, None, order=self.transition_order,
                                mark=self.located.key_at(key_path))
@@ -227,10 +229,12 @@ class _Builder:
                     t.events = descriptors
                 if isinstance(item, str):
                     t.targets = (item,)
+                    t.target_mark = self.located.at(item_path)
                 elif isinstance(item, dict):
                     t.targets = self._targets(item.get("target"))
+                    t.target_mark = self.located.at(item_path + ("target",))
                     guard = item.get("guard")
-                    t.guard = guard if isinstance(guard, str) else None
+                    t.guard = guard if isinstance(guard, str) and _GUARD.match(guard) else None
                     t.internal = item.get("type") == "internal"
                     t.actions = self._actions(item.get("do"))
                 else:
@@ -354,7 +358,9 @@ class _Builder:
         at = Problem(self.located.file, *t.mark, "")
         for name in t.targets:
             if name not in self.states:
-                self._at(at, f"unknown target state {name!r}{did_you_mean(name, self.states)}")
+                self.problems.append(Problem(self.located.file, *t.target_mark,
+                                             f"unknown target state {name!r}"
+                                             f"{did_you_mean(name, self.states)}"))
         if t.condition is not None and self.conditions is not None \
                 and t.condition not in self.conditions:
             self._at(at, f"guard names an unknown condition {t.condition!r}"
@@ -393,18 +399,17 @@ def unreachable(scheme: Scheme) -> list[State]:
     graph = nx.DiGraph()
     graph.add_node(scheme.root)
     states = scheme.states
-    for state in states.values():
-        graph.add_edge(state, state.parent)
-        if state.kind == PARALLEL:
+    for state in [scheme.root, *states.values()]:
+        if state.parent is not None:
+            graph.add_edge(state, state.parent)
+        # a missing initial state is reported as such, not as unreachable children
+        if state.kind == PARALLEL or (state.kind == COMPOUND and not state.initial):
             for child in state.proper_children():
                 graph.add_edge(state, child)
         targets = [n for t in state.transitions for n in t.targets]
         for name in (*state.initial, *state.default, *targets):
             if name in states:
                 graph.add_edge(state, states[name])
-    for name in scheme.root.initial:
-        if name in states:
-            graph.add_edge(scheme.root, states[name])
     reached = nx.descendants(graph, scheme.root)
     return [s for s in scheme.all_states() if s not in reached and s.kind != HISTORY]
 

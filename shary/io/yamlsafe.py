@@ -10,7 +10,8 @@ limit.  Here a file goes through three gates before anything else sees it:
    from a tag);
 3. the node graph, converted to plain ``dict``/``list``/scalars while counting
    expanded nodes, so an alias bomb stops at :data:`MAX_NODES` instead of
-   eating the memory; duplicate keys are refused.
+   eating the memory; duplicate keys are recorded as problems (the first value
+   is kept so that checking can go on and report everything at once).
 
 The result, :class:`Located`, maps every path (a tuple of keys and indices) to
 the position of its value and of its key, which is what turns a JSON Schema
@@ -55,6 +56,9 @@ class Located:
     data: Any
     marks: dict[Path, Mark] = field(default_factory=dict)
     key_marks: dict[Path, Mark] = field(default_factory=dict)
+    problems: list[Problem] = field(default_factory=list)
+    """Problems that did not stop loading (a duplicate key keeps its first value):
+    the file's checker reports them with its own, so that all come at once."""
 
     def at(self, path: Path) -> Mark:
         """Position of the value at ``path``, or of its nearest located ancestor."""
@@ -121,8 +125,7 @@ def load_text(text: str, file: str = "<string>") -> Located:
     located = Located(file, None)
     converter = _Converter(located)
     located.data = converter.convert(node, ())
-    if converter.problems:
-        raise FileError(converter.problems)
+    located.problems = converter.problems
     return located
 
 

@@ -1,0 +1,260 @@
+"""The ``shary`` command.
+
+Problems in a user's file are printed as ``FILE:LINE:COL: error: …`` on
+standard error and the command exits with status 2; nothing a file contains
+can make it print a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from rich.console import Console
+
+from shary import builtin
+from shary.acts import ActRegistry, builtin_acts, load_acts
+from shary.conditions import ConditionRegistry
+from shary.errors import FileError, Problem
+from shary.io import yamlsafe
+
+EXIT_BAD_FILE = 2
+
+_out = Console(highlight=False, soft_wrap=True)
+_err = Console(stderr=True, highlight=False, soft_wrap=True)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = _parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except FileError as err:
+        _print_problems(err.problems)
+        return EXIT_BAD_FILE
+    except KeyboardInterrupt:
+        return 130
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="shary", description="A SHARY-style supervision engine for robots that work "
+        "with people.")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("validate", help="check scheme and act files (default: the built-in ones)")
+    p.add_argument("paths", nargs="*", type=Path, metavar="PATH",
+                   help="files to check; acts files among them extend the acts of the others")
+    p.set_defaults(func=cmd_validate)
+
+    p = sub.add_parser("schemes", help="list the built-in communication schemes")
+    p.set_defaults(func=cmd_schemes)
+
+    p = sub.add_parser("simulate", help="run a scheme against a script of events and waits")
+    p.add_argument("scheme", help="a built-in scheme name or a scheme file")
+    p.add_argument("script", nargs="*", metavar="EVENT|WAIT",
+                   help="events to send (H-AGREE, done …) and waits on the clock (5s, 250ms)")
+    p.set_defaults(func=cmd_simulate)
+
+    p = sub.add_parser("render", help="draw a diagram")
+    what = p.add_subparsers(dest="what", required=True, metavar="WHAT")
+    r = what.add_parser("scheme", help="draw a scheme to .svg, .png, .dot or .mmd (Mermaid)")
+    r.add_argument("scheme", help="a built-in scheme name or a scheme file")
+    r.add_argument("-o", "--output", type=Path, required=True, metavar="OUT")
+    r.add_argument("--active", default="", metavar="STATE,…",
+                   help="highlight these states (an active configuration)")
+    r.set_defaults(func=cmd_render_scheme)
+
+    p = sub.add_parser("import-scxml", help="convert a data-model-free SCXML chart to a scheme")
+    p.add_argument("source", type=Path, metavar="FILE.scxml")
+    p.add_argument("-o", "--output", type=Path, required=True, metavar="FILE.yaml")
+    p.set_defaults(func=cmd_import_scxml)
+
+    p = sub.add_parser("conformance", help="run SCION-style statechart tests found under DIR")
+    p.add_argument("folder", type=Path, metavar="DIR")
+    p.add_argument("--only", type=Path, metavar="LIST",
+                   help="run only the charts named in this file (paths relative to DIR)")
+    p.set_defaults(func=cmd_conformance)
+    return parser
+
+
+def _print_problems(problems: Sequence[Problem]) -> None:
+    for problem in problems:
+        location = f"{problem.file}:{problem.line}:{problem.col}:"
+        _err.print(f"[bold]{_escape(location)}[/bold] [bold red]error:[/bold red] "
+                   f"{_escape(problem.message)}")
+
+
+def _escape(text: str) -> str:
+    return text.replace("[", r"\[")
+
+
+# -- validate -----------------------------------------------------------
+
+
+def cmd_validate(args: argparse.Namespace) -> int:
+    from shary.io.schemes import parse_scheme
+
+    paths = list(args.paths) or builtin.files("schemes")
+    problems: list[Problem] = []
+    loaded: list[yamlsafe.Located] = []
+    acts: ActRegistry = builtin_acts()
+    for path in paths:
+        try:
+            located = yamlsafe.load_file(path)
+        except FileError as err:
+            problems.extend(err.problems)
+            continue
+        if _is_acts_file(located):
+            try:
+                acts = acts.extended(load_acts(path))
+            except FileError as err:
+                problems.extend(err.problems)
+            continue
+        loaded.append(located)
+    conditions = ConditionRegistry.installed()
+    for located in loaded:
+        try:
+            parse_scheme(located, acts=acts, conditions=conditions)
+        except FileError as err:
+            problems.extend(err.problems)
+    _print_problems(sorted(problems))
+    bad = {p.file for p in problems}
+    for path in paths:
+        if str(path) not in bad:
+            _out.print(f"[green]ok[/green]    {_escape(str(path))}")
+    if problems:
+        _err.print(f"{len(problems)} problem(s) in {len(bad)} of {len(paths)} file(s)")
+        return EXIT_BAD_FILE
+    return 0
+
+
+def _is_acts_file(located: yamlsafe.Located) -> bool:
+    data = located.data
+    return isinstance(data, dict) and "acts" in data and "scheme" not in data
+
+
+# -- schemes, simulate ---------------------------------------------------
+
+
+def cmd_schemes(args: argparse.Namespace) -> int:
+    from shary.io.schemes import load_scheme
+
+    for path in builtin.files("schemes"):
+        if path.stem == "acts":
+            continue
+        scheme = load_scheme(path)
+        first = re.split(r"(?<!Fig)\.\s", " ".join(scheme.doc.split()), maxsplit=1)[0]
+        _out.print(f"[bold]{scheme.name:<24}[/bold] {_escape(first.rstrip('.'))}.")
+    return 0
+
+
+_WAIT = re.compile(r"^[0-9]+(\.[0-9]+)?(ms|s|min|h)$")
+
+
+def cmd_simulate(args: argparse.Namespace) -> int:
+    from shary.clock import SimulatedClock
+    from shary.compiler import compile_scheme
+    from shary.instance import SchemeListener
+    from shary.io.schemes import load_scheme
+    from shary.model import parse_duration
+
+    scheme = load_scheme(args.scheme)
+    clock = SimulatedClock()
+
+    class Trace(SchemeListener):
+        def entered(self, instance, state, event):  # type: ignore[override]
+            act = f"  [cyan]{state.act} ({state.act_type.name})[/cyan]" if state.act_type else ""
+            _out.print(f"{clock.now():8.2f}s  enter  {state.name}{act}")
+
+        def exited(self, instance, state, event):  # type: ignore[override]
+            _out.print(f"{clock.now():8.2f}s  exit   {state.name}")
+
+        def logged(self, instance, text):  # type: ignore[override]
+            _out.print(f"{clock.now():8.2f}s  log    {_escape(text)}")
+
+        def finished(self, instance, state):  # type: ignore[override]
+            _out.print(f"{clock.now():8.2f}s  [bold]finished in {state.name}[/bold]")
+
+    _out.print(f"[bold]{scheme.name}[/bold]: {_escape(scheme.doc.strip())}")
+    instance = compile_scheme(scheme).start(clock=clock, listener=Trace())
+    for word in args.script:
+        if _WAIT.match(word):
+            _out.print(f"{clock.now():8.2f}s  [dim]wait {word}[/dim]")
+            clock.advance(parse_duration(word))
+        else:
+            _out.print(f"{clock.now():8.2f}s  [yellow]<- {_escape(word)}[/yellow]")
+            instance.send(word)
+        if instance.finished:
+            break
+    _out.print(f"configuration: {', '.join(instance.configuration)}")
+    return 0
+
+
+# -- render ---------------------------------------------------------------
+
+
+def cmd_render_scheme(args: argparse.Namespace) -> int:
+    from shary.display import render_scheme
+    from shary.io.schemes import load_scheme
+
+    scheme = load_scheme(args.scheme)
+    active = [s for s in args.active.split(",") if s]
+    unknown = [s for s in active if s not in scheme.states]
+    if unknown:
+        _err.print(f"[bold red]error:[/bold red] --active names unknown states: "
+                   f"{', '.join(unknown)}")
+        return EXIT_BAD_FILE
+    try:
+        render_scheme(scheme, args.output, active=active)
+    except (ValueError, RuntimeError, OSError) as err:
+        _err.print(f"[bold red]error:[/bold red] {_escape(str(err))}")
+        return 1
+    _out.print(f"wrote {_escape(str(args.output))}")
+    return 0
+
+
+# -- SCXML ------------------------------------------------------------------
+
+
+def cmd_import_scxml(args: argparse.Namespace) -> int:
+    from shary.io.scxml import import_scxml
+
+    text = import_scxml(args.source)
+    try:
+        args.output.write_text(text, encoding="utf-8")
+    except OSError as err:
+        _err.print(f"[bold red]error:[/bold red] cannot write {args.output}: {err.strerror}")
+        return 1
+    _out.print(f"wrote {_escape(str(args.output))}")
+    return 0
+
+
+def cmd_conformance(args: argparse.Namespace) -> int:
+    from shary.conformance import find_tests, run_test
+
+    folder: Path = args.folder
+    if not folder.is_dir():
+        _err.print(f"[bold red]error:[/bold red] {_escape(str(folder))} is not a folder")
+        return EXIT_BAD_FILE
+    charts = find_tests(folder)
+    if args.only is not None:
+        wanted = set(yamlsafe.read_text(args.only).split())
+        charts = [c for c in charts if str(c.relative_to(folder)) in wanted]
+    passed = failed = 0
+    for chart in charts:
+        outcome = run_test(chart, folder)
+        if outcome.passed:
+            passed += 1
+        else:
+            failed += 1
+            _out.print(f"[red]FAIL[/red] {_escape(outcome.name)}: {_escape(outcome.reason)}")
+    _out.print(f"{passed} passed, {failed} failed")
+    return 0 if failed == 0 else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

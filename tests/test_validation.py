@@ -1,0 +1,175 @@
+"""The meaning checks of scheme files: each mistake named, placed, and all reported at once."""
+
+from __future__ import annotations
+
+import textwrap
+
+from conftest import problems
+
+
+def _messages(shary, path) -> list[tuple[int, int, str]]:
+    status, _, err = shary("validate", path)
+    assert status == 2, err
+    assert "Traceback" not in err
+    return [(int(m["line"]), int(m["col"]), m["message"]) for m in problems(err)]
+
+
+GOOD = """\
+    scheme: t
+    initial: ask
+    states:
+      ask:
+        act: ASK-TASK
+        on: {H-AGREE: done, H-DISAGREE: done}
+      done: {final: true}
+    """
+
+
+def test_builtin_files_are_valid(shary):
+    status, out, err = shary("validate")
+    assert status == 0, err
+    assert "give-object.yaml" in out and "acts.yaml" in out
+
+
+def test_a_good_file_passes(shary, write):
+    status, out, _ = shary("validate", write("good.yaml", GOOD))
+    assert status == 0
+    assert out.startswith("ok")
+
+
+def test_unknown_key_with_did_you_mean(shary, write):
+    path = write("k.yaml", GOOD.replace("act: ASK-TASK", "act: ASK-TASK\n        initail: x"))
+    ((line, col, msg),) = _messages(shary, path)
+    assert (line, col) == (6, 5)
+    assert "unknown key 'initail'" in msg and "did you mean 'initial'" in msg
+
+
+def test_unknown_act_and_act_word(shary, write):
+    path = write("a.yaml", GOOD.replace("ASK-TASK", "ASK-TASKS").replace("H-AGREE", "H-AGRE"))
+    found = _messages(shary, path)
+    assert any("unknown act 'ASK-TASKS'" in m and "did you mean 'ASK-TASK'" in m
+               for _, _, m in found)
+    assert any("unknown act 'H-AGRE'" in m and "did you mean 'H-AGREE'" in m
+               for _, _, m in found)
+
+
+def test_dangling_target(shary, write):
+    path = write("t.yaml", GOOD.replace("H-DISAGREE: done", "H-DISAGREE: dne"))
+    ((line, col, msg),) = _messages(shary, path)
+    assert (line, col) == (6, 37)
+    assert "unknown target state 'dne'" in msg and "did you mean 'done'" in msg
+
+
+def test_unreachable_state(shary, write):
+    path = write("u.yaml", GOOD + "  lost: {}\n")
+    ((line, col, msg),) = _messages(shary, path)
+    assert (line, col) == (8, 3)
+    assert "'lost' is unreachable" in msg
+
+
+def test_missing_initial_state(shary, write):
+    path = write("i.yaml", GOOD.replace("    initial: ask\n", ""))
+    ((line, _, msg),) = _messages(shary, path)
+    assert "no 'initial'" in msg and "ask, done" in msg
+
+
+def test_initial_naming_no_child(shary, write):
+    path = write("i2.yaml", GOOD.replace("initial: ask", "initial: asc"))
+    found = _messages(shary, path)
+    assert any("initial state 'asc' does not exist" in m and "'ask'" in m for _, _, m in found)
+
+
+def test_two_unguarded_transitions_on_one_event(shary, write):
+    path = write("s.yaml", """\
+        scheme: t
+        initial: a
+        states:
+          a:
+            on:
+              go: b
+              go.now: c
+              other:
+                - b
+                - c
+          b: {}
+          c: {}
+        """)
+    found = _messages(shary, path)
+    assert len(found) == 2
+    assert "'go.now' is never taken" in found[0][2] and "line 6" in found[0][2]
+    assert "'other' is never taken" in found[1][2]
+
+
+def test_guarded_transitions_on_one_event_are_fine(shary, write):
+    # guards must name registered conditions; none is registered in this environment
+    path = write("g.yaml", """\
+        scheme: t
+        initial: a
+        states:
+          a:
+            on:
+              go: [{target: b, guard: ready}, c]
+          b: {}
+          c: {}
+        """)
+    ((_, _, msg),) = _messages(shary, path)
+    assert "unknown condition 'ready'" in msg
+
+
+def test_all_problems_of_a_file_at_once(shary, write):
+    path = write("many.yaml", """\
+        scheme: t
+        initial: ask
+        roles: {robot: robot, partner: human}
+        states:
+          ask:
+            act: ASK-TSK
+            by: parner
+            on: {H-AGREE: nowhere, after 10: ask}
+          ask: {}
+          lost: {history: deep}
+          orphan: {}
+        """)
+    messages = " | ".join(m for _, _, m in _messages(shary, path))
+    for expected in ("duplicate key 'ask'", "unknown act 'ASK-TSK'", "unknown role 'parner'",
+                     "unknown target state 'nowhere'", "'10' is not a duration",
+                     "history state belongs", "'orphan' is unreachable"):
+        assert expected in messages, messages
+
+
+def test_schema_errors_read_well(shary, write):
+    path = write("types.yaml", """\
+        scheme: t
+        initial: [a, 3]
+        states:
+          a: {final: yes, on: {go: {target: a, guard: "x y"}}}
+        """)
+    found = _messages(shary, path)
+    text = " | ".join(m for _, _, m in found)
+    assert "expected a string here, got a number (3)" in text
+    assert "guard names a registered condition" in text
+
+
+def test_acts_file_extends_the_acts_of_schemes(shary, write):
+    acts = write("acts.yaml", "acts:\n  HAND-OVER: {doc: Hands an object over., "
+                 "answers: [AGREE]}\n")
+    scheme = write("s.yaml", GOOD.replace("ASK-TASK", "HAND-OVER"))
+    assert shary("validate", scheme)[0] == 2
+    status, _, err = shary("validate", acts, scheme)
+    assert status == 0, err
+
+
+def test_acts_declared_inside_a_scheme(shary, write):
+    path = write("own.yaml", "acts:\n  WAVE: {doc: Waves.}\n"
+                 + textwrap.dedent(GOOD).replace("ASK-TASK", "WAVE"))
+    assert shary("validate", path)[0] == 0
+
+
+def test_act_types_are_not_act_names(shary, write):
+    ((_, _, msg),) = _messages(shary, write("bad-acts.yaml", "acts:\n  H-AGREE: {}\n"))
+    assert "is an act type" in msg
+
+
+def test_missing_file_is_a_clean_error(shary, tmp_path):
+    ((_, _, msg),) = _messages(shary, tmp_path / "absent.yaml")
+    assert "cannot read file" in msg
