@@ -1,0 +1,126 @@
+"""SCXML import, and the SCION statechart suite as an outside yardstick."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from conftest import SUITES, problems
+
+from shary.conformance import run_test
+from shary.io.schemes import parse_scheme
+from shary.io.scxml import import_scxml
+from shary.io.yamlsafe import load_text
+
+SCION = SUITES / "scion"
+NO_DATAMODEL = SCION / "NO-DATAMODEL.txt"
+
+CHART = """\
+<?xml version="1.0"?>
+<scxml xmlns="http://www.w3.org/2005/07/scxml" version="1.0" initial="a">
+  <state id="a">
+    <onentry><send event="tick" delay="1.5s" id="t1"/></onentry>
+    <transition event="tick" target="p"/>
+    <transition event="tick" target="a"/>
+  </state>
+  <parallel id="p">
+    <state id="r1"><state id="x"><transition event="go" target="done"/></state></state>
+    <state id="r2"><state id="y"/><history id="h" type="deep"/></state>
+  </parallel>
+  <final id="done"/>
+  <state id="never"/>
+</scxml>
+"""
+
+
+def test_import_translates_and_prunes(write):
+    text = import_scxml(write("c.scxml", CHART))
+    assert text.startswith("# Left out, since no run can ever enter them: never")
+    scheme = parse_scheme(load_text(text))
+    assert scheme.state("p").kind == "parallel"
+    assert scheme.state("h").history == "deep"
+    assert [t.targets for t in scheme.state("a").transitions] == [("p",)]  # shadowed one dropped
+    assert "never" not in scheme.states
+
+
+@pytest.mark.parametrize("fragment, message", [
+    ('<transition event="e" cond="x &gt; 1" target="a"/>', "cond= needs a data model"),
+    ("<onentry><script>x = 1</script></onentry>", "<script> needs a data model"),
+    ('<onentry><send event="e" target="#_parent"/></onentry>', "another target"),
+    ('<invoke src="x"/>', "<invoke> needs a data model"),
+    ('<onentry><send event="e" delay="soon"/></onentry>', "is not a time"),
+])
+def test_unsupported_constructs_are_refused_by_name(shary, write, tmp_path, fragment, message):
+    chart = f'<scxml xmlns="http://www.w3.org/2005/07/scxml">\n<state id="a">\n{fragment}\n' \
+            '</state>\n</scxml>\n'
+    source = write("u.scxml", chart)
+    status, _, err = shary("import-scxml", source, "-o", tmp_path / "u.yaml")
+    assert status == 2
+    (m,) = problems(err)
+    assert message in m["message"] and m["line"] == "3"
+    assert not (tmp_path / "u.yaml").exists()
+
+
+@pytest.mark.parametrize("text, message", [
+    ("<scxml><state id='a'></scxml>", "XML syntax"),
+    ('<!DOCTYPE x [<!ENTITY a "aaaa">]><scxml/>', "DOCTYPE"),
+    ("<html/>", "not an SCXML document"),
+])
+def test_broken_xml_is_refused(shary, write, tmp_path, text, message):
+    status, _, err = shary("import-scxml", write("b.scxml", text), "-o", tmp_path / "b.yaml")
+    assert status == 2 and message in err and "Traceback" not in err
+
+
+def test_import_cli_writes_a_valid_scheme(shary, write, tmp_path):
+    out = tmp_path / "c.yaml"
+    status, _, _ = shary("import-scxml", write("c.scxml", CHART), "-o", out)
+    assert status == 0
+    assert shary("validate", out)[0] == 0
+
+
+def test_plain_chart_passes_when_it_reaches_pass(write, tmp_path):
+    chart = write("plain.scxml", """\
+        <scxml xmlns="http://www.w3.org/2005/07/scxml" initial="wait">
+          <state id="wait">
+            <onentry><send event="later" delay="2s"/></onentry>
+            <transition event="later" target="pass"/>
+          </state>
+          <final id="pass"/>
+        </scxml>
+        """)
+    assert run_test(chart).passed
+    failing = write("fail.scxml", chart.read_text().replace('target="pass"', 'target="fail"')
+                    .replace('<final id="pass"/>', '<final id="fail"/>'))
+    outcome = run_test(failing)
+    assert not outcome.passed and "not 'pass'" in outcome.reason
+
+
+def _no_datamodel_charts() -> list[str]:
+    if not NO_DATAMODEL.exists():
+        return []
+    return NO_DATAMODEL.read_text().split()
+
+
+@pytest.mark.skipif(not NO_DATAMODEL.exists(),
+                    reason=f"the SCION suite is not at {SCION} (../shared/suites/scion)")
+@pytest.mark.parametrize("name", _no_datamodel_charts())
+def test_scion_no_datamodel(name):
+    outcome = run_test(SCION / name, SCION)
+    assert outcome.passed, outcome.reason
+
+
+@pytest.mark.skipif(not NO_DATAMODEL.exists(),
+                    reason=f"the SCION suite is not at {SCION} (../shared/suites/scion)")
+def test_conformance_command_counts(shary):
+    status, out, _ = shary("conformance", SCION, "--only", NO_DATAMODEL)
+    assert status == 0
+    assert out.strip().splitlines()[-1] == f"{len(_no_datamodel_charts())} passed, 0 failed"
+
+
+def test_conformance_command_reports_failures(shary, write, tmp_path: Path):
+    write("bad.scxml", '<scxml xmlns="http://www.w3.org/2005/07/scxml"><state id="a">'
+          '<transition cond="1" event="e" target="a"/></state></scxml>')
+    status, out, _ = shary("conformance", tmp_path)
+    assert status == 1
+    assert "FAIL bad.scxml: refused: cond= needs a data model" in out
+    assert out.strip().splitlines()[-1] == "0 passed, 1 failed"
