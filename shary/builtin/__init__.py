@@ -1,28 +1,23 @@
-"""Where the built-in YAML lives once installed.
+"""Where the built-in YAML lives.
 
 The top-level folders of the repository (``schemes/`` …) are installed as
-sub-packages of this one (see ``[tool.setuptools.package-dir]`` in
-``pyproject.toml``), so they are found after a plain ``pip install .`` as well
-as in an editable checkout.
+sub-folders of this package (see ``[tool.setuptools.package-dir]`` in
+``pyproject.toml``), so a plain ``pip install .`` carries them.  In a source
+checkout (editable install, or tests run from the top of the repository) they
+are the checkout's own folders.
 """
 
 from __future__ import annotations
 
-from importlib import resources
 from pathlib import Path
+
+_HERE = Path(__file__).resolve().parent
 
 
 def folder(kind: str) -> Path:
-    """The folder of built-in files of one kind (``schemes`` …).
-
-    Installed, it is the package ``shary.builtin.KIND``; when ``shary`` is
-    imported straight from a source checkout (tests run from its top), that
-    package is not importable and the checkout's own folder is used.
-    """
-    try:
-        return Path(str(resources.files(f"shary.builtin.{kind}")))
-    except ModuleNotFoundError:
-        return Path(__file__).resolve().parents[2] / kind
+    """The folder of built-in files of one kind (``schemes`` …)."""
+    installed = _HERE / kind
+    return installed if installed.is_dir() else _HERE.parents[1] / kind
 
 
 def files(kind: str) -> list[Path]:

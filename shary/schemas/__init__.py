@@ -1,0 +1,1 @@
+"""JSON Schemas of the files users write (shipped so that editors can use them)."""
