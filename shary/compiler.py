@@ -159,6 +159,17 @@ class CompiledScheme:
         else:
             event.transitions[state.name] = []
 
+    def expects(self, flat_state: str, event: str) -> bool:
+        """Whether some active state of that flat state has a transition on ``event``.
+
+        These are SHARY's expected acts: the monitors of the current scheme state.
+        """
+        transitions = self.event(event).transitions
+        state = self.machine.states[flat_state]
+        if state.name not in transitions:
+            self.compile_transition(self.event(event), state)
+        return bool(transitions[state.name])
+
     def event(self, name: str) -> SchemeEvent:
         """The flat machine's event of that name (created on first use)."""
         found = self.machine.events.get(name)

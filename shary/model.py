@@ -146,6 +146,7 @@ class State:
     act: str | None = None
     by: str | None = None
     act_type: ActType | None = None
+    outcome: str = "done"
     doc: str = ""
     transitions: list[Transition] = field(default_factory=list)
     on_entry: tuple[Action, ...] = ()

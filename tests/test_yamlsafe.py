@@ -106,6 +106,6 @@ def test_positions_of_values_and_keys():
     assert located.data["states"]["a"]["on"] == {"go": "b"}
 
 
-def test_yaml_11_booleans_stay_keys():
-    located = yamlsafe.load_text("on: {yes: a}\n")
-    assert located.data == {"on": {"yes": "a"}}
+def test_yaml_12_booleans_only():
+    located = yamlsafe.load_text("on: {yes: a}\nlist: [on, off, yes, no, true, False]\n")
+    assert located.data == {"on": {"yes": "a"}, "list": ["on", "off", "yes", "no", True, False]}

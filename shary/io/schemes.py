@@ -157,6 +157,8 @@ class _Builder:
             state.doc = spec.get("doc", "") if isinstance(spec.get("doc"), str) else ""
             state.initial = self._targets(spec.get("initial"))
             state.default = self._targets(spec.get("default"))
+            if spec.get("outcome") in ("done", "failed"):
+                state.outcome = spec["outcome"]
             if spec.get("history") in ("shallow", "deep"):
                 state.history = spec["history"]
             self._act(state, spec, spec_path)
@@ -347,7 +349,9 @@ class _Builder:
                 elif not target.is_descendant_of(state.parent):
                     self.problem(path + ("default",), f"history default {name!r} is not inside "
                                  f"{state.parent.name!r}")
-        elif "default" in spec:
+        if "outcome" in spec and state.kind != FINAL:
+            self.problem(path + ("outcome",), "'outcome' belongs to final states", key=True)
+        if "default" in spec and state.kind != HISTORY:
             self.problem(path + ("default",), "'default' belongs to history states only",
                          key=True)
         if state.kind == PARALLEL and not state.proper_children():

@@ -21,6 +21,7 @@ error or a meaning check into ``FILE:LINE:COL: error: …``.
 from __future__ import annotations
 
 import os
+import re
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -38,6 +39,23 @@ MAX_NODES = 200_000
 
 Path = tuple[Any, ...]
 Mark = tuple[int, int]
+
+class _Loader(yaml.SafeLoader):
+    """PyYAML's safe loader with YAML 1.2 booleans: only true and false.
+
+    Under YAML 1.1, ``on``, ``off``, ``yes`` and ``no`` are booleans, so a
+    parameter named ``on`` (put the object *on* the table) or a person named
+    ``No`` would silently become ``True``/``False``.
+    """
+
+
+_Loader.yaml_implicit_resolvers = {
+    first: [(tag, regexp) for tag, regexp in resolvers if tag != "tag:yaml.org,2002:bool"]
+    for first, resolvers in yaml.SafeLoader.yaml_implicit_resolvers.items()
+}
+_Loader.add_implicit_resolver("tag:yaml.org,2002:bool",
+                              re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"),
+                              list("tTfF"))
 
 _CORE_TAGS = {
     "tag:yaml.org,2002:" + name
@@ -117,7 +135,7 @@ def load_text(text: str, file: str = "<string>") -> Located:
         raise FileError([Problem(file, 1, 1, f"text is larger than {MAX_BYTES} bytes")])
     _check_events(text, file)
     try:
-        node = yaml.compose(text, Loader=yaml.SafeLoader)
+        node = yaml.compose(text, Loader=_Loader)
     except yaml.YAMLError as err:
         raise FileError([_yaml_problem(err, file)]) from None
     if node is None:
@@ -142,7 +160,7 @@ def _check_events(text: str, file: str) -> None:
     depth = 0
     documents = 0
     try:
-        for event in yaml.parse(text, Loader=yaml.SafeLoader):
+        for event in yaml.parse(text, Loader=_Loader):
             tag = getattr(event, "tag", None)
             if tag is not None and tag != "!" and tag not in _CORE_TAGS:
                 mark = event.start_mark
