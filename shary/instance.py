@@ -71,7 +71,7 @@ class SchemeInstance:
     """One running copy of a compiled scheme (start one with :meth:`CompiledScheme.start`)."""
 
     __slots__ = ("definition", "state", "clock", "listener", "context", "finished",
-                 "_internal", "_external", "_busy", "_timers", "__weakref__")
+                 "_internal", "_external", "_busy", "_timers", "_frozen", "__weakref__")
 
     def __init__(self, definition: CompiledScheme, clock: Clock, listener: Any = None,
                  context: Any = None):
@@ -85,6 +85,7 @@ class SchemeInstance:
         self._external: deque[Event] = deque()
         self._busy = False
         self._timers: dict[str, Timer] | None = None
+        self._frozen: dict[str, tuple[float, tuple]] | None = None
 
     # -- queries ---------------------------------------------------------
 
@@ -102,6 +103,27 @@ class SchemeInstance:
         return name in self.active
 
     # -- running ---------------------------------------------------------
+
+    def freeze(self) -> None:
+        """Stop the instance's clock: pending timeouts keep their remaining time.
+
+        Used when a whole task is suspended by a more urgent one: its scheme
+        must not give up on its partner while it is not even running.
+        """
+        if self._frozen is not None or not self._timers:
+            self._frozen = self._frozen or {}
+            return
+        now = self.clock.now()
+        self._frozen = {key: (max(0.0, t.due - now), t.args) for key, t in self._timers.items()}
+        for timer in self._timers.values():
+            timer.cancel()
+        self._timers.clear()
+
+    def thaw(self) -> None:
+        """Restart the timeouts stopped by :meth:`freeze`, with their remaining time."""
+        frozen, self._frozen = self._frozen or {}, None
+        for key, (remaining, args) in frozen.items():
+            self._start_timer(key, remaining, args[1])
 
     def start(self) -> None:
         """Enter the initial states and settle (called once by ``CompiledScheme.start``)."""

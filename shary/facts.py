@@ -1,0 +1,500 @@
+"""The fact database: what each agent believes about the world, and its changes as events.
+
+SHARY keeps a-priori knowledge (places, furniture, objects) beside contextual
+facts that perception adds and removes (positions, who holds what, who looks
+at whom), and it keeps them *per agent*: what the robot believes and what it
+estimates each human believes.  Here that is one :class:`rdflib.Dataset`:
+
+* the **a-priori graph** is the dataset's default graph, filled from Turtle
+  files (:meth:`FactDatabase.load_turtle` with ``perspective=None``);
+* every **perspective** (an agent's name: ``"robot"``, ``"human-1"`` …) is a
+  named graph ``urn:shary:perspective:NAME``.
+
+**How perspectives see a-priori knowledge.**  A perspective *starts as a copy
+of the a-priori graph* the first time something writes to it, then evolves on
+its own: ``add``, ``remove`` and ``set`` change only that perspective.  A
+perspective nobody wrote to yet reads as the a-priori graph.  A union of the
+a-priori graph and the agent's graph would be the other choice, but a union
+cannot *forget*: an a-priori fact such as "the bottle is on the coffee table"
+could never be removed or replaced by ``set`` when perception sees the bottle
+move.  With copies, every agent knows the a-priori world at the start and its
+beliefs may then diverge from it and from each other's.  Turtle loaded into
+the a-priori graph later is copied into every existing perspective as well.
+Loading is setting up knowledge, not a change seen in the world, so it
+delivers no events; load before the run starts.
+
+**Terms.**  Users and recipes write short names: ``"coffee-table"`` and
+``"isOn"`` are IRIs of the world namespace (prefix ``w:``); ``"w:isOn"`` or
+``"rdf:type"`` use a known prefix (``w``, ``rdf``, ``rdfs``, ``xsd``,
+``owl``); ``"http://…"``, ``"https://…"`` and ``"urn:…"`` are full IRIs;
+Python ``bool``, ``int`` and ``float`` values are typed literals, and rdflib
+terms are taken as they are (use ``rdflib.Literal("text")`` for a string
+literal: a Python ``str`` always names a resource).  :meth:`FactDatabase.name`
+turns a term back into what :meth:`FactDatabase.term` accepts, so that
+``term(name(t)) == t``: a short name, a prefixed name, a full IRI, a Python
+``bool``/``int``/``float``, or the rdflib term itself for any other literal
+(strings, decimals, dates) and for blank nodes.  Mind that Turtle's ``0.5``
+is an ``xsd:decimal`` while Python's ``0.5`` is an ``xsd:double``: write
+``5.0e-1`` in files whose numbers the engine compares with Python floats.
+
+**Events.**  Every addition and deletion made through :meth:`add`,
+:meth:`remove` and :meth:`set` is delivered as a :class:`FactEvent` to the
+subscribers whose pattern matches.  Monitors react to those events; they never
+run a SPARQL query per event (rdflib's SPARQL engine costs milliseconds, see
+``../shared/DESIGN.md``), which is why subscriptions are indexed by
+(subject, predicate): one change looks up four buckets ((s, p), (any, p),
+(s, any), (any, any)) and only tests the subscriptions found there.
+
+**Order of delivery.**  Events are delivered *after* the change that caused
+them is complete (for :meth:`set`: all removals and the addition), in the
+order of the changes, and each event to its subscribers in the order they
+subscribed.  A callback may change facts: its changes are applied at once
+(later callbacks and queries see them) but their events are queued behind the
+ones already waiting (first in, first out) and delivered when the current
+event has reached all its subscribers.  So the sequence of events every
+subscriber sees is the same for the same sequence of calls, and no callback is
+ever entered twice at once.  A subscription cancelled during delivery receives
+nothing more, even of an event already under way; one made during delivery
+receives the events that are delivered after it.
+
+The database is single-threaded, like the rest of the engine's core.
+"""
+
+from __future__ import annotations
+
+import functools
+import logging
+import os
+import re
+import typing
+import warnings
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+from itertools import count
+from pathlib import Path
+from urllib.parse import quote
+
+from pyparsing import ParseException
+from rdflib import OWL, RDF, RDFS, XSD, Dataset, Graph, Literal, URIRef
+from rdflib.plugins.parsers.notation3 import BadSyntax
+from rdflib.plugins.sparql import prepareQuery
+from rdflib.plugins.sparql.sparql import Query
+from rdflib.term import Node
+
+from shary.errors import FileError, Problem
+from shary.io.yamlsafe import read_text
+
+__all__ = ["FactDatabase", "FactEvent", "Subscription", "Value", "MAX_TURTLE_BYTES"]
+
+log = logging.getLogger(__name__)
+
+MAX_TURTLE_BYTES = 8 * 1024 * 1024
+"""Largest Turtle file accepted (8 MiB, about 100,000 triples): a-priori
+knowledge of a home is far smaller, and rdflib needs seconds per megabyte."""
+
+Value = str | int | float | bool | Node
+"""What the engine speaks: short or prefixed names, full IRIs, Python numbers
+and booleans, or rdflib terms (string literals, blank nodes)."""
+
+EventKind = typing.Literal["added", "removed"]
+
+_PREFIXES = {"rdf": str(RDF), "rdfs": str(RDFS), "xsd": str(XSD), "owl": str(OWL)}
+"""Fixed, so that what a name means does not depend on which files were loaded."""
+
+_NAME = re.compile(r"\w(?:[\w.-]*[\w-])?")
+"""A short name (the local part of a prefixed name): no spaces, colons or slashes."""
+
+_PERSPECTIVE_GRAPH = "urn:shary:perspective:"
+
+_Triple = tuple[Node, Node, Node]
+
+
+@dataclass(frozen=True)
+class FactEvent:
+    """One fact added to or removed from one perspective, in short names."""
+
+    kind: EventKind
+    subject: Value
+    predicate: Value
+    object: Value
+    perspective: str
+
+
+class Subscription:
+    """A standing interest in fact events that match a pattern; give it to ``unsubscribe``.
+
+    The pattern is kept as rdflib terms (the index keys), so that matching a
+    change never converts names.
+    """
+
+    __slots__ = ("callback", "perspective", "active", "_key", "_object", "_order")
+
+    def __init__(self, callback: Callable[[FactEvent], object],
+                 key: tuple[Node | None, Node | None], obj: Node | None,
+                 perspective: str | None, order: int):
+        self.callback = callback
+        self.perspective = perspective
+        self.active = True
+        """False once unsubscribed: a cancelled subscription receives nothing more."""
+        self._key = key
+        self._object = obj
+        self._order = order
+
+    def _matches(self, obj: Node, perspective: str) -> bool:
+        return (self.active
+                and (self._object is None or self._object == obj)
+                and (self.perspective is None or self.perspective == perspective))
+
+
+@functools.lru_cache(maxsize=256)
+def _prepare_select(text: str, namespace: str) -> Query:
+    """Parse a SELECT query once: recipes run the same few queries over and over."""
+    try:
+        query = prepareQuery(text, initNs={"w": namespace, **_PREFIXES})
+    except ParseException as err:
+        raise ValueError(f"not a SPARQL SELECT query: {err}") from None
+    if query.algebra.name != "SelectQuery":
+        kind = query.algebra.name.removesuffix("Query").upper()
+        raise ValueError(f"only SPARQL SELECT queries are run here, not {kind}")
+    return query
+
+
+def _order(term: Node) -> str:
+    """A total, stable order on terms, so that lists and events never depend on hashing."""
+    return term.n3()
+
+
+class FactDatabase:
+    """A-priori knowledge and per-agent contextual facts, with change events by pattern.
+
+    See the module's documentation for the perspective rule, the terms and the
+    order of delivery.
+    """
+
+    def __init__(self, namespace: str = "http://shary.dev/world#"):
+        self._namespace = namespace
+        self._prefixes = {"w": namespace, **_PREFIXES}
+        self._dataset = Dataset()
+        self._apriori = self._dataset.default_graph
+        self._graphs: dict[str, Graph] = {}
+        # Caches both ways between names and IRIs: a world's vocabulary is small
+        # and the same names come back with every perception update.
+        self._terms: dict[str, Node] = {}
+        self._names: dict[URIRef, str] = {}
+        self._index: dict[tuple[Node | None, Node | None], list[Subscription]] = {}
+        self._orders = count()
+        self._queue: deque[tuple[EventKind, Node, Node, Node, str]] = deque()
+        self._delivering = False
+
+    @property
+    def dataset(self) -> Dataset:
+        """The underlying dataset (a-priori default graph, one named graph per
+        perspective), for exporting it, e.g. as TriG; change facts through the
+        database's methods, or subscribers will not hear of it."""
+        return self._dataset
+
+    # -- terms -----------------------------------------------------------------------------------
+
+    def term(self, value: Value) -> Node:
+        """The rdflib term for a short name, prefixed name, full IRI, number or boolean."""
+        if isinstance(value, Node):
+            return value
+        if isinstance(value, str):
+            term = self._terms.get(value)
+            if term is None:
+                term = self._terms[value] = self._parse_name(value)
+            return term
+        if isinstance(value, (bool, int, float)):
+            return Literal(value)
+        raise TypeError(f"cannot make an RDF term of {type(value).__name__} {value!r}")
+
+    def _parse_name(self, text: str) -> URIRef:
+        prefix, colon, local = text.partition(":")
+        if not colon:
+            if _NAME.fullmatch(text):
+                return URIRef(self._namespace + text)
+            raise ValueError(f"{text!r} is not a name: use letters, digits, '_', '-' and '.' "
+                             "(and rdflib.Literal for a string literal)")
+        if prefix in self._prefixes:
+            if _NAME.fullmatch(local):
+                return URIRef(self._prefixes[prefix] + local)
+            raise ValueError(f"{text!r}: {local!r} is not a name")
+        if (local.startswith("//") or prefix == "urn") and not any(c.isspace() for c in text):
+            return URIRef(text)
+        known = ", ".join(sorted(self._prefixes))
+        raise ValueError(f"{text!r}: unknown prefix {prefix!r} (known: {known}); "
+                         "a full IRI starts with http://, https:// or urn:")
+
+    def name(self, term: Node) -> Value:
+        """The inverse of :meth:`term`: the short name, prefixed name or full IRI of an
+        IRI, the Python value of a bool/int/float literal, any other term as it is."""
+        if isinstance(term, URIRef):
+            try:
+                return self._names[term]
+            except KeyError:
+                name = self._names[term] = self._short(term)
+                return name
+        if isinstance(term, Literal):
+            value = term.toPython()
+            if isinstance(value, (bool, int, float)):
+                return value
+        return term
+
+    def _short(self, iri: URIRef) -> str:
+        if iri.startswith(self._namespace) and _NAME.fullmatch(iri[len(self._namespace):]):
+            return str(iri[len(self._namespace):])
+        for prefix, namespace in _PREFIXES.items():
+            if iri.startswith(namespace) and _NAME.fullmatch(iri[len(namespace):]):
+                return f"{prefix}:{iri[len(namespace):]}"
+        return str(iri)
+
+    def _triple(self, s: Value, p: Value, o: Value) -> _Triple:
+        return self.term(s), self.term(p), self.term(o)
+
+    # -- perspectives ----------------------------------------------------------------------------
+
+    def perspectives(self) -> list[str]:
+        """The perspectives written to so far, in the order they were created."""
+        return list(self._graphs)
+
+    def _view(self, perspective: str) -> Graph:
+        """The graph to read a perspective from (the a-priori graph until it diverges)."""
+        return self._graphs.get(perspective, self._apriori)
+
+    def _graph(self, perspective: str) -> Graph:
+        """The graph to write a perspective to, created as a copy of the a-priori graph."""
+        graph = self._graphs.get(perspective)
+        if graph is None:
+            if not isinstance(perspective, str) or not perspective:
+                raise ValueError(f"a perspective is an agent's name, not {perspective!r}")
+            graph = self._dataset.graph(URIRef(_PERSPECTIVE_GRAPH + quote(perspective, safe="")))
+            graph += self._apriori
+            self._graphs[perspective] = graph
+        return graph
+
+    # -- loading ---------------------------------------------------------------------------------
+
+    def load_turtle(self, path: str | os.PathLike[str], perspective: str | None = None) -> int:
+        """Load a Turtle file into the a-priori graph (``None``) or one perspective.
+
+        Returns the number of triples the file holds.  The file is parsed in
+        full before anything changes, so a refused file leaves the database
+        as it was.  Delivers no events (see the module's documentation).
+        """
+        file = os.fspath(path)
+        parsed = _parse_turtle(read_text(file, max_bytes=MAX_TURTLE_BYTES), file)
+        if perspective is None:
+            self._apriori += parsed
+            for graph in self._graphs.values():
+                graph += parsed
+        else:
+            graph = self._graph(perspective)
+            graph += parsed
+        return len(parsed)
+
+    # -- reading ---------------------------------------------------------------------------------
+
+    def holds(self, s: Value, p: Value, o: Value, perspective: str = "robot") -> bool:
+        """Whether the agent of ``perspective`` believes the fact."""
+        return self._triple(s, p, o) in self._view(perspective)
+
+    def objects(self, s: Value, p: Value, perspective: str = "robot") -> list[Value]:
+        """Every object of (s, p) in a perspective, as names, in a stable order."""
+        view = self._view(perspective)
+        return [self.name(o) for o in sorted(view.objects(self.term(s), self.term(p)), key=_order)]
+
+    def select(self, sparql: str, perspective: str = "robot",
+               **bindings: Value) -> list[dict[str, Value | None]]:
+        """Run a SPARQL SELECT over one perspective; rows map each variable to a name.
+
+        ``w:``, ``rdf:``, ``rdfs:``, ``xsd:`` and ``owl:`` are declared.  Keyword
+        arguments bind variables before the query runs (SPARQL's initBindings),
+        so values never have to be pasted into query text.  A variable left
+        unbound in a row maps to None.  Rows come in the engine's order; write
+        ORDER BY when the order matters.  Anything but SELECT raises ValueError:
+        facts change through :meth:`add` and :meth:`remove`, which deliver events.
+        """
+        query = _prepare_select(sparql, self._namespace)
+        init = {variable: self.term(value) for variable, value in bindings.items()}
+        result = self._view(perspective).query(query, initBindings=init)
+        names = [str(variable) for variable in result.vars or ()]
+        return [{name: None if value is None else self.name(value)
+                 for name, value in zip(names, row, strict=True)}
+                for row in result]
+
+    # -- changing --------------------------------------------------------------------------------
+
+    def add(self, s: Value, p: Value, o: Value, perspective: str = "robot") -> bool:
+        """Add a fact to a perspective; True (and an "added" event) when it is new."""
+        triple = self._triple(s, p, o)
+        graph = self._graph(perspective)
+        size = len(graph)
+        graph.add(triple)
+        if len(graph) == size:
+            return False
+        self._deliver(("added", *triple, perspective))
+        return True
+
+    def remove(self, s: Value, p: Value, o: Value, perspective: str = "robot") -> bool:
+        """Remove a fact from a perspective; True (and a "removed" event) when it was there."""
+        triple = self._triple(s, p, o)
+        graph = self._graph(perspective)
+        if triple not in graph:
+            return False
+        graph.remove(triple)
+        self._deliver(("removed", *triple, perspective))
+        return True
+
+    def set(self, s: Value, p: Value, o: Value, perspective: str = "robot") -> bool:
+        """Make ``o`` the only object of (s, p), for functional predicates (a position,
+        what an object is on).
+
+        Removes every other object first (in a stable order), then adds ``o``;
+        all these events are delivered once the whole change is made, so no
+        subscriber sees (s, p) without an object in between.  Returns True when
+        the fact (s, p, o) was new.
+        """
+        s_term, p_term, o_term = self._triple(s, p, o)
+        graph = self._graph(perspective)
+        changes: list[tuple[EventKind, Node, Node, Node, str]] = []
+        for old in sorted(graph.objects(s_term, p_term), key=_order):
+            if old != o_term:
+                graph.remove((s_term, p_term, old))
+                changes.append(("removed", s_term, p_term, old, perspective))
+        new = (s_term, p_term, o_term) not in graph
+        if new:
+            graph.add((s_term, p_term, o_term))
+            changes.append(("added", s_term, p_term, o_term, perspective))
+        self._deliver(*changes)
+        return new
+
+    # -- events ----------------------------------------------------------------------------------
+
+    def subscribe(self, callback: Callable[[FactEvent], object], subject: Value | None = None,
+                  predicate: Value | None = None, object: Value | None = None,
+                  perspective: str | None = None) -> Subscription:
+        """Call ``callback(event)`` for every change matching the pattern (None: anything)."""
+        key = (None if subject is None else self.term(subject),
+               None if predicate is None else self.term(predicate))
+        subscription = Subscription(callback, key, None if object is None else self.term(object),
+                                    perspective, next(self._orders))
+        self._index.setdefault(key, []).append(subscription)
+        return subscription
+
+    def unsubscribe(self, subscription: Subscription) -> None:
+        """Stop a subscription at once (even mid-delivery); unsubscribing twice is harmless."""
+        if not subscription.active:
+            return
+        subscription.active = False
+        bucket = self._index[subscription._key]
+        bucket.remove(subscription)
+        if not bucket:
+            del self._index[subscription._key]
+
+    def _deliver(self, *changes: tuple[EventKind, Node, Node, Node, str]) -> None:
+        """Queue events and, unless already delivering, deliver the queue (FIFO).
+
+        A failing callback does not keep the other subscribers from their
+        events (they would drift from the facts); the first error is raised
+        once the queue is empty, and any further ones are logged.
+        """
+        self._queue.extend(changes)
+        if self._delivering:
+            return
+        self._delivering = True
+        errors: list[Exception] = []
+        try:
+            while self._queue:
+                kind, s, p, o, perspective = self._queue.popleft()
+                event = None
+                for subscription in self._candidates(s, p):
+                    if not subscription._matches(o, perspective):
+                        continue
+                    if event is None:
+                        event = FactEvent(kind, self.name(s), self.name(p), self.name(o),
+                                          perspective)
+                    try:
+                        subscription.callback(event)
+                    except Exception as err:
+                        if errors:
+                            log.error("fact subscriber failed on %s", event, exc_info=err)
+                        errors.append(err)
+        finally:
+            # Empty unless delivery was interrupted (KeyboardInterrupt …): stale
+            # events must not surface later, after some unrelated change.
+            self._queue.clear()
+            self._delivering = False
+        if errors:
+            raise errors[0]
+
+    def _candidates(self, s: Node, p: Node) -> list[Subscription]:
+        """The subscriptions whose subject and predicate match, in subscription order.
+
+        A copy: callbacks may subscribe and unsubscribe while it is walked.
+        """
+        index = self._index
+        if not index:
+            return []
+        buckets = [bucket for bucket in (index.get((s, p)), index.get((None, p)),
+                                         index.get((s, None)), index.get((None, None)))
+                   if bucket]
+        if len(buckets) == 1:
+            return list(buckets[0])
+        return sorted((sub for bucket in buckets for sub in bucket), key=lambda sub: sub._order)
+
+
+def _parse_turtle(text: str, file: str) -> Graph:
+    """Parse Turtle text into a new graph, or raise FileError with positions.
+
+    rdflib accepts literals whose text does not fit their datatype
+    (``"abc"^^xsd:integer``), printing a traceback through its logger and
+    warnings; here they are mistakes in the file like any other, refused with
+    a position, and rdflib's output is kept off the user's terminal.
+    """
+    parsed = Graph()
+    rdflib_terms = logging.getLogger("rdflib.term")
+    rdflib_terms.addFilter(_drop)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            parsed.parse(data=text, format="turtle", publicID=Path(file).resolve().as_uri())
+    except BadSyntax as err:
+        line, col = _syntax_position(err)
+        raise FileError([Problem(file, line, col, f"invalid Turtle: {err._why}")]) from None
+    except Exception as err:  # rdflib raises ValueError & co. for bad terms, without position
+        raise FileError([Problem(file, 1, 1, f"invalid Turtle: {err}")]) from None
+    finally:
+        rdflib_terms.removeFilter(_drop)
+    ill_typed = {o for o in parsed.objects() if isinstance(o, Literal) and o.ill_typed}
+    if ill_typed:
+        raise FileError([Problem(file, *_find_literal(text, literal),
+                                 f"ill-typed literal: {literal.n3()}")
+                         for literal in ill_typed])
+    return parsed
+
+
+def _drop(record: logging.LogRecord) -> bool:
+    """A logging filter that lets nothing through."""
+    return False
+
+
+def _find_literal(text: str, literal: Literal) -> tuple[int, int]:
+    """Where a literal's text first appears quoted; the file's start when rdflib
+    rewrote it (it turns an ill-typed boolean into "false")."""
+    lexical = str(literal)
+    found = [at for mark in "\"'" if (at := text.find(f"{mark}{lexical}{mark}")) >= 0]
+    if not found:
+        return 1, 1
+    at = min(found)
+    return text.count("\n", 0, at) + 1, at - (text.rfind("\n", 0, at) + 1) + 1
+
+
+def _syntax_position(err: BadSyntax) -> tuple[int, int]:
+    """Line and column of a Turtle syntax error.
+
+    The line is the one rdflib's message gives ("at line N"); rdflib exposes
+    no column, so it is counted from the offset the error keeps of the text.
+    """
+    text = err._str.decode("utf-8")
+    return err.lines + 1, err._i - (text.rfind("\n", 0, err._i) + 1) + 1

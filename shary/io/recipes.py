@@ -1,0 +1,399 @@
+"""Loading recipe libraries: schema first, then meaning, across all files at once.
+
+Files refer to each other (a recipe in one file serves a task declared in
+another), so :func:`load_library` reads every file, then checks the whole:
+unknown tasks, acts, parameters, atomic tasks and predicates, acts that the
+task's scheme never carries out, cyclic orderings of steps, missing arguments,
+chronicle goals using unbound variables.  Every problem names its file,
+line and column.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+import networkx as nx
+
+from shary import builtin
+from shary.acts import ActRegistry, builtin_acts
+from shary.errors import FileError, Problem
+from shary.io import schema, yamlsafe
+from shary.io.schema import did_you_mean
+from shary.io.schemes import load_scheme
+from shary.model import Scheme, parse_duration
+from shary.recipes import (
+    ANY_TASK,
+    ROBOT_PARAM,
+    AtomicTask,
+    Chronicle,
+    ChronicleEvent,
+    Condition,
+    Monitor,
+    Pattern,
+    PlanSpec,
+    Recipe,
+    RecipeLibrary,
+    Retry,
+    SchemeChoice,
+    Step,
+    TaskType,
+    Term,
+)
+
+ANY = TaskType(ANY_TASK, (), {}, ())
+"""What a recipe for any task may assume: only the robot."""
+
+
+def builtin_library_files() -> list[Path]:
+    return builtin.files("recipes")
+
+
+def load_library(paths: list[str | os.PathLike[str]] | None = None, *,
+                 acts: ActRegistry | None = None, with_builtin: bool = True) -> RecipeLibrary:
+    """Load and check recipe files (the built-in ones first, unless told otherwise)."""
+    files = [Path(p) for p in (builtin_library_files() if with_builtin else [])]
+    files += [Path(p) for p in paths or [] if Path(p) not in files]
+    problems: list[Problem] = []
+    documents: list[yamlsafe.Located] = []
+    for path in files:
+        try:
+            located = yamlsafe.load_file(path)
+        except FileError as err:
+            problems.extend(err.problems)
+            continue
+        if not isinstance(located.data, dict):
+            problems.append(located.problem((), "expected a mapping (with tasks, recipes, "
+                                            "atomic, predicates or chronicles) at the top"))
+            continue
+        problems.extend(schema.check(located, "recipes"))
+        documents.append(located)
+    builder = _Builder(acts or builtin_acts())
+    for located in documents:
+        builder.declare(located)
+    for located in documents:
+        builder.define(located)
+    problems.extend(builder.problems)
+    if problems:
+        raise FileError(problems)
+    return builder.library
+
+
+class _Builder:
+    def __init__(self, acts: ActRegistry):
+        self.acts = acts
+        self.library = RecipeLibrary()
+        self.problems: list[Problem] = []
+        self.schemes: dict[str, Scheme | None] = {}
+
+    def problem(self, located: yamlsafe.Located, path: tuple, message: str, *,
+                key: bool = False) -> None:
+        self.problems.append(located.problem(path, message, key=key))
+
+    # -- first pass: the vocabulary ----------------------------------------
+
+    def declare(self, located: yamlsafe.Located) -> None:
+        data = located.data
+        for name, doc in _items(data.get("predicates")):
+            self.library.predicates[name] = doc if isinstance(doc, str) else ""
+        for name, spec in _items(data.get("atomic")):
+            spec = spec if isinstance(spec, dict) else {}
+            self.library.atomic[name] = AtomicTask(name, tuple(_strings(spec.get("params"))),
+                                                   spec.get("doc", "") or "")
+        for name, spec in _items(data.get("tasks")):
+            if isinstance(spec, dict):
+                self._task(located, name, spec)
+
+    def _task(self, located: yamlsafe.Located, name: str, spec: dict[str, Any]) -> None:
+        path = ("tasks", name)
+        if name in self.library.tasks:
+            self.problem(located, path, f"task {name!r} is declared twice", key=True)
+            return
+        params = tuple(_strings(spec.get("params")))
+        if ROBOT_PARAM in params:
+            self.problem(located, path + ("params",), f"'{ROBOT_PARAM}' is implicit: every "
+                         "task has it")
+        env = {ROBOT_PARAM, *params}
+        raw = spec.get("scheme")
+        if isinstance(raw, str):
+            options = [(path + ("scheme",), raw, path, None)]
+        else:
+            options = [(path + ("scheme", i, "scheme"), c.get("scheme"),
+                        path + ("scheme", i, "when"), c.get("when"))
+                       for i, c in enumerate(raw or []) if isinstance(c, dict)]
+        choices = []
+        for where, scheme_name, when_path, when in options:
+            scheme = self._scheme(located, where, scheme_name)
+            conditions = self._conditions(located, when_path, when, env)
+            if scheme is not None:
+                choices.append(SchemeChoice(scheme, conditions))
+        roles = {k: Term.parse(v) for k, v in _items(spec.get("roles"))}
+        for role, term in roles.items():
+            self._check_term(located, path + ("roles", role), term, env)
+        for choice in choices:
+            for role in choice.scheme.roles:
+                if role not in roles and role != ROBOT_PARAM and role not in params:
+                    self.problem(located, path, f"scheme {choice.scheme.name!r} has the role "
+                                 f"{role!r}; say who plays it under 'roles:' (e.g. "
+                                 f"{role}: $someone)", key=True)
+        self.library.tasks[name] = TaskType(name, params, roles, tuple(choices),
+                                            spec.get("doc", "") or "")
+
+    def _scheme(self, located: yamlsafe.Located, path: tuple, name: Any) -> Scheme | None:
+        if not isinstance(name, str):
+            return None
+        local = Path(located.file).parent / name
+        ref = str(local) if local.suffix in (".yaml", ".yml") and local.exists() else name
+        if ref not in self.schemes:
+            try:
+                self.schemes[ref] = load_scheme(ref, acts=self.acts)
+            except FileError as err:
+                self.schemes[ref] = None
+                messages = "; ".join(str(p) for p in err.problems[:3])
+                self.problem(located, path, f"scheme {name!r} cannot be used: {messages}")
+        return self.schemes[ref]
+
+    # -- second pass: recipes and chronicles ---------------------------------
+
+    def define(self, located: yamlsafe.Located) -> None:
+        data = located.data
+        recipes = data.get("recipes")
+        for index, spec in enumerate(recipes if isinstance(recipes, list) else []):
+            if isinstance(spec, dict):
+                self._recipe(located, ("recipes", index), spec)
+        for name, spec in _items(data.get("chronicles")):
+            if isinstance(spec, dict):
+                self._chronicle(located, ("chronicles", name), name, spec)
+
+    def _recipe(self, located: yamlsafe.Located, path: tuple, spec: dict[str, Any]) -> None:
+        task_name, act = spec.get("task"), spec.get("act")
+        if not isinstance(task_name, str) or not isinstance(act, str):
+            return
+        task = ANY if task_name == ANY_TASK else self.library.tasks.get(task_name)
+        if task is None:
+            self.problem(located, path + ("task",), f"unknown task {task_name!r}"
+                         f"{did_you_mean(task_name, self.library.tasks)}")
+            return
+        if act not in self.acts:
+            self.problem(located, path + ("act",), f"unknown act {act!r}"
+                         f"{did_you_mean(act, self.acts.acts)}")
+            return
+        if task.schemes and not any(any(s.act == act for s in c.scheme.states.values())
+                                    for c in task.schemes):
+            names = ", ".join(c.scheme.name for c in task.schemes)
+            self.problem(located, path + ("act",), f"no state of the scheme(s) of task "
+                         f"{task_name!r} ({names}) carries out {act!r}")
+        env = {ROBOT_PARAM, *task.params}
+        steps = self._steps(located, path + ("steps",), spec.get("steps"), env)
+        monitors = tuple(self._monitor(located, path + ("monitors", i), m, env)
+                         for i, m in enumerate(spec.get("monitors") or [])
+                         if isinstance(m, dict))
+        plan = None
+        if isinstance(spec.get("plan"), dict):
+            raw = spec["plan"]
+            args = {k: Term.parse(v) for k, v in _items(raw.get("with"))}
+            for key, term in args.items():
+                self._check_term(located, path + ("plan", "with", key), term, env)
+            refine = {k: Term.parse(v) for k, v in _items(raw.get("refine"))}
+            for key, term in refine.items():
+                if term.kind == "const" and term.value not in self.library.tasks:
+                    self.problem(located, path + ("plan", "refine", key),
+                                 f"unknown task {term.value!r} to refine {key!r}")
+            plan = PlanSpec(str(raw.get("domain")), str(raw.get("task")), args, refine)
+        retry = Retry()
+        if isinstance(spec.get("retry"), dict):
+            raw = spec["retry"]
+            then = raw.get("then", "fail")
+            retry = Retry(int(raw.get("max_attempts", 1)),
+                          "emit" if isinstance(then, dict) else str(then),
+                          then.get("emit") if isinstance(then, dict) else None)
+        given = [k for k in ("steps", "plan", "function") if k in spec]
+        if len(given) > 1:
+            self.problem(located, path + (given[1],), f"a recipe has steps, a plan or a "
+                         f"function, not {' and '.join(given)}", key=True)
+        when = self._conditions(located, path + ("when",), spec.get("when"), env)
+        rank = len(self.library.recipes_for(task_name, act)) + 1
+        name = spec.get("name") or f"{task_name}/{act}#{rank}"
+        self.library.recipes.append(Recipe(
+            name, task_name, act, when, steps, plan,
+            spec.get("function") if isinstance(spec.get("function"), str) else None,
+            monitors, retry, spec.get("doc", "") or "", located.file,
+            located.key_at(path)))
+
+    def _steps(self, located: yamlsafe.Located, path: tuple, raw: Any,
+               env: set[str]) -> tuple[Step, ...]:
+        if not isinstance(raw, list):
+            return ()
+        steps: list[Step] = []
+        names: dict[str, int] = {}
+        order = nx.DiGraph()
+        for index, spec in enumerate(raw):
+            if not isinstance(spec, dict):
+                continue
+            where = path + (index,)
+            name = spec.get("name") or spec.get("do") or spec.get("task") or f"step{index + 1}"
+            if name in names:
+                name = f"{name}-{index + 1}" if "name" not in spec else name
+                if name in names:
+                    self.problem(located, where + ("name",), f"two steps are named {name!r}")
+                    continue
+            names[name] = index
+            after = tuple(_strings(spec.get("after"))) if "after" in spec else \
+                ((steps[-1].name,) if steps else ())
+            args = {k: Term.parse(v) for k, v in _items(spec.get("with"))}
+            for key, term in args.items():
+                self._check_term(located, where + ("with", key), term, env)
+            by = Term.parse(spec["by"]) if "by" in spec else None
+            if by is not None:
+                self._check_term(located, where + ("by",), by, env)
+            atomic, task = spec.get("do"), spec.get("task")
+            if isinstance(atomic, str):
+                self._check_call(located, where, "atomic task", atomic, self.library.atomic,
+                                 self.library.atomic.get(atomic) and
+                                 self.library.atomic[atomic].params, args)
+            if isinstance(task, str):
+                self._check_call(located, where, "task", task, self.library.tasks,
+                                 self.library.tasks.get(task) and
+                                 self.library.tasks[task].params, args)
+            step = Step(name, atomic if isinstance(atomic, str) else None,
+                        task if isinstance(task, str) else None, args, by, after,
+                        spec.get("emit"))
+            steps.append(step)
+            order.add_node(name)
+        for step in steps:
+            for before in step.after:
+                if before not in names:
+                    self.problem(located, path + (names[step.name], "after"),
+                                 f"step {step.name!r} comes after {before!r}, which is not a "
+                                 f"step of this recipe{did_you_mean(before, names)}")
+                else:
+                    order.add_edge(before, step.name)
+        try:
+            cycle = nx.find_cycle(order)
+        except nx.NetworkXNoCycle:
+            cycle = []
+        if cycle:
+            loop = " -> ".join([a for a, _ in cycle] + [cycle[0][0]])
+            self.problem(located, path, f"the steps are ordered in a cycle: {loop}")
+        return tuple(steps)
+
+    def _check_call(self, located: yamlsafe.Located, where: tuple, what: str, name: str,
+                    known: dict, params: Any, args: dict[str, Term]) -> None:
+        key = "do" if what == "atomic task" else "task"
+        if name not in known:
+            self.problem(located, where + (key,), f"unknown {what} {name!r}"
+                         f"{did_you_mean(name, known)}" + ("; declare it under 'atomic:'"
+                                                          if what == "atomic task" else ""))
+            return
+        params = tuple(params or ())
+        for arg in args:
+            if arg not in params:
+                self.problem(located, where + ("with", arg), f"{what} {name!r} has no "
+                             f"parameter {arg!r}{did_you_mean(arg, params)}; its parameters: "
+                             f"{', '.join(params) or 'none'}", key=True)
+        missing = [p for p in params if p not in args]
+        if missing:
+            self.problem(located, where + (key,), f"{what} {name!r} needs "
+                         f"{', '.join(missing)} (under 'with:')")
+
+    def _monitor(self, located: yamlsafe.Located, path: tuple, spec: dict[str, Any],
+                 env: set[str]) -> Monitor:
+        change = "added" if "added" in spec else "removed"
+        pattern = self._pattern(located, path + (change,), spec.get(change), env)
+        perspective = Term.parse(spec["perspective"]) if "perspective" in spec else None
+        if perspective is not None:
+            self._check_term(located, path + ("perspective",), perspective, env)
+        name = spec.get("name") or f"{change}-{pattern.predicate}"
+        return Monitor(name, change, pattern, str(spec.get("emit", "")), perspective)
+
+    def _pattern(self, located: yamlsafe.Located, path: tuple, raw: Any, env: set[str],
+                 variables: set[str] | None = None) -> Pattern:
+        items = raw if isinstance(raw, list) and len(raw) == 3 else ["_", "_", "_"]
+        terms = [Term.parse(x) for x in items]
+        for index, term in enumerate(terms):
+            if term.kind == "param" and variables is not None:
+                variables.add(term.value)
+            else:
+                self._check_term(located, path + (index,), term, env)
+        predicate = terms[1]
+        if predicate.kind != "const":
+            self.problem(located, path + (1,), "the predicate of a pattern must be a constant")
+        elif predicate.value not in self.library.predicates:
+            self.problem(located, path + (1,), f"unknown predicate {predicate.value!r}"
+                         f"{did_you_mean(str(predicate.value), self.library.predicates)}; "
+                         "declare it under 'predicates:'")
+        return Pattern(*terms)
+
+    def _conditions(self, located: yamlsafe.Located, path: tuple, raw: Any,
+                    env: set[str]) -> tuple[Condition, ...]:
+        out = []
+        for index, spec in enumerate(raw if isinstance(raw, list) else []):
+            if isinstance(spec, dict) and spec:
+                negated = "not" in spec
+                key = "not" if negated else "holds"
+                pattern = self._pattern(located, path + (index, key), spec.get(key), env)
+                if pattern.subject.kind == "any" or pattern.predicate.kind == "any":
+                    self.problem(located, path + (index, key), "a condition needs a subject "
+                                 "and a predicate (only the object may be _)")
+                out.append(Condition(pattern, negated))
+        return tuple(out)
+
+    def _check_term(self, located: yamlsafe.Located, path: tuple, term: Term,
+                    env: set[str]) -> None:
+        if term.kind == "param" and term.value not in env:
+            self.problem(located, path, f"unknown parameter ${term.value}"
+                         f"{did_you_mean(term.value, sorted(env))}; parameters here: "
+                         f"{', '.join('$' + p for p in sorted(env))}")
+
+    def _chronicle(self, located: yamlsafe.Located, path: tuple, name: str,
+                   spec: dict[str, Any]) -> None:
+        variables: set[str] = set()
+        events = []
+        for index, raw in enumerate(spec.get("events") or []):
+            if not isinstance(raw, dict):
+                continue
+            change = "added" if "added" in raw else "removed"
+            pattern = self._pattern(located, path + ("events", index, change), raw.get(change),
+                                    set(), variables)
+            timing = {k: parse_duration(raw[k]) for k in ("within", "after", "stays")
+                      if isinstance(raw.get(k), str) and _is_duration(raw[k])}
+            events.append(ChronicleEvent(change, pattern, **timing))
+        goal = spec.get("goal") if isinstance(spec.get("goal"), dict) else {}
+        task_name = goal.get("task")
+        args = {k: Term.parse(v) for k, v in _items(goal.get("with"))}
+        task = self.library.tasks.get(task_name) if isinstance(task_name, str) else None
+        if isinstance(task_name, str) and task is None:
+            self.problem(located, path + ("goal", "task"), f"unknown task {task_name!r}"
+                         f"{did_you_mean(task_name, self.library.tasks)}")
+        for key, term in args.items():
+            if term.kind == "param" and term.value not in variables:
+                self.problem(located, path + ("goal", "with", key), f"${term.value} is not "
+                             "bound by any event of the chronicle")
+            if task is not None and key not in task.params:
+                self.problem(located, path + ("goal", "with", key), f"task {task_name!r} has "
+                             f"no parameter {key!r}", key=True)
+        if task is not None:
+            missing = [p for p in task.params if p not in args]
+            if missing:
+                self.problem(located, path + ("goal",), f"the goal needs {', '.join(missing)} "
+                             "(under 'with:')")
+        self.library.chronicles[name] = Chronicle(
+            name, tuple(events), str(task_name), args, int(goal.get("priority", 0)),
+            str(goal.get("todo", "default")), spec.get("doc", "") or "")
+
+
+def _items(value: Any) -> list[tuple[str, Any]]:
+    return list(value.items()) if isinstance(value, dict) else []
+
+
+def _strings(value: Any) -> list[str]:
+    return [v for v in value if isinstance(v, str)] if isinstance(value, list) else []
+
+
+def _is_duration(text: str) -> bool:
+    try:
+        parse_duration(text)
+    except ValueError:
+        return False
+    return True

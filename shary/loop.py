@@ -1,0 +1,99 @@
+"""One event loop, one clock, no threads.
+
+Everything the supervisor does runs as a callback of this loop: executor
+reports, fact events, timers, scheme steps.  Work scheduled with
+:meth:`EventLoop.call_soon` runs in FIFO order once the current callback has
+returned, which gives run-to-completion at the level of the whole supervisor
+and a deterministic order for a given seed.
+
+With a :class:`~shary.clock.SimulatedClock` (headless runs, tests), whoever
+drives the world calls :meth:`EventLoop.advance`; with a :class:`WallClock`
+(a real robot), :meth:`EventLoop.run_for` sleeps until the next timer.
+"""
+
+from __future__ import annotations
+
+import random
+import time
+from collections import deque
+from collections.abc import Callable
+from typing import Any
+
+from shary.clock import Clock, SimulatedClock, Timer
+
+MAX_CALLBACKS_PER_DRAIN = 1_000_000
+"""Callbacks run without time passing before the loop declares a livelock."""
+
+
+class WallClock(SimulatedClock):
+    """Real time (monotonic seconds since creation), with the same timer heap."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._origin = time.monotonic()
+
+    def now(self) -> float:
+        return time.monotonic() - self._origin
+
+    def call_later(self, delay: float, callback: Callable[..., Any], *args: Any) -> Timer:
+        self._now = self.now()
+        return super().call_later(delay, callback, *args)
+
+
+class EventLoop:
+    """The supervisor's single-threaded loop: a clock, a FIFO of ready work, a seeded RNG."""
+
+    def __init__(self, clock: Clock | None = None, seed: int = 0):
+        self.clock = clock if clock is not None else SimulatedClock()
+        self.seed = seed
+        self.random = random.Random(seed)
+        self._ready: deque[tuple[Callable[..., Any], tuple]] = deque()
+
+    def now(self) -> float:
+        return self.clock.now()
+
+    def call_soon(self, callback: Callable[..., Any], *args: Any) -> None:
+        """Run ``callback(*args)`` after the current callback, in FIFO order."""
+        self._ready.append((callback, args))
+
+    def call_later(self, delay: float, callback: Callable[..., Any], *args: Any) -> Timer:
+        """Run ``callback(*args)`` ``delay`` seconds from now (cancel with ``.cancel()``)."""
+        return self.clock.call_later(delay, self.call_soon, callback, *args)
+
+    def run_until_idle(self) -> int:
+        """Run ready callbacks until none is left; return how many ran."""
+        ran = 0
+        ready = self._ready
+        while ready:
+            callback, args = ready.popleft()
+            callback(*args)
+            ran += 1
+            if ran > MAX_CALLBACKS_PER_DRAIN:
+                raise RuntimeError("the event loop never became idle (a livelock?)")
+        return ran
+
+    def advance(self, seconds: float) -> None:
+        """Simulated time: move on ``seconds``, firing timers in order, idle after each."""
+        assert isinstance(self.clock, SimulatedClock)
+        self.run_until_idle()
+        target = self.clock.now() + seconds
+        while True:
+            due = self.clock.next_due()
+            if due is None or due > target:
+                break
+            self.clock.advance_to(due)
+            self.run_until_idle()
+        self.clock.advance_to(target)
+        self.run_until_idle()
+
+    def run_for(self, seconds: float) -> None:
+        """Real time: run for ``seconds``, sleeping between timers."""
+        end = self.clock.now() + seconds
+        self.run_until_idle()
+        while self.clock.now() < end:
+            due = self.clock.next_due() if isinstance(self.clock, SimulatedClock) else None
+            wake = end if due is None else min(due, end)
+            time.sleep(max(0.0, wake - self.clock.now()))
+            if isinstance(self.clock, SimulatedClock):
+                self.clock.advance_to(self.clock.now())
+            self.run_until_idle()

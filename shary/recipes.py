@@ -1,0 +1,233 @@
+"""Recipes and the vocabulary around them: tasks, atomic tasks, monitors, chronicles.
+
+SHARY: "Task recipes are methods that compute the partially ordered list of
+subtasks of an act X task.  This sub-task tree contains both a set of tasks
+needed for the achievement of the act X task but also a list of tasks
+required for monitoring the execution."  A recipe library (``recipes/*.yaml``)
+declares:
+
+* the **predicates** facts may use and the **atomic** tasks executors perform
+  (so that a typo in a monitor or a step is caught when the file is loaded);
+* **tasks**: which communication scheme runs a task, chosen by context when
+  several are given (SHARY's adapted schemes), and who plays its roles;
+* **recipes**, one or several per (task, act), chosen by context: scripted
+  steps, a plan from a planner, or a registered Python function;
+* **chronicles**: patterns of fact events over time that put a goal on the
+  agenda (the robot's initiative).
+
+Terms in files: ``$name`` is a parameter of the task (in a chronicle, a
+variable bound by its events), ``_`` anything, everything else a constant.
+(``?name`` would read better for variables, but YAML takes ``?`` in ``[?x]``
+for a complex key.)
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from typing import Any
+
+from shary.model import Scheme
+
+_PLACEHOLDER = re.compile(r"\{([A-Za-z0-9_][A-Za-z0-9_-]*)\}")
+
+ANY_TASK = "*"
+"""A recipe for this task serves any task whose own recipes do not fit."""
+
+ROBOT_PARAM = "robot"
+"""Every task has this parameter: the robot whose supervisor runs it."""
+
+
+@dataclass(frozen=True)
+class Term:
+    """A term of a pattern or an argument: a constant, ``$name`` or ``_``."""
+
+    kind: str
+    value: Any
+
+    @staticmethod
+    def parse(raw: Any) -> Term:
+        if isinstance(raw, str):
+            if raw == "_":
+                return Term("any", None)
+            if raw.startswith("$") and len(raw) > 1:
+                return Term("param", raw[1:])
+        return Term("const", raw)
+
+    def resolve(self, env: dict[str, Any]) -> Any:
+        """The value of this term in ``env`` (None for ``_`` and unbound names).
+
+        A constant string may name parameters in braces (``"the {object}"``): they
+        are replaced by their values; nothing else in the text is interpreted.
+        """
+        if self.kind == "const":
+            if isinstance(self.value, str) and "{" in self.value:
+                return _PLACEHOLDER.sub(lambda m: str(env.get(m.group(1), m.group(0))),
+                                        self.value)
+            return self.value
+        if self.kind == "any":
+            return None
+        return env.get(self.value)
+
+    def __str__(self) -> str:
+        prefix = {"param": "$", "any": "_", "const": ""}[self.kind]
+        return prefix + ("" if self.value is None else str(self.value))
+
+
+@dataclass(frozen=True)
+class Pattern:
+    """A triple pattern over facts."""
+
+    subject: Term
+    predicate: Term
+    object: Term
+
+    def terms(self) -> tuple[Term, Term, Term]:
+        return (self.subject, self.predicate, self.object)
+
+    def resolve(self, env: dict[str, Any]) -> tuple[Any, Any, Any]:
+        return tuple(t.resolve(env) for t in self.terms())  # type: ignore[return-value]
+
+    def __str__(self) -> str:
+        return "[" + ", ".join(str(t) for t in self.terms()) + "]"
+
+
+@dataclass(frozen=True)
+class Condition:
+    """A fact that must hold (or, negated, must not) in the robot's perspective."""
+
+    pattern: Pattern
+    negated: bool = False
+
+
+@dataclass(frozen=True)
+class AtomicTask:
+    """A leaf of the task tree that an executor performs."""
+
+    name: str
+    params: tuple[str, ...] = ()
+    doc: str = ""
+
+
+@dataclass(frozen=True)
+class SchemeChoice:
+    """One scheme a task may run, used when its conditions hold."""
+
+    scheme: Scheme
+    when: tuple[Condition, ...] = ()
+
+
+@dataclass(frozen=True)
+class TaskType:
+    """A kind of task: its parameters, who plays its scheme's roles, its scheme(s)."""
+
+    name: str
+    params: tuple[str, ...]
+    roles: dict[str, Term]
+    schemes: tuple[SchemeChoice, ...]
+    doc: str = ""
+
+
+@dataclass(frozen=True)
+class Step:
+    """A subtask of a recipe: an atomic task or a task with its own scheme."""
+
+    name: str
+    atomic: str | None
+    task: str | None
+    args: dict[str, Term]
+    by: Term | None
+    after: tuple[str, ...]
+    emit: str | None = None
+
+
+@dataclass(frozen=True)
+class Monitor:
+    """A monitoring task: when a matching fact is added (or removed), emit an event."""
+
+    name: str
+    change: str
+    pattern: Pattern
+    emit: str
+    perspective: Term | None = None
+
+
+@dataclass(frozen=True)
+class Retry:
+    """How often a failed step is tried, and what happens after the last failure."""
+
+    max_attempts: int = 1
+    then: str = "fail"
+    emit: str | None = None
+
+
+@dataclass(frozen=True)
+class PlanSpec:
+    """A planner-backed recipe: which domain and task to plan, and how to refine actions."""
+
+    domain: str
+    task: str
+    args: dict[str, Term]
+    refine: dict[str, Term]
+
+
+@dataclass(frozen=True)
+class Recipe:
+    """How one act of one task is carried out, in some context."""
+
+    name: str
+    task: str
+    act: str
+    when: tuple[Condition, ...] = ()
+    steps: tuple[Step, ...] = ()
+    plan: PlanSpec | None = None
+    function: str | None = None
+    monitors: tuple[Monitor, ...] = ()
+    retry: Retry = Retry()
+    doc: str = ""
+    file: str = ""
+    mark: tuple[int, int] = (1, 1)
+
+    @property
+    def kind(self) -> str:
+        return "plan" if self.plan else "function" if self.function else "scripted"
+
+
+@dataclass(frozen=True)
+class ChronicleEvent:
+    """One fact change of a chronicle, with its timing relative to the previous one."""
+
+    change: str
+    pattern: Pattern
+    within: float | None = None
+    after: float | None = None
+    stays: float | None = None
+
+
+@dataclass(frozen=True)
+class Chronicle:
+    """A pattern of fact events over time that puts a goal on the agenda."""
+
+    name: str
+    events: tuple[ChronicleEvent, ...]
+    task: str
+    args: dict[str, Term]
+    priority: int = 0
+    todo: str = "default"
+    doc: str = ""
+
+
+@dataclass
+class RecipeLibrary:
+    """Everything loaded from recipe files, checked together."""
+
+    predicates: dict[str, str] = field(default_factory=dict)
+    atomic: dict[str, AtomicTask] = field(default_factory=dict)
+    tasks: dict[str, TaskType] = field(default_factory=dict)
+    recipes: list[Recipe] = field(default_factory=list)
+    chronicles: dict[str, Chronicle] = field(default_factory=dict)
+
+    def recipes_for(self, task: str, act: str) -> list[Recipe]:
+        """The recipes of an act within a task, in file order, then those for any task (*)."""
+        return ([r for r in self.recipes if r.task == task and r.act == act]
+                + [r for r in self.recipes if r.task == ANY_TASK and r.act == act])

@@ -1,0 +1,371 @@
+"""The supervisor: tasks, their schemes and acts, on one loop, logged.
+
+SHARY's execution stream (Fig. 3): "when the task is created, a communication
+scheme associated to the task is instantiated according to the task, the
+context and the concerned agent.  This scheme gives the first act to execute.
+The recipe corresponding to that act ... is instantiated ... During Act
+Execution, communication and execution monitoring is done through wait on
+Expected Acts.  When a monitor is triggered ... the current act is stopped and
+the answer is instantiated given the communication scheme."
+
+:class:`Supervisor` holds the parts (recipe library, fact database, executors,
+loop, task tree, agenda, context log); :class:`TaskRun` is one task being
+carried out, listening to its scheme instance: entering a state with an act
+creates an :class:`~shary.acttask.ActTask`, leaving it stops that act.  An act
+state entered inside another act's state suspends the outer act (the person
+looked away: WAIT-ATTENTION inside REALIZE-TASK), which resumes when the
+inner one is left.
+
+Nothing here knows about bottles or a particular robot: agents, tasks and
+atomic tasks all come from files and from whoever fills the executor port.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable
+from typing import Any, Protocol
+
+from shary.acttask import ActTask, StepRun
+from shary.compiler import CompiledScheme, compile_scheme
+from shary.conditions import ConditionRegistry
+from shary.executors import ExecutorRegistry, Outcome, Reporter, Request
+from shary.instance import Event, SchemeInstance, SchemeListener
+from shary.loop import EventLoop
+from shary.model import Scheme, State
+from shary.recipes import ROBOT_PARAM, Condition, Recipe, RecipeLibrary, Step, TaskType, Term
+from shary.tasktree import CANCELLED, DONE, FAILED, ONGOING, SUSPENDED, TASK, TaskTree
+
+
+class Planner(Protocol):
+    """What a planner-backed recipe needs: a list of steps for a task in the current facts."""
+
+    def plan_steps(self, domain: str, task: str, args: dict[str, Any], facts: Any,
+                   refine: dict[str, str]) -> list[Step]: ...
+
+
+RecipeFunction = Callable[["TaskRun", Recipe], list[Step]]
+"""A Python recipe: returns the steps of an act x task, given its task run."""
+
+
+class Supervisor:
+    """One robot's supervision: see the module's docstring."""
+
+    def __init__(self, library: RecipeLibrary, facts: Any, *, robot: str = "robot",
+                 loop: EventLoop | None = None, executors: ExecutorRegistry | None = None,
+                 log: Any = None, conditions: ConditionRegistry | None = None,
+                 planners: dict[str, Planner] | None = None,
+                 functions: dict[str, RecipeFunction] | None = None):
+        self.library = library
+        self.facts = facts
+        self.robot = robot
+        self.loop = loop or EventLoop()
+        self.executors = executors or ExecutorRegistry()
+        self.log = log
+        self.conditions = conditions or ConditionRegistry()
+        self.planners = dict(planners or {})
+        self.functions = dict(functions or {})
+        self.tree = TaskTree(self.record)
+        self.runs: list[TaskRun] = []
+        self._compiled: dict[int, CompiledScheme] = {}
+        self._requests: dict[str, tuple[StepRun, ActTask]] = {}
+        self._request_ids = itertools.count(1)
+        self.reporter = Reporter(self._outcome, self.loop.call_soon)
+        from shary.agenda import TaskAgenda
+
+        self.agenda = TaskAgenda(self)
+
+    # -- the context log -------------------------------------------------------
+
+    def record(self, kind: str, task: str | None = None, agent: str | None = None,
+               **data: Any) -> None:
+        if self.log is not None:
+            self.log.record(self.loop.now(), kind, task=task, agent=agent, **data)
+
+    # -- tasks -----------------------------------------------------------------
+
+    def start_task(self, name: str, args: dict[str, Any], *, parent: ActTask | None = None,
+                   parent_node: str | None = None, step: StepRun | None = None,
+                   on_finish: Callable[[TaskRun], None] | None = None) -> TaskRun:
+        """Create a task and start its scheme (raise KeyError/ValueError on a bad call)."""
+        task_type = self.library.tasks[name]
+        missing = [p for p in task_type.params if p not in args]
+        extra = [a for a in args if a not in task_type.params and a != ROBOT_PARAM]
+        if missing or extra:
+            raise ValueError(f"task {name!r} takes {', '.join(task_type.params) or 'nothing'}; "
+                             f"missing: {missing}, unknown: {extra}")
+        run = TaskRun(self, task_type, dict(args), parent, parent_node, step, on_finish)
+        self.runs.append(run)
+        run.start()
+        return run
+
+    def compiled(self, scheme: Scheme) -> CompiledScheme:
+        found = self._compiled.get(id(scheme))
+        if found is None:
+            found = self._compiled[id(scheme)] = compile_scheme(scheme, self.conditions)
+        return found
+
+    def holds(self, conditions: tuple[Condition, ...], env: dict[str, Any]) -> bool:
+        """Whether facts satisfy conditions (the robot's perspective; ``_`` object: any)."""
+        for condition in conditions:
+            s, p, o = condition.pattern.resolve(env)
+            if o is None:
+                found = bool(self.facts.objects(s, p))
+            else:
+                found = self.facts.holds(s, p, o)
+            if found == condition.negated:
+                return False
+        return True
+
+    def choose_scheme(self, task_type: TaskType, env: dict[str, Any]) -> Scheme:
+        for choice in task_type.schemes:
+            if self.holds(choice.when, env):
+                return choice.scheme
+        raise LookupError(f"no scheme of task {task_type.name!r} fits the context")
+
+    def choose_recipe(self, run: TaskRun, act: str) -> Recipe | None:
+        """The first recipe of (task, act) whose conditions hold: several may serve one act."""
+        for recipe in self.library.recipes_for(run.type.name, act):
+            if self.holds(recipe.when, run.env):
+                return recipe
+        return None
+
+    def expand(self, run: TaskRun, recipe: Recipe) -> list[Step]:
+        """The steps of a recipe: scripted, from a planner, or from a Python function."""
+        if recipe.plan is not None:
+            planner = self.planners.get(recipe.plan.domain) or self.planners.get("*")
+            if planner is None:
+                raise LookupError(f"recipe {recipe.name!r} needs a planner for domain "
+                                  f"{recipe.plan.domain!r}; none is registered")
+            args = {k: t.resolve(run.env) for k, t in recipe.plan.args.items()}
+            refine = {k: str(t.resolve(run.env)) for k, t in recipe.plan.refine.items()}
+            steps = planner.plan_steps(recipe.plan.domain, recipe.plan.task, args, self.facts,
+                                       refine)
+            self.record("plan", task=run.node, recipe=recipe.name,
+                        steps=[s.name for s in steps])
+            return steps
+        if recipe.function is not None:
+            function = self.functions.get(recipe.function)
+            if function is None:
+                raise LookupError(f"recipe {recipe.name!r} names the function "
+                                  f"{recipe.function!r}, which is not registered")
+            return list(function(run, recipe))
+        return list(recipe.steps)
+
+    # -- acts from agents -------------------------------------------------------
+
+    def receive_act(self, agent: str, act: str, data: Any = None,
+                    task: str | None = None) -> None:
+        """An agent communicated ``act`` (H-AGREE …): delivered to the tasks that expect it."""
+        self.loop.call_soon(self._receive_act, agent, act, data, task)
+
+    def _receive_act(self, agent: str, act: str, data: Any, task: str | None) -> None:
+        self.record("act-received", task=task, agent=agent, act=act)
+        taken = False
+        for run in list(self.runs):
+            if run.ended or run.paused or (task is not None and run.node != task):
+                continue
+            if agent in run.roles.values() and run.expects(act):
+                run.deliver(act, {"agent": agent, "data": data})
+                taken = True
+        if not taken:
+            self.record("act-unexpected", task=task, agent=agent, act=act)
+
+    # -- executors ----------------------------------------------------------------
+
+    def execute(self, atomic: str, args: dict[str, Any], agent: str, node: str,
+                act: ActTask) -> Request:
+        request = Request(f"r{next(self._request_ids)}", atomic, args, agent, node)
+        run = next(r for r in act.steps.values() if r.node == node)
+        self._requests[request.id] = (run, act)
+        self.record("exec-request", task=node, agent=agent, atomic=atomic, request=request.id,
+                    args=args)
+        executor = self.executors.get(atomic)
+        if executor is None:
+            self.reporter.failed(request, f"no executor is registered for {atomic!r}")
+        else:
+            executor.start(request, self.reporter)
+        return request
+
+    def cancel_request(self, request: Request, reason: str) -> None:
+        self.record("exec-cancel", task=request.node, agent=request.agent, request=request.id,
+                    reason=reason)
+        executor = self.executors.get(request.atomic)
+        if executor is not None:
+            executor.cancel(request)
+
+    def _outcome(self, outcome: Outcome) -> None:
+        request = outcome.request
+        self.record("exec-result", task=request.node, agent=request.agent,
+                    request=request.id, status=outcome.status, reason=outcome.reason or None)
+        found = self._requests.pop(request.id, None)
+        if found is not None:
+            run, act = found
+            act.outcome(run, outcome)
+
+    def missing_executors(self) -> list[str]:
+        """Atomic tasks the library declares that no executor performs."""
+        return [a for a in self.library.atomic if self.executors.get(a) is None]
+
+
+class TaskRun(SchemeListener):
+    """One task being carried out: its scheme instance and its act x task nodes."""
+
+    def __init__(self, sup: Supervisor, task_type: TaskType, args: dict[str, Any],
+                 parent: ActTask | None, parent_node: str | None, step: StepRun | None,
+                 on_finish: Callable[[TaskRun], None] | None):
+        self.sup = sup
+        self.type = task_type
+        self.robot = str(args.get(ROBOT_PARAM, sup.robot))
+        self.env: dict[str, Any] = {ROBOT_PARAM: self.robot, **args}
+        self.parent = parent
+        self.step = step
+        self.on_finish = on_finish
+        self.node = sup.tree.add(TASK, task_type.name, parent_node, args=args or None)
+        self.scheme = sup.choose_scheme(task_type, self.env)
+        self.roles = {role: _role_agent(role, task_type.roles.get(role), self.env)
+                      for role in self.scheme.roles}
+        self.compiled = sup.compiled(self.scheme)
+        self.acts: dict[str, ActTask] = {}
+        self.instance: SchemeInstance | None = None
+        self.ended = False
+        self.paused = False
+        self.outcome: str | None = None
+
+    def __repr__(self) -> str:
+        return f"<TaskRun {self.type.name} {self.node} {self.outcome or 'running'}>"
+
+    def start(self) -> None:
+        self.sup.tree.set_state(self.node, ONGOING)
+        self.sup.record("task-start", task=self.node, agent=self.robot, name=self.type.name,
+                        scheme=self.scheme.name, roles=self.roles)
+        self.instance = self.compiled.start(clock=self.sup.loop.clock, listener=self,
+                                            context=self)
+
+    @property
+    def configuration(self) -> tuple[str, ...]:
+        return self.instance.configuration if self.instance is not None else ()
+
+    def expects(self, event: str) -> bool:
+        """Whether some active state of the scheme has a transition on ``event``."""
+        return self.instance is not None and self.compiled.expects(self.instance.state, event)
+
+    # -- events into the scheme --------------------------------------------------
+
+    def deliver(self, event: str, data: Any = None) -> None:
+        if self.ended or self.paused or self.instance is None:
+            return
+        self.sup.record("event", task=self.node, event=event)
+        self.instance.send(event, data)
+
+    def deliver_soon(self, event: str, data: Any = None) -> None:
+        self.sup.loop.call_soon(self.deliver, event, data)
+
+    # -- the scheme's listener -----------------------------------------------------
+
+    def entered(self, instance: SchemeInstance, state: State, event: Event | None) -> None:
+        self.sup.record("enter", task=self.node, state=state.name,
+                        event=event.name if event else None)
+        if state.act is None:
+            return
+        agent = self.roles.get(state.by or "", self.robot)
+        self.sup.record("act", task=self.node, agent=agent, act=state.act,
+                        act_type=state.act_type.name if state.act_type else None)
+        outer = self._enclosing_act(state)
+        if outer is not None:
+            outer.suspend(f"{state.act} entered")
+        act = ActTask(self, state, agent)
+        self.acts[state.name] = act
+        if not self.paused:
+            act.start()
+
+    def exited(self, instance: SchemeInstance, state: State, event: Event | None) -> None:
+        self.sup.record("exit", task=self.node, state=state.name,
+                        event=event.name if event else None)
+        act = self.acts.pop(state.name, None)
+        if act is not None:
+            act.stop(f"left {state.name}" + (f" on {event.name}" if event else ""))
+            self.sup.loop.call_soon(self._resume_enclosing)
+
+    def finished(self, instance: SchemeInstance, state: State) -> None:
+        self.ended = True
+        self.outcome = state.outcome
+        self.sup.tree.set_state(self.node, DONE if state.outcome == "done" else FAILED,
+                                f"ended in {state.name}")
+        self.sup.record("task-end", task=self.node, name=self.type.name, outcome=state.outcome,
+                        state=state.name)
+        self.sup.loop.call_soon(self._report)
+
+    def _report(self) -> None:
+        if self.parent is not None and self.step is not None:
+            self.parent.step_finished(self.step, DONE if self.outcome == "done" else FAILED,
+                                      f"task {self.type.name} {self.outcome}")
+        if self.on_finish is not None:
+            self.on_finish(self)
+
+    def _enclosing_act(self, state: State) -> ActTask | None:
+        for ancestor in state.ancestors():
+            act = self.acts.get(ancestor.name)
+            if act is not None:
+                return act
+        return None
+
+    def _has_inner_act(self, act: ActTask) -> bool:
+        return any(other.state.is_descendant_of(act.state) for other in self.acts.values())
+
+    def _resume_enclosing(self) -> None:
+        if self.ended or self.paused:
+            return
+        for act in list(self.acts.values()):
+            if act.suspended and not self._has_inner_act(act):
+                act.resume("inner act over")
+
+    # -- the agenda's control -------------------------------------------------------
+
+    def suspend(self, reason: str) -> None:
+        """Suspend the whole task: its acts stop acting, its scheme hears nothing."""
+        if self.ended or self.paused:
+            return
+        self.paused = True
+        self.sup.tree.set_state(self.node, SUSPENDED, reason)
+        if self.instance is not None:
+            self.instance.freeze()
+        for act in self.acts.values():
+            act.suspend(reason)
+
+    def resume(self, reason: str) -> None:
+        if self.ended or not self.paused:
+            return
+        self.paused = False
+        self.sup.tree.set_state(self.node, ONGOING, reason)
+        if self.instance is not None:
+            self.instance.thaw()
+        for act in list(self.acts.values()):
+            if self._has_inner_act(act):
+                continue
+            if not act.started:
+                act.start()
+            else:
+                act.resume(reason)
+
+    def cancel(self, reason: str) -> None:
+        """Stop the task for good (its parent's act was stopped)."""
+        if self.ended:
+            return
+        for act in list(self.acts.values()):
+            act.stop(reason)
+        self.acts.clear()
+        self.ended = True
+        self.outcome = "cancelled"
+        if self.node in self.sup.tree:
+            self.sup.tree.set_state(self.node, CANCELLED, reason)
+
+
+def _role_agent(role: str, term: Term | None, env: dict[str, Any]) -> str:
+    if term is not None:
+        value = term.resolve(env)
+        if value is not None:
+            return str(value)
+    if role in env:
+        return str(env[role])
+    return str(env[ROBOT_PARAM]) if role == ROBOT_PARAM else role

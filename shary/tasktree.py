@@ -1,0 +1,98 @@
+"""The dynamic task tree.
+
+SHARY's "incremental context-based task refinement process ... results in a
+dynamic hierarchical task tree": a task node, under it an act x task node for
+each act its scheme visits, under those the recipe's steps (atomic tasks, or
+subtasks with their own act x task nodes).  The tree grows when an act is
+entered, is cut when an act is preempted (what it had running is cancelled
+first), and is kept when an act is suspended, so that it can resume.
+
+States are strings so that JAHRVIS's nine states (PLANNED, TODO, ONGOING,
+EXECUTED, SUSPENDED, UNPLANNED, NOT_STARTING, NOT_FINISHED, NOT_SEEN) can be
+added without changing the structure.  Every change is reported to a
+recorder (the context log), which is how a tree is redrawn at any past time.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import networkx as nx
+
+PLANNED, TODO, ONGOING, DONE, FAILED, SUSPENDED, CANCELLED = (
+    "planned", "todo", "ongoing", "done", "failed", "suspended", "cancelled")
+STATES = (PLANNED, TODO, ONGOING, DONE, FAILED, SUSPENDED, CANCELLED)
+FINISHED = frozenset({DONE, FAILED, CANCELLED})
+
+TASK, ACT, ATOMIC = "task", "act", "atomic"
+"""Node kinds: a task, an act x task, an atomic task."""
+
+Recorder = Callable[..., Any]
+
+
+class TaskTree:
+    """Tasks, act x task nodes and atomic tasks, as a networkx directed tree (forest)."""
+
+    def __init__(self, recorder: Recorder | None = None):
+        self.graph = nx.DiGraph()
+        self._record = recorder
+        self._next = 0
+
+    def add(self, kind: str, name: str, parent: str | None = None, *, state: str = PLANNED,
+            **attrs: Any) -> str:
+        """Add a node (under ``parent``) and return its id."""
+        self._next += 1
+        node = f"n{self._next}"
+        self.graph.add_node(node, kind=kind, name=name, state=state, **attrs)
+        if parent is not None:
+            self.graph.add_edge(parent, node)
+        if self._record is not None:
+            self._record("node", task=node, parent=parent, node_kind=kind, name=name,
+                         state=state, **{k: v for k, v in attrs.items() if v is not None})
+        return node
+
+    def state(self, node: str) -> str:
+        return self.graph.nodes[node]["state"]
+
+    def set_state(self, node: str, state: str, reason: str | None = None) -> None:
+        """Change a node's state (recorded; a no-op when it does not change)."""
+        data = self.graph.nodes[node]
+        if data["state"] == state:
+            return
+        data["state"] = state
+        if self._record is not None:
+            extra = {"reason": reason} if reason else {}
+            self._record("task-state", task=node, name=data["name"], state=state, **extra)
+
+    def node(self, node: str) -> dict[str, Any]:
+        return self.graph.nodes[node]
+
+    def parent(self, node: str) -> str | None:
+        preds = list(self.graph.predecessors(node))
+        return preds[0] if preds else None
+
+    def children(self, node: str) -> list[str]:
+        return list(self.graph.successors(node))
+
+    def subtree(self, node: str) -> Iterator[str]:
+        """The node and its descendants, parents before children."""
+        yield node
+        for child in self.graph.successors(node):
+            yield from self.subtree(child)
+
+    def cut(self, node: str) -> None:
+        """Remove a node and everything under it (finished nodes are marked cancelled first)."""
+        nodes = list(self.subtree(node))
+        for n in nodes:
+            if self.graph.nodes[n]["state"] not in FINISHED:
+                self.set_state(n, CANCELLED, "cut")
+        self.graph.remove_nodes_from(nodes)
+        if self._record is not None:
+            self._record("node-removed", task=node, nodes=nodes)
+
+    def __contains__(self, node: object) -> bool:
+        return node in self.graph
+
+    def __len__(self) -> int:
+        return self.graph.number_of_nodes()
