@@ -45,9 +45,11 @@ def _parser() -> argparse.ArgumentParser:
         "with people.")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    p = sub.add_parser("validate", help="check scheme and act files (default: the built-in ones)")
+    p = sub.add_parser("validate", help="check schemes, acts, recipe libraries and Turtle files "
+                       "(default: the built-in ones)")
     p.add_argument("paths", nargs="*", type=Path, metavar="PATH",
-                   help="files to check; acts files among them extend the acts of the others")
+                   help="files to check; acts files among them extend the acts of the others, "
+                   "recipe files are checked together with the built-in library")
     p.set_defaults(func=cmd_validate)
 
     p = sub.add_parser("schemes", help="list the built-in communication schemes")
@@ -73,6 +75,10 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", type=Path, required=True, metavar="FILE.yaml")
     p.set_defaults(func=cmd_import_scxml)
 
+    from shary.log import add_log_command
+
+    add_log_command(sub)
+
     p = sub.add_parser("conformance", help="run SCION-style statechart tests found under DIR")
     p.add_argument("folder", type=Path, metavar="DIR")
     p.add_argument("--only", type=Path, metavar="LIST",
@@ -96,29 +102,53 @@ def _escape(text: str) -> str:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
+    from shary.facts import FactDatabase
+    from shary.io.recipes import builtin_library_files, load_library
     from shary.io.schemes import parse_scheme
 
-    paths = list(args.paths) or builtin.files("schemes")
+    paths = list(args.paths) or builtin.files("schemes") + builtin_library_files()
     problems: list[Problem] = []
-    loaded: list[yamlsafe.Located] = []
+    schemes: list[yamlsafe.Located] = []
+    libraries: list[Path] = []
     acts: ActRegistry = builtin_acts()
     for path in paths:
+        if path.suffix == ".ttl":
+            try:
+                FactDatabase().load_turtle(path)
+            except FileError as err:
+                problems.extend(err.problems)
+            continue
         try:
             located = yamlsafe.load_file(path)
         except FileError as err:
             problems.extend(err.problems)
             continue
-        if _is_acts_file(located):
+        kind = _kind_of(located)
+        if kind == "acts":
             try:
                 acts = acts.extended(load_acts(path))
             except FileError as err:
                 problems.extend(err.problems)
-            continue
-        loaded.append(located)
+        elif kind == "scheme":
+            schemes.append(located)
+        elif kind == "recipes":
+            libraries.append(path)
+        else:
+            problems.extend(located.problems)
+            what = "a mapping" if isinstance(located.data, dict) else "expected a mapping"
+            problems.append(located.problem((), f"not a scheme, acts or recipe file: {what} "
+                                            "with 'scheme:', 'acts:', or some of "
+                                            "'predicates:', 'atomic:', 'tasks:', 'recipes:', "
+                                            "'chronicles:'"))
     conditions = ConditionRegistry.installed()
-    for located in loaded:
+    for located in schemes:
         try:
             parse_scheme(located, acts=acts, conditions=conditions)
+        except FileError as err:
+            problems.extend(err.problems)
+    if libraries:
+        try:
+            load_library(libraries, acts=acts)
         except FileError as err:
             problems.extend(err.problems)
     _print_problems(sorted(problems))
@@ -127,14 +157,22 @@ def cmd_validate(args: argparse.Namespace) -> int:
         if str(path) not in bad:
             _out.print(f"[green]ok[/green]    {_escape(str(path))}")
     if problems:
-        _err.print(f"{len(problems)} problem(s) in {len(bad)} of {len(paths)} file(s)")
+        _err.print(f"{len(problems)} problem(s) in {len(bad)} file(s) of {len(paths)} checked")
         return EXIT_BAD_FILE
     return 0
 
 
-def _is_acts_file(located: yamlsafe.Located) -> bool:
+def _kind_of(located: yamlsafe.Located) -> str | None:
     data = located.data
-    return isinstance(data, dict) and "acts" in data and "scheme" not in data
+    if not isinstance(data, dict):
+        return None
+    if "scheme" in data or "states" in data:
+        return "scheme"
+    if set(data) == {"acts"}:
+        return "acts"
+    if set(data) & {"predicates", "atomic", "tasks", "recipes", "chronicles"}:
+        return "recipes"
+    return None
 
 
 # -- schemes, simulate ---------------------------------------------------

@@ -80,7 +80,8 @@ class Supervisor:
     def record(self, kind: str, task: str | None = None, agent: str | None = None,
                **data: Any) -> None:
         if self.log is not None:
-            self.log.record(self.loop.now(), kind, task=task, agent=agent, **data)
+            self.log.record(self.loop.now(), kind, task=task, agent=agent,
+                            **{k: v for k, v in data.items() if v is not None})
 
     # -- tasks -----------------------------------------------------------------
 

@@ -1,0 +1,192 @@
+"""Recipe libraries: bad input refused with positions; planner and function recipes."""
+
+from __future__ import annotations
+
+from conftest import problems
+from scripted import World
+
+from shary.recipes import Step, Term
+
+BASE = """\
+predicates:
+  isOn: an object lies on furniture
+atomic:
+  wave: {params: [to]}
+tasks:
+  greet:
+    params: [person]
+    roles: {partner: $person}
+    scheme: give-object
+"""
+
+
+def _problems(shary, *paths) -> list[tuple[int, int, str]]:
+    status, _, err = shary("validate", *paths)
+    assert status == 2, err
+    assert "Traceback" not in err
+    return [(int(m["line"]), int(m["col"]), m["message"]) for m in problems(err)]
+
+
+def test_a_good_library_passes(shary, write):
+    path = write("ok.yaml", BASE + """\
+        recipes:
+          - task: greet
+            act: ASK-TASK
+            steps:
+              - {do: wave, with: {to: $person}}
+        """.replace("        ", ""))
+    status, out, err = shary("validate", path)
+    assert status == 0, err
+
+
+def test_unknown_task_act_parameter_executor(shary, write):
+    path = write("bad.yaml", BASE + """\
+recipes:
+  - task: gret
+    act: ASK-TASK
+  - task: greet
+    act: ASK-TASKS
+  - task: greet
+    act: ASK-TASK
+    steps:
+      - {do: wav, with: {to: $person}}
+      - {do: wave, with: {to: $persn}}
+      - {do: wave, with: {too: $person}}
+""")
+    found = _problems(shary, path)
+    text = " | ".join(m for _, _, m in found)
+    assert "unknown task 'gret' (did you mean 'greet'?)" in text
+    assert "unknown act 'ASK-TASKS'" in text
+    assert "unknown atomic task 'wav' (did you mean 'wave'?)" in text
+    assert "unknown parameter $persn (did you mean 'person'?)" in text
+    assert "atomic task 'wave' has no parameter 'too'" in text
+    assert "atomic task 'wave' needs to" in text
+    lines = sorted({line for line, _, _ in found})
+    assert lines == [11, 14, 18, 19, 20]
+
+
+def test_act_not_in_the_tasks_scheme(shary, write):
+    path = write("act.yaml", BASE + "recipes:\n  - {task: greet, act: ASK-HELP}\n")
+    ((_, _, msg),) = _problems(shary, path)
+    assert "carries out 'ASK-HELP'" in msg
+
+
+def test_cyclic_ordering(shary, write):
+    path = write("cycle.yaml", BASE + """\
+recipes:
+  - task: greet
+    act: ASK-TASK
+    steps:
+      - {name: a, do: wave, with: {to: $person}, after: [c]}
+      - {name: b, do: wave, with: {to: $person}}
+      - {name: c, do: wave, with: {to: $person}}
+""")
+    ((line, _, msg),) = _problems(shary, path)
+    assert "cycle" in msg and "a -> b -> c -> a" in msg and line == 14
+
+
+def test_monitor_on_unknown_predicate(shary, write):
+    path = write("mon.yaml", BASE + """\
+recipes:
+  - task: greet
+    act: ASK-TASK
+    monitors:
+      - {added: [$person, looksAtt, $robot], emit: attention-back}
+""")
+    ((line, col, msg),) = _problems(shary, path)
+    assert "unknown predicate 'looksAtt'" in msg and "did you mean 'looksAt'" in msg
+    assert (line, col) == (14, 27)
+
+
+def test_malformed_turtle(shary, write):
+    path = write("world.ttl", "@prefix w: <http://shary.dev/world#> .\nw:a w:b w:c .\n"
+                 "w:d w:e .\n")
+    ((line, _, msg),) = _problems(shary, path)
+    assert line == 3
+
+
+def test_unknown_file_kind(shary, write):
+    ((_, _, msg),) = _problems(shary, write("what.yaml", "hello: world\n"))
+    assert "not a scheme, acts or recipe file" in msg
+
+
+def test_chronicle_goal_needs_bound_variables(shary, write):
+    path = write("chron.yaml", BASE + """\
+chronicles:
+  hello:
+    events:
+      - added: [$someone, isOn, sofa]
+    goal: {task: greet, with: {person: $nobody}}
+""")
+    ((_, _, msg),) = _problems(shary, path)
+    assert "$nobody is not bound" in msg
+
+
+class PlannerDouble:
+    """Test double: a fixed plan (the real planner lives in planner/)."""
+
+    def __init__(self):
+        self.calls = []
+
+    def plan_steps(self, domain, task, args, facts, refine):
+        self.calls.append((domain, task, args))
+        return [Step("navigate-1", "navigate", None, {"place": Term("const", args["place"])},
+                     None, ()),
+                Step("look-1", "look-at", None, {"target": Term("const", args["place"])},
+                     None, ("navigate-1",))]
+
+
+PLANNED = """\
+tasks:
+  survey:
+    params: [place]
+    scheme: robot-task
+recipes:
+  - task: survey
+    act: REALIZE-TASK
+    plan: {domain: living-room, task: survey-place, with: {place: $place}}
+  - task: survey
+    act: END-TASK
+    function: say-done
+"""
+
+
+def test_planner_backed_and_function_recipes(write):
+    planner = PlannerDouble()
+
+    def say_done(run, recipe):
+        return [Step("say", "speak", None, {"text": Term("const", f"{run.env['place']} seen")},
+                     None, ())]
+
+    world = World(extra_library=[write("planned.yaml", PLANNED)],
+                  planners={"living-room": planner}, functions={"say-done": say_done})
+    run = world.sup.start_task("survey", {"place": "kitchen"})
+    world.run(10)
+    assert planner.calls == [("living-room", "survey-place", {"place": "kitchen"})]
+    assert world.executor.names() == ["navigate", "look-at", "speak"]
+    assert world.executor.started[-1][2] == {"text": "kitchen seen"}
+    assert run.outcome == "done"
+
+
+def test_same_inputs_same_log(tmp_path):
+    from shary.log import ContextLog, read_events
+
+    def scenario(path):
+        with ContextLog(path, seed=3) as log:
+            world = World(log=log, seed=3)
+            world.executor.durations.update({"move-arm": 4.0})
+            world.give()
+            world.sup.receive_act("alice", "H-AGREE")
+            world.run(2.5)
+            world.facts.remove("alice", "looksAt", "jido")
+            world.run(5)
+            world.facts.add("alice", "looksAt", "jido")
+            world.run(30)
+        return [(e.time, e.kind, e.task, e.agent, e.data) for e in read_events(path)]
+
+    first = scenario(tmp_path / "a.sqlite")
+    second = scenario(tmp_path / "b.sqlite")
+    assert first == second
+    kinds = {kind for _, kind, _, _, _ in first}
+    assert {"act", "enter", "exit", "task-state", "exec-request", "exec-result", "monitor",
+            "node", "node-removed", "event", "recipe"} <= kinds
