@@ -134,6 +134,8 @@ class CompiledScheme:
         self.initial_step = step
         self.initial_name = self.flat_state(step.target).name
         self.clock: Clock = SimulatedClock()
+        self.has_eventless = any(t.events is None for s in scheme.states.values()
+                                 for t in s.transitions)
         self.timers: dict[str, tuple[tuple[str, float], ...]] = {
             s.name: tuple((t.events[0], t.after) for t in s.transitions
                           if t.after is not None and t.events)

@@ -163,11 +163,12 @@ class SchemeInstance:
 
     def _settle(self) -> None:
         events = self.definition.machine.events
-        eventless = events.get(EVENTLESS) or self.definition.event(EVENTLESS)
+        eventless = (events.get(EVENTLESS) or self.definition.event(EVENTLESS)) \
+            if self.definition.has_eventless else None
         internal = self._internal
         steps = 0
         while not self.finished:
-            if eventless.trigger(self, None):
+            if eventless is not None and eventless.trigger(self, None):
                 pass
             elif internal:
                 event = internal.popleft()

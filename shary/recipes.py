@@ -226,8 +226,14 @@ class RecipeLibrary:
     tasks: dict[str, TaskType] = field(default_factory=dict)
     recipes: list[Recipe] = field(default_factory=list)
     chronicles: dict[str, Chronicle] = field(default_factory=dict)
+    _index: dict[tuple[str, str], list[Recipe]] | None = field(default=None, repr=False)
+    _indexed: int = field(default=0, repr=False)
 
     def recipes_for(self, task: str, act: str) -> list[Recipe]:
         """The recipes of an act within a task, in file order, then those for any task (*)."""
-        return ([r for r in self.recipes if r.task == task and r.act == act]
-                + [r for r in self.recipes if r.task == ANY_TASK and r.act == act])
+        if self._index is None or self._indexed != len(self.recipes):
+            index: dict[tuple[str, str], list[Recipe]] = {}
+            for recipe in self.recipes:
+                index.setdefault((recipe.task, recipe.act), []).append(recipe)
+            self._index, self._indexed = index, len(self.recipes)
+        return self._index.get((task, act), []) + self._index.get((ANY_TASK, act), [])

@@ -65,8 +65,9 @@ class Supervisor:
         self.conditions = conditions or ConditionRegistry()
         self.planners = dict(planners or {})
         self.functions = dict(functions or {})
-        self.tree = TaskTree(self.record)
-        self.runs: list[TaskRun] = []
+        self.tree = TaskTree(self.record if log is not None else None)
+        self.runs: dict[str, TaskRun] = {}
+        self._by_agent: dict[str, dict[str, TaskRun]] = {}
         self._compiled: dict[int, CompiledScheme] = {}
         self._requests: dict[str, tuple[StepRun, ActTask]] = {}
         self._request_ids = itertools.count(1)
@@ -79,6 +80,7 @@ class Supervisor:
 
     def record(self, kind: str, task: str | None = None, agent: str | None = None,
                **data: Any) -> None:
+        """Time-stamp an event into the context log (None values left out)."""
         if self.log is not None:
             self.log.record(self.loop.now(), kind, task=task, agent=agent,
                             **{k: v for k, v in data.items() if v is not None})
@@ -96,9 +98,17 @@ class Supervisor:
             raise ValueError(f"task {name!r} takes {', '.join(task_type.params) or 'nothing'}; "
                              f"missing: {missing}, unknown: {extra}")
         run = TaskRun(self, task_type, dict(args), parent, parent_node, step, on_finish)
-        self.runs.append(run)
+        self.runs[run.node] = run
+        for agent in set(run.roles.values()):
+            self._by_agent.setdefault(agent, {})[run.node] = run
         run.start()
         return run
+
+    def forget(self, run: TaskRun) -> None:
+        """Drop an ended task from the live indexes (its tree and log stay)."""
+        self.runs.pop(run.node, None)
+        for agent in set(run.roles.values()):
+            self._by_agent.get(agent, {}).pop(run.node, None)
 
     def compiled(self, scheme: Scheme) -> CompiledScheme:
         found = self._compiled.get(id(scheme))
@@ -163,10 +173,10 @@ class Supervisor:
     def _receive_act(self, agent: str, act: str, data: Any, task: str | None) -> None:
         self.record("act-received", task=task, agent=agent, act=act)
         taken = False
-        for run in list(self.runs):
+        for run in list(self._by_agent.get(agent, {}).values()):
             if run.ended or run.paused or (task is not None and run.node != task):
                 continue
-            if agent in run.roles.values() and run.expects(act):
+            if run.expects(act):
                 run.deliver(act, {"agent": agent, "data": data})
                 taken = True
         if not taken:
@@ -298,6 +308,7 @@ class TaskRun(SchemeListener):
         self.sup.loop.call_soon(self._report)
 
     def _report(self) -> None:
+        self.sup.forget(self)
         if self.parent is not None and self.step is not None:
             self.parent.step_finished(self.step, DONE if self.outcome == "done" else FAILED,
                                       f"task {self.type.name} {self.outcome}")
@@ -358,6 +369,7 @@ class TaskRun(SchemeListener):
         self.acts.clear()
         self.ended = True
         self.outcome = "cancelled"
+        self.sup.forget(self)
         if self.node in self.sup.tree:
             self.sup.tree.set_state(self.node, CANCELLED, reason)
 

@@ -38,6 +38,7 @@ class TaskTree:
         self.graph = nx.DiGraph()
         self._record = recorder
         self._next = 0
+        self._attrs: dict[str, dict[str, Any]] = {}  # the graph's own node dicts, for speed
 
     def add(self, kind: str, name: str, parent: str | None = None, *, state: str = PLANNED,
             **attrs: Any) -> str:
@@ -45,6 +46,7 @@ class TaskTree:
         self._next += 1
         node = f"n{self._next}"
         self.graph.add_node(node, kind=kind, name=name, state=state, **attrs)
+        self._attrs[node] = self.graph.nodes[node]
         if parent is not None:
             self.graph.add_edge(parent, node)
         if self._record is not None:
@@ -53,11 +55,11 @@ class TaskTree:
         return node
 
     def state(self, node: str) -> str:
-        return self.graph.nodes[node]["state"]
+        return self._attrs[node]["state"]
 
     def set_state(self, node: str, state: str, reason: str | None = None) -> None:
         """Change a node's state (recorded; a no-op when it does not change)."""
-        data = self.graph.nodes[node]
+        data = self._attrs[node]
         if data["state"] == state:
             return
         data["state"] = state
@@ -66,7 +68,7 @@ class TaskTree:
             self._record("task-state", task=node, name=data["name"], state=state, **extra)
 
     def node(self, node: str) -> dict[str, Any]:
-        return self.graph.nodes[node]
+        return self._attrs[node]
 
     def parent(self, node: str) -> str | None:
         preds = list(self.graph.predecessors(node))
@@ -85,14 +87,15 @@ class TaskTree:
         """Remove a node and everything under it (finished nodes are marked cancelled first)."""
         nodes = list(self.subtree(node))
         for n in nodes:
-            if self.graph.nodes[n]["state"] not in FINISHED:
+            if self._attrs[n]["state"] not in FINISHED:
                 self.set_state(n, CANCELLED, "cut")
+            del self._attrs[n]
         self.graph.remove_nodes_from(nodes)
         if self._record is not None:
             self._record("node-removed", task=node, nodes=nodes)
 
     def __contains__(self, node: object) -> bool:
-        return node in self.graph
+        return node in self._attrs
 
     def __len__(self) -> int:
         return self.graph.number_of_nodes()
