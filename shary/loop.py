@@ -48,6 +48,8 @@ class EventLoop:
         self.seed = seed
         self.random = random.Random(seed)
         self._ready: deque[tuple[Callable[..., Any], tuple]] = deque()
+        self.idle_hooks: list[Callable[[], Any]] = []
+        """Called each time the loop becomes idle after work (the context log's flush)."""
 
     def now(self) -> float:
         return self.clock.now()
@@ -70,6 +72,9 @@ class EventLoop:
             ran += 1
             if ran > MAX_CALLBACKS_PER_DRAIN:
                 raise RuntimeError("the event loop never became idle (a livelock?)")
+        if ran:
+            for hook in self.idle_hooks:
+                hook()
         return ran
 
     def advance(self, seconds: float) -> None:

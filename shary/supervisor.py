@@ -72,6 +72,8 @@ class Supervisor:
         self._requests: dict[str, tuple[StepRun, ActTask]] = {}
         self._request_ids = itertools.count(1)
         self.reporter = Reporter(self._outcome, self.loop.call_soon)
+        if log is not None and hasattr(log, "flush"):
+            self.loop.idle_hooks.append(log.flush)
         from shary.agenda import TaskAgenda
 
         self.agenda = TaskAgenda(self)
