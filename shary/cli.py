@@ -70,6 +70,13 @@ def _parser() -> argparse.ArgumentParser:
                    help="highlight these states (an active configuration)")
     r.set_defaults(func=cmd_render_scheme)
 
+    r = what.add_parser("tree", help="draw the task tree of a logged run, as it stood at a time")
+    r.add_argument("log", type=Path, metavar="LOG", help="a context log (.sqlite)")
+    r.add_argument("--at", type=float, default=None, metavar="T",
+                   help="seconds of the run's clock (default: the end)")
+    r.add_argument("-o", "--output", type=Path, required=True, metavar="OUT")
+    r.set_defaults(func=cmd_render_tree)
+
     p = sub.add_parser("import-scxml", help="convert a data-model-free SCXML chart to a scheme")
     p.add_argument("source", type=Path, metavar="FILE.scxml")
     p.add_argument("-o", "--output", type=Path, required=True, metavar="FILE.yaml")
@@ -252,6 +259,24 @@ def cmd_render_scheme(args: argparse.Namespace) -> int:
         _err.print(f"[bold red]error:[/bold red] {_escape(str(err))}")
         return 1
     _out.print(f"wrote {_escape(str(args.output))}")
+    return 0
+
+
+def cmd_render_tree(args: argparse.Namespace) -> int:
+    from shary.display import render_tree
+    from shary.log import read_events
+    from shary.tasktree import TaskTree
+
+    events = read_events(args.log)
+    tree = TaskTree.replay(events, args.at)
+    end = events[-1].time if events else 0.0
+    when = f"t = {args.at:g} s" if args.at is not None else f"end (t = {end:g} s)"
+    try:
+        render_tree(tree, args.output, title=f"{args.log.name} at {when}")
+    except (ValueError, RuntimeError, OSError) as err:
+        _err.print(f"[bold red]error:[/bold red] {_escape(str(err))}")
+        return 1
+    _out.print(f"wrote {_escape(str(args.output))} ({len(tree)} nodes)")
     return 0
 
 

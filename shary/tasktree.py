@@ -15,7 +15,7 @@ recorder (the context log), which is how a tree is redrawn at any past time.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
 import networkx as nx
@@ -99,3 +99,30 @@ class TaskTree:
 
     def __len__(self) -> int:
         return self.graph.number_of_nodes()
+
+    @classmethod
+    def replay(cls, events: Iterable[Any], until: float | None = None) -> TaskTree:
+        """The tree as it stood at time ``until`` (default: the end), rebuilt from the
+        ``node``, ``task-state`` and ``node-removed`` events of a context log."""
+        tree = cls()
+        for event in events:
+            if until is not None and event.time > until:
+                break
+            if event.kind == "node":
+                data = dict(event.data)
+                if event.agent:
+                    data["agent"] = event.agent
+                parent = data.pop("parent", None)
+                tree.graph.add_node(event.task, kind=data.pop("node_kind"),
+                                    name=data.pop("name"), state=data.pop("state"), **data)
+                tree._attrs[event.task] = tree.graph.nodes[event.task]
+                if parent in tree._attrs:
+                    tree.graph.add_edge(parent, event.task)
+            elif event.kind == "task-state" and event.task in tree._attrs:
+                tree._attrs[event.task]["state"] = event.data["state"]
+            elif event.kind == "node-removed":
+                for node in event.data["nodes"]:
+                    tree._attrs.pop(node, None)
+                    if node in tree.graph:
+                        tree.graph.remove_node(node)
+        return tree
