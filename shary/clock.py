@@ -18,17 +18,22 @@ from typing import Any, Protocol
 class Timer:
     """A pending call; cancelling it only marks it (it is dropped when due)."""
 
-    __slots__ = ("due", "seq", "callback", "args", "cancelled")
+    __slots__ = ("due", "seq", "callback", "args", "cancelled", "clock")
 
-    def __init__(self, due: float, seq: int, callback: Callable[..., Any], args: tuple):
+    def __init__(self, due: float, seq: int, callback: Callable[..., Any], args: tuple,
+                 clock: SimulatedClock | None = None):
         self.due = due
         self.seq = seq
         self.callback = callback
         self.args = args
         self.cancelled = False
+        self.clock = clock
 
     def cancel(self) -> None:
-        self.cancelled = True
+        if not self.cancelled:
+            self.cancelled = True
+            if self.clock is not None:
+                self.clock._forget(self)
 
     def __lt__(self, other: Timer) -> bool:
         return (self.due, self.seq) < (other.due, other.seq)
@@ -49,19 +54,34 @@ class SimulatedClock:
         self._now = start
         self._heap: list[Timer] = []
         self._seq = itertools.count()
+        self._cancelled = 0
 
     def now(self) -> float:
         return self._now
 
     def call_later(self, delay: float, callback: Callable[..., Any], *args: Any) -> Timer:
-        timer = Timer(self._now + max(0.0, delay), next(self._seq), callback, args)
+        timer = Timer(self._now + max(0.0, delay), next(self._seq), callback, args, self)
         heapq.heappush(self._heap, timer)
         return timer
+
+    def _forget(self, timer: Timer) -> None:
+        """Count a cancelled timer; rebuild the heap when they are most of it.
+
+        Cancelled timers are dropped lazily when due, but a clock that does
+        not move (or timeouts far away, cancelled again and again) would let
+        them pile up.
+        """
+        self._cancelled += 1
+        if self._cancelled > 256 and self._cancelled * 2 > len(self._heap):
+            self._heap = [t for t in self._heap if not t.cancelled]
+            heapq.heapify(self._heap)
+            self._cancelled = 0
 
     def next_due(self) -> float | None:
         """When the next live timer is due, or None when none is pending."""
         while self._heap and self._heap[0].cancelled:
             heapq.heappop(self._heap)
+            self._cancelled -= 1
         return self._heap[0].due if self._heap else None
 
     def advance(self, seconds: float) -> int:
@@ -74,6 +94,7 @@ class SimulatedClock:
         while self._heap and self._heap[0].due <= when:
             timer = heapq.heappop(self._heap)
             if timer.cancelled:
+                self._cancelled -= 1
                 continue
             self._now = max(self._now, timer.due)
             timer.callback(*timer.args)

@@ -73,7 +73,8 @@ class StepTransition(FlatTransition):
     def execute(self, event_data: Any) -> bool:
         instance = event_data.model
         event = event_data.args[0]
-        key = tuple(bool(f(instance, event)) for f in self.condition_funcs)
+        funcs = self.condition_funcs
+        key = tuple(bool(f(instance, event)) for f in funcs) if funcs else ()
         try:
             step = self.steps[key]
         except KeyError:
