@@ -1,0 +1,63 @@
+"""The event loop and clocks: FIFO order, timers in order, idle hooks, real time."""
+
+from __future__ import annotations
+
+from shary.clock import SimulatedClock
+from shary.loop import EventLoop, WallClock
+
+
+def test_ready_work_runs_in_fifo_order_after_the_current_callback():
+    loop = EventLoop()
+    seen = []
+
+    def first():
+        seen.append("first")
+        loop.call_soon(seen.append, "third")
+
+    loop.call_soon(first)
+    loop.call_soon(seen.append, "second")
+    loop.run_until_idle()
+    assert seen == ["first", "second", "third"]
+
+
+def test_timers_fire_in_due_order_and_the_loop_idles_between_them():
+    loop = EventLoop()
+    seen = []
+
+    def at(name):
+        seen.append((loop.now(), name))
+        loop.call_soon(seen.append, (loop.now(), name + "-after"))
+
+    loop.call_later(2, at, "b")
+    loop.call_later(1, at, "a")
+    cancelled = loop.call_later(1.5, at, "never")
+    cancelled.cancel()
+    loop.advance(3)
+    assert seen == [(1, "a"), (1, "a-after"), (2, "b"), (2, "b-after")]
+    assert loop.now() == 3
+
+
+def test_idle_hooks_run_after_work_only():
+    loop = EventLoop()
+    flushes = []
+    loop.idle_hooks.append(lambda: flushes.append(loop.now()))
+    loop.run_until_idle()
+    loop.call_soon(lambda: None)
+    loop.run_until_idle()
+    assert flushes == [0]
+
+
+def test_many_cancelled_timers_do_not_pile_up():
+    clock = SimulatedClock()
+    for _ in range(10_000):
+        clock.call_later(30, lambda: None).cancel()
+    assert len(clock._heap) < 600 and clock.next_due() is None
+
+
+def test_wall_clock_runs_in_real_time():
+    loop = EventLoop(WallClock())
+    seen = []
+    loop.call_later(0.02, seen.append, "tick")
+    loop.run_for(0.1)
+    assert seen == ["tick"] and loop.now() >= 0.1
+
