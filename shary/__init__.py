@@ -9,9 +9,9 @@ from shary.acts import ActRegistry, builtin_acts
 from shary.clock import SimulatedClock
 from shary.compiler import CompiledScheme, compile_scheme
 from shary.conditions import ConditionRegistry
-from shary.errors import FileError, Problem
 from shary.instance import SchemeInstance
 from shary.io.schemes import load_scheme
+from userfiles.errors import FileError, Problem
 
 __all__ = [
     "ActRegistry",

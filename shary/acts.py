@@ -14,7 +14,8 @@ import os
 from dataclasses import dataclass, field
 from functools import cache
 
-from shary.errors import FileError, Problem
+from userfiles import yamlsafe
+from userfiles.errors import FileError, Problem
 
 AGENT_KINDS = ("robot", "human")
 _PREFIX = {"robot": "R", "human": "H"}
@@ -90,7 +91,7 @@ def acts_from_data(data: dict, source: str) -> dict[str, Act]:
 
 def load_acts(path: str | os.PathLike[str]) -> dict[str, Act]:
     """The acts defined in an acts file (``acts:`` at the top), checked."""
-    from shary.io import schema, yamlsafe
+    from shary.io import schema
 
     located = yamlsafe.load_file(path)
     if not isinstance(located.data, dict):

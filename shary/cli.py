@@ -18,8 +18,8 @@ from rich.console import Console
 from shary import builtin
 from shary.acts import ActRegistry, builtin_acts, load_acts
 from shary.conditions import ConditionRegistry
-from shary.errors import FileError, Problem
-from shary.io import yamlsafe
+from userfiles import yamlsafe
+from userfiles.errors import FileError, Problem
 
 EXIT_BAD_FILE = 2
 

@@ -25,10 +25,10 @@ from pathlib import Path
 
 from shary.clock import SimulatedClock
 from shary.compiler import compile_scheme
-from shary.errors import FileError
 from shary.io.schemes import parse_scheme
 from shary.io.scxml import import_scxml
-from shary.io.yamlsafe import load_text
+from userfiles.errors import FileError
+from userfiles.yamlsafe import load_text
 
 PLAIN_CHART_TIME_LIMIT = 60.0
 """Simulated seconds a plain chart may take to reach ``pass``."""

@@ -82,8 +82,8 @@ from rdflib.plugins.sparql import prepareQuery
 from rdflib.plugins.sparql.sparql import Query
 from rdflib.term import Node
 
-from shary.errors import FileError, Problem
-from shary.io.yamlsafe import read_text
+from userfiles.errors import FileError, Problem
+from userfiles.yamlsafe import read_text
 
 __all__ = ["FactDatabase", "FactEvent", "Subscription", "Value", "MAX_TURTLE_BYTES"]
 

@@ -50,7 +50,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.text import Span, Text
 
-from shary.errors import FileError, Problem
+from userfiles.errors import FileError, Problem
 
 FORMAT_VERSION = 1
 COMMIT_EVERY = 256

@@ -38,5 +38,6 @@ def test_wheel_carries_the_builtin_yaml_and_schemas(tmp_path):
     (wheel,) = tmp_path.glob("shary-*.whl")
     names = set(zipfile.ZipFile(wheel).namelist())
     for expected in ("shary/builtin/schemes/give-object.yaml", "shary/builtin/schemes/acts.yaml",
+                     "shary/builtin/recipes/core.yaml", "userfiles/yamlsafe.py",
                      "shary/schemas/scheme.schema.json", "shary/schemas/acts.schema.json"):
         assert expected in names

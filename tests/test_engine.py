@@ -9,7 +9,7 @@ import pytest
 from shary import ConditionRegistry, SimulatedClock, compile_scheme, load_scheme
 from shary.instance import LivelockError, SchemeListener
 from shary.io.schemes import parse_scheme
-from shary.io.yamlsafe import load_text
+from userfiles.yamlsafe import load_text
 
 
 def scheme(text: str, conditions: ConditionRegistry | None = None):

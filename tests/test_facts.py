@@ -7,8 +7,8 @@ from pathlib import Path
 import pytest
 from rdflib import Literal, URIRef
 
-from shary.errors import FileError
 from shary.facts import FactDatabase, FactEvent
+from userfiles.errors import FileError
 
 LIVING_ROOM = Path(__file__).parent / "data" / "living-room.ttl"
 W = "http://shary.dev/world#"

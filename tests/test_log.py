@@ -14,8 +14,8 @@ from pathlib import Path
 
 import pytest
 
-from shary.errors import FileError
 from shary.log import ContextLog, LogEvent, add_log_command, export_jsonl, read_events
+from userfiles.errors import FileError
 
 # (time, kind, task, agent, data): a short run of give-object.
 RUN = [

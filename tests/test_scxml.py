@@ -10,7 +10,7 @@ from conftest import SUITES, problems
 from shary.conformance import run_test
 from shary.io.schemes import parse_scheme
 from shary.io.scxml import import_scxml
-from shary.io.yamlsafe import load_text
+from userfiles.yamlsafe import load_text
 
 SCION = SUITES / "scion"
 NO_DATAMODEL = SCION / "NO-DATAMODEL.txt"

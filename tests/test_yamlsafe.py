@@ -7,7 +7,7 @@ import time
 import pytest
 from conftest import problems
 
-from shary.io import yamlsafe
+from userfiles import yamlsafe
 
 
 def _refused(shary, path) -> list:

@@ -18,9 +18,7 @@ import networkx as nx
 
 from shary import builtin
 from shary.acts import ActRegistry, builtin_acts
-from shary.errors import FileError, Problem
-from shary.io import schema, yamlsafe
-from shary.io.schema import did_you_mean
+from shary.io import schema
 from shary.io.schemes import load_scheme
 from shary.model import Scheme, parse_duration
 from shary.recipes import (
@@ -41,6 +39,9 @@ from shary.recipes import (
     TaskType,
     Term,
 )
+from userfiles import yamlsafe
+from userfiles.errors import FileError, Problem
+from userfiles.schema import did_you_mean
 
 ANY = TaskType(ANY_TASK, (), {}, ())
 """What a recipe for any task may assume: only the robot."""

@@ -18,9 +18,7 @@ import networkx as nx
 from shary import builtin
 from shary.acts import ACT_TYPES, ActRegistry, act_type, acts_from_data, builtin_acts
 from shary.conditions import ConditionRegistry
-from shary.errors import FileError, Problem
-from shary.io import schema, yamlsafe
-from shary.io.schema import did_you_mean
+from shary.io import schema
 from shary.model import (
     ATOMIC,
     COMPOUND,
@@ -38,6 +36,9 @@ from shary.model import (
     covers,
     parse_duration,
 )
+from userfiles import yamlsafe
+from userfiles.errors import FileError, Problem
+from userfiles.schema import did_you_mean
 
 DEFAULT_ROLES = {"robot": "robot", "partner": "human"}
 """Roles of a scheme that declares none: one robot and its human partner."""

@@ -26,10 +26,10 @@ from typing import Any
 
 import yaml
 
-from shary.errors import FileError, Problem
 from shary.io.schemes import parse_scheme, unreachable
-from shary.io.yamlsafe import Located, read_text
 from shary.model import covers
+from userfiles.errors import FileError, Problem
+from userfiles.yamlsafe import Located, read_text
 
 _NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.:-]*$")
 _TIME = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*(ms|s)\s*$")

@@ -28,7 +28,7 @@ from typing import Any
 import yaml
 from yaml.constructor import SafeConstructor
 
-from shary.errors import FileError, Problem
+from userfiles.errors import FileError, Problem
 
 MAX_BYTES = 1024 * 1024
 """Largest file accepted (1 MiB): a scheme of a thousand states is about 100 KB."""

@@ -1,0 +1,112 @@
+"""JSON Schema checks of located YAML, reported with file positions.
+
+jsonschema's raw messages are rewritten where a user would otherwise be
+puzzled: unknown keys get a "did you mean", and a failed ``anyOf`` reports the
+branch that came closest instead of "is not valid under any of the given
+schemas".  Each package keeps its own schemas (``shary/schemas``,
+``planner/schemas``) and builds validators with :func:`validator`.
+"""
+
+from __future__ import annotations
+
+import difflib
+import json
+import re
+from pathlib import Path
+from typing import Any
+
+from jsonschema import Draft202012Validator
+from jsonschema.exceptions import ValidationError, best_match
+from referencing import Registry, Resource
+
+from userfiles.errors import Problem
+from userfiles.yamlsafe import Located
+
+
+def validator(folder: Path, name: str) -> Draft202012Validator:
+    """A validator for ``folder/NAME.schema.json``, resolving ``$ref`` to its siblings."""
+    documents = [json.loads(f.read_text("utf-8")) for f in sorted(folder.iterdir())
+                 if f.name.endswith(".schema.json")]
+    registry = Registry().with_resources(
+        (doc["$id"], Resource.from_contents(doc)) for doc in documents)
+    main = json.loads((folder / f"{name}.schema.json").read_text("utf-8"))
+    return Draft202012Validator(main, registry=registry)
+
+
+def did_you_mean(word: str, choices: Any) -> str:
+    """`` (did you mean 'x'?)`` when a close match exists, else an empty string."""
+    close = difflib.get_close_matches(word, [str(c) for c in choices], n=1, cutoff=0.6)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def check(located: Located, checker: Draft202012Validator) -> list[Problem]:
+    """Every violation of a schema in ``located`` (and its loading problems)."""
+    problems: list[Problem] = list(located.problems)
+    for error in checker.iter_errors(located.data):
+        problems.extend(_explain(located, error))
+    return problems
+
+
+def _explain(located: Located, error: ValidationError) -> list[Problem]:
+    path = tuple(error.absolute_path)
+    if error.validator in ("anyOf", "oneOf") and error.context:
+        # A branch that fails on the type of the value itself was not the one meant.
+        meant = [e for e in error.context
+                 if not (e.validator == "type" and not e.relative_path)]
+        return _explain(located, best_match(meant or error.context))
+    if error.validator == "additionalProperties" and isinstance(error.instance, dict):
+        known = list(error.schema.get("properties", {}))
+        allowed = set(known)
+        patterns = list(error.schema.get("patternProperties", {}))
+        out = []
+        for key in error.instance:
+            if key in allowed or any(_matches(p, key) for p in patterns):
+                continue
+            hint = did_you_mean(key, known)
+            expected = f"; expected one of: {', '.join(known)}" if known and not hint else ""
+            out.append(located.problem(path + (key,), f"unknown key {key!r}{hint}{expected}",
+                                       key=True))
+        return out
+    if error.validator == "required":
+        return [located.problem(path, error.message.replace("is a required property",
+                                                            "is missing (required)"))]
+    if error.validator == "type":
+        expected = error.validator_value
+        if isinstance(expected, list):
+            expected = " or ".join(expected)
+        return [located.problem(path, f"expected {_article(expected)} here, "
+                                      f"got {_describe(error.instance)}")]
+    if error.validator == "enum":
+        hint = did_you_mean(str(error.instance), error.validator_value)
+        choices = ", ".join(str(v) for v in error.validator_value)
+        return [located.problem(path, f"{error.instance!r} is not one of: {choices}{hint}")]
+    if error.validator == "pattern":
+        what = error.schema.get("description", f"must match {error.validator_value}")
+        return [located.problem(path, f"{error.instance!r}: {what}")]
+    if error.validator == "propertyNames":
+        return [located.problem(path, error.message)]
+    return [located.problem(path, error.message)]
+
+
+def _matches(pattern: str, key: str) -> bool:
+    return re.search(pattern, key) is not None
+
+
+def _article(kind: str) -> str:
+    return ("an " if kind[:1] in "aeiou" else "a ") + kind if " or " not in kind else kind
+
+
+def _describe(value: Any) -> str:
+    if value is None:
+        return "nothing (null)"
+    if isinstance(value, bool):
+        return f"a boolean ({value})"
+    if isinstance(value, (int, float)):
+        return f"a number ({value})"
+    if isinstance(value, str):
+        return f"a string ({value!r})"
+    if isinstance(value, list):
+        return "a list"
+    if isinstance(value, dict):
+        return "a mapping"
+    return type(value).__name__
