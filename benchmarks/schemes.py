@@ -28,7 +28,7 @@ from transitions.extensions import HierarchicalMachine
 
 from shary import compile_scheme
 from shary.io.schemes import parse_scheme
-from shary.io.yamlsafe import load_text
+from userfiles.yamlsafe import load_text
 
 PHASES, GROUPS, LEAVES = 4, 3, 3
 EVENTS = ["next"] * 6 + ["skip"] * 2 + ["phase", "noise"]
