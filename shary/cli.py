@@ -82,6 +82,21 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", type=Path, required=True, metavar="FILE.yaml")
     p.set_defaults(func=cmd_import_scxml)
 
+    p = sub.add_parser("plan", help="plan a problem with the HATP-like planner")
+    p.add_argument("domain", help="a built-in domain name or a domain file")
+    p.add_argument("problem", type=Path, help="a problem file")
+    p.add_argument("--budget-ms", type=int, default=None, metavar="N",
+                   help="time budget (default: the problem's); the best plan so far is kept")
+    p.add_argument("--rules", default=None, metavar="RULE,…",
+                   help="the social rules to apply (default: the problem's selection; "
+                   "'none' for none)")
+    p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p.add_argument("--render", choices=("tree", "streams"),
+                   help="draw the decomposition tree or the per-agent streams")
+    p.add_argument("-o", "--output", type=Path, metavar="OUT",
+                   help="where --render draws (.svg, .png, .dot)")
+    p.set_defaults(func=cmd_plan)
+
     from shary.log import add_log_command
 
     add_log_command(sub)
@@ -278,6 +293,107 @@ def cmd_render_tree(args: argparse.Namespace) -> int:
         return 1
     _out.print(f"wrote {_escape(str(args.output))} ({len(tree)} nodes)")
     return 0
+
+
+# -- planning ----------------------------------------------------------------
+
+
+def cmd_plan(args: argparse.Namespace) -> int:
+    import json
+
+    import planner
+
+    if args.render and args.output is None:
+        _err.print("[bold red]error:[/bold red] --render needs -o OUT")
+        return EXIT_BAD_FILE
+    domain = planner.load_domain(args.domain)
+    problem = planner.load_problem(args.problem, domain)
+    if args.rules is not None:
+        try:
+            problem.select_rules([] if args.rules == "none" else
+                                 [r for r in args.rules.split(",") if r])
+        except KeyError as err:
+            _err.print(f"[bold red]error:[/bold red] {_escape(str(err.args[0]))}")
+            return EXIT_BAD_FILE
+    result = planner.plan(problem, args.budget_ms)
+    best = result.plan
+    errors = planner.validate(problem, best) if best is not None else []
+    if args.json:
+        print(json.dumps(_plan_json(problem, result, errors), sort_keys=True))
+    else:
+        _print_plan(problem, result, errors)
+    if best is not None and args.render:
+        from planner.display import streams_dot, tree_dot
+        from shary.display import render_dot
+
+        title = f"{problem.name} ({domain.name})"
+        source = tree_dot(best, title) if args.render == "tree" else streams_dot(best, title)
+        try:
+            render_dot(source, args.output)
+        except (ValueError, RuntimeError, OSError) as err:
+            _err.print(f"[bold red]error:[/bold red] {_escape(str(err))}")
+            return 1
+        if not args.json:
+            _out.print(f"wrote {_escape(str(args.output))}")
+    return 0 if best is not None and not errors else 1
+
+
+def _plan_json(problem, result, errors) -> dict:  # type: ignore[no-untyped-def]
+    best = result.plan
+    out = {"problem": problem.name, "domain": problem.domain.name, "found": best is not None,
+           "plans_found": result.plans_found, "expansions": result.expansions,
+           "complete": result.complete, "elapsed_ms": round(result.elapsed_ms, 3)}
+    if best is None:
+        out["explanation"] = [str(f) for f in result.failures]
+        return out
+    out.update({
+        "score": best.score, "criteria": best.criteria, "weights": best.weights,
+        "breakdown": best.breakdown(), "violations": best.violations, "valid": not errors,
+        "validation_errors": errors, "makespan": best.makespan,
+        "actions": [{"index": a.index, "name": a.name, "args": list(a.args), "agent": a.agent,
+                     "cost": a.cost, "start": a.start, "end": a.end} for a in best.actions],
+        "streams": {agent: [a.index for a in acts] for agent, acts in best.streams.items()},
+        "links": [{"from": k.producer, "to": k.consumer, "fact": f"{k.entity}.{k.attribute}"}
+                  for k in best.links]})
+    return out
+
+
+def _print_plan(problem, result, errors) -> None:  # type: ignore[no-untyped-def]
+    best = result.plan
+    state = "search complete" if result.complete else "time budget reached: best so far"
+    _out.print(f"[bold]{problem.name}[/bold] ({problem.domain.name}): {result.plans_found} "
+               f"plan(s) in {result.elapsed_ms:.1f} ms, {result.expansions} expansions, {state}")
+    if best is None:
+        _out.print("[bold red]no plan[/bold red]; where each top task got stuck:")
+        for failure in result.failures:
+            _out.print(f"  {_escape(str(failure))}")
+        return
+    names = {a.index: str(a) for a in best.actions}
+    for agent, actions in best.streams.items():
+        _out.print(f"[bold]{agent}[/bold] ({problem.kind(agent) or 'agent'})")
+        for a in actions:
+            _out.print(f"  {a.start:6.1f} - {a.end:6.1f}  {_escape(str(a))}  [dim]cost "
+                       f"{a.cost:g}[/dim]")
+    by_index = {a.index: a for a in best.actions}
+    crossing = [k for k in best.links if by_index[k.producer].agent != by_index[k.consumer].agent]
+    if crossing:
+        _out.print("[bold]links between streams[/bold]")
+        for link in crossing:
+            _out.print(f"  {_escape(names[link.producer])} -> {_escape(names[link.consumer])}"
+                       f"  ({link.entity}.{link.attribute})")
+    _out.print(f"[bold]score {best.score:g}[/bold] (makespan {best.makespan:g} s)")
+    for name, value in best.criteria.items():
+        weight = best.weights.get(name, 0.0)
+        if weight or value:
+            _out.print(f"  {name:<24} {value:8.2f} x {weight:.3f} = {value * weight:8.2f}")
+    for violation in best.violations:
+        _out.print(f"  [yellow]{_escape(violation)}[/yellow]")
+    if errors:
+        _out.print("[bold red]the validator refuses this plan:[/bold red]")
+        for error in errors:
+            _out.print(f"  {_escape(error)}")
+    else:
+        _out.print("[green]validated[/green]: every precondition, decomposition and goal holds")
 
 
 # -- SCXML ------------------------------------------------------------------

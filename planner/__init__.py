@@ -1,0 +1,37 @@
+"""A HATP-like human-aware HTN planner (standalone: it imports nothing from shary).
+
+HATP (Alami et al., in SHARY, section 2.3) plans with the robot *and* the
+humans in the plan, reads its plans as one stream of actions per agent with
+causal links between the streams, and scores them with action costs plus
+"social rules" so that the plan is one people accept.
+
+    from planner import load_domain, load_problem, plan, validate
+
+    domain = load_domain("living-room")
+    problem = load_problem("planner/problems/clean-up.yaml", domain)
+    result = plan(problem, budget_ms=200)
+    for agent, actions in result.plan.streams.items(): ...
+    assert validate(problem, result.plan) == []
+"""
+
+from planner.domain import Domain, Problem
+from planner.io import builtin_domains, find_domain, load_domain, load_problem
+from planner.plan import CausalLink, Plan, PlanAction, TreeNode
+from planner.search import Result, plan
+from planner.validate import validate
+
+__all__ = [
+    "CausalLink",
+    "Domain",
+    "Plan",
+    "PlanAction",
+    "Problem",
+    "Result",
+    "TreeNode",
+    "builtin_domains",
+    "find_domain",
+    "load_domain",
+    "load_problem",
+    "plan",
+    "validate",
+]

@@ -1,0 +1,170 @@
+"""The planning model: entity types, actions, methods, social rules, problems.
+
+HATP's world is "a set of entities ... each entity is unique" with static and
+dynamic attributes (Fig. 4); its domain is "a pair D = <T, R>" of tasks
+(actions and methods, Fig. 5) and social rules.  Everything here is already
+compiled: conditions, effects, costs and subtask arguments are
+:mod:`planner.expr` closures.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from planner.expr import Effect, Expr
+
+AGENT_KINDS = ("robot", "human")
+
+
+@dataclass(frozen=True)
+class EntityType:
+    name: str
+    static: dict[str, str]
+    dynamic: dict[str, str]
+    agent: bool = False
+    doc: str = ""
+
+    @property
+    def attributes(self) -> dict[str, str]:
+        return {**self.static, **self.dynamic}
+
+
+@dataclass(frozen=True)
+class ConditionalEffect:
+    """Effects applied only when a condition holds in the state before the action."""
+
+    condition: Expr
+    effects: tuple[Effect, ...]
+
+
+@dataclass(frozen=True)
+class Action:
+    """A primitive task, performed by the agent named by its ``agent`` parameter."""
+
+    name: str
+    params: tuple[tuple[str, str], ...]
+    agent: str
+    pre: Expr | None
+    effects: tuple[Effect | ConditionalEffect, ...]
+    cost: Expr | float
+    duration: Expr | float
+    doc: str = ""
+
+
+@dataclass(frozen=True)
+class Subtask:
+    """A subtask of a decomposition: a task name and argument expressions."""
+
+    task: str
+    args: tuple[Expr, ...]
+    text: str
+
+
+@dataclass(frozen=True)
+class Decomposition:
+    name: str
+    vars: tuple[tuple[str, str], ...]
+    pre: Expr | None
+    subtasks: tuple[Subtask, ...]
+    doc: str = ""
+
+
+@dataclass(frozen=True)
+class Method:
+    """A compound task and the ways it decomposes, tried in order."""
+
+    name: str
+    params: tuple[tuple[str, str], ...]
+    decompositions: tuple[Decomposition, ...]
+    doc: str = ""
+
+
+@dataclass(frozen=True)
+class Rule:
+    """A social rule of the domain (a problem selects it, with penalties and a weight)."""
+
+    name: str
+    kind: str
+    vars: tuple[tuple[str, str], ...] = ()
+    when: Expr | None = None
+    during: bool = False
+    first: tuple[str, str | None] | None = None
+    then: tuple[str, str | None] | None = None
+    link: tuple[tuple[str, str], ...] = ()
+    agents: str = "any"
+    immediately: bool = True
+    method: str | None = None
+    decomposition: str | None = None
+    max_wait: float = 0.0
+    doc: str = ""
+
+
+@dataclass
+class Domain:
+    name: str
+    types: dict[str, EntityType]
+    actions: dict[str, Action]
+    methods: dict[str, Method]
+    rules: dict[str, Rule]
+    doc: str = ""
+    file: str = ""
+
+    def task(self, name: str) -> Action | Method | None:
+        return self.actions.get(name) or self.methods.get(name)
+
+
+@dataclass(frozen=True)
+class SelectedRule:
+    """A rule as a problem uses it: penalty by agent name, agent kind or default."""
+
+    rule: Rule
+    penalties: dict[str, float]
+    weight: float = 1.0
+
+    def penalty(self, agent: str | None, kind: str | None) -> float:
+        table = self.penalties
+        if agent is not None and agent in table:
+            return table[agent]
+        if kind is not None and kind in table:
+            return table[kind]
+        return table.get("default", 1.0)
+
+
+@dataclass
+class Problem:
+    name: str
+    domain: Domain
+    entities: dict[str, str]
+    initial: dict[tuple[str, str], Any]
+    tasks: tuple[tuple[str, tuple[Any, ...]], ...]
+    goals: dict[tuple[str, str], Any] = field(default_factory=dict)
+    rules: dict[str, SelectedRule] = field(default_factory=dict)
+    weights: dict[str, float] = field(default_factory=dict)
+    scale: dict[str, float] = field(default_factory=dict)
+    budget_ms: int = 1000
+    doc: str = ""
+    file: str = ""
+
+    def select_rules(self, names: list[str]) -> None:
+        """Keep only these social rules: the problem's settings for those it selected,
+        a penalty of 1 for the others; KeyError names a rule the domain lacks."""
+        chosen = {}
+        for name in names:
+            if name not in self.domain.rules:
+                known = ", ".join(self.domain.rules) or "none"
+                raise KeyError(f"the domain has no rule {name!r}; its rules: {known}")
+            chosen[name] = self.rules.get(name) or SelectedRule(self.domain.rules[name],
+                                                                {"default": 1.0})
+        self.rules = chosen
+        if self.weights:
+            self.weights = {k: v for k, v in self.weights.items()
+                            if k in chosen or k not in self.domain.rules}
+
+    def of_type(self, type_name: str) -> list[str]:
+        """The entities of a type, sorted by name (the search's deterministic order)."""
+        return sorted(e for e, t in self.entities.items() if t == type_name)
+
+    def kind(self, agent: str) -> str | None:
+        value = self.initial.get((agent, "kind"))
+        return value if isinstance(value, str) else None

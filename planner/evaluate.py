@@ -1,0 +1,316 @@
+"""Evaluating a plan: streams, causal links, times, criteria, social rules, score.
+
+A total-order plan from the search is read as HATP reads it: one stream per
+agent, with causal links (an action needs a value another action set) and
+ordering constraints (an action must not overwrite what an earlier one still
+reads, or what an earlier one wrote).  Actions start as soon as their
+predecessors in those relations, and their agent's previous action, are over:
+actions of different agents overlap when nothing orders them.
+
+The score is HATP's: action costs plus the penalties of the social rules the
+problem selected, or, when the problem compares criteria with the Analytic
+Hierarchy Process, the weighted sum of the criteria (each divided by its
+scale).  Every criterion is kept so that the score can be broken down.
+"""
+
+from __future__ import annotations
+
+import itertools
+from typing import Any
+
+from planner.domain import ConditionalEffect, Problem, SelectedRule
+from planner.plan import CausalLink, Plan, PlanAction, TreeNode
+
+BASE_CRITERIA = ("cost", "duration", "human-effort", "robot-effort", "rules")
+MONOTONE = ("cost", "human-effort", "robot-effort")
+
+
+class Evaluator:
+    """Turns search trails into evaluated :class:`Plan` objects for one problem."""
+
+    def __init__(self, problem: Problem):
+        self.problem = problem
+        self.domain = problem.domain
+        if problem.weights:
+            self.weights = dict(problem.weights)
+        else:
+            self.weights = {"cost": 1.0, **{name: 1.0 for name in problem.rules}}
+        self.scale = {name: problem.scale.get(name, 1.0) for name in self.weights}
+        self._bound = tuple((self.weights.get(c, 0.0) / self.scale.get(c, 1.0))
+                            for c in MONOTONE)
+
+    def lower_bound(self, cost: float, human: float, robot: float) -> float:
+        """A score no completion of a partial plan can go below."""
+        wc, wh, wr = self._bound
+        return wc * cost + wh * human + wr * robot
+
+    # -- from the search's trail to a plan -------------------------------------------
+
+    def plan(self, trail: Any, roots: list[int]) -> Plan:
+        """The plan a search trail (a linked list of its choices, last first) describes."""
+        records = []
+        while trail is not None:
+            records.append(trail[0])
+            trail = trail[1]
+        records.reverse()
+        return self.build(records, roots)
+
+    def build(self, records: list[tuple], root_ids: list[int]) -> Plan:
+        """A plan from the search's records: ("method", …) and ("act", …) in order;
+        ``root_ids`` are the tree ids of the problem's top tasks."""
+        tree: dict[int, TreeNode] = {}
+        roots: list[int] = []
+        alias: dict[int, int] = {}
+        actions: list[PlanAction] = []
+
+        def attach(parent: int, node: TreeNode) -> None:
+            parent = alias.get(parent, parent)
+            if parent in tree:
+                tree[parent].children.append(node.id)
+            tree[node.id] = node
+
+        for root, (name, args) in zip(root_ids, self.problem.tasks, strict=True):
+            tree[root] = TreeNode(root, name, tuple(args))
+            roots.append(root)
+        for record in records:
+            if record[0] == "method":
+                _, node, parent, name, args, dec, binding = record
+                if parent in roots and tree[parent].decomposition is None \
+                        and tree[parent].action is None and not tree[parent].children:
+                    tree[parent].decomposition = dec
+                    tree[parent].bindings = dict(binding)
+                    alias[node] = parent
+                else:
+                    attach(parent, TreeNode(node, name, tuple(args), dec, bindings=dict(binding)))
+            else:
+                _, node, parent, name, args, agent, price, length = record
+                index = len(actions)
+                actions.append(PlanAction(index, name, tuple(args), agent, float(price),
+                                          float(length)))
+                if parent in roots and not tree[parent].children \
+                        and tree[parent].decomposition is None:
+                    tree[parent].action = index
+                else:
+                    attach(parent, TreeNode(node, name, tuple(args), action=index))
+        return self.evaluate(actions, tree, roots)
+
+    # -- links, times, criteria ----------------------------------------------------------
+
+    def evaluate(self, actions: list[PlanAction], tree: dict[int, TreeNode],
+                 roots: list[int]) -> Plan:
+        problem = self.problem
+        values = dict(problem.initial)
+        writer: dict[tuple[str, str], int] = {}
+        readers: dict[tuple[str, str], list[int]] = {}
+        links: dict[tuple, CausalLink] = {}
+        orderings: set[tuple[int, int]] = set()
+        during_rules = [r for r in problem.rules.values()
+                        if r.rule.kind == "state" and r.rule.during]
+        violations: list[str] = []
+        penalties: dict[str, float] = {name: 0.0 for name in problem.rules}
+        for index, act in enumerate(actions):
+            action = self.domain.actions[act.name]
+            env = {p: a for (p, _), a in zip(action.params, act.args, strict=True)}
+            reads: set[tuple[str, str]] = set()
+            writes: list[tuple[tuple[str, str], Any]] = []
+
+            def get(entity: str, attribute: str, _reads: set = reads) -> Any:
+                _reads.add((entity, attribute))
+                return values.get((entity, attribute))
+
+            def put(entity: str, attribute: str, value: Any, _writes: list = writes) -> None:
+                _writes.append(((entity, attribute), value))
+
+            if action.pre is not None:
+                action.pre(env, get)
+            for effect in action.effects:
+                if isinstance(effect, ConditionalEffect):
+                    if effect.condition(env, get):
+                        for inner in effect.effects:
+                            inner(env, get, put)
+                else:
+                    effect(env, get, put)
+            for key in sorted(reads):
+                producer = writer.get(key)
+                if producer is not None and producer != index:
+                    links.setdefault((producer, index, key),
+                                     CausalLink(producer, index, key[0], key[1]))
+            for key, value in writes:
+                for reader in readers.get(key, ()):
+                    if reader != index:
+                        orderings.add((reader, index))
+                if key in writer and writer[key] != index:
+                    orderings.add((writer[key], index))
+                writer[key] = index
+                readers[key] = []
+                values[key] = value
+            for key in reads:
+                readers.setdefault(key, []).append(index)
+            for selected in during_rules:
+                self._state_rule(selected, values, writer, actions, penalties, violations)
+        for selected in problem.rules.values():
+            if selected.rule.kind == "state" and not selected.rule.during:
+                self._state_rule(selected, values, writer, actions, penalties, violations)
+        timed = self._schedule(actions, list(links.values()), orderings)
+        plan = Plan(timed, sorted(links.values(), key=lambda k: (k.consumer, k.producer,
+                                                                  k.entity, k.attribute)),
+                    sorted(orderings), tree, roots)
+        self._plan_rules(plan, penalties, violations)
+        self._score(plan, penalties, violations)
+        return plan
+
+    def _schedule(self, actions: list[PlanAction], links: list[CausalLink],
+                  orderings: set[tuple[int, int]]) -> list[PlanAction]:
+        before: dict[int, set[int]] = {a.index: set() for a in actions}
+        for link in links:
+            before[link.consumer].add(link.producer)
+        for first, second in orderings:
+            before[second].add(first)
+        last: dict[str, int] = {}
+        for act in actions:
+            if act.agent in last:
+                before[act.index].add(last[act.agent])
+            last[act.agent] = act.index
+        ends: dict[int, float] = {}
+        timed = []
+        for act in actions:
+            start = max((ends[p] for p in before[act.index]), default=0.0)
+            ends[act.index] = start + act.duration
+            timed.append(PlanAction(act.index, act.name, act.args, act.agent, act.cost,
+                                    act.duration, start, start + act.duration))
+        return timed
+
+    # -- social rules ------------------------------------------------------------------------
+
+    def _kind(self, agent: str | None) -> str | None:
+        return self.problem.kind(agent) if agent is not None else None
+
+    def _charge(self, selected: SelectedRule, agent: str | None, amount: float,
+                penalties: dict[str, float], violations: list[str], what: str) -> None:
+        cost = selected.penalty(agent, self._kind(agent)) * amount
+        if cost > 0:
+            penalties[selected.rule.name] += cost
+            violations.append(f"{selected.rule.name}: {what} (+{cost:g})")
+
+    def _state_rule(self, selected: SelectedRule, values: dict, writer: dict,
+                    actions: list[PlanAction], penalties: dict, violations: list) -> None:
+        rule = selected.rule
+        names = [v for v, _ in rule.vars]
+        choices = [self.problem.of_type(t) for _, t in rule.vars]
+        for combo in itertools.product(*choices):
+            env = dict(zip(names, combo, strict=True))
+            reads: set[tuple[str, str]] = set()
+
+            def get(entity: str, attribute: str, _reads: set = reads) -> Any:
+                _reads.add((entity, attribute))
+                return values.get((entity, attribute))
+
+            if rule.when is not None and rule.when(env, get):
+                culprits = [writer[k] for k in reads if k in writer]
+                agent = actions[max(culprits)].agent if culprits else None
+                self._charge(selected, agent, 1.0, penalties, violations,
+                             f"{rule.when.text} with " + ", ".join(
+                                 f"{k}={v}" for k, v in env.items()))
+
+    def _plan_rules(self, plan: Plan, penalties: dict, violations: list) -> None:
+        actions = sorted(plan.actions, key=lambda a: a.index)
+        for selected in self.problem.rules.values():
+            rule = selected.rule
+            if rule.kind == "sequence":
+                self._sequence(selected, actions, penalties, violations)
+            elif rule.kind == "decomposition":
+                for node in plan.tree.values():
+                    if node.task == rule.method and node.decomposition == rule.decomposition:
+                        agent = self._first_agent(plan, node)
+                        self._charge(selected, agent, 1.0, penalties, violations,
+                                     f"{node.task} decomposed as {node.decomposition}")
+            elif rule.kind == "effort":
+                human = sum(a.cost for a in actions if self._kind(a.agent) == "human")
+                robot = sum(a.cost for a in actions if self._kind(a.agent) == "robot")
+                humans = [a.agent for a in actions if self._kind(a.agent) == "human"]
+                if human > robot:
+                    self._charge(selected, humans[0] if humans else None, human - robot,
+                                 penalties, violations,
+                                 f"human effort {human:g} > robot effort {robot:g}")
+            elif rule.kind == "timeout":
+                for agent, stream in plan.streams.items():
+                    for prev, nxt in zip(stream, stream[1:], strict=False):
+                        gap = nxt.start - prev.end
+                        if gap > rule.max_wait:
+                            self._charge(selected, agent, gap - rule.max_wait, penalties,
+                                         violations, f"{agent} waits {gap:g} between {prev} "
+                                         f"and {nxt}")
+            elif rule.kind == "crossed-links":
+                by_index = {a.index: a for a in actions}
+                for link in plan.links:
+                    producer, consumer = by_index[link.producer], by_index[link.consumer]
+                    if producer.agent != consumer.agent:
+                        self._charge(selected, consumer.agent, 1.0, penalties, violations,
+                                     f"{producer} ({producer.agent}) -> {consumer} "
+                                     f"({consumer.agent}) on {link.entity}.{link.attribute}")
+
+    def _first_agent(self, plan: Plan, node: TreeNode) -> str | None:
+        stack = [node]
+        while stack:
+            current = stack.pop(0)
+            if current.action is not None:
+                return plan.actions[current.action].agent
+            stack[:0] = [plan.tree[c] for c in current.children]
+        return None
+
+    def _matches(self, act: PlanAction, pattern: tuple[str, str | None] | None) -> bool:
+        if pattern is None:
+            return False
+        name, kind = pattern
+        return act.name == name and (kind is None or self._kind(act.agent) == kind)
+
+    def _arg(self, act: PlanAction, param: str) -> Any:
+        params = [p for p, _ in self.domain.actions[act.name].params]
+        return act.args[params.index(param)] if param in params else None
+
+    def _sequence(self, selected: SelectedRule, actions: list[PlanAction], penalties: dict,
+                  violations: list) -> None:
+        rule = selected.rule
+        for i, first in enumerate(actions):
+            if not self._matches(first, rule.first):
+                continue
+            linked = {self._arg(first, p) for p, _ in rule.link}
+            for second in actions[i + 1:]:
+                if rule.link:
+                    related = all(self._arg(first, p) == self._arg(second, q)
+                                  for p, q in rule.link)
+                    touches = bool(linked & set(second.args))
+                elif rule.agents == "same":
+                    related = touches = second.agent == first.agent
+                else:
+                    related = touches = True
+                if not touches and rule.immediately:
+                    continue
+                agents_ok = (rule.agents == "any"
+                             or (rule.agents == "same") == (second.agent == first.agent))
+                if related and agents_ok and self._matches(second, rule.then):
+                    self._charge(selected, second.agent, 1.0, penalties, violations,
+                                 f"{first} ({first.agent}) then {second} ({second.agent})")
+                    break
+                if rule.immediately:
+                    break
+
+    # -- the score ------------------------------------------------------------------------------
+
+    def _score(self, plan: Plan, penalties: dict[str, float], violations: list[str]) -> None:
+        actions = plan.actions
+        criteria = {
+            "cost": sum(a.cost for a in actions),
+            "duration": plan.makespan,
+            "human-effort": sum(a.cost for a in actions if self._kind(a.agent) == "human"),
+            "robot-effort": sum(a.cost for a in actions if self._kind(a.agent) == "robot"),
+        }
+        weighted = {name: self.problem.rules[name].weight * value
+                    for name, value in penalties.items()}
+        criteria["rules"] = sum(weighted.values())
+        criteria.update(weighted)
+        plan.criteria = criteria
+        plan.weights = {name: self.weights.get(name, 0.0) / self.scale.get(name, 1.0)
+                        for name in criteria}
+        plan.score = sum(plan.weights[name] * value for name, value in criteria.items())
+        plan.violations = violations

@@ -1,0 +1,684 @@
+"""The expression language of planning domains: preconditions, effects and costs.
+
+HATP writes tasks with small expressions over entity attributes (Fig. 5:
+``Ag.posTopo != P2; P2.freePlace == true``, effects ``Ag.posTopo = P2``, costs
+that depend on the state).  The world they run against maps (entity, attribute)
+to a value: None, a bool, a number or a string, and a string that names an
+entity *is* that entity, so ``obj.holder.at`` reads ``at`` of whoever holds
+``obj``.
+
+Each text is parsed, type-checked and compiled once, when the domain is
+loaded, into nested Python closures, one per node of the syntax tree.  Why
+closures: the search evaluates the same few conditions millions of times, so
+all the deciding (which operator, which variable, is an operand constant) is
+done once; a call is then plain function calls, with no walk over a tree and
+no lookup of operators.  Why a parser of our own: a domain file is data, and
+nothing from its text ever reaches Python's eval, exec or compile builtins; a
+typo is reported at its column instead of being run.
+
+Semantics, chosen for planning:
+
+* attribute access propagates null: an attribute of null is null, so
+  ``obj.holder.at == p`` is simply false while nobody holds ``obj``;
+* ``== null`` and ``!= null`` test for null; ``<`` ``<=`` ``>`` ``>=`` with a
+  null operand are false (an unknown quantity satisfies no bound);
+* ``and``, ``or`` and ``not`` give booleans; ``/`` divides exactly;
+* arithmetic takes numbers only (not null, strings or booleans), and what the
+  types cannot rule out at compile time is an :class:`EvalError` at run time.
+"""
+
+from __future__ import annotations
+
+import difflib
+import operator
+import re
+from collections.abc import Callable
+from typing import Any
+
+__all__ = ["EvalError", "Effect", "Expr", "ExprError", "compile_effect", "compile_expr"]
+
+FUNCTIONS = ("abs", "max", "min")
+SCALAR_TYPES = ("bool", "number", "string", "any")
+_KEYWORDS = ("and", "or", "not", "true", "false", "null")
+_LITERALS = {"true": True, "false": False, "null": None}
+_PYTHON_NAMES = {"True": "true", "False": "false", "None": "null"}
+_COMPARISONS = ("==", "!=", "<", "<=", ">", ">=")
+_NUMS = frozenset((int, float))
+_NO = object()  # "not a constant"
+
+# A token is a number, a name, a quoted string or an operator; anything else is an error.
+_TOKEN = (r"(?P<num>[0-9]+(?:\.[0-9]+)?(?:[eE][-+]?[0-9]+)?)|(?P<name>[A-Za-z_][A-Za-z0-9_]*)"
+          r"|(?P<str>\"[^\"]*\"|'[^']*')|(?P<op>==|!=|<=|>=|&&|\|\||[-+*/<>=().,])"
+          r"|(?P<ws>\s+)|(?P<bad>.)")
+
+
+class ExprError(Exception):
+    """A syntax or type error found at compile time, at ``offset`` (0-based) in the text.
+
+    ``offset`` is a plain attribute so that a caller that compiled a piece of a
+    larger text (a subtask argument) can shift it to a position in the whole.
+    """
+
+    def __init__(self, message: str, offset: int):
+        super().__init__(message)
+        self.message = message
+        self.offset = offset
+
+    def __str__(self) -> str:
+        return f"{self.message} (at offset {self.offset})"
+
+
+class EvalError(Exception):
+    """A problem only the state reveals: assigning through null, arithmetic on a
+    null or a string, division by zero."""
+
+
+Getter = Callable[[str, str], Any]
+Setter = Callable[[str, str, Any], None]
+
+
+class Expr:
+    """A compiled expression: ``expr(env, get)`` evaluates it.
+
+    ``env`` binds every name of ``variables``; ``get(entity, attribute)`` reads
+    the state.  ``reads`` are the attribute names it may read (for causal links
+    and lower bounds), ``type`` its static type when known (an entity type,
+    "bool", "number", "string" or None), ``fn`` the bare closure for hot loops.
+    """
+
+    __slots__ = ("text", "variables", "reads", "type", "fn")
+
+    def __init__(self, text: str, fn: Callable[[dict[str, Any], Getter], Any],
+                 variables: frozenset[str], reads: frozenset[str], type_: str | None):
+        self.text, self.fn, self.variables, self.reads, self.type = (
+            text, fn, variables, reads, type_)
+
+    def __call__(self, env: dict[str, Any], get: Getter) -> Any:
+        return self.fn(env, get)
+
+    def __repr__(self) -> str:
+        return f"Expr({self.text!r})"
+
+
+class Effect:
+    """A compiled assignment: ``effect(env, get, set)`` calls ``set(entity, attr, value)``.
+
+    ``target_attribute`` is the attribute it writes; ``variables`` and ``reads``
+    are as for :class:`Expr` (reads include the attributes that lead to the target).
+    """
+
+    __slots__ = ("text", "target_attribute", "variables", "reads", "fn")
+
+    def __init__(self, text: str, fn: Callable[[dict[str, Any], Getter, Setter], None],
+                 target_attribute: str, variables: frozenset[str], reads: frozenset[str]):
+        self.text, self.fn, self.target_attribute, self.variables, self.reads = (
+            text, fn, target_attribute, variables, reads)
+
+    def __call__(self, env: dict[str, Any], get: Getter, set: Setter) -> None:
+        self.fn(env, get, set)
+
+    def __repr__(self) -> str:
+        return f"Effect({self.text!r})"
+
+
+def compile_expr(text: str, variables: dict[str, str | None],
+                 attributes: dict[str, dict[str, str]] | None = None) -> Expr:
+    """Compile a condition or a cost; ``variables`` maps names to entity types (or None),
+    ``attributes`` maps entity types to {attribute: type} (None: no type checks)."""
+    p = _Parser(text, variables, attributes)
+    node = p.or_()
+    p.finish()
+    return Expr(text, node.fn, frozenset(p.used), frozenset(p.reads), _public(node.type))
+
+
+def compile_effect(text: str, variables: dict[str, str | None],
+                   attributes: dict[str, dict[str, str]] | None = None) -> Effect:
+    """Compile one assignment ``var.attr = expr`` (or ``var.a.b = expr``)."""
+    p = _Parser(text, variables, attributes)
+    kind, word, pos = p.peek()
+    if kind != "name" or word in _KEYWORDS:
+        p.fail("an effect assigns an attribute: write var.attr = value", pos)
+    owner = p.primary()
+    if owner.var is None:
+        p.fail("an effect assigns an attribute of a variable: write var.attr = value", pos)
+    steps = p.attribute_names()
+    if not steps:
+        p.fail(f"an effect assigns an attribute: write {word}.attribute = value", pos)
+    for attr, at in steps[:-1]:
+        owner = p.attribute(owner, attr, at)
+    attr, at = steps[-1]
+    target_type = p.attribute_type(owner, attr, at)
+    target = text[pos:p.last_end]
+    kind, word, eq = p.next()
+    if word == "==":
+        p.fail("an effect assigns with '=', not '=='", eq)
+    if word != "=":
+        p.fail(f"expected '=' after {target}, found {_show(word)}", eq)
+    value = p.or_()
+    p.finish()
+    if not _comparable(target_type, value.type):
+        p.fail(f"cannot assign {p.describe(value)} to {target} ({_a(target_type or '')})",
+               value.pos)
+    return Effect(text, _assign(owner, attr, value, text[pos:owner.end], target),
+                  attr, frozenset(p.used), frozenset(p.reads))
+
+
+class _Node:
+    """One parsed node: its closure, static type, span, and what specialisation needs."""
+
+    __slots__ = ("fn", "type", "pos", "end", "const", "var", "path", "boolean")
+
+    def __init__(self, fn: Callable, type_: str | None, pos: int, end: int, *,
+                 const: Any = _NO, var: str | None = None,
+                 path: tuple[str, str] | None = None, boolean: bool = False):
+        self.fn, self.type, self.pos, self.end = fn, type_, pos, end
+        self.const, self.var, self.path, self.boolean = const, var, path, boolean
+
+
+class _Parser:
+    """Recursive descent; each method parses one precedence level and returns a
+    :class:`_Node` whose closure is already built (parsing and compiling are one pass).
+
+    Static types: None (unknown), "number", "bool", "string", "null", "name"
+    (a quoted string: text or an entity of unknown type), or an entity type.
+    """
+
+    def __init__(self, text: str, variables: dict[str, str | None],
+                 attributes: dict[str, dict[str, str]] | None):
+        self.text, self.variables, self.attributes = text, variables, attributes
+        self.tokens = _tokenize(text)
+        self.i = 0
+        self.last_end = 0
+        self.used: set[str] = set()
+        self.reads: set[str] = set()
+
+    # -- tokens -------------------------------------------------------------------
+
+    def peek(self) -> tuple[str, str, int]:
+        return self.tokens[self.i]
+
+    def next(self) -> tuple[str, str, int]:
+        tok = self.tokens[self.i]
+        if tok[0] != "end":
+            self.i += 1
+            self.last_end = tok[2] + len(tok[1])
+        return tok
+
+    def at(self, *words: str) -> bool:
+        kind, word, _ = self.tokens[self.i]
+        return word in words and kind in ("name", "op")
+
+    def fail(self, message: str, offset: int) -> None:
+        raise ExprError(message, offset)
+
+    def finish(self) -> None:
+        kind, word, pos = self.peek()
+        if kind == "end":
+            return
+        if word == ")":
+            self.fail("unbalanced ')': no '(' to close", pos)
+        if word == "=":
+            self.fail("'=' assigns, once, in an effect; use '==' to compare", pos)
+        if word in _COMPARISONS:
+            self.fail("comparisons cannot be chained; use 'and'", pos)
+        self.fail(f"unexpected {_show(word)} after {self.text[:pos].strip()!r}", pos)
+
+    def describe(self, node: _Node) -> str:
+        src = self.text[node.pos:node.end]
+        return src if node.type in (None, "name") else f"{src} ({_a(node.type)})"
+
+    # -- precedence levels ----------------------------------------------------------
+
+    def or_(self) -> _Node:
+        node = self.and_()
+        if not self.at("or"):
+            return node
+        parts = [node]
+        while self.at("or"):
+            self.next()
+            parts.append(self.and_())
+        return self.fold(_logic(False, parts), "bool", parts, boolean=True)
+
+    def and_(self) -> _Node:
+        node = self.not_()
+        if not self.at("and"):
+            return node
+        parts = [node]
+        while self.at("and"):
+            self.next()
+            parts.append(self.not_())
+        return self.fold(_logic(True, parts), "bool", parts, boolean=True)
+
+    def not_(self) -> _Node:
+        if not self.at("not"):
+            return self.comparison()
+        pos = self.next()[2]
+        operand = self.not_()
+        f = operand.fn
+        node = self.fold(lambda env, get: not f(env, get), "bool", [operand], boolean=True)
+        node.pos = pos
+        return node
+
+    def comparison(self) -> _Node:
+        left = self.sum()
+        if not self.at(*_COMPARISONS):
+            return left
+        op, pos = self.next()[1:]
+        right = self.sum()
+        if self.at(*_COMPARISONS):
+            self.fail("comparisons cannot be chained; use 'and'", self.peek()[2])
+        if op in ("==", "!=") and not _comparable(left.type, right.type):
+            self.fail(f"{self.describe(left)} and {self.describe(right)} are never equal", pos)
+        if op not in ("==", "!="):
+            for side in (left, right):
+                if side.type not in (None, "number", "null"):
+                    self.fail(f"{op!r} orders numbers, not {self.describe(side)}", side.pos)
+        fn = _compare(op, left, right, self.text[left.pos:right.end])
+        return self.fold(fn, "bool", [left, right], boolean=True)
+
+    def sum(self) -> _Node:
+        node = self.product()
+        while self.at("+", "-"):
+            node = self.arithmetic(node, self.next()[1], self.product)
+        return node
+
+    def product(self) -> _Node:
+        node = self.unary()
+        while self.at("*", "/"):
+            node = self.arithmetic(node, self.next()[1], self.unary)
+        return node
+
+    def arithmetic(self, left: _Node, op: str, operand: Callable[[], _Node]) -> _Node:
+        right = operand()
+        self.need_numbers(op, left, right)
+        fn = _arith(op, left.fn, right.fn, self.text[left.pos:right.end])
+        return self.fold(fn, "number", [left, right])
+
+    def unary(self) -> _Node:
+        if not self.at("-"):
+            return self.postfix()
+        pos = self.next()[2]
+        inner = self.unary()
+        self.need_numbers("-", inner)
+        fn = _arith("neg", inner.fn, None, self.text[pos:inner.end])
+        node = self.fold(fn, "number", [inner])
+        node.pos = pos
+        return node
+
+    def postfix(self) -> _Node:
+        node = self.primary()
+        for attr, at in self.attribute_names():
+            node = self.attribute(node, attr, at)
+        return node
+
+    def primary(self) -> _Node:
+        kind, word, pos = self.next()
+        end = self.last_end
+        if kind == "num":
+            value = float(word) if ("." in word or "e" in word.lower()) else int(word)
+            return _const(value, "number", pos, end)
+        if kind == "str":
+            return _const(word[1:-1], "name", pos, end)
+        if kind == "name" and word in _LITERALS:
+            value = _LITERALS[word]
+            return _const(value, "null" if value is None else "bool", pos, end)
+        if kind == "name" and word not in _KEYWORDS:
+            if self.at("("):
+                return self.call(word, pos)
+            return self.variable(word, pos, end)
+        if kind == "end":
+            if self.i == 0:
+                self.fail("empty expression", 0)
+            before = self.tokens[self.i - 1]
+            self.fail(f"the expression ends after {_show(before[1])}", before[2])
+        if word == "(":
+            node = self.or_()
+            self.close(pos, "(")
+            node.pos, node.end = pos, self.last_end
+            return node
+        self.fail(f"expected a value, found {_show(word)}", pos)
+        raise AssertionError  # unreachable: fail raised
+
+    def close(self, opened: int, what: str) -> None:
+        kind, word, pos = self.peek()
+        if word == ")":
+            self.next()
+        elif kind == "end":
+            self.fail(f"{what!r} is never closed", opened)
+        else:
+            self.fail(f"expected ')' or an operator, found {_show(word)}", pos)
+
+    def variable(self, name: str, pos: int, end: int) -> _Node:
+        if name not in self.variables:
+            hint = _PYTHON_NAMES.get(name)
+            if hint:
+                self.fail(f"unknown name {name!r}; write {hint}", pos)
+            close = difflib.get_close_matches(name, list(self.variables), 1)
+            maybe = f" (did you mean {close[0]!r}?)" if close else ""
+            self.fail(f'unknown name {name!r}{maybe}; write entity names in quotes: "{name}"',
+                      pos)
+        self.used.add(name)
+        type_ = _norm(self.variables[name]) if self.attributes is not None else None
+        return _Node(lambda env, get: env[name], type_, pos, end, var=name)
+
+    def call(self, name: str, pos: int) -> _Node:
+        if name not in FUNCTIONS:
+            close = difflib.get_close_matches(name, FUNCTIONS, 1)
+            maybe = f"; did you mean {close[0]!r}?" if close else ""
+            self.fail(f"unknown function {name!r} (the functions are "
+                      f"{', '.join(FUNCTIONS)}){maybe}", pos)
+        opened = self.next()[2]
+        args = []
+        if not self.at(")"):
+            args.append(self.or_())
+            while self.at(","):
+                self.next()
+                args.append(self.or_())
+        self.close(opened, "(")
+        if name == "abs" and len(args) != 1:
+            self.fail(f"abs takes one argument, not {len(args)}", pos)
+        if not args:
+            self.fail(f"{name} needs at least one argument", pos)
+        self.need_numbers(name, *args)
+        fn = _function(name, [a.fn for a in args], self.text[pos:self.last_end])
+        node = self.fold(fn, "number", args)
+        node.pos = pos
+        return node
+
+    def attribute_names(self) -> list[tuple[str, int]]:
+        out = []
+        while self.at("."):
+            self.next()
+            kind, word, pos = self.next()
+            if kind != "name":
+                self.fail(f"expected an attribute name after '.', found {_show(word)}", pos)
+            out.append((word, pos))
+        return out
+
+    def attribute(self, base: _Node, attr: str, at: int) -> _Node:
+        type_ = self.attribute_type(base, attr, at)
+        self.reads.add(attr)
+        src = self.text[base.pos:base.end]
+        path = None if base.var is None else (base.var, attr)
+        return _Node(_read(base, attr, src), type_, base.pos, at + len(attr), path=path)
+
+    def attribute_type(self, base: _Node, attr: str, at: int) -> str | None:
+        """The type of ``base.attr``, checked against the domain's types when known."""
+        t, src = base.type, self.text[base.pos:base.end]
+        if t == "null":
+            self.fail(f"null has no attributes (reading {attr!r})", at)
+        if t in ("number", "bool", "string"):
+            self.fail(f"{src} is {_a(t)}, not an entity: it has no attribute {attr!r}", at)
+        attrs = None if t is None or self.attributes is None else self.attributes.get(t)
+        if attrs is None:  # unknown, a quoted name, or a type the domain does not describe
+            return None
+        if attr not in attrs:
+            close = difflib.get_close_matches(attr, list(attrs), 1)
+            hint = (f"; did you mean {close[0]!r}?" if close else
+                    f" (its attributes: {', '.join(sorted(attrs))})" if attrs else
+                    " (it has no attributes)")
+            self.fail(f"{src} is {_a(t)}, which has no attribute {attr!r}{hint}", at)
+        return _norm(attrs[attr])
+
+    # -- checks and folding -----------------------------------------------------------
+
+    def need_numbers(self, op: str, *nodes: _Node) -> None:
+        for node in nodes:
+            if node.type not in (None, "number"):
+                what = "a quoted string" if node.type == "name" else self.describe(node)
+                self.fail(f"{op!r} needs numbers, not {what}", node.pos)
+
+    def fold(self, fn: Callable, type_: str | None, parts: list[_Node], *,
+             boolean: bool = False) -> _Node:
+        """A node over ``parts``; computed now if they are all constants (so that
+        ``-1`` or ``2 * 3`` cost nothing per call, and ``1 / 0`` is a compile error)."""
+        pos, end = parts[0].pos, self.last_end
+        if all(p.const is not _NO for p in parts):
+            try:
+                value = fn({}, None)
+            except EvalError as err:
+                raise ExprError(str(err), pos) from None
+            node = _const(value, type_, pos, end)
+        else:
+            node = _Node(fn, type_, pos, end, boolean=boolean)
+        return node
+
+
+# -- closure builders: every decision is taken here, once ---------------------------------
+
+
+def _tokenize(text: str) -> list[tuple[str, str, int]]:
+    out = []
+    for m in re.finditer(_TOKEN, text, re.DOTALL):
+        kind, word, pos = m.lastgroup or "bad", m.group(), m.start()
+        if kind == "ws":
+            continue
+        if kind == "bad":
+            if word in "\"'":
+                raise ExprError(f"unterminated string: no closing {word}", pos)
+            hint = {"!": "; use 'not' (or '!=')", "&": "; use 'and'", "|": "; use 'or'"}
+            raise ExprError(f"unexpected character {word!r}{hint.get(word, '')}", pos)
+        if word in ("&&", "||"):
+            raise ExprError(f"unexpected {word!r}; use {'and' if word == '&&' else 'or'!r}", pos)
+        out.append((kind, word, pos))
+    out.append(("end", "", len(text)))
+    return out
+
+
+def _const(value: Any, type_: str | None, pos: int, end: int) -> _Node:
+    return _Node(lambda env, get: value, type_, pos, end, const=value,
+                 boolean=isinstance(value, bool))
+
+
+def _read(base: _Node, attr: str, src: str) -> Callable:
+    """``base.attr``: null propagates, a non-entity is an error.  The common case,
+    an attribute of a variable, reads the variable itself (one closure, not two)."""
+
+    def bad(value: Any) -> EvalError:
+        return EvalError(f"{src} is {value!r}, not an entity: it has no attribute {attr!r}")
+
+    if base.var is not None:
+        var = base.var
+
+        def read_var(env: dict, get: Getter) -> Any:
+            entity = env[var]
+            if entity.__class__ is str:
+                return get(entity, attr)
+            if entity is None:
+                return None
+            raise bad(entity)
+
+        return read_var
+    inner = base.fn
+
+    def read(env: dict, get: Getter) -> Any:
+        entity = inner(env, get)
+        if entity.__class__ is str:
+            return get(entity, attr)
+        if entity is None:
+            return None
+        raise bad(entity)
+
+    return read
+
+
+def _logic(conjunction: bool, parts: list[_Node]) -> Callable:
+    """``a and b and ...`` / ``a or b or ...`` as one closure, always giving a bool."""
+    fns = tuple(p.fn for p in parts)
+    if conjunction:
+        if len(fns) == 2:
+            a, b = fns
+            fn = lambda env, get: a(env, get) and b(env, get)  # noqa: E731
+        elif len(fns) == 3:
+            a, b, c = fns
+            fn = lambda env, get: a(env, get) and b(env, get) and c(env, get)  # noqa: E731
+        else:
+            fn = lambda env, get: all(f(env, get) for f in fns)  # noqa: E731
+    elif len(fns) == 2:
+        a, b = fns
+        fn = lambda env, get: a(env, get) or b(env, get)  # noqa: E731
+    else:
+        fn = lambda env, get: any(f(env, get) for f in fns)  # noqa: E731
+    if all(p.boolean for p in parts):
+        return fn
+    return lambda env, get: True if fn(env, get) else False
+
+
+def _compare(op: str, left: _Node, right: _Node, src: str) -> Callable:
+    """A comparison.  Equality against a constant or a variable reads it directly,
+    and ``var.attr == <constant or variable>``, the bulk of preconditions, is one
+    closure (the general reader only serves when var is not an entity)."""
+    if op in ("==", "!="):
+        if left.const is not _NO or (left.var is not None and right.const is _NO):
+            left, right = right, left  # equality is symmetric: put the simple side right
+        f, c, v = left.fn, right.const, right.var
+        if left.path is not None and (c is not _NO or v is not None):
+            var, attr = left.path
+            test = ((operator.is_ if op == "==" else operator.is_not) if c is None else
+                    (operator.eq if op == "==" else operator.ne))
+            if v is None:
+                return lambda env, get: test(
+                    get(e, attr) if (e := env[var]).__class__ is str else f(env, get), c)
+            return lambda env, get: test(
+                get(e, attr) if (e := env[var]).__class__ is str else f(env, get), env[v])
+        if c is None:
+            return ((lambda env, get: f(env, get) is None) if op == "==" else
+                    (lambda env, get: f(env, get) is not None))
+        if c is not _NO:
+            return ((lambda env, get: f(env, get) == c) if op == "==" else
+                    (lambda env, get: f(env, get) != c))
+        if v is not None:
+            return ((lambda env, get: f(env, get) == env[v]) if op == "==" else
+                    (lambda env, get: f(env, get) != env[v]))
+        g = right.fn
+        return ((lambda env, get: f(env, get) == g(env, get)) if op == "==" else
+                (lambda env, get: f(env, get) != g(env, get)))
+    order = {"<": operator.lt, "<=": operator.le, ">": operator.gt, ">=": operator.ge}[op]
+    f, g = left.fn, right.fn
+
+    def compare(env: dict, get: Getter) -> bool:
+        a, b = f(env, get), g(env, get)
+        try:
+            return order(a, b)
+        except TypeError:
+            if a is None or b is None:
+                return False
+            raise EvalError(f"cannot compute {src}: cannot order {a!r} and {b!r}") from None
+
+    return compare
+
+
+def _arith(op: str, f: Callable, g: Callable | None, src: str) -> Callable:
+    """``+ - * /`` and negation over numbers; anything else is an EvalError."""
+    nums = _NUMS
+    if g is None:
+
+        def negate(env: dict, get: Getter) -> Any:
+            a = f(env, get)
+            if a.__class__ not in nums:
+                _numbers(src, a)
+            return -a
+
+        return negate
+    apply = {"+": operator.add, "-": operator.sub, "*": operator.mul,
+             "/": operator.truediv}[op]
+
+    def arith(env: dict, get: Getter) -> Any:
+        a, b = f(env, get), g(env, get)
+        if a.__class__ not in nums or b.__class__ not in nums:
+            _numbers(src, a, b)
+        try:
+            return apply(a, b)
+        except ZeroDivisionError:
+            raise EvalError(f"division by zero in {src}") from None
+
+    return arith
+
+
+def _function(name: str, fns: list[Callable], src: str) -> Callable:
+    if name == "abs":
+        (f,) = fns
+
+        def absolute(env: dict, get: Getter) -> Any:
+            a = f(env, get)
+            if a.__class__ not in _NUMS:
+                _numbers(src, a)
+            return abs(a)
+
+        return absolute
+    pick = min if name == "min" else max
+
+    def extreme(env: dict, get: Getter) -> Any:
+        values = [f(env, get) for f in fns]
+        _numbers(src, *values)
+        return pick(values)
+
+    return extreme
+
+
+def _numbers(src: str, *values: Any) -> None:
+    """Raise unless all ``values`` are numbers (the slow path of arithmetic)."""
+    for value in values:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            what = "null" if value is None else repr(value)
+            raise EvalError(f"cannot compute {src}: {what} is not a number")
+
+
+def _assign(owner: _Node, attr: str, value: _Node, owner_src: str, target: str) -> Callable:
+    """The closure of an effect: find the entity, then ``set`` its attribute."""
+
+    def bad(entity: Any) -> EvalError:
+        what = "null" if entity is None else f"{entity!r}, not an entity"
+        return EvalError(f"cannot assign {target}: {owner_src} is {what}")
+
+    find = owner.fn
+    if value.const is not _NO:
+        c = value.const
+
+        def assign_const(env: dict, get: Getter, set: Setter) -> None:
+            entity = find(env, get)
+            if entity.__class__ is not str:
+                raise bad(entity)
+            set(entity, attr, c)
+
+        return assign_const
+    compute = value.fn
+
+    def assign(env: dict, get: Getter, set: Setter) -> None:
+        entity = find(env, get)
+        if entity.__class__ is not str:
+            raise bad(entity)
+        set(entity, attr, compute(env, get))
+
+    return assign
+
+
+# -- types ---------------------------------------------------------------------------------
+
+
+def _norm(type_: str | None) -> str | None:
+    return None if type_ in (None, "any") else type_
+
+
+def _public(type_: str | None) -> str | None:
+    return {"name": "string", "null": None}.get(type_, type_) if type_ else None
+
+
+def _comparable(a: str | None, b: str | None) -> bool:
+    """Whether values of static types ``a`` and ``b`` can ever be equal (or ``b``
+    assigned to an ``a``): numbers with numbers, booleans with booleans; quoted
+    names and strings with any entity; distinct entity types never."""
+    if a is None or b is None or "null" in (a, b) or a == b:
+        return True
+    scalar = ("number", "bool")
+    if a in scalar or b in scalar:
+        return False
+    return a in ("name", "string") or b in ("name", "string")
+
+
+def _a(type_: str) -> str:
+    return f"{'an' if type_[:1].lower() in 'aeiou' else 'a'} {type_}"
+
+
+def _show(word: str) -> str:
+    return "the end" if word == "" else repr(word)

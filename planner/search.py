@@ -1,0 +1,266 @@
+"""SHOP2-style HTN search, anytime branch and bound, iterative, deterministic.
+
+Tasks are decomposed in order (total-order HTN, like SHOP2, which HATP's
+algorithm is "largely inspired from"): the first task of the agenda is an
+action (its precondition is checked and its effects applied) or a method
+(each decomposition, in file order, for each binding of its variables, in
+name order, whose precondition holds, replaces it by its subtasks).  Agents
+are bound like any other variable, which is how a plan comes to involve the
+robot and the humans.
+
+The search is a depth-first walk over an explicit stack of choice points
+(no recursion, so no depth limit), with copy-on-write states.  It is
+*anytime*: every complete plan is evaluated (:mod:`planner.evaluate`); the
+best so far is kept, reported to ``on_improvement``, and used to prune: a
+partial plan whose lower bound (the monotone part of the score: cost and
+effort so far) cannot beat it is abandoned.  When the time budget runs out,
+the best plan found so far is returned.
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from typing import Any
+
+from planner.domain import Action, ConditionalEffect, Method, Problem
+from planner.evaluate import Evaluator
+from planner.plan import Plan
+
+FOLD = 64
+"""A state's own changes are folded into a new base beyond this many."""
+CHECK_EVERY = 256
+"""Expansions between two looks at the clock."""
+
+_MISSING = object()
+
+
+class State:
+    """Attribute values: a base shared by many states plus this state's own changes."""
+
+    __slots__ = ("base", "delta")
+
+    def __init__(self, base: dict[tuple[str, str], Any], delta: dict | None = None):
+        self.base = base
+        self.delta = delta if delta is not None else {}
+
+    def get(self, entity: str, attribute: str) -> Any:
+        key = (entity, attribute)
+        value = self.delta.get(key, _MISSING)
+        return self.base.get(key) if value is _MISSING else value
+
+    def child(self) -> State:
+        if len(self.delta) > FOLD:
+            return State({**self.base, **self.delta})
+        return State(self.base, dict(self.delta))
+
+    def set(self, entity: str, attribute: str, value: Any) -> None:
+        self.delta[(entity, attribute)] = value
+
+    def items(self) -> dict[tuple[str, str], Any]:
+        return {**self.base, **self.delta}
+
+
+@dataclass(frozen=True)
+class Failure:
+    """Why a task could not be carried out, at some depth below a top task."""
+
+    depth: int
+    path: tuple[str, ...]
+    reason: str
+
+    def __str__(self) -> str:
+        return " > ".join(self.path) + f": {self.reason}"
+
+
+@dataclass
+class Result:
+    """What a search gives back: the best plan (or None) and how the search went."""
+
+    plan: Plan | None
+    plans_found: int
+    expansions: int
+    complete: bool
+    elapsed_ms: float
+    failures: list[Failure] = field(default_factory=list)
+    improvements: list[tuple[float, float]] = field(default_factory=list)
+
+    def explain(self) -> str:
+        """Why there is no plan: for each top task, the deepest point reached and what
+        blocked it."""
+        if self.plan is not None:
+            return "a plan was found"
+        if not self.failures:
+            return "no plan: the search ran out of time before any task failed"
+        return "\n".join(str(f) for f in self.failures)
+
+
+def _label(name: str, args: tuple[Any, ...]) -> str:
+    return f"{name}({', '.join(str(a) for a in args)})"
+
+
+class Search:
+    """One search for one problem (see the module's docstring)."""
+
+    def __init__(self, problem: Problem,
+                 on_improvement: Callable[[Plan], None] | None = None):
+        self.problem = problem
+        self.domain = problem.domain
+        self.evaluator = Evaluator(problem)
+        self.on_improvement = on_improvement
+        self.ids = itertools.count(1)
+        self.parents: dict[int, tuple[int | None, str, int]] = {}
+        self.failures: dict[int, Failure] = {}
+        self.kinds = {e: problem.kind(e) for e in problem.entities}
+
+    # -- bookkeeping for explanations --------------------------------------------
+
+    def _node(self, parent: int | None, label: str, root: int) -> int:
+        node = next(self.ids)
+        self.parents[node] = (parent, label, root)
+        return node
+
+    def _fail(self, parent: int, label: str, reason: str) -> None:
+        path = [label]
+        node: int | None = parent
+        root = 0
+        while node is not None:
+            up, text, root = self.parents[node]
+            path.append(text)
+            node = up
+        path.reverse()
+        known = self.failures.get(root)
+        if known is None or len(path) > known.depth:
+            self.failures[root] = Failure(len(path), tuple(path), reason)
+
+    # -- the search ------------------------------------------------------------------
+
+    def run(self, budget_ms: float) -> Result:
+        start = time.perf_counter()
+        deadline = start + budget_ms / 1000.0
+        roots = [self._node(None, _label(name, args), index)
+                 for index, (name, args) in enumerate(self.problem.tasks)]
+        agenda = None
+        for root, (name, args) in reversed(list(zip(roots, self.problem.tasks, strict=True))):
+            agenda = ((name, args, root), agenda)
+        state = State(dict(self.problem.initial))
+        best: Plan | None = None
+        best_score = float("inf")
+        found = 0
+        expansions = 0
+        improvements: list[tuple[float, float]] = []
+        stack: list[Iterator[tuple]] = [iter([(state, agenda, None, 0.0, 0.0, 0.0)])]
+        complete = True
+        bound = self.evaluator.lower_bound
+        while stack:
+            try:
+                node = next(stack[-1])
+            except StopIteration:
+                stack.pop()
+                continue
+            expansions += 1
+            if expansions % CHECK_EVERY == 0 and time.perf_counter() > deadline:
+                complete = False
+                break
+            state, agenda, trail, cost, human, robot = node
+            if bound(cost, human, robot) >= best_score:
+                continue
+            if agenda is None:
+                missed = [f"{e}.{a} == {v!r}" for (e, a), v in self.problem.goals.items()
+                          if state.get(e, a) != v]
+                if missed:
+                    self.failures.setdefault(-1, Failure(0, ("goals",), "a decomposition of "
+                                             "every task ends without " + ", ".join(missed)))
+                    continue
+                plan = self.evaluator.plan(trail, roots)
+                found += 1
+                if plan.score < best_score:
+                    best, best_score = plan, plan.score
+                    improvements.append(((time.perf_counter() - start) * 1000, plan.score))
+                    if self.on_improvement is not None:
+                        self.on_improvement(plan)
+                continue
+            stack.append(self._expand(node))
+        elapsed = (time.perf_counter() - start) * 1000
+        failures = [self.failures[k] for k in sorted(self.failures, key=lambda k: (k < 0, k))
+                    ] if best is None else []
+        return Result(best, found, expansions, complete, elapsed, failures, improvements)
+
+    def _expand(self, node: tuple) -> Iterator[tuple]:
+        state, agenda, trail, cost, human, robot = node
+        (name, args, parent), rest = agenda
+        task = self.domain.task(name)
+        if isinstance(task, Action):
+            yield from self._apply(task, args, parent, state, rest, trail, cost, human, robot)
+        else:
+            assert isinstance(task, Method)
+            yield from self._decompose(task, args, parent, state, rest, trail, cost, human,
+                                       robot)
+
+    def _apply(self, action: Action, args: tuple, parent: int, state: State, rest: Any,
+               trail: Any, cost: float, human: float, robot: float) -> Iterator[tuple]:
+        env = {p: a for (p, _), a in zip(action.params, args, strict=True)}
+        get = state.get
+        if action.pre is not None and not action.pre(env, get):
+            self._fail(parent, _label(action.name, args),
+                       f"precondition false: {action.pre.text}")
+            return
+        price = action.cost(env, get) if callable(action.cost) else action.cost
+        length = action.duration(env, get) if callable(action.duration) else action.duration
+        child = state.child()
+        for effect in action.effects:
+            if isinstance(effect, ConditionalEffect):
+                if effect.condition(env, get):
+                    for inner in effect.effects:
+                        inner(env, get, child.set)
+            else:
+                effect(env, get, child.set)
+        agent = env[action.agent]
+        kind = self.kinds.get(agent)
+        node = next(self.ids)
+        record = ("act", node, parent, action.name, args, agent, price, length)
+        yield (child, rest, (record, trail), cost + price,
+               human + (price if kind == "human" else 0.0),
+               robot + (price if kind == "robot" else 0.0))
+
+    def _decompose(self, method: Method, args: tuple, parent: int, state: State, rest: Any,
+                   trail: Any, cost: float, human: float, robot: float) -> Iterator[tuple]:
+        env = {p: a for (p, _), a in zip(method.params, args, strict=True)}
+        get = state.get
+        label = _label(method.name, args)
+        root = self.parents[parent][2]
+        tried = []
+        applied = False
+        for dec in method.decompositions:
+            names = [v for v, _ in dec.vars]
+            choices = [self.problem.of_type(t) for _, t in dec.vars]
+            matched = False
+            for values in itertools.product(*choices):
+                local = {**env, **dict(zip(names, values, strict=True))}
+                if dec.pre is not None and not dec.pre(local, get):
+                    continue
+                matched = applied = True
+                node = self._node(parent, f"{label}[{dec.name}]", root)
+                agenda = rest
+                for sub in reversed(dec.subtasks):
+                    agenda = ((sub.task, tuple(a(local, get) for a in sub.args), node), agenda)
+                binding = dict(zip(names, values, strict=True))
+                record = ("method", node, parent, method.name, args, dec.name, binding)
+                yield (state, agenda, (record, trail), cost, human, robot)
+            if not matched:
+                if dec.vars and not any(True for _ in itertools.product(*choices)):
+                    tried.append(f"{dec.name}: no entity of type "
+                                 f"{', '.join(t for _, t in dec.vars)}")
+                else:
+                    tried.append(f"{dec.name}: {dec.pre.text if dec.pre else 'no binding'}")
+        if not applied:
+            self._fail(parent, label, "no decomposition applies (" + "; ".join(tried) + ")")
+
+
+def plan(problem: Problem, budget_ms: float | None = None,
+         on_improvement: Callable[[Plan], None] | None = None) -> Result:
+    """Plan ``problem`` within ``budget_ms`` (default: the problem's own budget)."""
+    budget = problem.budget_ms if budget_ms is None else budget_ms
+    return Search(problem, on_improvement).run(budget)
