@@ -33,12 +33,11 @@ import difflib
 import operator
 import re
 from collections.abc import Callable
-from typing import Any
+from typing import Any, NoReturn
 
 __all__ = ["EvalError", "Effect", "Expr", "ExprError", "compile_effect", "compile_expr"]
 
 FUNCTIONS = ("abs", "max", "min")
-SCALAR_TYPES = ("bool", "number", "string", "any")
 _KEYWORDS = ("and", "or", "not", "true", "false", "null")
 _LITERALS = {"true": True, "false": False, "null": None}
 _PYTHON_NAMES = {"True": "true", "False": "false", "None": "null"}
@@ -60,7 +59,7 @@ class ExprError(Exception):
     """
 
     def __init__(self, message: str, offset: int):
-        super().__init__(message)
+        super().__init__(message, offset)  # both in args, so that it pickles
         self.message = message
         self.offset = offset
 
@@ -208,7 +207,7 @@ class _Parser:
         kind, word, _ = self.tokens[self.i]
         return word in words and kind in ("name", "op")
 
-    def fail(self, message: str, offset: int) -> None:
+    def fail(self, message: str, offset: int) -> NoReturn:
         raise ExprError(message, offset)
 
     def finish(self) -> None:
@@ -225,29 +224,24 @@ class _Parser:
 
     def describe(self, node: _Node) -> str:
         src = self.text[node.pos:node.end]
-        return src if node.type in (None, "name") else f"{src} ({_a(node.type)})"
+        return src if node.type in (None, "name", "null") else f"{src} ({_a(node.type)})"
 
     # -- precedence levels ----------------------------------------------------------
 
     def or_(self) -> _Node:
-        node = self.and_()
-        if not self.at("or"):
-            return node
-        parts = [node]
-        while self.at("or"):
-            self.next()
-            parts.append(self.and_())
-        return self.fold(_logic(False, parts), "bool", parts, boolean=True)
+        return self.logic("or", self.and_)
 
     def and_(self) -> _Node:
-        node = self.not_()
-        if not self.at("and"):
-            return node
-        parts = [node]
-        while self.at("and"):
+        return self.logic("and", self.not_)
+
+    def logic(self, word: str, operand: Callable[[], _Node]) -> _Node:
+        parts = [operand()]
+        while self.at(word):
             self.next()
-            parts.append(self.not_())
-        return self.fold(_logic(True, parts), "bool", parts, boolean=True)
+            parts.append(operand())
+        if len(parts) == 1:
+            return parts[0]
+        return self.fold(_logic(word == "and", parts), "bool", parts, boolean=True)
 
     def not_(self) -> _Node:
         if not self.at("not"):
@@ -337,7 +331,6 @@ class _Parser:
             node.pos, node.end = pos, self.last_end
             return node
         self.fail(f"expected a value, found {_show(word)}", pos)
-        raise AssertionError  # unreachable: fail raised
 
     def close(self, opened: int, what: str) -> None:
         kind, word, pos = self.peek()

@@ -16,7 +16,7 @@ the tree cut).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 from shary.executors import Outcome, Request
@@ -57,6 +57,7 @@ class ActTask:
         self.steps: dict[str, StepRun] = {}
         self.subscriptions: list[Any] = []
         self.started = False
+        self.replans = 0
         self.completes = False
         self.suspended = False
         self.over = False
@@ -78,7 +79,12 @@ class ActTask:
         self.completes = self.recipe.kind != "scripted" or bool(self.recipe.steps)
         for monitor in self.recipe.monitors:
             self._attach(monitor)
-        steps = sup.expand(self.run, self.recipe)
+        try:
+            steps = sup.expand(self.run, self.recipe)
+        except LookupError as err:
+            sup.record("recipe-failed", task=self.node, act=self.act, reason=str(err))
+            self._finish(FAILED, "failed", str(err))
+            return
         for step in steps:
             kind = ATOMIC if step.atomic else "task"
             node = sup.tree.add(kind, step.atomic or step.task or step.name, self.node,
@@ -192,6 +198,9 @@ class ActTask:
             self._advance()
             return
         then = retry.then if retry is not None else "fail"
+        if then == "replan" and self.replans < (retry.max_attempts if retry else 1):
+            self._replan(f"{run.step.name} failed: {reason}")
+            return
         if then == "skip":
             run.state = DONE
             sup.tree.set_state(run.node, DONE, f"skipped after: {reason}")
@@ -203,6 +212,38 @@ class ActTask:
             self._finish(FAILED, retry.emit, reason)
         else:
             self._finish(FAILED, "failed", reason)
+
+    def _replan(self, reason: str) -> None:
+        """Drop the steps not done yet and ask the recipe for new ones from the current facts
+        (a planner-backed recipe plans again: "the bottle is not reachable" is a fact now)."""
+        self.replans += 1
+        sup = self.sup
+        for name, run in list(self.steps.items()):
+            if run.state == DONE:
+                continue
+            if run.state == ONGOING:
+                self._interrupt(run, CANCELLED, reason)
+            if run.child is not None and not run.child.ended:
+                run.child.cancel(reason)
+            if run.node in sup.tree:
+                sup.tree.cut(run.node)
+            del self.steps[name]
+        sup.record("replan", task=self.node, reason=reason, attempt=self.replans)
+        assert self.recipe is not None
+        try:
+            steps = sup.expand(self.run, self.recipe)
+        except LookupError as err:
+            self._finish(FAILED, "failed", f"replanning failed: {err}")
+            return
+        done = {name for name, run in self.steps.items() if run.state == DONE}
+        for step in steps:
+            name = step.name if step.name not in self.steps else f"{step.name}@{self.replans}"
+            step = replace(step, name=name, after=tuple(a for a in step.after if a not in done))
+            kind = ATOMIC if step.atomic else "task"
+            node = sup.tree.add(kind, step.atomic or step.task or step.name, self.node,
+                                state=TODO, step=step.name)
+            self.steps[step.name] = StepRun(step, node)
+        self._advance()
 
     def _finish(self, state: str, event: str, reason: str = "") -> None:
         if self.over:

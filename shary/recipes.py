@@ -29,6 +29,7 @@ from typing import Any
 
 from shary.model import Scheme
 
+_REFINEMENT = re.compile(r"^\s*([A-Za-z0-9_][A-Za-z0-9_.:-]*)\s*(?:\((.*)\))?\s*$")
 _PLACEHOLDER = re.compile(r"\{([A-Za-z0-9_][A-Za-z0-9_-]*)\}")
 
 ANY_TASK = "*"
@@ -168,7 +169,7 @@ class PlanSpec:
     domain: str
     task: str
     args: dict[str, Term]
-    refine: dict[str, Term]
+    refine: dict[str, str]
 
 
 @dataclass(frozen=True)
@@ -237,3 +238,19 @@ class RecipeLibrary:
                 index.setdefault((recipe.task, recipe.act), []).append(recipe)
             self._index, self._indexed = index, len(self.recipes)
         return self._index.get((task, act), []) + self._index.get((ANY_TASK, act), [])
+
+
+def parse_refinement(text: str) -> tuple[str, dict[str, str]]:
+    """``"navigate(place=to)"`` -> ("navigate", {"place": "to"}): the task or atomic task
+    that refines a plan action, and which action parameter fills each of its parameters
+    (a bare name passes the parameters of the same name)."""
+    match = _REFINEMENT.match(text)
+    if not match:
+        raise ValueError(f"{text!r} is not a refinement: write task or task(param=action_param)")
+    mapping = {}
+    for part in filter(None, (p.strip() for p in (match.group(2) or "").split(","))):
+        key, eq, value = part.partition("=")
+        if not eq or not key.strip() or not value.strip():
+            raise ValueError(f"{part!r} in {text!r}: write param=action_param")
+        mapping[key.strip()] = value.strip()
+    return match.group(1), mapping

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any, Protocol
 
 from shary.acttask import ActTask, StepRun
@@ -151,9 +152,14 @@ class Supervisor:
                 raise LookupError(f"recipe {recipe.name!r} needs a planner for domain "
                                   f"{recipe.plan.domain!r}; none is registered")
             args = {k: t.resolve(run.env) for k, t in recipe.plan.args.items()}
-            refine = {k: str(t.resolve(run.env)) for k, t in recipe.plan.refine.items()}
-            steps = planner.plan_steps(recipe.plan.domain, recipe.plan.task, args, self.facts,
-                                       refine)
+            refine = dict(recipe.plan.refine)
+            try:
+                steps = planner.plan_steps(recipe.plan.domain, recipe.plan.task, args,
+                                           self.facts, refine)
+            except RuntimeError as err:
+                raise LookupError(str(err)) from err
+            steps = [s if s.atomic is None or s.atomic in self.library.atomic
+                     else replace(s, atomic=None, task=s.atomic) for s in steps]
             self.record("plan", task=run.node, recipe=recipe.name,
                         steps=[s.name for s in steps])
             return steps

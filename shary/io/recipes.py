@@ -38,6 +38,7 @@ from shary.recipes import (
     Step,
     TaskType,
     Term,
+    parse_refinement,
 )
 from userfiles import yamlsafe
 from userfiles.errors import FileError, Problem
@@ -196,11 +197,9 @@ class _Builder:
             args = {k: Term.parse(v) for k, v in _items(raw.get("with"))}
             for key, term in args.items():
                 self._check_term(located, path + ("plan", "with", key), term, env)
-            refine = {k: Term.parse(v) for k, v in _items(raw.get("refine"))}
-            for key, term in refine.items():
-                if term.kind == "const" and term.value not in self.library.tasks:
-                    self.problem(located, path + ("plan", "refine", key),
-                                 f"unknown task {term.value!r} to refine {key!r}")
+            refine = {k: str(v) for k, v in _items(raw.get("refine"))}
+            for action, text in refine.items():
+                self._check_refinement(located, path + ("plan", "refine", action), text)
             plan = PlanSpec(str(raw.get("domain")), str(raw.get("task")), args, refine)
         retry = Retry()
         if isinstance(spec.get("retry"), dict):
@@ -278,6 +277,26 @@ class _Builder:
             loop = " -> ".join([a for a, _ in cycle] + [cycle[0][0]])
             self.problem(located, path, f"the steps are ordered in a cycle: {loop}")
         return tuple(steps)
+
+    def _check_refinement(self, located: yamlsafe.Located, path: tuple, text: str) -> None:
+        try:
+            target, mapping = parse_refinement(text)
+        except ValueError as err:
+            self.problem(located, path, str(err))
+            return
+        known = {**{n: a.params for n, a in self.library.atomic.items()},
+                 **{n: t.params for n, t in self.library.tasks.items()}}
+        if target not in known:
+            self.problem(located, path, f"unknown task or atomic task {target!r}"
+                         f"{did_you_mean(target, known)}")
+            return
+        params = known[target]
+        wrong = [k for k in mapping if k not in params]
+        missing = [p for p in params if p not in mapping]
+        if wrong or missing:
+            self.problem(located, path, f"{target} takes {', '.join(params) or 'nothing'}"
+                         + (f"; unknown: {', '.join(wrong)}" if wrong else "")
+                         + (f"; missing: {', '.join(missing)}" if missing else ""))
 
     def _check_call(self, located: yamlsafe.Located, where: tuple, what: str, name: str,
                     known: dict, params: Any, args: dict[str, Term]) -> None:
