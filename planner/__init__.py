@@ -15,7 +15,7 @@ causal links between the streams, and scores them with action costs plus
 """
 
 from planner.domain import Domain, Problem
-from planner.io import builtin_domains, find_domain, load_domain, load_problem
+from planner.io import builtin_domains, builtin_problems, find_domain, load_domain, load_problem
 from planner.plan import CausalLink, Plan, PlanAction, TreeNode
 from planner.search import Result, plan
 from planner.validate import validate
@@ -29,6 +29,7 @@ __all__ = [
     "Result",
     "TreeNode",
     "builtin_domains",
+    "builtin_problems",
     "find_domain",
     "load_domain",
     "load_problem",

@@ -42,6 +42,7 @@ from userfiles.schema import did_you_mean
 
 SCHEMAS = Path(__file__).resolve().parent / "schemas"
 DOMAINS = Path(__file__).resolve().parent / "domains"
+PROBLEMS = Path(__file__).resolve().parent / "problems"
 SCALARS = ("bool", "number", "string", "any")
 _CALL = re.compile(r"^\s*([A-Za-z_][A-Za-z0-9_]*)\s*\((.*)\)\s*$", re.S)
 
@@ -53,6 +54,10 @@ def _validator(name: str) -> Draft202012Validator:
 
 def builtin_domains() -> list[Path]:
     return sorted(DOMAINS.glob("*.yaml"))
+
+
+def builtin_problems() -> list[Path]:
+    return sorted(PROBLEMS.glob("*.yaml"))
 
 
 def find_domain(name_or_path: str | os.PathLike[str]) -> Path:

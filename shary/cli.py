@@ -124,14 +124,17 @@ def _escape(text: str) -> str:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
+    import planner
     from shary.facts import FactDatabase
     from shary.io.recipes import builtin_library_files, load_library
     from shary.io.schemes import parse_scheme
 
-    paths = list(args.paths) or builtin.files("schemes") + builtin_library_files()
+    paths = list(args.paths) or (builtin.files("schemes") + builtin_library_files()
+                                 + planner.builtin_domains() + planner.builtin_problems())
     problems: list[Problem] = []
     schemes: list[yamlsafe.Located] = []
     libraries: list[Path] = []
+    planning: list[tuple[Path, yamlsafe.Located]] = []
     acts: ActRegistry = builtin_acts()
     for path in paths:
         if path.suffix == ".ttl":
@@ -155,13 +158,15 @@ def cmd_validate(args: argparse.Namespace) -> int:
             schemes.append(located)
         elif kind == "recipes":
             libraries.append(path)
+        elif kind in ("domain", "problem"):
+            planning.append((path, located))
         else:
             problems.extend(located.problems)
             what = "a mapping" if isinstance(located.data, dict) else "expected a mapping"
-            problems.append(located.problem((), f"not a scheme, acts or recipe file: {what} "
-                                            "with 'scheme:', 'acts:', or some of "
-                                            "'predicates:', 'atomic:', 'tasks:', 'recipes:', "
-                                            "'chronicles:'"))
+            problems.append(located.problem((), f"not a scheme, acts, recipe, domain or "
+                                            f"problem file: {what} with 'scheme:', 'acts:', "
+                                            "'domain:', 'problem:', or some of 'predicates:', "
+                                            "'atomic:', 'tasks:', 'recipes:', 'chronicles:'"))
     conditions = ConditionRegistry.installed()
     for located in schemes:
         try:
@@ -173,6 +178,8 @@ def cmd_validate(args: argparse.Namespace) -> int:
             load_library(libraries, acts=acts)
         except FileError as err:
             problems.extend(err.problems)
+    for path, located in planning:
+        problems.extend(_check_planning(path, located))
     _print_problems(sorted(problems))
     bad = {p.file for p in problems}
     for path in paths:
@@ -184,10 +191,34 @@ def cmd_validate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check_planning(path: Path, located: yamlsafe.Located) -> list[Problem]:
+    """Problems of a planning domain, or of a problem with the domain it names."""
+    import planner
+
+    try:
+        if _kind_of(located) == "domain":
+            planner.load_domain(path)
+            return []
+        name = located.data.get("domain")
+        if not isinstance(name, str):
+            return [located.problem((), "a problem file names its domain ('domain:') for "
+                                    "shary validate to check it")]
+        local = path.parent / name
+        domain = planner.load_domain(local if local.suffix in (".yaml", ".yml") else name)
+        planner.load_problem(path, domain)
+    except FileError as err:
+        return list(err.problems)
+    return []
+
+
 def _kind_of(located: yamlsafe.Located) -> str | None:
     data = located.data
     if not isinstance(data, dict):
         return None
+    if "domain" in data and "types" in data:
+        return "domain"
+    if "problem" in data:
+        return "problem"
     if "scheme" in data or "states" in data:
         return "scheme"
     if set(data) == {"acts"}:

@@ -101,3 +101,14 @@ def test_unknown_rule_on_the_command_line(shary):
     status, _, err = shary("plan", "living-room", ROOT / "problems" / "serve-drink.yaml",
                            "--rules", "politness")
     assert status == 2 and "no rule 'politness'" in err
+
+
+def test_validate_checks_domains_and_problems(shary, write):
+    status, out, _ = shary("validate")
+    assert status == 0 and "living-room.yaml" in out and "fig6.yaml" in out
+    domain = write("d.yaml", DOMAIN.replace("ag.at != to", "ag.at != too"))
+    problem = write("p.yaml", "problem: p\ndomain: d.yaml\nentities: {}\ntasks: [Go()]\n")
+    status, _, err = shary("validate", domain, problem)
+    assert status == 2
+    found = problems(err)
+    assert any("unknown name 'too'" in m["message"] and m["line"] == "9" for m in found)
