@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 from shary.executors import Outcome, Request
 from shary.model import State
-from shary.recipes import Monitor, Recipe, Step
+from shary.recipes import ROBOT_PARAM, Monitor, Recipe, Step
 from shary.tasktree import ACT, ATOMIC, CANCELLED, DONE, FAILED, ONGOING, SUSPENDED, TODO
 
 if TYPE_CHECKING:
@@ -157,8 +157,9 @@ class ActTask:
         args = {k: t.resolve(env) for k, t in run.step.args.items()}
         agent = run.step.by.resolve(env) if run.step.by is not None else self.run.robot
         if run.step.task is not None:
-            run.child = sup.start_task(run.step.task, args, parent=self, parent_node=run.node,
-                                       step=run)
+            if run.step.by is not None:
+                args[ROBOT_PARAM] = agent  # the subtask's performer plays its robot role
+            run.child = sup.start_task(run.step.task, args, parent=self, step=run)
             return
         run.request = sup.execute(run.step.atomic or "", args, str(agent), run.node, self)
 

@@ -240,7 +240,12 @@ class TaskRun(SchemeListener):
         self.parent = parent
         self.step = step
         self.on_finish = on_finish
-        self.node = sup.tree.add(TASK, task_type.name, parent_node, args=args or None)
+        if step is not None:
+            # the step's own node becomes the task's: one node per subtask in the tree
+            self.node = step.node
+            sup.tree.node(self.node)["args"] = args or None
+        else:
+            self.node = sup.tree.add(TASK, task_type.name, parent_node, args=args or None)
         self.scheme = sup.choose_scheme(task_type, self.env)
         self.roles = {role: _role_agent(role, task_type.roles.get(role), self.env)
                       for role in self.scheme.roles}

@@ -13,7 +13,7 @@ def test_schemes_lists_the_builtins(shary):
     status, out, _ = shary("schemes")
     assert status == 0
     names = [line.split()[0] for line in out.splitlines()]
-    assert names == ["ask-help", "give-object-attentive", "give-object", "robot-task"]
+    assert names == ["ask-help", "give-object-attentive", "give-object", "perform", "robot-task"]
 
 
 def test_simulate_runs_a_script_of_events_and_waits(shary):

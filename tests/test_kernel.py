@@ -224,3 +224,27 @@ def test_cancelled_state_is_recorded_for_cut_nodes(world):
     world.sup.receive_act("alice", "H-DISAGREE")
     world.run(1)
     assert ("task-state", CANCELLED) in states
+
+
+ADAPTED = """\
+tasks:
+  hand-over:
+    doc: with a partner who knows the robot, skip the question (SHARY's adapted schemes)
+    params: [object, partner]
+    roles: {partner: $partner}
+    scheme:
+      - scheme: robot-task
+        when: [{holds: [$partner, knows, $robot]}]
+      - scheme: give-object
+predicates:
+  knows: a person is familiar with the robot
+"""
+
+
+def test_adapted_scheme_chosen_by_context(write):
+    world = World(extra_library=[write("adapted.yaml", ADAPTED)])
+    stranger = world.sup.start_task("hand-over", {"object": "bottle", "partner": "alice"})
+    world.facts.add("alice", "knows", "jido")
+    friend = world.sup.start_task("hand-over", {"object": "bottle", "partner": "alice"})
+    assert (stranger.scheme.name, stranger.configuration) == ("give-object", ("ask",))
+    assert (friend.scheme.name, friend.configuration) == ("robot-task", ("realize",))

@@ -41,7 +41,8 @@ def test_clean_up_runs_the_plan_of_fig_9b():
     run = world.sup.start_task("clean-up", {"object": "yellow-bottle"})
     world.run(60)
     assert run.outcome == "done"
-    done = [(name, args) for _, name, args in world.executor.started if name != "speak"]
+    done = [(name, args) for _, name, args in world.executor.started
+            if name not in ("speak", "look-at")]
     assert done == [("navigate", {"place": "coffee-area"}), ("pick", {"object": "yellow-bottle"}),
                     ("navigate", {"place": "trash-area"}),
                     ("dump", {"object": "yellow-bottle", "into": "trash"})]
@@ -64,13 +65,17 @@ def test_unreachable_bottle_replans_with_the_human_as_in_fig_10():
     run = world.sup.start_task("clean-up", {"object": "yellow-bottle"})
     world.run(120)
     assert run.outcome == "done"
-    assert [a for a in agents if a[0] != "speak"] == [
+    assert [a for a in agents if a[0] not in ("speak", "look-at")] == [
         ("navigate", "jido"), ("pick", "jido"),                       # the first plan fails
         ("navigate", "alice"), ("pick", "alice"), ("navigate", "alice"),  # the new plan:
         ("give", "alice"), ("navigate", "jido"), ("dump", "jido")]    # Alice hands it over
     tree = world.sup.tree
     kinds = [tree.node(n)["name"] for n in tree.graph]
     assert kinds.count("pick") == 1  # the failed pick was cut with the first plan's rest
+    moves = [n for n in tree.graph if tree.node(n)["name"] == "move-for-manipulate"]
+    refined = {tree.node(c)["name"] for m in moves for c in tree.children(m)}
+    assert refined == {"REALIZE-TASK x move-for-manipulate"}  # the plan's leaves, refined
+    assert ("look-at", "alice") in agents  # Alice's moves are hers
 
 
 def test_no_plan_fails_the_act_cleanly():
