@@ -51,6 +51,17 @@ class Action:
     duration: Expr | float
     doc: str = ""
 
+    def apply(self, env: dict[str, Any], get: Any, set: Any) -> None:
+        """Run the effects (conditional ones when their condition holds), reading the state
+        before the action through ``get`` and writing through ``set``."""
+        for effect in self.effects:
+            if isinstance(effect, ConditionalEffect):
+                if effect.condition(env, get):
+                    for inner in effect.effects:
+                        inner(env, get, set)
+            else:
+                effect(env, get, set)
+
 
 @dataclass(frozen=True)
 class Subtask:

@@ -18,7 +18,7 @@ from __future__ import annotations
 import itertools
 from typing import Any
 
-from planner.domain import ConditionalEffect, Problem, SelectedRule
+from planner.domain import Problem, SelectedRule
 from planner.plan import CausalLink, Plan, PlanAction, TreeNode
 
 BASE_CRITERIA = ("cost", "duration", "human-effort", "robot-effort", "rules")
@@ -123,13 +123,7 @@ class Evaluator:
 
             if action.pre is not None:
                 action.pre(env, get)
-            for effect in action.effects:
-                if isinstance(effect, ConditionalEffect):
-                    if effect.condition(env, get):
-                        for inner in effect.effects:
-                            inner(env, get, put)
-                else:
-                    effect(env, get, put)
+            action.apply(env, get, put)
             for key in sorted(reads):
                 producer = writer.get(key)
                 if producer is not None and producer != index:

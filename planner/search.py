@@ -25,7 +25,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
-from planner.domain import Action, ConditionalEffect, Method, Problem
+from planner.domain import Action, Method, Problem
 from planner.evaluate import Evaluator
 from planner.plan import Plan
 
@@ -210,13 +210,7 @@ class Search:
         price = action.cost(env, get) if callable(action.cost) else action.cost
         length = action.duration(env, get) if callable(action.duration) else action.duration
         child = state.child()
-        for effect in action.effects:
-            if isinstance(effect, ConditionalEffect):
-                if effect.condition(env, get):
-                    for inner in effect.effects:
-                        inner(env, get, child.set)
-            else:
-                effect(env, get, child.set)
+        action.apply(env, get, child.set)
         agent = env[action.agent]
         kind = self.kinds.get(agent)
         node = next(self.ids)

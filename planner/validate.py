@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from planner.domain import ConditionalEffect, Problem
+from planner.domain import Problem
 from planner.plan import Plan
 
 
@@ -60,13 +60,7 @@ def validate(problem: Problem, plan: Plan) -> list[str]:
             def put(entity: str, attribute: str, value: Any, _w: list = writes) -> None:
                 _w.append(((entity, attribute), value))
 
-            for effect in action.effects:
-                if isinstance(effect, ConditionalEffect):
-                    if effect.condition(env, get):
-                        for inner in effect.effects:
-                            inner(env, get, put)
-                else:
-                    effect(env, get, put)
+            action.apply(env, get, put)
             values.update(writes)
             continue
         method = domain.methods.get(node.task)

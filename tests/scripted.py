@@ -68,3 +68,14 @@ class World:
 
     def run(self, seconds: float) -> None:
         self.loop.advance(seconds)
+
+    def distracted_give(self) -> None:
+        """give-object where Alice agrees, looks away during the arm motion, looks back."""
+        self.executor.durations.update({"move-arm": 4.0})
+        self.give()
+        self.sup.receive_act("alice", "H-AGREE")
+        self.run(2.5)
+        self.facts.remove("alice", "looksAt", "jido")
+        self.run(5)
+        self.facts.add("alice", "looksAt", "jido")
+        self.run(30)

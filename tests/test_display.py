@@ -69,14 +69,7 @@ def test_render_refuses_unknown_active_states(shary, tmp_path):
 def _logged_run(path):
     with ContextLog(path) as log:
         world = World(log=log)
-        world.executor.durations.update({"move-arm": 4.0})
-        world.give()
-        world.sup.receive_act("alice", "H-AGREE")
-        world.run(2.5)
-        world.facts.remove("alice", "looksAt", "jido")
-        world.run(5)
-        world.facts.add("alice", "looksAt", "jido")
-        world.run(30)
+        world.distracted_give()
         return world
 
 

@@ -173,15 +173,7 @@ def test_same_inputs_same_log(tmp_path):
 
     def scenario(path):
         with ContextLog(path, seed=3) as log:
-            world = World(log=log, seed=3)
-            world.executor.durations.update({"move-arm": 4.0})
-            world.give()
-            world.sup.receive_act("alice", "H-AGREE")
-            world.run(2.5)
-            world.facts.remove("alice", "looksAt", "jido")
-            world.run(5)
-            world.facts.add("alice", "looksAt", "jido")
-            world.run(30)
+            World(log=log, seed=3).distracted_give()
         return [(e.time, e.kind, e.task, e.agent, e.data) for e in read_events(path)]
 
     first = scenario(tmp_path / "a.sqlite")
