@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from transitions import Event, Machine
+from transitions import Event, EventData, Machine
 from transitions import State as FlatState
 from transitions import Transition as FlatTransition
 
@@ -95,7 +95,16 @@ class StepTransition(FlatTransition):
 
 
 class SchemeEvent(Event):
-    """An event of the flat machine that compiles its transitions on first use."""
+    """An event of the flat machine that compiles its transitions on first use.
+
+    ``trigger`` goes straight to ``Event._trigger``: schemes keep their own
+    run-to-completion queues (:mod:`shary.instance`), so the machine's
+    ``_process`` (which would only call the trigger back) is skipped.
+    """
+
+    def trigger(self, model: Any, *args: Any, **kwargs: Any) -> bool:
+        return self._trigger(EventData(None, self, self.machine, model, args=args,
+                                       kwargs=kwargs))
 
     def _is_valid_source(self, state: ConfigurationState) -> bool:
         if state.finished:

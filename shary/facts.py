@@ -340,9 +340,10 @@ class FactDatabase:
         """Remove a fact from a perspective; True (and a "removed" event) when it was there."""
         triple = self._triple(s, p, o)
         graph = self._graph(perspective)
-        if triple not in graph:
-            return False
+        size = len(graph)  # cheaper than a membership test in rdflib's memory store
         graph.remove(triple)
+        if len(graph) == size:
+            return False
         self._deliver(("removed", *triple, perspective))
         return True
 
@@ -436,9 +437,13 @@ class FactDatabase:
         index = self._index
         if not index:
             return []
-        buckets = [bucket for bucket in (index.get((s, p)), index.get((None, p)),
-                                         index.get((s, None)), index.get((None, None)))
-                   if bucket]
+        exact = index.get((s, p))
+        by_predicate = index.get((None, p))
+        by_subject = index.get((s, None))
+        anything = index.get((None, None))
+        if not (by_predicate or by_subject or anything):
+            return list(exact) if exact else []
+        buckets = [b for b in (exact, by_predicate, by_subject, anything) if b]
         if len(buckets) == 1:
             return list(buckets[0])
         return sorted((sub for bucket in buckets for sub in bucket), key=lambda sub: sub._order)
