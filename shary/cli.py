@@ -413,10 +413,13 @@ def _print_plan(problem, result, errors) -> None:  # type: ignore[no-untyped-def
             _out.print(f"  {_escape(names[link.producer])} -> {_escape(names[link.consumer])}"
                        f"  ({link.entity}.{link.attribute})")
     _out.print(f"[bold]score {best.score:g}[/bold] (makespan {best.makespan:g} s)")
-    for name, value in best.criteria.items():
-        weight = best.weights.get(name, 0.0)
-        if weight or value:
-            _out.print(f"  {name:<24} {value:8.2f} x {weight:.3f} = {value * weight:8.2f}")
+    weighed = [n for n in best.criteria if best.weights.get(n, 0.0)]
+    for name in weighed:
+        value, weight = best.criteria[name], best.weights[name]
+        _out.print(f"  {name:<24} {value:8.2f} x {weight:.3f} = {value * weight:8.2f}")
+    others = [f"{n} {v:g}" for n, v in best.criteria.items() if n not in weighed]
+    if others:
+        _out.print(f"  [dim]not in the score: {', '.join(others)}[/dim]")
     for violation in best.violations:
         _out.print(f"  [yellow]{_escape(violation)}[/yellow]")
     if errors:
