@@ -12,6 +12,7 @@ import re
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from rich.console import Console
 
@@ -299,12 +300,18 @@ def cmd_render_scheme(args: argparse.Namespace) -> int:
         _err.print(f"[bold red]error:[/bold red] --active names unknown states: "
                    f"{', '.join(unknown)}")
         return EXIT_BAD_FILE
+    return _draw(lambda: render_scheme(scheme, args.output, active=active), args.output)
+
+
+def _draw(draw: Any, out: Path, detail: str = "", quiet: bool = False) -> int:
+    """Run a drawing function; a drawing that cannot be made is an error, not a traceback."""
     try:
-        render_scheme(scheme, args.output, active=active)
+        draw()
     except (ValueError, RuntimeError, OSError) as err:
         _err.print(f"[bold red]error:[/bold red] {_escape(str(err))}")
         return 1
-    _out.print(f"wrote {_escape(str(args.output))}")
+    if not quiet:
+        _out.print(f"wrote {_escape(str(out))}{detail}")
     return 0
 
 
@@ -317,13 +324,8 @@ def cmd_render_tree(args: argparse.Namespace) -> int:
     tree = TaskTree.replay(events, args.at)
     end = events[-1].time if events else 0.0
     when = f"t = {args.at:g} s" if args.at is not None else f"end (t = {end:g} s)"
-    try:
-        render_tree(tree, args.output, title=f"{args.log.name} at {when}")
-    except (ValueError, RuntimeError, OSError) as err:
-        _err.print(f"[bold red]error:[/bold red] {_escape(str(err))}")
-        return 1
-    _out.print(f"wrote {_escape(str(args.output))} ({len(tree)} nodes)")
-    return 0
+    return _draw(lambda: render_tree(tree, args.output, title=f"{args.log.name} at {when}"),
+                 args.output, f" ({len(tree)} nodes)")
 
 
 # -- planning ----------------------------------------------------------------
@@ -359,13 +361,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
 
         title = f"{problem.name} ({domain.name})"
         source = tree_dot(best, title) if args.render == "tree" else streams_dot(best, title)
-        try:
-            render_dot(source, args.output)
-        except (ValueError, RuntimeError, OSError) as err:
-            _err.print(f"[bold red]error:[/bold red] {_escape(str(err))}")
+        if _draw(lambda: render_dot(source, args.output), args.output, quiet=args.json):
             return 1
-        if not args.json:
-            _out.print(f"wrote {_escape(str(args.output))}")
     return 0 if best is not None and not errors else 1
 
 
