@@ -10,7 +10,8 @@ actions such as MoveForManipulate; SHARY refines them), ordered by the plan's
 causal links, its ordering constraints and each agent's stream, so that the
 human's and the robot's steps run side by side when nothing orders them.
 
-This is the only module of ``shary`` that imports ``planner``.
+Besides the command line (``shary plan``, ``shary validate``), this is the
+only part of ``shary`` that imports ``planner``.
 """
 
 from __future__ import annotations
