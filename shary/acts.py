@@ -30,10 +30,6 @@ class ActType:
     performer: str
     kind: str
 
-    @property
-    def is_answer(self) -> bool:
-        return self.kind != "ACT"
-
 
 ACT_TYPES: dict[str, ActType] = {
     f"{_PREFIX[who]}-{kind}": ActType(f"{_PREFIX[who]}-{kind}", who, kind)

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -88,6 +87,3 @@ def run_test(chart: Path, root: Path | None = None) -> Outcome:
                            f"{sorted(got)}, expected {sorted(step['nextConfiguration'])}")
     return Outcome(name, True)
 
-
-def run_all(charts: Iterable[Path], root: Path | None = None) -> list[Outcome]:
-    return [run_test(chart, root) for chart in charts]
