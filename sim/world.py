@@ -1,0 +1,687 @@
+"""The living room of SHARY Fig. 8 in PyBullet, with a Jido-like robot.
+
+:class:`LivingRoom` builds the scene the paper's scenarios run in: a coffee
+table with four coloured bottles, a store table, a trash bin, a sofa, two
+chairs and a cupboard, inside two walls.  Furniture is static (mass 0) and made
+of boxes, so contacts are cheap and exact; bottles are light cylinders with
+mass, so they can be picked, dropped and knocked over.
+
+Robots are loaded from the hand-written URDF files in ``sim/models`` with a
+*fixed* base that the world moves kinematically (:meth:`LivingRoom.set_base_pose`):
+navigation in these scenarios is about where the robot is, not about wheel
+slip, and not simulating wheels is what lets runs go much faster than real
+time.
+
+Design rules kept here:
+
+- Every PyBullet call names this world's client id, so several worlds can live
+  in one process (tests run them side by side; a planner may keep a scratch
+  world to try motions in).
+- PyBullet's C-level chatter is silenced around connecting and loading
+  (:mod:`sim.quiet`), so standard output stays machine-readable.
+- Poses handed in and out are those of the URDF/body *frames*.  PyBullet's
+  base pose is the centre of mass; the conversion lives in one place
+  (:meth:`LivingRoom.set_base_pose` / :meth:`LivingRoom.base_pose`).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .png import write_png
+from .quiet import silenced
+
+with silenced():  # the import prints a "pybullet build time" banner on stderr
+    import pybullet as pb
+
+MODELS_DIR = Path(__file__).resolve().parent / "models"
+
+Colour = tuple[float, float, float, float]
+Vec3 = tuple[float, float, float]
+Place = tuple[float, float, float]  # x, y, yaw of a robot base
+
+
+# --------------------------------------------------------------------- scene data
+
+@dataclass(frozen=True)
+class Part:
+    """One box of a piece of furniture, in the furniture's own frame."""
+
+    half_extents: Vec3
+    offset: Vec3
+    rgba: Colour
+
+
+@dataclass(frozen=True)
+class Footprint:
+    """An oriented rectangle on the floor, for roadmap and placement checks."""
+
+    x: float
+    y: float
+    yaw: float
+    half_x: float
+    half_y: float
+
+    def contains(self, px: float, py: float, margin: float = 0.0) -> bool:
+        """Whether (px, py) lies within the rectangle grown by ``margin``."""
+        dx, dy = px - self.x, py - self.y
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        lx, ly = c * dx + s * dy, -s * dx + c * dy
+        return abs(lx) <= self.half_x + margin and abs(ly) <= self.half_y + margin
+
+
+WOOD_DARK: Colour = (0.42, 0.27, 0.16, 1.0)
+WOOD_LIGHT: Colour = (0.62, 0.46, 0.30, 1.0)
+
+
+def _table(length: float, width: float, height: float, rgba: Colour) -> list[Part]:
+    """A top and four legs; the top surface is at ``height``."""
+    top, leg = 0.04, 0.025
+    parts = [Part((length / 2, width / 2, top / 2), (0, 0, height - top / 2), rgba)]
+    leg_half = (height - top) / 2
+    for sx in (-1, 1):
+        for sy in (-1, 1):
+            parts.append(Part((leg, leg, leg_half),
+                              (sx * (length / 2 - 2 * leg), sy * (width / 2 - 2 * leg), leg_half),
+                              rgba))
+    return parts
+
+
+def _chair(rgba: Colour) -> list[Part]:
+    """A seat at 0.45 m, four legs and a back; it faces its local +x."""
+    seat, leg = 0.22, 0.02
+    parts = [Part((seat, seat, 0.02), (0, 0, 0.43), rgba),
+             Part((0.02, seat, 0.23), (-seat + 0.02, 0, 0.68), rgba)]
+    for sx in (-1, 1):
+        for sy in (-1, 1):
+            parts.append(Part((leg, leg, 0.205), (sx * (seat - leg), sy * (seat - leg), 0.205),
+                              rgba))
+    return parts
+
+
+def _sofa(frame: Colour, cushion: Colour) -> list[Part]:
+    """A 1.8 m sofa, seat at 0.42 m; it faces its local +x."""
+    return [Part((0.4, 0.9, 0.16), (0, 0, 0.16), frame),          # base
+            Part((0.3, 0.74, 0.05), (0.08, 0, 0.37), cushion),    # seat cushion, top at 0.42
+            Part((0.1, 0.9, 0.3), (-0.3, 0, 0.62), frame),        # back, top at 0.92
+            Part((0.4, 0.08, 0.11), (0, 0.82, 0.43), frame),      # arm rests
+            Part((0.4, 0.08, 0.11), (0, -0.82, 0.43), frame)]
+
+
+def _bin(rgba: Colour) -> list[Part]:
+    """An open box 0.4 x 0.4 x 0.5 m: a bottom and four walls, nothing on top."""
+    h, w, t = 0.25, 0.2, 0.01
+    return [Part((w, w, t), (0, 0, t), rgba),
+            Part((t, w, h), (w - t, 0, h), rgba), Part((t, w, h), (-w + t, 0, h), rgba),
+            Part((w, t, h), (0, w - t, h), rgba), Part((w, t, h), (0, -w + t, h), rgba)]
+
+
+def _cupboard(rgba: Colour) -> list[Part]:
+    """A closed cabinet 0.5 deep, 1.0 wide, 1.6 tall; doors face its local +x."""
+    return [Part((0.25, 0.5, 0.8), (0, 0, 0.8), rgba),
+            Part((0.005, 0.003, 0.7), (0.255, 0, 0.85), (0.25, 0.18, 0.1, 1.0))]
+
+
+# name -> (x, y, yaw, parts).  Layout of Fig. 8: the coffee table in the middle
+# of the room with the sofa behind it, chairs beside the coffee table and at the
+# store table, the trash bin in a corner, the cupboard on the west wall.
+FURNITURE: dict[str, tuple[float, float, float, list[Part]]] = {
+    "coffee-table": (0.0, 0.0, 0.0, _table(0.9, 0.5, 0.45, WOOD_DARK)),
+    "store-table": (2.1, 1.7, 0.0, _table(1.0, 0.6, 0.72, WOOD_LIGHT)),
+    "sofa": (0.0, 1.35, -math.pi / 2, _sofa((0.45, 0.1, 0.12, 1), (0.62, 0.16, 0.18, 1))),
+    "chair-1": (-1.35, 0.0, 0.0, _chair((0.3, 0.2, 0.12, 1))),
+    "chair-2": (2.1, 2.25, -math.pi / 2, _chair((0.3, 0.2, 0.12, 1))),
+    "trash": (-2.3, -1.7, 0.0, _bin((0.25, 0.4, 0.3, 1))),
+    "cupboard": (-2.72, 1.0, 0.0, _cupboard((0.55, 0.38, 0.22, 1))),
+}
+
+ROOM = (-3.0, 3.0, -2.5, 2.6)  # x min, x max, y min, y max of the floor
+WALL_HEIGHT = 1.4
+FLOOR_RGBA: Colour = (0.78, 0.72, 0.6, 1.0)
+WALL_RGBA: Colour = (0.88, 0.87, 0.82, 1.0)
+
+BOTTLE_RADIUS = 0.035
+BOTTLE_HEIGHT = 0.22
+BOTTLE_MASS = 0.4
+# name -> (x, y on the coffee table, colour).  All within Jido's reach from
+# coffee-area; a scenario that needs an unreachable bottle moves one.
+BOTTLES: dict[str, tuple[float, float, Colour]] = {
+    "yellow-bottle": (-0.3, 0.0, (0.95, 0.82, 0.1, 1.0)),
+    "green-bottle": (-0.1, -0.08, (0.15, 0.65, 0.2, 1.0)),
+    "orange-bottle": (0.12, 0.0, (1.0, 0.5, 0.05, 1.0)),
+    "blue-bottle": (0.32, -0.08, (0.12, 0.3, 0.9, 1.0)),
+}
+
+# Robot base places (x, y, yaw), the nodes of the roadmap.  Each faces what is
+# done there: the coffee table, the store table, the trash bin, the sofa.
+PLACES: dict[str, Place] = {
+    "base": (1.5, -1.75, math.pi / 2),
+    "coffee-area": (0.0, -0.7, math.pi / 2),
+    "store-area": (2.1, 0.95, math.pi / 2),
+    "trash-area": (-1.55, -1.7, math.pi),
+    "sofa-area": (1.4, 0.75, 3 * math.pi / 4),
+}
+
+# A robot base is kept this far from furniture footprints when the roadmap is
+# built: Jido's base radius (0.3 m) plus a margin.
+CLEARANCE = 0.35
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """A robot model: its URDF file and its home (tucked) joint positions by name."""
+
+    urdf: str
+    home: Mapping[str, float] = field(default_factory=dict)
+
+
+MODELS: dict[str, ModelSpec] = {
+    "jido": ModelSpec("jido.urdf", {
+        # folded back along the robot's right side, out of the head camera's view
+        "arm_joint_1": -2.9, "arm_joint_2": -0.25, "arm_joint_4": 2.09, "arm_joint_6": 1.16,
+        "head_tilt_joint": 0.8,  # looking at a table top in front of the robot
+    }),
+    "pr2like": ModelSpec("pr2like.urdf", {
+        # the PR2's usual "tucked arms" posture
+        "torso_lift_joint": 0.05,
+        "l_shoulder_pan_joint": 0.06, "l_shoulder_lift_joint": 1.25,
+        "l_upper_arm_roll_joint": 1.79, "l_elbow_flex_joint": -1.68,
+        "l_forearm_roll_joint": -1.73, "l_wrist_flex_joint": -0.1, "l_wrist_roll_joint": -0.09,
+        "r_shoulder_pan_joint": -0.02, "r_shoulder_lift_joint": 1.11,
+        "r_upper_arm_roll_joint": -1.56, "r_elbow_flex_joint": -2.12,
+        "r_forearm_roll_joint": -1.42, "r_wrist_flex_joint": -1.84, "r_wrist_roll_joint": 0.21,
+        "head_tilt_joint": 0.6,
+    }),
+}
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A fixed camera: eye, target, vertical field of view in degrees, up direction."""
+
+    eye: Vec3
+    target: Vec3
+    fov: float = 60.0
+    up: Vec3 = (0.0, 0.0, 1.0)
+
+
+CAMERAS: dict[str, Camera] = {
+    "overview": Camera((3.0, -4.2, 4.2), (-0.2, 0.4, 0.0), 52.0),
+    "top": Camera((0.0, 0.05, 7.5), (0.0, 0.05, 0.0), 48.0, up=(0.0, 1.0, 0.0)),
+}
+LIGHT_DIRECTION = (1.0, -0.6, 2.0)
+
+
+# --------------------------------------------------------------------- robots
+
+@dataclass(frozen=True)
+class Arm:
+    """One arm of a robot: its joints root to tip, its grasp link and its fingers."""
+
+    name: str
+    joints: tuple[int, ...]
+    gripper_link: int
+    fingers: tuple[int, ...]
+
+
+@dataclass
+class Robot:
+    """What the world knows of a loaded robot, indexed for quick PyBullet calls.
+
+    Arms are found from the model, not hard-coded: each link named
+    ``gripper_link`` or ``<prefix>_gripper_link`` ends an arm whose joints are
+    the movable joints on its path from the base, minus those shared with
+    another arm (a torso lift moves both arms of a PR2 and belongs to neither).
+    Fingers are the movable joints below the arm's last joint that are not on
+    the path to the grasp link.
+    """
+
+    name: str
+    model: str
+    body: int
+    joints: dict[str, int]
+    links: dict[str, int]
+    limits: dict[int, tuple[float, float]]
+    efforts: dict[int, float]
+    movable: tuple[int, ...]  # PyBullet's degree-of-freedom order (IK results use it)
+    arms: dict[str, Arm]
+    home: dict[int, float]
+
+    @property
+    def default_arm(self) -> str:
+        for name in ("arm", "right"):
+            if name in self.arms:
+                return name
+        return next(iter(self.arms))
+
+    def arm(self, name: str | None = None) -> Arm:
+        name = self.default_arm if name is None else name
+        try:
+            return self.arms[name]
+        except KeyError:
+            raise KeyError(f"robot {self.name!r} has no arm {name!r} "
+                           f"(arms: {', '.join(self.arms)})") from None
+
+    def joint(self, name: str) -> int:
+        try:
+            return self.joints[name]
+        except KeyError:
+            raise KeyError(f"robot {self.name!r} has no joint {name!r}") from None
+
+    def link(self, name: str) -> int:
+        try:
+            return self.links[name]
+        except KeyError:
+            raise KeyError(f"robot {self.name!r} has no link {name!r}") from None
+
+
+def _arm_name(link_name: str) -> str | None:
+    if link_name == "gripper_link":
+        return "arm"
+    if link_name.endswith("_gripper_link"):
+        prefix = link_name[: -len("_gripper_link")]
+        return {"l": "left", "r": "right"}.get(prefix, prefix)
+    return None
+
+
+def _describe(name: str, model: str, body: int, client: int,
+              home_by_name: Mapping[str, float]) -> Robot:
+    joints, links, parents = {}, {}, {}
+    limits, efforts, movable = {}, {}, []
+    for i in range(pb.getNumJoints(body, physicsClientId=client)):
+        info = pb.getJointInfo(body, i, physicsClientId=client)
+        joints[info[1].decode()] = i
+        links[info[12].decode()] = i
+        parents[i] = info[16]
+        if info[2] != pb.JOINT_FIXED:
+            movable.append(i)
+            limits[i] = (info[8], info[9])
+            efforts[i] = info[10]
+
+    def ancestors(link: int) -> list[int]:
+        path = []
+        while link != -1:
+            path.append(link)
+            link = parents[link]
+        return path
+
+    chains: dict[str, tuple[list[int], int]] = {}
+    for link_name, index in links.items():
+        arm_name = _arm_name(link_name)
+        if arm_name is not None:
+            path = [j for j in reversed(ancestors(index)) if j in limits]
+            chains[arm_name] = (path, index)
+    counts: dict[int, int] = {}
+    for path, _ in chains.values():
+        for j in path:
+            counts[j] = counts.get(j, 0) + 1
+    on_paths = {j for path, _ in chains.values() for j in path}
+    arms = {}
+    for arm_name, (path, gripper) in chains.items():
+        own = tuple(j for j in path if counts[j] == 1)
+        fingers = tuple(j for j in movable if j not in on_paths and own
+                        and own[-1] in ancestors(j)[1:])
+        arms[arm_name] = Arm(arm_name, own, gripper, fingers)
+    home = {joints[n]: v for n, v in home_by_name.items()}
+    return Robot(name, model, body, joints, links, limits, efforts, tuple(movable), arms, home)
+
+
+def yaw_quaternion(yaw: float) -> tuple[float, float, float, float]:
+    return (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
+
+
+# --------------------------------------------------------------------- the world
+
+class LivingRoom:
+    """The SHARY living room in its own PyBullet client (DIRECT unless ``gui``).
+
+    Bodies are known by name: the furniture (``coffee-table``, ``store-table``,
+    ``trash``, ``sofa``, ``chair-1``, ``chair-2``, ``cupboard``), the bottles
+    (``yellow-bottle`` …), the robots (``jido``), ``floor`` and the walls.
+    ``places`` maps place names to robot base poses (x, y, yaw); ``roadmap``
+    joins places whose straight segment keeps a robot base clear of furniture.
+
+    Use it as a context manager, or call :meth:`close`, so the PyBullet client
+    is released.
+    """
+
+    def __init__(self, gui: bool = False, robot: str | None = "jido",
+                 timestep: float = 1.0 / 240.0, gravity: float = -9.81):
+        self.gui = gui
+        self.timestep = timestep
+        self.time = 0.0
+        self._bodies: dict[str, int] = {}
+        self.robots: dict[str, Robot] = {}
+        self.footprints: dict[str, Footprint] = {}
+        self.places: dict[str, Place] = dict(PLACES)
+        if gui and sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
+            # PyBullet would call exit(1) from C, killing the process silently.
+            raise RuntimeError("the PyBullet GUI needs an X display (DISPLAY is not set); "
+                               "run headless, which is the default")
+        with silenced(stderr=not gui):  # a GUI failure explains itself on stderr
+            self.client = pb.connect(pb.GUI if gui else pb.DIRECT)
+        if self.client < 0:
+            raise RuntimeError("could not connect to PyBullet"
+                               + (" (only one GUI window per process)" if gui else ""))
+        self._connected = True
+        try:
+            self.call(pb.setGravity, 0, 0, gravity)
+            self.call(pb.setTimeStep, timestep)
+            if gui:
+                self.call(pb.configureDebugVisualizer, pb.COV_ENABLE_GUI, 0)
+                cam = CAMERAS["overview"]
+                dx, dy, dz = (e - t for e, t in zip(cam.eye, cam.target, strict=True))
+                self.call(pb.resetDebugVisualizerCamera, math.hypot(dx, dy, dz),
+                          math.degrees(math.atan2(dy, dx)) + 90,
+                          -math.degrees(math.atan2(dz, math.hypot(dx, dy))), cam.target)
+            self._build_room()
+            for name, (x, y, yaw, parts) in FURNITURE.items():
+                self._add_static(name, x, y, yaw, parts)
+            for name, (x, y, rgba) in BOTTLES.items():
+                self.add_bottle(name, x, y, self.top("coffee-table"), rgba)
+            self.roadmap = self.build_roadmap()
+            if robot is not None:
+                self.add_robot(robot, robot, "base")
+        except BaseException:
+            self.close()
+            raise
+
+    # ----------------------------------------------------------------- plumbing
+
+    def call(self, fn: Any, *args: Any, **kwargs: Any) -> Any:
+        """Call a PyBullet function on this world's client."""
+        return fn(*args, physicsClientId=self.client, **kwargs)
+
+    def close(self) -> None:
+        """Disconnect from PyBullet; safe to call twice."""
+        if getattr(self, "_connected", False):
+            self._connected = False
+            pb.disconnect(physicsClientId=self.client)
+
+    def __enter__(self) -> LivingRoom:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # ----------------------------------------------------------------- building
+
+    def _add_static(self, name: str, x: float, y: float, yaw: float,
+                    parts: Sequence[Part]) -> int:
+        """A static body from boxes; its footprint is the parts' bounding rectangle."""
+        types = [pb.GEOM_BOX] * len(parts)
+        halves = [list(p.half_extents) for p in parts]
+        offsets = [list(p.offset) for p in parts]
+        col = self.call(pb.createCollisionShapeArray, types, halfExtents=halves,
+                        collisionFramePositions=offsets)
+        vis = self.call(pb.createVisualShapeArray, types, halfExtents=halves,
+                        visualFramePositions=offsets, rgbaColors=[list(p.rgba) for p in parts])
+        body = self.call(pb.createMultiBody, baseMass=0, baseCollisionShapeIndex=col,
+                         baseVisualShapeIndex=vis, basePosition=[x, y, 0],
+                         baseOrientation=yaw_quaternion(yaw))
+        self._bodies[name] = body
+        lo_x = min(p.offset[0] - p.half_extents[0] for p in parts)
+        hi_x = max(p.offset[0] + p.half_extents[0] for p in parts)
+        lo_y = min(p.offset[1] - p.half_extents[1] for p in parts)
+        hi_y = max(p.offset[1] + p.half_extents[1] for p in parts)
+        cx, cy = (lo_x + hi_x) / 2, (lo_y + hi_y) / 2
+        c, s = math.cos(yaw), math.sin(yaw)
+        self.footprints[name] = Footprint(x + c * cx - s * cy, y + s * cx + c * cy, yaw,
+                                          (hi_x - lo_x) / 2, (hi_y - lo_y) / 2)
+        return body
+
+    def _build_room(self) -> None:
+        x0, x1, y0, y1 = ROOM
+        cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
+        floor = [Part(((x1 - x0) / 2, (y1 - y0) / 2, 0.05), (0, 0, -0.05), FLOOR_RGBA)]
+        self._add_static("floor", cx, cy, 0.0, floor)
+        del self.footprints["floor"]
+        t, h = 0.05, WALL_HEIGHT / 2
+        self._add_static("wall-north", cx, y1 + t, 0.0,
+                         [Part(((x1 - x0) / 2 + 2 * t, t, h), (0, 0, h), WALL_RGBA)])
+        self._add_static("wall-west", x0 - t, cy, 0.0,
+                         [Part((t, (y1 - y0) / 2, h), (0, 0, h), WALL_RGBA)])
+
+    def add_bottle(self, name: str, x: float, y: float, z_bottom: float,
+                   rgba: Colour = (0.5, 0.5, 0.5, 1.0)) -> int:
+        """A bottle (a cylinder with mass) standing at (x, y) on a surface at ``z_bottom``."""
+        col = self.call(pb.createCollisionShape, pb.GEOM_CYLINDER, radius=BOTTLE_RADIUS,
+                        height=BOTTLE_HEIGHT)
+        vis = self.call(pb.createVisualShape, pb.GEOM_CYLINDER, radius=BOTTLE_RADIUS,
+                        length=BOTTLE_HEIGHT, rgbaColor=list(rgba))
+        body = self.call(pb.createMultiBody, baseMass=BOTTLE_MASS, baseCollisionShapeIndex=col,
+                         baseVisualShapeIndex=vis,
+                         basePosition=[x, y, z_bottom + BOTTLE_HEIGHT / 2 + 1e-4])
+        self.call(pb.changeDynamics, body, -1, lateralFriction=0.8, rollingFriction=0.001,
+                  spinningFriction=0.001)
+        self._bodies[name] = body
+        return body
+
+    def add_robot(self, name: str, model: str | None = None,
+                  at: str | Place = "base") -> Robot:
+        """Load a robot model (``jido``, ``pr2like``) as ``name`` at a place, arms tucked."""
+        model = name if model is None else model
+        if name in self._bodies:
+            raise ValueError(f"a body named {name!r} already exists")
+        try:
+            spec = MODELS[model]
+        except KeyError:
+            raise KeyError(f"unknown robot model {model!r} "
+                           f"(models: {', '.join(MODELS)})") from None
+        with silenced():
+            body = self.call(pb.loadURDF, str(MODELS_DIR / spec.urdf), useFixedBase=True,
+                             flags=pb.URDF_USE_INERTIA_FROM_FILE)
+        self._bodies[name] = body
+        robot = _describe(name, model, body, self.client, spec.home)
+        self.robots[name] = robot
+        positions = {j: robot.home.get(j, 0.0) for j in robot.movable}
+        self.set_joints(name, positions)
+        x, y, yaw = self.places[at] if isinstance(at, str) else at
+        self.set_base_pose(name, x, y, yaw)
+        return robot
+
+    # ----------------------------------------------------------------- queries
+
+    @property
+    def names(self) -> list[str]:
+        """Every named body, in creation order."""
+        return list(self._bodies)
+
+    @property
+    def bottles(self) -> list[str]:
+        return [n for n in self._bodies if n.endswith("-bottle")]
+
+    @property
+    def furniture(self) -> list[str]:
+        return list(FURNITURE)
+
+    def body(self, name: str) -> int:
+        """The PyBullet body id of a named body (valid on this world's client only)."""
+        try:
+            return self._bodies[name]
+        except KeyError:
+            raise KeyError(f"no body named {name!r} in this world") from None
+
+    def robot(self, name: str) -> Robot:
+        """What the world knows of a loaded robot: joints, links, arms, limits."""
+        try:
+            return self.robots[name]
+        except KeyError:
+            raise KeyError(f"no robot named {name!r} in this world") from None
+
+    def pose(self, name: str) -> tuple[Vec3, tuple[float, float, float, float]]:
+        """Position and orientation (quaternion) of a body's frame.
+
+        For robots that is the URDF base frame (on the floor), not PyBullet's
+        centre of mass; furniture frames are on the floor, bottle frames at
+        their centre.
+        """
+        body = self.body(name)
+        pos, orn = self.call(pb.getBasePositionAndOrientation, body)
+        if name in self.robots:
+            local_pos, local_orn = self.call(pb.getDynamicsInfo, body, -1)[3:5]
+            inv_pos, inv_orn = pb.invertTransform(local_pos, local_orn)
+            pos, orn = pb.multiplyTransforms(pos, orn, inv_pos, inv_orn)
+        return tuple(pos), tuple(orn)
+
+    def position(self, name: str) -> Vec3:
+        """Position of a body's frame (see :meth:`pose`)."""
+        return self.pose(name)[0]
+
+    def aabb(self, name: str) -> tuple[Vec3, Vec3]:
+        """Axis-aligned bounding box (min corner, max corner) of a whole body."""
+        body = self.body(name)
+        lo, hi = self.call(pb.getAABB, body, -1)
+        for link in range(self.call(pb.getNumJoints, body)):
+            a, b = self.call(pb.getAABB, body, link)
+            lo = [min(u, v) for u, v in zip(lo, a, strict=True)]
+            hi = [max(u, v) for u, v in zip(hi, b, strict=True)]
+        return tuple(lo), tuple(hi)
+
+    def top(self, name: str) -> float:
+        """Height of the highest part of a piece of furniture (a table's surface)."""
+        if name not in FURNITURE:
+            raise KeyError(f"{name!r} is not furniture (furniture: {', '.join(FURNITURE)})")
+        parts = FURNITURE[name][3]
+        return max(p.offset[2] + p.half_extents[2] for p in parts)
+
+    def link_pose(self, robot: str, link: str | int) -> tuple[Vec3, tuple[float, ...]]:
+        """World pose of a robot link's URDF frame."""
+        r = self.robot(robot)
+        index = r.link(link) if isinstance(link, str) else link
+        state = self.call(pb.getLinkState, r.body, index, computeForwardKinematics=True)
+        return tuple(state[4]), tuple(state[5])
+
+    def link_position(self, robot: str, link: str | int) -> Vec3:
+        return self.link_pose(robot, link)[0]
+
+    def joint_positions(self, robot: str, joints: Iterable[int] | None = None) -> dict[int, float]:
+        r = self.robot(robot)
+        joints = r.movable if joints is None else tuple(joints)
+        states = self.call(pb.getJointStates, r.body, list(joints))
+        return {j: s[0] for j, s in zip(joints, states, strict=True)}
+
+    def collisions(self, name: str, margin: float = 0.0,
+                   ignore: Iterable[str] = ()) -> list[str]:
+        """Names of bodies within ``margin`` of (or touching, or inside) body ``name``."""
+        body, skip = self.body(name), set(ignore) | {name}
+        return [other for other, b in self._bodies.items()
+                if other not in skip
+                and self.call(pb.getClosestPoints, body, b, margin)]
+
+    # ----------------------------------------------------------------- motion
+
+    def set_base_pose(self, robot: str, x: float, y: float, yaw: float) -> None:
+        """Put a robot's base frame at (x, y) on the floor, heading ``yaw``.
+
+        Kinematic: the robot jumps there.  PyBullet places a base by its
+        centre of mass, so the URDF frame is converted here.
+        """
+        body = self.robot(robot).body
+        local_pos, local_orn = self.call(pb.getDynamicsInfo, body, -1)[3:5]
+        pos, orn = pb.multiplyTransforms([x, y, 0.0], yaw_quaternion(yaw), local_pos, local_orn)
+        self.call(pb.resetBasePositionAndOrientation, body, pos, orn)
+
+    def base_pose(self, robot: str) -> Place:
+        """(x, y, yaw) of a robot's base frame."""
+        pos, orn = self.pose(robot)
+        yaw = pb.getEulerFromQuaternion(orn)[2]
+        return pos[0], pos[1], yaw
+
+    def set_joints(self, robot: str, positions: Mapping[int, float]) -> None:
+        """Teleport joints and make their motors hold the new positions.
+
+        Resetting alone would let the next physics step drop the arm under
+        gravity; position motors at the joint's rated effort keep it there.
+        """
+        r = self.robot(robot)
+        for j, value in positions.items():
+            self.call(pb.resetJointState, r.body, j, value, 0.0)
+        joints = list(positions)
+        self.call(pb.setJointMotorControlArray, r.body, joints, pb.POSITION_CONTROL,
+                  targetPositions=[positions[j] for j in joints],
+                  forces=[r.efforts[j] for j in joints])
+
+    def step(self, seconds: float) -> int:
+        """Advance physics by ``seconds`` (rounded to whole time steps); return the steps."""
+        steps = max(0, round(seconds / self.timestep))
+        for _ in range(steps):
+            self.call(pb.stepSimulation)
+        self.time += steps * self.timestep
+        return steps
+
+    # ----------------------------------------------------------------- roadmap
+
+    def segment_clear(self, a: tuple[float, float], b: tuple[float, float],
+                      clearance: float = CLEARANCE, step: float = 0.02) -> bool:
+        """Whether a base of radius ``clearance`` can slide from a to b missing furniture."""
+        n = max(1, math.ceil(math.dist(a, b) / step))
+        for i in range(n + 1):
+            t = i / n
+            px, py = a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])
+            x0, x1, y0, y1 = ROOM
+            if not (x0 + clearance <= px <= x1 - clearance
+                    and y0 + clearance <= py <= y1 - clearance):
+                return False
+            if any(f.contains(px, py, clearance) for f in self.footprints.values()):
+                return False
+        return True
+
+    def build_roadmap(self, clearance: float = CLEARANCE) -> dict[str, tuple[str, ...]]:
+        """Place -> neighbouring places joined by a clear straight segment."""
+        names = list(self.places)
+        edges: dict[str, list[str]] = {n: [] for n in names}
+        for i, a in enumerate(names):
+            for b in names[i + 1:]:
+                if self.segment_clear(self.places[a][:2], self.places[b][:2], clearance):
+                    edges[a].append(b)
+                    edges[b].append(a)
+        return {n: tuple(sorted(v)) for n, v in edges.items()}
+
+    # ----------------------------------------------------------------- images
+
+    def _view(self, camera: str, width: int, height: int) -> tuple[list[float], list[float]]:
+        aspect = width / height
+        if camera in CAMERAS:
+            cam = CAMERAS[camera]
+            view = pb.computeViewMatrix(cam.eye, cam.target, cam.up)
+            proj = pb.computeProjectionMatrixFOV(cam.fov, aspect, 0.1, 30.0)
+            return view, proj
+        if camera in self.robots and "camera_link" in self.robots[camera].links:
+            pos, orn = self.link_pose(camera, "camera_link")
+            rot = np.array(pb.getMatrixFromQuaternion(orn)).reshape(3, 3)
+            forward, up = rot[:, 0], rot[:, 2]
+            eye = np.array(pos) + 0.03 * forward  # just in front of the lens
+            view = pb.computeViewMatrix(eye.tolist(), (eye + forward).tolist(), up.tolist())
+            proj = pb.computeProjectionMatrixFOV(58.0, aspect, 0.05, 30.0)
+            return view, proj
+        known = [*CAMERAS, *(n for n, r in self.robots.items() if "camera_link" in r.links)]
+        raise KeyError(f"unknown camera {camera!r} (cameras: {', '.join(known)})")
+
+    def image(self, width: int = 320, height: int = 240,
+              camera: str = "overview") -> bytes:
+        """RGB bytes (rows top to bottom) seen by a named camera or a robot's camera.
+
+        ER_TINY_RENDERER is the software renderer: it works headless and needs
+        no GPU or display.
+        """
+        view, proj = self._view(camera, width, height)
+        _, _, rgba, _, _ = self.call(
+            pb.getCameraImage, width, height, viewMatrix=view, projectionMatrix=proj,
+            renderer=pb.ER_TINY_RENDERER, shadow=1, lightDirection=list(LIGHT_DIRECTION),
+            flags=pb.ER_NO_SEGMENTATION_MASK)
+        pixels = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)
+        return pixels[:, :, :3].tobytes()
+
+    def snapshot(self, path: str | Path, width: int = 320, height: int = 240,
+                 camera: str = "overview") -> Path:
+        """Write a PNG of what ``camera`` sees (``overview``, ``top`` or a robot's name)."""
+        return write_png(path, width, height, self.image(width, height, camera))
