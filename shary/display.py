@@ -1,14 +1,22 @@
 """Diagrams: schemes and task trees as DOT, Mermaid, SVG and PNG.
 
 Like py_trees' display module, this is the one place that knows how things
-look.  DOT is built with the ``graphviz`` package and laid out by a ``dot``
+look.  Users write schemes in YAML but check them by looking at them, so a
+scheme is drawn with the statechart conventions they know: compound states are
+boxes around their children, parallel regions are dashed boxes side by side, a
+black point marks where a state starts, history is a circled H, and the states
+a running instance is in can be highlighted to show where a scenario stands.
+
+DOT is built with the ``graphviz`` package and laid out by a ``dot``
 executable: the system's when there is one, otherwise the one the
 ``graphviz-pure`` wheel ships, so a pip-only install can draw.  Mermaid is
-written by hand (it is text, with its own identifier rules).
+written by hand (it is text, with its own identifier rules), for the places
+that render it themselves: GitHub, editors, documentation sites.
 """
 
 from __future__ import annotations
 
+import html
 import os
 import re
 import shutil
@@ -17,7 +25,6 @@ import sys
 import sysconfig
 from collections.abc import Iterable
 from pathlib import Path
-from typing import Any
 
 import graphviz
 
@@ -27,10 +34,16 @@ from shary.tasktree import ACT, TASK, TaskTree
 DOT_FORMATS = {".svg": "svg", ".png": "png"}
 TEXT_SUFFIXES = (".dot", ".gv")
 MERMAID_SUFFIXES = (".mmd", ".mermaid")
-SUFFIXES = (*DOT_FORMATS, *TEXT_SUFFIXES, *MERMAID_SUFFIXES)
+MARKDOWN_SUFFIX = ".md"
+SUFFIXES = (*DOT_FORMATS, *TEXT_SUFFIXES, *MERMAID_SUFFIXES, MARKDOWN_SUFFIX)
 
 ACTIVE_FILL = "#ffe680"
+"""Fill of an active state, the same in DOT and Mermaid."""
 ACTIVE_LINE = "#b8860b"
+ACTIVE_BACKGROUND = "#fff8dc"
+"""Background of an active compound state: paler than ACTIVE_FILL, so that the
+active states inside it still stand out."""
+ACT_COLOUR = "#1f4e79"
 STATE_COLOURS = {
     "planned": "#eeeeee", "todo": "#ffffff", "ongoing": "#9ecae1", "done": "#a1d99b",
     "failed": "#fc9272", "suspended": "#fdd0a2", "cancelled": "#d9d9d9",
@@ -42,144 +55,86 @@ _FONT = "Helvetica"
 
 
 def find_dot() -> str:
-    """A Graphviz ``dot``: on PATH, else the ``graphviz-pure`` executable."""
-    found = shutil.which("dot")
-    if found:
-        return found
-    folders = [sysconfig.get_path("scripts"), os.path.dirname(sys.executable)]
-    for folder in [None, *folders]:
-        candidate = shutil.which("graphviz-pure", path=folder) if folder else \
-            shutil.which("graphviz-pure")
-        if candidate:
-            return candidate
-    raise RuntimeError("no Graphviz 'dot' found: install Graphviz, or "
-                       "'pip install graphviz-pure' for a dot that comes from pip")
+    """The path of a Graphviz ``dot`` executable.
+
+    A system Graphviz wins because its user may have set it up (fonts,
+    plugins); ``graphviz-pure`` is the fallback that a pip install always
+    brings.  Its script may be off PATH (a virtual environment used without
+    being activated), hence the look next to the running interpreter.
+    """
+    folders = (sysconfig.get_path("scripts"), os.path.dirname(sys.executable))
+    found = shutil.which("dot") or shutil.which("graphviz-pure") or next(
+        filter(None, (shutil.which("graphviz-pure", path=folder) for folder in folders)), None)
+    if found is None:
+        raise RuntimeError("no Graphviz 'dot' found: install Graphviz, or "
+                           "'pip install graphviz-pure' for a dot that comes from pip")
+    return found
 
 
 def render_dot(source: str, out: Path) -> None:
-    """Write DOT ``source`` to ``out``: as text (.dot, .gv) or laid out (.svg, .png)."""
+    """Write DOT ``source`` to ``out``: as text (.dot, .gv) or laid out (.svg, .png).
+
+    The image is written only once ``dot`` has succeeded, so that a failure
+    never leaves a truncated file behind to be mistaken for a drawing.
+    """
     suffix = out.suffix.lower()
     if suffix in TEXT_SUFFIXES:
         out.write_text(source, encoding="utf-8")
         return
     if suffix not in DOT_FORMATS:
         raise ValueError(f"cannot draw to {out.name!r}: use one of {', '.join(SUFFIXES)}")
-    done = subprocess.run([find_dot(), f"-T{DOT_FORMATS[suffix]}", "-o", str(out)],
-                          input=source.encode("utf-8"), capture_output=True, check=False)
+    dot = find_dot()
+    done = subprocess.run([dot, f"-T{DOT_FORMATS[suffix]}"], input=source.encode("utf-8"),
+                          capture_output=True, check=False)
     if done.returncode != 0:
-        raise RuntimeError(f"dot failed ({done.returncode}): "
+        raise RuntimeError(f"{dot} failed ({done.returncode}): "
                            f"{done.stderr.decode('utf-8', 'replace').strip()}")
+    out.write_bytes(done.stdout)
 
 
 # -- schemes ---------------------------------------------------------------------
 
 
-def _act_line(state: State) -> str:
-    if state.act is None:
-        return ""
-    kind = f" ({state.act_type.name})" if state.act_type else ""
-    return f"\n{state.act}{kind}"
-
-
-class _SchemeDot:
-    """Builds the DOT of one scheme (clusters for compound and parallel states)."""
-
-    def __init__(self, scheme: Scheme, active: Iterable[str]):
-        self.scheme = scheme
-        self.active = set(active)
-        self.graph = graphviz.Digraph(scheme.name, graph_attr={
-            "compound": "true", "fontname": _FONT, "label": scheme.name, "labelloc": "t",
-            "fontsize": "16", "nodesep": "0.4", "ranksep": "0.5"},
-            node_attr={"fontname": _FONT, "fontsize": "11"},
-            edge_attr={"fontname": _FONT, "fontsize": "9", "color": "#555555"})
-
-    def build(self) -> str:
-        root = self.scheme.root
-        self.graph.node("start", "", shape="point", width="0.15")
-        for state in root.children:
-            self._state(self.graph, state)
-        for name in root.initial:
-            self._edge("start", self.scheme.states[name], None, "")
-        for state in self.scheme.all_states():
-            if state.kind in (COMPOUND,) and state.initial:
-                for name in state.initial:
-                    self._edge(self._anchor(state), self.scheme.states[name], None, "",
-                               style="solid")
-            for t in state.transitions:
-                self._transition(t)
-        return self.graph.source
-
-    def _id(self, state: State) -> str:
-        return f"s{state.order}"  # names may hold ':' which DOT reads as a port
-
-    def _anchor(self, state: State) -> str:
-        """A node inside a state's drawing that edges can attach to."""
-        if state.kind == COMPOUND:
-            return f"i{state.order}"
-        if state.kind == PARALLEL:
-            return self._anchor(state.proper_children()[0])
-        return self._id(state)
-
-    def _state(self, parent: graphviz.Digraph, state: State) -> None:
-        on = state.name in self.active
-        if state.kind in (COMPOUND, PARALLEL):
-            with parent.subgraph(name=f"cluster_{state.name}") as sub:
-                region = state.parent is not None and state.parent.kind == PARALLEL
-                style = "dashed,rounded" if region else "rounded"
-                sub.attr(label=f"{state.name}{_act_line(state)}", style=style,
-                         fontname=_FONT, fontsize="12", penwidth="2.5" if on else "1",
-                         color=ACTIVE_LINE if on else "#777777",
-                         bgcolor="#fff8dc" if on else "white")
-                if state.kind == COMPOUND:
-                    sub.node(f"i{state.order}", "", shape="point", width="0.12")
-                for child in state.children:
-                    self._state(sub, child)
-            return
-        attrs: dict[str, Any] = {}
-        if state.kind == FINAL:
-            attrs.update(shape="doublecircle", label="", xlabel=state.name, width="0.2")
-        elif state.kind == HISTORY:
-            attrs.update(shape="circle", label="H*" if state.history == "deep" else "H",
-                         width="0.3", fixedsize="true", tooltip=state.name)
-        else:
-            attrs.update(shape="box", style="rounded", label=f"{state.name}{_act_line(state)}")
-        if on:
-            attrs.update(style=",".join(filter(None, [attrs.get("style"), "filled"])),
-                         fillcolor=ACTIVE_FILL, penwidth="2.5", color=ACTIVE_LINE)
-        parent.node(self._id(state), **attrs)
-
-    def _transition(self, t: Transition) -> None:
-        source = t.source
-        if not t.targets:
-            self._edge(self._anchor(source), source, source, t.label(), style="dashed",
-                       self_loop=True)
-            return
-        for name in t.targets:
-            self._edge(self._anchor(source), self.scheme.states[name], source, t.label())
-
-    def _edge(self, tail: str, target: State, source: State | None, label: str,
-              style: str = "solid", self_loop: bool = False) -> None:
-        attrs: dict[str, Any] = {"label": label, "style": style}
-        head = self._anchor(target)
-        if self_loop:
-            head = tail
-        elif target.kind in (COMPOUND, PARALLEL) and not (
-                source is not None and (source is target or source.is_descendant_of(target))):
-            attrs["lhead"] = f"cluster_{target.name}"
-        if source is not None and source.kind in (COMPOUND, PARALLEL) and not self_loop \
-                and not (target is source or target.is_descendant_of(source)):
-            attrs["ltail"] = f"cluster_{source.name}"
-        if label == "":
-            attrs["arrowsize"] = "0.7"
-        self.graph.edge(tail, head, **attrs)
-
-
 def scheme_dot(scheme: Scheme, active: Iterable[str] = ()) -> str:
-    """DOT source of a scheme; states named in ``active`` are highlighted."""
-    return _SchemeDot(scheme, active).build()
+    """DOT source of a scheme; the states named in ``active`` are highlighted."""
+    return _SchemeDot(scheme, _active(scheme, active)).graph.source
 
 
-def _mermaid_ids(scheme: Scheme) -> dict[str, str]:
+def scheme_mermaid(scheme: Scheme, active: Iterable[str] = ()) -> str:
+    """A Mermaid ``stateDiagram-v2`` of a scheme; ``active`` states get the class active."""
+    return _SchemeMermaid(scheme, _active(scheme, active)).text()
+
+
+def render_scheme(scheme: Scheme, out: Path, active: Iterable[str] = ()) -> None:
+    """Draw a scheme to ``out``, the suffix says how: .svg, .png, .dot, .gv, Mermaid
+    (.mmd, .mermaid) or a Markdown page holding a Mermaid block (.md)."""
+    suffix = out.suffix.lower()
+    if suffix in MERMAID_SUFFIXES:
+        out.write_text(scheme_mermaid(scheme, active), encoding="utf-8")
+    elif suffix == MARKDOWN_SUFFIX:
+        out.write_text(f"# {scheme.name}\n\n```mermaid\n{scheme_mermaid(scheme, active)}```\n",
+                       encoding="utf-8")
+    else:
+        render_dot(scheme_dot(scheme, active), out)
+
+
+def _active(scheme: Scheme, active: Iterable[str]) -> set[str]:
+    """The names in ``active``, refused if one is no state: a typo would
+    otherwise highlight nothing, silently."""
+    names = set(active)
+    unknown = sorted(names - scheme.states.keys())
+    if unknown:
+        raise ValueError(f"scheme {scheme.name!r} has no state {', '.join(map(repr, unknown))}")
+    return names
+
+
+def _safe_ids(scheme: Scheme) -> dict[str, str]:
+    """An identifier of letters, digits and ``_`` for each state name.
+
+    Names may hold ``.``, ``:`` and ``-``: Mermaid refuses them in ids and DOT
+    reads ``a:b`` in an edge as node ``a``, port ``b``.  The ``s_`` prefix keeps
+    ids apart from keywords (``end``, ``state``, ``node``) and from helper nodes.
+    """
     ids: dict[str, str] = {}
     used: set[str] = set()
     for state in scheme.all_states():
@@ -193,61 +148,242 @@ def _mermaid_ids(scheme: Scheme) -> dict[str, str]:
     return ids
 
 
-def scheme_mermaid(scheme: Scheme, active: Iterable[str] = ()) -> str:
-    """A Mermaid ``stateDiagram-v2`` of a scheme; ``active`` states get the class active."""
-    ids = _mermaid_ids(scheme)
-    active = set(active)
-    lines = ["stateDiagram-v2", f"    %% {scheme.name}"]
+def _act_line(state: State) -> str | None:
+    """``ASK-TASK (R-ACT)``: the act a state carries out and its type, if it has one."""
+    if state.act is None:
+        return None
+    return f"{state.act} ({state.act_type.name})" if state.act_type else state.act
 
-    def label(state: State) -> str:
-        if state.kind == HISTORY:
-            return "H*" if state.history == "deep" else "H"
-        return state.name + (f"<br/>{state.act} ({state.act_type.name})"
-                             if state.act and state.act_type else "")
 
-    def block(state: State, indent: str) -> None:
-        sid = ids[state.name]
-        lines.append(f'{indent}state "{label(state)}" as {sid}')
-        if state.kind not in (COMPOUND, PARALLEL):
-            return
-        lines.append(f"{indent}state {sid} {{")
-        children = state.children
+def _history_mark(state: State) -> str:
+    return "H*" if state.history == "deep" else "H"
+
+
+def _is_cluster(state: State) -> bool:
+    return state.kind in (COMPOUND, PARALLEL)
+
+
+def _internal(state: State) -> list[Transition]:
+    """Targetless transitions.  They act without leaving the state, so they are
+    listed inside it, as UML does, rather than drawn as loops (a loop on a
+    compound state would hang on its initial point and read as re-entering it)."""
+    return [t for t in state.transitions if not t.targets]
+
+
+class _SchemeDot:
+    """The DOT drawing of one scheme: clusters for compound and parallel states."""
+
+    def __init__(self, scheme: Scheme, active: set[str]) -> None:
+        self.scheme = scheme
+        self.active = active
+        self.ids = _safe_ids(scheme)
+        self.graph = graphviz.Digraph(scheme.name, graph_attr={
+            "compound": "true", "fontname": _FONT, "fontsize": "16", "labelloc": "t",
+            "label": f"<<B>{html.escape(scheme.name)}</B>>", "nodesep": "0.4",
+            "ranksep": "0.5"},
+            node_attr={"shape": "box", "style": "rounded", "fontname": _FONT, "fontsize": "12"},
+            edge_attr={"fontname": _FONT, "fontsize": "10", "color": "#444444",
+                       "arrowsize": "0.7"})
+        self._contents(self.graph, scheme.root)
+        for state in [scheme.root, *scheme.all_states()]:
+            if state.kind == COMPOUND:
+                for name in state.initial:
+                    self._edge(None, self._initial_point(state), self.scheme.states[name], "")
+            for transition in state.transitions:
+                for name in transition.targets:
+                    if not (_is_cluster(state) and name == state.name):  # listed in its label
+                        self._edge(state, self._exit(state), self.scheme.states[name],
+                                   graphviz.escape(transition.label()))
+            for name in state.default:
+                self._edge(state, self._exit(state), self.scheme.states[name], "")
+
+    def _contents(self, graph: graphviz.Digraph, state: State) -> None:
+        """What is drawn inside ``state``: its initial point, then its children."""
         if state.kind == COMPOUND:
-            for name in state.initial:
-                lines.append(f"{indent}    [*] --> {ids[name]}")
-            for child in children:
-                block(child, indent + "    ")
+            graph.node(self._initial_point(state), "", shape="point", width="0.12")
+        for child in state.children:
+            if _is_cluster(child):
+                with graph.subgraph(name=self._cluster(child)) as cluster:
+                    self._cluster_attrs(cluster, child, region=state.kind == PARALLEL)
+                    self._contents(cluster, child)
+            else:
+                self._node(graph, child)
+
+    def _cluster_attrs(self, cluster: graphviz.Digraph, state: State, region: bool) -> None:
+        # Style, width and colour are set on every cluster: a nested cluster
+        # would otherwise inherit its parent's, the highlight among them.
+        on = state.name in self.active
+        style = ["rounded", "dashed" if region else "solid", *(["filled"] if on else [])]
+        attrs = {"label": self._label(state, bold=True), "labeljust": "l", "fontsize": "13",
+                 "style": ",".join(style), "penwidth": "3" if on else "1",
+                 "color": ACTIVE_LINE if on else "#777777",
+                 "tooltip": graphviz.escape(state.doc or state.name)}
+        if on:
+            attrs["fillcolor"] = ACTIVE_BACKGROUND
+        cluster.attr(**attrs)
+
+    def _node(self, graph: graphviz.Digraph, state: State) -> None:
+        attrs = {"tooltip": graphviz.escape(state.doc or state.name)}
+        if state.kind == HISTORY:
+            attrs.update(shape="circle", label=_history_mark(state), fixedsize="true",
+                         width="0.35", fontsize="11")
         else:
-            for i, child in enumerate(state.proper_children()):
-                if i:
-                    lines.append(f"{indent}    --")
-                block(child, indent + "    ")
-        lines.append(f"{indent}}}")
+            attrs["label"] = self._label(state, bold=False)
+        if state.kind == FINAL:
+            # A double border rather than UML's bull's-eye: the name and the act
+            # fit inside, where a bull's-eye would grow huge or need an outside
+            # label that dot places over the edges.
+            attrs["peripheries"] = "2"
+        if state.name in self.active:
+            style = "filled,bold" if state.kind == HISTORY else "rounded,filled,bold"
+            attrs.update(style=style, fillcolor=ACTIVE_FILL, penwidth="2.5", color=ACTIVE_LINE)
+        graph.node(self.ids[state.name], **attrs)
 
-    for name in scheme.root.initial:
-        lines.append(f"    [*] --> {ids[name]}")
-    for state in scheme.root.children:
-        block(state, "    ")
-    for state in scheme.all_states():
-        if state.kind == FINAL and state.parent is scheme.root:
-            lines.append(f"    {ids[state.name]} --> [*]")
-        for t in state.transitions:
-            text = t.label().replace(":", "∶")
-            for name in t.targets or (state.name,):
-                lines.append(f"    {ids[state.name]} --> {ids[name]} : {text}")
-    lines.append(f"    classDef active fill:{ACTIVE_FILL},stroke:{ACTIVE_LINE},"
-                 "stroke-width:3px")
-    for name in sorted(active & set(ids)):
-        lines.append(f"    class {ids[name]} active")
-    return "\n".join(lines) + "\n"
+    def _label(self, state: State, bold: bool) -> str:
+        """An HTML-like label: the name, the act line, then the listed transitions.
+
+        A cluster's label (``bold``) has its lines flush left, in line with
+        the cluster's corner; a node's are centred in the node.
+        """
+        name = html.escape(state.name)
+        lines = [f"<B>{name}</B>" if bold else name]
+        act = _act_line(state)
+        if act:
+            lines.append(f'<FONT POINT-SIZE="10" COLOR="{ACT_COLOUR}">{html.escape(act)}</FONT>')
+        lines += [f'<FONT POINT-SIZE="9"><I>{html.escape(text)}</I></FONT>'
+                  for text in self._listed(state)]
+        if bold:
+            return "<" + "".join(line + '<BR ALIGN="LEFT"/>' for line in lines) + ">"
+        return "<" + "<BR/>".join(lines) + ">"
+
+    def _listed(self, state: State) -> list[str]:
+        """Transitions written inside a state instead of drawn: the targetless ones
+        and, on a compound state, those that re-enter it (dot draws no loop on a
+        cluster; a loop on its initial point would not read as leaving it)."""
+        texts = [t.label() for t in _internal(state)]
+        if _is_cluster(state):
+            texts += [f"{t.label()} (re-enters)" for t in state.transitions
+                      if state.name in t.targets]
+        return texts
+
+    def _cluster(self, state: State) -> str:
+        return f"cluster_{state.name}"
+
+    def _initial_point(self, state: State) -> str:
+        return "init_" + (self.ids[state.name] if state.parent else "root")
+
+    def _anchor(self, state: State) -> str:
+        """The node that edges to or from ``state`` attach to.
+
+        A cluster is no node, so an edge touching a compound state goes to its
+        initial point and is clipped at the cluster's border (``lhead``,
+        ``ltail``); a parallel state lends the anchor of its first region.
+        """
+        if state.kind == COMPOUND:
+            return self._initial_point(state)
+        if state.kind == PARALLEL:
+            return self._anchor(state.proper_children()[0])
+        return self.ids[state.name]
+
+    def _exit(self, state: State) -> str:
+        """The node that edges leaving ``state`` start from: its last child, recursively.
+
+        dot ranks an edge's head below its tail; starting from a node low in
+        the cluster sends the targets below it instead of beside its top.
+        """
+        children = state.proper_children()
+        return self._exit(children[-1]) if _is_cluster(state) and children else self._anchor(state)
+
+    def _edge(self, source: State | None, tail: str, target: State, label: str) -> None:
+        """An edge from ``tail`` (in ``source``, None for an initial point) to ``target``.
+
+        It is clipped at the borders of the compound states it leaves or enters.
+        When one end lies inside the other, dot can clip neither, and the edge
+        must not rank its ends either: a transition from a child back to its
+        parent would sink the parent's initial point below the child.
+        """
+        attrs = {"label": label} if label else {}
+        if source is not None and (source is target or source.is_descendant_of(target)
+                                   or target.is_descendant_of(source)):
+            attrs["constraint"] = "false"
+        else:
+            if source is not None and _is_cluster(source):
+                attrs["ltail"] = self._cluster(source)
+            if _is_cluster(target):
+                attrs["lhead"] = self._cluster(target)
+        self.graph.edge(tail, self._anchor(target), **attrs)
 
 
-def render_scheme(scheme: Scheme, out: Path, active: Iterable[str] = ()) -> None:
-    """Draw a scheme to ``out`` (.svg, .png, .dot, .gv, .mmd): the suffix says how."""
-    if out.suffix.lower() in MERMAID_SUFFIXES:
-        out.write_text(scheme_mermaid(scheme, active), encoding="utf-8")
-    else:
-        render_dot(scheme_dot(scheme, active), out)
+class _SchemeMermaid:
+    """The Mermaid text of one scheme: the tree of states, then the transitions.
+
+    Every transition is written at the top level, after all the states.
+    Mermaid makes a state a child of the block where it last meets its id
+    (the top level excepted), so a transition written inside a composite
+    would pull its ends out of their own composites into that one.
+    """
+
+    def __init__(self, scheme: Scheme, active: set[str]) -> None:
+        self.scheme = scheme
+        self.active = active
+        self.ids = _safe_ids(scheme)
+        self.lines = ["stateDiagram-v2", f"    %% {_mermaid_text(scheme.name)}"]
+
+    def text(self) -> str:
+        self._contents(self.scheme.root, 1)
+        for source in self.scheme.all_states():
+            sid = self.ids[source.name]
+            for transition in source.transitions:
+                self.lines += [f"    {sid} --> {self.ids[name]} : "
+                               f"{_mermaid_text(transition.label())}"
+                               for name in transition.targets]
+            self.lines += [f"    {sid} --> {self.ids[name]}" for name in source.default]
+        self.lines.append(f"    classDef active fill:{ACTIVE_FILL},stroke:{ACTIVE_LINE},"
+                          "stroke-width:3px")
+        self.lines += [f"    class {self.ids[name]} active"
+                       for name in sorted(self.active, key=lambda n: self.scheme.states[n].order)]
+        return "\n".join(self.lines) + "\n"
+
+    def _contents(self, state: State, depth: int) -> None:
+        """The initial arrows of ``state``, then its children, regions apart."""
+        pad = "    " * depth
+        self.lines += [f"{pad}[*] --> {self.ids[name]}" for name in state.initial]
+        for index, child in enumerate(state.children):
+            if state.kind == PARALLEL and index:
+                self.lines.append(f"{pad}--")
+            self._state(child, depth)
+
+    def _state(self, state: State, depth: int) -> None:
+        pad = "    " * depth
+        sid = self.ids[state.name]
+        title = state.name
+        if state.kind == HISTORY:
+            title = f"{_history_mark(state)} {state.name}"
+        act = _act_line(state)
+        details = [_mermaid_text(line)
+                   for line in ([act] if act else []) + [t.label() for t in _internal(state)]]
+        if _is_cluster(state):
+            # Mermaid refuses descriptions on composite states: the details join the title.
+            self.lines.append(f'{pad}state "{"<br/>".join([_mermaid_text(title), *details])}"'
+                              f" as {sid}")
+            self.lines.append(f"{pad}state {sid} {{")
+            self._contents(state, depth + 1)
+            self.lines.append(f"{pad}}}")
+            return
+        self.lines.append(f'{pad}state "{_mermaid_text(title)}" as {sid}')
+        self.lines += [f"{pad}{sid} : {line}" for line in details]
+        if state.kind == FINAL:
+            self.lines.append(f"{pad}{sid} --> [*]")
+
+
+_MERMAID_ENTITIES = {"#": "#35;", ";": "#59;", '"': "#34;", "<": "#60;", ">": "#62;"}
+
+
+def _mermaid_text(text: str) -> str:
+    """Text safe on one line of Mermaid.  ``;`` ends a statement, ``"`` a name and
+    ``<``/``>`` would be read as HTML, so they become entity codes, which Mermaid
+    shows as the characters themselves (``#`` too, as it starts an entity)."""
+    return "".join(_MERMAID_ENTITIES.get(c, c) for c in " ".join(text.split()))
 
 
 # -- task trees ------------------------------------------------------------------

@@ -2,34 +2,177 @@
 
 from __future__ import annotations
 
+import re
+import textwrap
+
+import pytest
 from scripted import World
 
 from shary import load_scheme
-from shary.display import find_dot, render_scheme, scheme_dot, scheme_mermaid, tree_dot
+from shary.display import (
+    ACTIVE_BACKGROUND,
+    ACTIVE_FILL,
+    find_dot,
+    render_dot,
+    render_scheme,
+    scheme_dot,
+    scheme_mermaid,
+    tree_dot,
+)
+from shary.io.schemes import parse_scheme
 from shary.log import ContextLog, read_events
 from shary.tasktree import TaskTree
+from userfiles.yamlsafe import load_text
+
+BUILT_IN = ["give-object", "give-object-attentive", "robot-task", "ask-help"]
+
+PARALLEL = """\
+    scheme: hand.over
+    initial: ask
+    states:
+      ask:
+        act: ASK-TASK
+        on:
+          H-AGREE: together
+          ping: {target: null, do: [{log: 'say "hi"; <now>'}]}
+      together:
+        parallel: true
+        on: {done.state.together: end, restart: together}
+        states:
+          arm:
+            initial: "moving:1"
+            states:
+              "moving:1": {on: {reached: arm.done}}
+              arm.done: {final: true}
+          watch:
+            initial: attending
+            states:
+              attending: {on: {look-away: away}}
+              away: {on: {look-back: last}}
+              last: {history: shallow, default: attending}
+      end: {act: END-TASK, final: true}
+    """
 
 
-def test_dot_has_every_state_and_transition_label():
-    scheme = load_scheme("give-object-attentive")
+def parallel_scheme():
+    return parse_scheme(load_text(textwrap.dedent(PARALLEL), "hand.over.yaml"))
+
+
+_ATTR = re.compile(r'(\w+)=("(?:[^"\\]|\\.)*"|<.*?>(?= \w+=|$)|[^ \]]+)')
+
+
+def _attrs(text: str) -> dict[str, str]:
+    return {k: v[1:-1] if v.startswith('"') else v for k, v in _ATTR.findall(text)}
+
+
+def edges(source: str) -> list[tuple[str, str, dict[str, str]]]:
+    """The DOT edge statements: (tail, head, attributes)."""
+    found = (re.match(r"^\s*(\w+) -> (\w+)(?: \[(.*)\])?$", line)
+             for line in source.splitlines())
+    return [(m.group(1), m.group(2), _attrs(m.group(3) or "")) for m in found if m]
+
+
+def nodes(source: str) -> dict[str, dict[str, str]]:
+    """The DOT node statements: node id -> its attributes."""
+    found = (re.match(r"^\s*(\w+) \[(.*)\]$", line) for line in source.splitlines())
+    return {m.group(1): _attrs(m.group(2)) for m in found if m and m.group(1) not in
+            ("graph", "node", "edge")}
+
+
+def clusters(source: str) -> dict[str, dict[str, str]]:
+    """The attributes of each cluster (the line after its ``subgraph``)."""
+    return {name: _attrs(line) for name, line in
+            re.findall(r"subgraph (\S+) \{\n\s*(.*)", source)}
+
+
+@pytest.mark.parametrize("name", BUILT_IN)
+def test_dot_names_every_state_and_labels_every_transition(name):
+    scheme = load_scheme(name)
     source = scheme_dot(scheme)
+    labels = [attrs.get("label") for _, _, attrs in edges(source)]
     for state in scheme.all_states():
-        if state.kind in ("atomic", "final"):
-            assert state.name in source
-        elif state.kind in ("compound", "parallel"):
-            assert f"cluster_{state.name}" in source
-    for state in scheme.all_states():
+        assert state.name in source
+        if state.act:
+            assert f"{state.act} ({state.act_type.name})" in source
         for t in state.transitions:
-            assert t.label() in source
-    assert "H*" in source and "REALIZE-TASK (R-ACT)" in source
+            assert labels.count(t.label()) >= len(t.targets)
+    points = [n for n, attrs in nodes(source).items() if attrs.get("shape") == "point"]
+    compound = [s for s in scheme.all_states() if s.kind == "compound"]
+    assert len(points) == 1 + len(compound)  # the root's initial point, and one each
 
 
-def test_active_states_are_highlighted_and_only_them():
+def test_dot_edges_attach_to_compound_states_at_their_borders():
+    drawn = {(attrs.get("label"), head): (tail, attrs) for tail, head, attrs in
+             edges(scheme_dot(load_scheme("give-object-attentive")))}
+    # into realize: to its initial point, clipped at its border
+    assert drawn["H-AGREE", "init_s_realize"] == ("s_ask", {"label": "H-AGREE",
+                                                             "lhead": "cluster_realize"})
+    # out of realize and out of engaged: clipped at the border they leave
+    assert drawn["done", "s_end"][1]["ltail"] == "cluster_realize"
+    assert drawn["attention-lost", "s_suspended"][1]["ltail"] == "cluster_engaged"
+    # into the deep history state inside engaged, not to engaged itself
+    assert "lhead" not in drawn["attention-back", "s_resume"][1]
+    assert drawn[None, "s_ask"][0] == "init_root"
+    assert drawn[None, "init_s_engaged"] == ("init_s_realize", {"lhead": "cluster_engaged"})
+
+
+def test_dot_shapes_and_act_lines():
+    source = scheme_dot(load_scheme("give-object-attentive"))
+    drawn = nodes(source)
+    assert drawn["s_resume"]["label"] == "H*" and drawn["s_resume"]["shape"] == "circle"
+    assert drawn["s_ended"]["peripheries"] == "2" and "peripheries" not in drawn["s_end"]
+    assert drawn["s_ask"]["label"].startswith("<ask<BR/>")
+    assert "ASK-TASK (R-ACT)" in drawn["s_ask"]["label"]
+    assert "REALIZE-TASK (R-ACT)" in clusters(source)["cluster_realize"]["label"]
+    assert "compound=true" in source
+
+
+def test_dot_parallel_regions_and_odd_names(tmp_path):
+    source = scheme_dot(parallel_scheme())
+    drawn = clusters(source)
+    assert "dashed" in drawn["cluster_arm"]["style"]
+    assert "dashed" in drawn["cluster_watch"]["style"]
+    assert "dashed" not in drawn["cluster_together"]["style"]
+    assert {"s_moving_1", "s_arm_done", "s_last"} <= set(nodes(source))  # from ':' and '.'
+    assert nodes(source)["s_last"]["label"] == "H"  # shallow history
+    # targetless and re-entering transitions are listed in the state, not drawn
+    assert "say &quot;hi&quot;; &lt;now&gt;" in nodes(source)["s_ask"]["label"]
+    assert "restart (re-enters)" in drawn["cluster_together"]["label"]
+    assert "restart" not in [attrs.get("label") for _, _, attrs in edges(source)]
+    render_dot(source, tmp_path / "p.svg")  # dot accepts it all
+    assert "<svg" in (tmp_path / "p.svg").read_text()
+
+
+def test_only_active_states_are_highlighted():
     scheme = load_scheme("give-object-attentive")
-    plain = scheme_dot(scheme)
-    lit = scheme_dot(scheme, active=["suspended", "realize"])
-    assert "#ffe680" not in plain and "#fff8dc" not in plain
-    assert lit.count("#ffe680") == 1 and lit.count("#fff8dc") == 1
+    source = scheme_dot(scheme, active=["suspended", "realize", "ended"])
+    lit = {node for node, attrs in nodes(source).items()
+           if attrs.get("fillcolor") == ACTIVE_FILL}
+    assert lit == {"s_suspended", "s_ended"}
+    drawn = clusters(source)
+    assert [c for c, attrs in drawn.items() if "fillcolor" in attrs] == ["cluster_realize"]
+    assert drawn["cluster_realize"]["fillcolor"] == ACTIVE_BACKGROUND
+    assert drawn["cluster_realize"]["penwidth"] == "3"
+    assert drawn["cluster_engaged"]["penwidth"] == "1"  # set, so not inherited
+    assert ACTIVE_FILL not in scheme_dot(scheme) and ACTIVE_BACKGROUND not in scheme_dot(scheme)
+    with pytest.raises(ValueError, match="nowhere"):
+        scheme_dot(scheme, active=["nowhere"])
+
+
+def test_mermaid_nests_states_separates_regions_and_marks_initials():
+    text = scheme_mermaid(parallel_scheme(), active=["away"])
+    lines = [line.strip() for line in text.splitlines()]
+    assert lines[0] == "stateDiagram-v2"
+    assert "state s_together {" in lines and "--" in lines
+    assert lines[lines.index("state s_arm {") + 1] == "[*] --> s_moving_1"
+    assert "[*] --> s_ask" in lines and "s_arm_done --> [*]" in lines
+    assert 'state "H last" as s_last' in lines and "s_last --> s_attending" in lines
+    assert "s_ask : ASK-TASK (R-ACT)" in lines
+    assert "s_ask : ping / log 'say #34;hi#34;#59; #60;now#62;'" in lines
+    assert "classDef active fill:#ffe680,stroke:#b8860b,stroke-width:3px" in lines
+    assert [line for line in lines if line.startswith("class ")] == ["class s_away active"]
+    ids = {word for line in lines for word in re.findall(r"\bs_\S+", line)}
+    assert all(re.fullmatch(r"s_\w+", i) for i in ids)
 
 
 def test_mermaid_is_a_state_diagram_with_safe_ids():
@@ -50,6 +193,24 @@ def test_png_and_svg_without_system_graphviz(tmp_path):
     assert (tmp_path / "g.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "<svg" in (tmp_path / "g.svg").read_text()
     assert (tmp_path / "g.dot").read_text().startswith("digraph")
+    render_scheme(scheme, tmp_path / "g.mmd", active=["ask"])
+    render_scheme(scheme, tmp_path / "g.md")
+    assert (tmp_path / "g.mmd").read_text().startswith("stateDiagram-v2")
+    assert "```mermaid\nstateDiagram-v2" in (tmp_path / "g.md").read_text()
+
+
+def test_render_dot_refuses_unknown_formats_and_reports_dot_errors(tmp_path):
+    with pytest.raises(ValueError, match=r"\.svg.*\.png.*\.dot.*\.gv.*\.mmd.*\.md"):
+        render_dot("digraph {}", tmp_path / "g.pdf")
+    with pytest.raises(RuntimeError, match="syntax"):
+        render_dot("digraph { a -> }", tmp_path / "bad.svg")
+    assert not (tmp_path / "bad.svg").exists()
+
+
+def test_find_dot_says_how_to_get_one(monkeypatch):
+    monkeypatch.setattr("shary.display.shutil.which", lambda *args, **kwargs: None)
+    with pytest.raises(RuntimeError, match="pip install graphviz-pure"):
+        find_dot()
 
 
 def test_render_scheme_command(shary, tmp_path):
