@@ -263,11 +263,15 @@ class ActTask:
 
         def react(event: Any) -> None:
             if event.kind == monitor.change and not self.over:
+                fact = (event.subject, event.predicate, event.object)
                 self.sup.record("monitor", task=self.node, monitor=monitor.name,
-                                emit=monitor.emit, fact=[event.subject, event.predicate,
-                                                         event.object])
-                self.run.deliver_soon(monitor.emit, {"fact": (event.subject, event.predicate,
-                                                              event.object)})
+                                emit=monitor.emit, fact=list(fact))
+                if monitor.emit in ("done", "failed") and not self.steps:
+                    # a watching act ends by what it watched for: done or failed, not cut
+                    self._finish(DONE if monitor.emit == "done" else FAILED, monitor.emit,
+                                 f"{' '.join(map(str, fact))} {event.kind}")
+                else:
+                    self.run.deliver_soon(monitor.emit, {"fact": fact})
 
         self.subscriptions.append(self.sup.facts.subscribe(
             react, subject=s, predicate=p, object=o, perspective=perspective))

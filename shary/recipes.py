@@ -170,6 +170,10 @@ class PlanSpec:
     task: str
     args: dict[str, Term]
     refine: dict[str, str]
+    facts: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    """Planner attribute -> the predicates its value is read from, first found wins;
+    ``^p`` reads ``p`` backwards (the subject of ``? p entity``).  Attributes not
+    named here are read from facts whose predicate is the attribute's name."""
 
 
 @dataclass(frozen=True)

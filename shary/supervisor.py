@@ -34,15 +34,23 @@ from shary.executors import ExecutorRegistry, Outcome, Reporter, Request
 from shary.instance import Event, SchemeInstance, SchemeListener
 from shary.loop import EventLoop
 from shary.model import Scheme, State
-from shary.recipes import ROBOT_PARAM, Condition, Recipe, RecipeLibrary, Step, TaskType, Term
+from shary.recipes import (
+    ROBOT_PARAM,
+    Condition,
+    PlanSpec,
+    Recipe,
+    RecipeLibrary,
+    Step,
+    TaskType,
+    Term,
+)
 from shary.tasktree import CANCELLED, DONE, FAILED, ONGOING, SUSPENDED, TASK, TaskTree
 
 
 class Planner(Protocol):
     """What a planner-backed recipe needs: a list of steps for a task in the current facts."""
 
-    def plan_steps(self, domain: str, task: str, args: dict[str, Any], facts: Any,
-                   refine: dict[str, str]) -> list[Step]: ...
+    def plan_steps(self, spec: PlanSpec, args: dict[str, Any], facts: Any) -> list[Step]: ...
 
 
 RecipeFunction = Callable[["TaskRun", Recipe], list[Step]]
@@ -152,10 +160,8 @@ class Supervisor:
                 raise LookupError(f"recipe {recipe.name!r} needs a planner for domain "
                                   f"{recipe.plan.domain!r}; none is registered")
             args = {k: t.resolve(run.env) for k, t in recipe.plan.args.items()}
-            refine = dict(recipe.plan.refine)
             try:
-                steps = planner.plan_steps(recipe.plan.domain, recipe.plan.task, args,
-                                           self.facts, refine)
+                steps = planner.plan_steps(recipe.plan, args, self.facts)
             except RuntimeError as err:
                 raise LookupError(str(err)) from err
             steps = [s if s.atomic is None or s.atomic in self.library.atomic

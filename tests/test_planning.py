@@ -22,12 +22,16 @@ LIVING_ROOM = {
 }
 
 
+PERCEIVED = {"at": "isAt", "on": "isOn"}
+"""The attributes the clean-up recipe reads from perception's predicates (plan.facts)."""
+
+
 def living_room_world(**kwargs) -> World:
     world = World(planners={"living-room": HatpPlanner("living-room", budget_ms=2000)},
                   **kwargs)
     for entity, attributes in LIVING_ROOM.items():
         for attribute, value in attributes.items():
-            world.facts.set(entity, attribute, value)
+            world.facts.set(entity, PERCEIVED.get(attribute, attribute), value)
     return world
 
 
@@ -59,28 +63,40 @@ def test_unreachable_bottle_replans_with_the_human_as_in_fig_10():
             # perception finds out: the bottle is out of Jido's reach
             world.facts.set("yellow-bottle", "robot_reach", False)
             world.executor.failures["pick"] = ["out of reach"]
+        if request.atomic == "speak" and "cannot reach" in request.args["text"]:
+            # Alice agrees, fetches the bottle and hands it over
+            world.loop.call_later(2, world.sup.receive_act, "alice", "H-AGREE")
+            world.loop.call_later(10, world.facts.remove, "yellow-bottle", "isOn",
+                                  "coffee-table")
+            world.loop.call_later(10, world.facts.add, "jido", "isHolding", "yellow-bottle")
         original(request, reporter)
 
     world.executor.start = start
     run = world.sup.start_task("clean-up", {"object": "yellow-bottle"})
     world.run(120)
     assert run.outcome == "done"
-    assert [a for a in agents if a[0] not in ("speak", "look-at")] == [
-        ("navigate", "jido"), ("pick", "jido"),                       # the first plan fails
-        ("navigate", "alice"), ("pick", "alice"), ("navigate", "alice"),  # the new plan:
-        ("give", "alice"), ("navigate", "jido"), ("dump", "jido")]    # Alice hands it over
+    assert [a for a in agents if a[0] not in ("look-at",)] == [
+        ("navigate", "jido"), ("pick", "jido"),          # the first plan fails
+        ("speak", "jido"),                                # the new plan: Jido asks Alice,
+        ("speak", "jido"),                                # she hands it over (END-TASK),
+        ("navigate", "jido"), ("dump", "jido"),           # Jido dumps it
+        ("speak", "jido")]                                # and announces the end
     tree = world.sup.tree
     kinds = [tree.node(n)["name"] for n in tree.graph]
-    assert kinds.count("pick") == 1  # the failed pick was cut with the first plan's rest
-    moves = [n for n in tree.graph if tree.node(n)["name"] == "move-for-manipulate"]
-    refined = {tree.node(c)["name"] for m in moves for c in tree.children(m)}
-    assert refined == {"REALIZE-TASK x move-for-manipulate"}  # the plan's leaves, refined
-    assert ("look-at", "alice") in agents  # Alice's moves are hers
+    assert kinds.count("pick") == 0  # the failed pick was cut with the first plan's rest
+    assert kinds.count("ask-help") == 1  # Alice's part of the plan: one joint task
+    ask = next(n for n in tree.graph if tree.node(n)["name"] == "ask-help")
+    acts = {tree.node(c)["name"] for c in tree.children(ask)}
+    assert acts == {"ASK-HELP x ask-help", "REALIZE-TASK x ask-help", "END-TASK x ask-help"}, acts
+    plan = world.sup.planners["living-room"].last.plan
+    assert [(a.name, a.agent) for a in plan.actions] == [
+        ("Move", "alice"), ("Pick", "alice"), ("Move", "alice"), ("Give", "alice"),
+        ("Move", "jido"), ("Dump", "jido")]
 
 
 def test_no_plan_fails_the_act_cleanly():
     world = living_room_world()
-    world.facts.remove("yellow-bottle", "on", "coffee-table")
+    world.facts.remove("yellow-bottle", "isOn", "coffee-table")
     run = world.sup.start_task("clean-up", {"object": "yellow-bottle"})
     world.run(60)
     assert run.outcome == "failed"

@@ -128,8 +128,8 @@ class PlannerDouble:
     def __init__(self):
         self.calls = []
 
-    def plan_steps(self, domain, task, args, facts, refine):
-        self.calls.append((domain, task, args))
+    def plan_steps(self, spec, args, facts):
+        self.calls.append((spec.domain, spec.task, args))
         return [Step("navigate-1", "navigate", None, {"place": Term("const", args["place"])},
                      None, ()),
                 Step("look-1", "look-at", None, {"target": Term("const", args["place"])},

@@ -200,7 +200,18 @@ class _Builder:
             refine = {k: str(v) for k, v in _items(raw.get("refine"))}
             for action, text in refine.items():
                 self._check_refinement(located, path + ("plan", "refine", action), text)
-            plan = PlanSpec(str(raw.get("domain")), str(raw.get("task")), args, refine)
+            facts = {}
+            for attribute, given in _items(raw.get("facts")):
+                predicates = (given,) if isinstance(given, str) else tuple(given or ())
+                for i, predicate in enumerate(predicates):
+                    name = str(predicate).removeprefix("^")
+                    if name not in self.library.predicates:
+                        at = path + ("plan", "facts", attribute)
+                        self.problem(located, at + ((i,) if not isinstance(given, str) else ()),
+                                     f"unknown predicate {name!r}"
+                                     + did_you_mean(name, self.library.predicates))
+                facts[str(attribute)] = tuple(str(p) for p in predicates)
+            plan = PlanSpec(str(raw.get("domain")), str(raw.get("task")), args, refine, facts)
         retry = Retry()
         if isinstance(spec.get("retry"), dict):
             raw = spec["retry"]
