@@ -81,6 +81,9 @@ class Supervisor:
         self._requests: dict[str, tuple[StepRun, ActTask]] = {}
         self._request_ids = itertools.count(1)
         self.reporter = Reporter(self._outcome, self.loop.call_soon)
+        self.act_listeners: list[Callable[[TaskRun, State, str], Any]] = []
+        """Told when an act starts (task run, its state, the agent): what people around
+        the robot see and hear it begin — simulated people answer from here."""
         if log is not None and hasattr(log, "flush"):
             self.loop.idle_hooks.append(log.flush)
         from shary.agenda import TaskAgenda
@@ -301,6 +304,8 @@ class TaskRun(SchemeListener):
         agent = self.roles.get(state.by or "", self.robot)
         self.sup.record("act", task=self.node, agent=agent, act=state.act,
                         act_type=state.act_type.name if state.act_type else None)
+        for listener in self.sup.act_listeners:
+            listener(self, state, agent)
         outer = self._enclosing_act(state)
         if outer is not None:
             outer.suspend(f"{state.act} entered")

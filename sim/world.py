@@ -488,6 +488,12 @@ class LivingRoom:
         self.set_base_pose(name, x, y, yaw)
         return robot
 
+    def register(self, name: str, body: int) -> None:
+        """Name a body built elsewhere (a person's torso), so queries find it."""
+        if name in self._bodies:
+            raise ValueError(f"a body named {name!r} already exists")
+        self._bodies[name] = body
+
     # ----------------------------------------------------------------- queries
 
     @property

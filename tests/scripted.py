@@ -54,6 +54,7 @@ class World:
         self.facts = FactDatabase()
         self.facts.add("alice", "looksAt", "jido")
         self.facts.add("bottle", "isOn", "table")
+        self.facts.add("bottle", "isReachableBy", "jido")
         self.executor = ScriptedExecutor(self.loop)
         library = load_library(extra_library or [])
         registry = ExecutorRegistry({name: self.executor for name in library.atomic})
