@@ -102,6 +102,21 @@ def _parser() -> argparse.ArgumentParser:
 
     add_log_command(sub)
 
+    p = sub.add_parser("run", help="run a scenario on the simulated Jido (headless), judge it")
+    p.add_argument("scenario", metavar="NAME|FILE",
+                   help="a built-in scenario (see 'shary scenarios') or a scenario file")
+    p.add_argument("--seed", type=int, default=0, help="seed of the people's random choices")
+    p.add_argument("--gui", action="store_true", help="open PyBullet's window")
+    p.add_argument("--out", type=Path, metavar="DIR",
+                   help="where to write log.sqlite, tree.svg, timeline.svg, summary.json "
+                   "(default: runs/NAME)")
+    p.add_argument("--snapshots", action="store_true", help="also write PNG views at each act")
+    p.add_argument("--quiet", action="store_true", help="print only the verdict")
+    p.set_defaults(func=cmd_run)
+
+    p = sub.add_parser("scenarios", help="list the built-in scenarios")
+    p.set_defaults(func=cmd_scenarios)
+
     p = sub.add_parser("conformance", help="run SCION-style statechart tests found under DIR")
     p.add_argument("folder", type=Path, metavar="DIR")
     p.add_argument("--only", type=Path, metavar="LIST",
@@ -242,6 +257,53 @@ def cmd_schemes(args: argparse.Namespace) -> int:
         first = re.split(r"(?<!Fig)\.\s", " ".join(scheme.doc.split()), maxsplit=1)[0]
         _out.print(f"[bold]{scheme.name:<24}[/bold] {_escape(first.rstrip('.'))}.")
     return 0
+
+
+def cmd_scenarios(args: argparse.Namespace) -> int:
+    from sim.scenario import builtin_scenarios, load_scenario
+
+    for name, path in builtin_scenarios().items():
+        scenario = load_scenario(path)
+        first = re.split(r"(?<!Fig)\.\s", " ".join(scenario.doc.split()), maxsplit=1)[0]
+        _out.print(f"[bold]{name:<26}[/bold] {_escape(first.rstrip('.'))}.")
+    return 0
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    from sim.run import run_scenario
+    from sim.scenario import find_scenario
+
+    try:
+        path = find_scenario(args.scenario)
+    except KeyError as err:
+        _err.print(f"[bold red]error:[/bold red] {_escape(err.args[0])}")
+        return EXIT_BAD_FILE
+    out = args.out or Path("runs") / path.stem
+    colours = {}
+
+    def report(t: float, who: str, text: str) -> None:
+        if args.quiet:
+            return
+        colour = colours.setdefault(who, ["cyan", "magenta", "green", "yellow"][len(colours) % 4])
+        _out.print(f"[dim]{t:7.1f}s[/dim]  [{colour}]{_escape(who):<8}[/{colour}] {_escape(text)}")
+
+    try:
+        result = run_scenario(path, seed=args.seed, out=out, snapshots=args.snapshots,
+                              gui=args.gui, report=report)
+    except RuntimeError as err:
+        _err.print(f"[bold red]error:[/bold red] {_escape(str(err))}")
+        return 1
+    verdict = "[bold green]PASSED[/bold green]" if result.passed else "[bold red]FAILED[/bold red]"
+    _out.print(f"{verdict} {result.scenario}: {result.simulated_seconds:.1f} s simulated in "
+               f"{result.wall_seconds:.2f} s (x{result.real_time_factor:.0f} real time), "
+               f"seed {result.seed}")
+    for difference in result.differences:
+        _out.print(f"  - {_escape(difference)}")
+    _out.print(f"[dim]wrote {_escape(str(out))}/: "
+               f"{', '.join(Path(v).name for k, v in result.outputs.items() if k != 'snapshots')}"
+               + (f" and {len(result.outputs['snapshots'].split(', '))} snapshots"
+                  if "snapshots" in result.outputs else "") + "[/dim]")
+    return 0 if result.passed else 1
 
 
 _WAIT = re.compile(r"^[0-9]+(\.[0-9]+)?(ms|s|min|h)$")

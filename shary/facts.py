@@ -304,6 +304,11 @@ class FactDatabase:
         view = self._view(perspective)
         return [self.name(o) for o in sorted(view.objects(self.term(s), self.term(p)), key=_order)]
 
+    def triples(self, perspective: str = "robot") -> list[tuple[Value, Value, Value]]:
+        """Every fact of a perspective, in short names (a run's final state, a dump)."""
+        return sorted(((self.name(s), self.name(p), self.name(o))
+                       for s, p, o in self._view(perspective)), key=str)
+
     def select(self, sparql: str, perspective: str = "robot",
                **bindings: Value) -> list[dict[str, Value | None]]:
         """Run a SPARQL SELECT over one perspective; rows map each variable to a name.

@@ -1,0 +1,277 @@
+"""People who behave: a profile (:mod:`sim.humans`) played out on the supervisor's loop.
+
+A :class:`Person` hears the robot's acts (the supervisor tells its act
+listeners when an act starts, as a person sees and hears the robot begin to
+ask, to hand over, to give up) and answers after the robot has finished
+speaking and the profile's delay; looks where the profile says (at the robot,
+or away on a phone call triggered by a time or by the robot starting an
+action towards them); takes what the robot holds out when attending to it;
+helps when asked (fetches the object and hands it to the robot); and plays a
+script of its own (walk to the table, put a bottle down, leave).
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from collections.abc import Callable
+from typing import Any
+
+from .humans import ARM_LENGTH, HUMAN_PLACES, Profile
+from .motion import Activity, Instant, Lazy, Sequence, Wait
+from .simulation import Simulation, Walk, standing_height
+
+AWAY = "away"
+"""Attention on nothing in the room (a phone call)."""
+
+
+class Person:
+    """One simulated person (see the module's docstring)."""
+
+    def __init__(self, name: str, profile: Profile, sim: Simulation, sup: Any,
+                 rng: random.Random, robot_arm: Any, say: Callable[[str, str], Any]):
+        self.name = name
+        self.profile = profile
+        self.sim = sim
+        self.sup = sup
+        self.rng = rng
+        self.robot_arm = robot_arm
+        self.say = say
+        self.avatar = sim.people[name]
+        self.attention = sim.robot if profile.attention == "robot" else profile.attention
+        self.default_attention = self.attention
+        self.offer: tuple[str, str, Callable[[], Any]] | None = None
+        self._take_timer: Any = None
+        self._script = list(profile.script)
+        self._triggered: set[int] = set()
+        self.busy: int | None = None
+
+    # -- start -------------------------------------------------------------------
+
+    def begin(self) -> None:
+        for i, d in enumerate(self.profile.distractions):
+            if d.at is not None:
+                self._triggered.add(i)
+                self.sim.loop.call_later(d.at + self._draw(d.after), self._distract, d)
+        self._next_script_step()
+        self.refresh()
+
+    def _draw(self, span: tuple[float, float]) -> float:
+        low, high = span
+        return low if high <= low else self.rng.uniform(low, high)
+
+    # -- attention ------------------------------------------------------------------
+
+    def refresh(self) -> None:
+        """Turn the head to what the person attends to (it may have moved)."""
+        a = self.avatar
+        if self.attention == AWAY:
+            point = (a.x + 1.5 * math.cos(a.yaw + 1.9), a.y + 1.5 * math.sin(a.yaw + 1.9), 0.7)
+        elif self.attention == self.sim.robot:
+            point = self.sim.world.link_position(self.sim.robot, "camera_link")
+        elif self.attention in self.sim.people:
+            point = self.sim.people[self.attention].eyes
+        else:
+            try:
+                point = self.sim.world.position(self.attention)
+                if self.attention in self.sim.world.footprints:
+                    f = self.sim.world.footprints[self.attention]
+                    point = (f.x, f.y, self.sim.world.top(self.attention))
+            except KeyError:
+                return
+        a.look_at_point(point)
+
+    def look(self, target: str) -> None:
+        self.attention = self.sim.robot if target == "robot" else target
+        self.refresh()
+        self.sim.observe()
+        self._consider_offer()
+
+    def _distract(self, distraction: Any) -> None:
+        self.say(self.name, "(takes a phone call)" if distraction.look in (AWAY, "phone")
+                 else f"(looks at {distraction.look})")
+        self.look(AWAY if distraction.look == "phone" else distraction.look)
+        if distraction.duration is not None:
+            self.sim.loop.call_later(distraction.duration, self.look, self.default_attention)
+
+    def robot_started(self, atomic: str, args: dict[str, Any]) -> None:
+        """The robot began an action: a phone call may ring now (Fig. 11)."""
+        if self.name not in args.values():
+            return
+        for i, d in enumerate(self.profile.distractions):
+            if d.robot_starts == atomic and i not in self._triggered:
+                self._triggered.add(i)
+                self.sim.loop.call_later(self._draw(d.after), self._distract, d)
+
+    # -- answering acts ---------------------------------------------------------------
+
+    def on_act(self, run: Any, state: Any, agent: str) -> None:
+        """An act began in a task; answer it if it is addressed to this person."""
+        if agent == self.name or self.name not in run.roles.values():
+            return
+        answer = self.profile.answers.get(state.act)
+        if answer is None or answer.reply is None:
+            return
+        speaking = max(0.0, self.robot_arm.speech_ends - self.sim.loop.now())
+        delay = speaking + self._draw(answer.after)
+        self.sim.loop.call_later(delay, self._answer, run, state.act, answer.reply)
+
+    def _answer(self, run: Any, act: str, reply: str) -> None:
+        if run.ended:
+            return
+        self.say(self.name, {"H-AGREE": "Yes.", "H-DISAGREE": "No, thanks."}.get(reply, reply))
+        self.sup.receive_act(self.name, reply, task=run.node)
+        if act == "ASK-HELP" and reply == "H-AGREE" and self.profile.helps:
+            obj = run.env.get("object")
+            if obj is not None:
+                self.help(str(obj))
+
+    # -- taking what is held out ---------------------------------------------------------
+
+    def offered(self, obj: str, giver: str, taken: Callable[[], Any]) -> None:
+        self.offer = (obj, giver, taken)
+        self._consider_offer()
+
+    def withdraw(self) -> None:
+        self.offer = None
+        if self._take_timer is not None:
+            self._take_timer.cancel()
+            self._take_timer = None
+
+    def _consider_offer(self) -> None:
+        if (self.offer is None or self.profile.takes is None or self._take_timer is not None
+                or self.attention != self.offer[1]):
+            return
+        self._take_timer = self.sim.loop.call_later(self._draw(self.profile.takes), self._take)
+
+    def _take(self) -> None:
+        self._take_timer = None
+        if self.offer is None or self.attention != self.offer[1]:
+            return  # looked away meanwhile: wait until attending again
+        obj, _, taken = self.offer
+        self.offer = None
+        self.sim.attach(obj, self.name)
+        self.sim.observe()
+        taken()
+
+    # -- doing things ------------------------------------------------------------------
+
+    def _run(self, activity: Activity, done: Callable[[], Any] | None = None) -> None:
+        if self.busy is not None:
+            self.sim.stop(self.busy)
+
+        def over() -> None:
+            self.busy = None
+            if done is not None:
+                done()
+
+        self.busy = self.sim.start(activity, over)
+
+    def walk_to(self, place: str) -> Activity:
+        x, y, yaw, seated = HUMAN_PLACES[place]
+        return Lazy(lambda: Walk(self.avatar, self.sim.person_path(self.name, (x, y), yaw),
+                                 self.profile.speed, yaw, seated), f"walk to {place}")
+
+    def _walk_near(self, obj: str) -> Activity:
+        def build() -> Activity:
+            target = self.sim.world.position(obj)
+            place = min(HUMAN_PLACES, key=lambda p: math.dist(HUMAN_PLACES[p][:2], target[:2])
+                        if not HUMAN_PLACES[p][3] else math.inf)
+            x, y, _, _ = HUMAN_PLACES[place]
+            yaw = math.atan2(target[1] - y, target[0] - x)
+            return Walk(self.avatar, self.sim.person_path(self.name, (x, y)), self.profile.speed,
+                        yaw)
+        return Lazy(build, f"walk to {obj}")
+
+    def _reach(self, point: Callable[[], tuple[float, float, float]] | None) -> Activity:
+        def act() -> None:
+            self.avatar.hand_out = None if point is None else point()
+            self.avatar.place()
+            self.sim.carry()
+        return Sequence([Instant(act, "reach"), Wait(0.6)], "reach")
+
+    def _pick(self, obj: str) -> Activity:
+        def grab() -> None:
+            x, y, _ = self.sim.world.position(obj)
+            if math.hypot(x - self.avatar.x, y - self.avatar.y) <= ARM_LENGTH:
+                self.sim.attach(obj, self.name)
+            else:
+                self.say(self.name, f"(cannot reach the {obj})")
+        return Sequence([self._reach(lambda: self.sim.world.position(obj)), Instant(grab),
+                         self._reach(None)], f"pick {obj}")
+
+    def help(self, obj: str) -> None:
+        """Fetch ``obj`` and hand it to the robot (the helper's part of Fig. 10)."""
+        def to_robot() -> Activity:
+            x, y = self.sim.meeting_point(self.name)
+            rx, ry, _ = self.sim.world.base_pose(self.sim.robot)
+            return Walk(self.avatar, self.sim.person_path(self.name, (x, y)), self.profile.speed,
+                        math.atan2(ry - y, rx - x))
+
+        def hold_out() -> tuple[float, float, float]:
+            a = self.avatar
+            return (a.x + 0.45 * math.cos(a.yaw), a.y + 0.45 * math.sin(a.yaw), 0.85)
+
+        def hand_over() -> None:
+            if self.sim.held_by(self.name) == obj:
+                self.robot_arm.take_from(self.name, obj, self._handed)
+
+        steps: list[Activity] = []
+        if self.sim.held_by(self.name) != obj:
+            steps += [self._walk_near(obj), self._pick(obj)]
+        steps += [Lazy(to_robot, "walk to the robot"), self._reach(hold_out),
+                  Instant(hand_over, "hold out")]
+        self._run(Sequence(steps, f"help with {obj}"))
+
+    def _handed(self) -> None:
+        self.avatar.hand_out = None
+        self.avatar.place()
+
+    # -- the script ------------------------------------------------------------------------
+
+    def _next_script_step(self) -> None:
+        if not self._script:
+            return
+        step = self._script.pop(0)
+        delay = self._draw(step.after)
+        if step.at is not None:
+            delay += max(0.0, step.at - self.sim.loop.now())
+        self.sim.loop.call_later(delay, self._do, step)
+
+    def _do(self, step: Any) -> None:
+        if step.look is not None:
+            self.look(step.look)
+        activity: Activity | None = None
+        if step.walk is not None:
+            activity = self.walk_to(step.walk)
+        elif step.take is not None:
+            activity = Sequence([self._walk_near(step.take), self._pick(step.take)],
+                                f"take {step.take}")
+        elif step.put is not None:
+            activity = self._put(step.put, step.on or "coffee-table")
+        if activity is None:
+            self._next_script_step()
+        else:
+            self._run(activity, self._next_script_step)
+
+    def _put(self, obj: str, furniture: str) -> Activity:
+        def spot() -> tuple[float, float, float]:
+            f = self.sim.world.footprints[furniture]
+            a = self.avatar
+            # the point of the furniture top nearest the person, 8 cm inside its edge
+            lx = max(-f.half_x + 0.08, min(f.half_x - 0.08, (a.x - f.x)))
+            ly = max(-f.half_y + 0.08, min(f.half_y - 0.08, (a.y - f.y)))
+            return (f.x + lx, f.y + ly, standing_height(self.sim.world.top(furniture)))
+
+        def let_go() -> None:
+            if self.sim.held_by(self.name) == obj:
+                self.sim.settle(obj, spot())
+                self.sim.observe()
+
+        return Sequence([self._reach(spot), Instant(let_go, f"put {obj}"), self._reach(None)],
+                        f"put {obj} on {furniture}")
+
+    @property
+    def pending(self) -> bool:
+        """Whether the person still has something to do on their own."""
+        return bool(self._script) or self.busy is not None

@@ -1,0 +1,236 @@
+"""Perception: what the robot knows of the world, as facts in its perspective.
+
+After every tick (and every instant change) :class:`Perception` computes the
+facts the world makes true — ``isAt``, ``isOn``/``isIn``, ``isHolding``,
+``looksAt``, ``isNear``, ``isReachableBy``, ``isSeatedOn``, ``position`` —
+and publishes only the difference to the fact database, so monitors and
+chronicles hear of changes, not of ticks.
+
+What the robot can know is limited the way SHARY's robot was:
+
+* **objects are seen, not known**: where an object is changes in the robot's
+  beliefs only when the object (or the spot where it was believed to be) is
+  in the head camera's field of view — which is why Jido must go and look at
+  the table after a person has been there (Fig. 12);
+* **people are tracked** (the paper's motion capture): where they are, what
+  they hold and where they look is always known.
+
+Two filters make facts robust to a noisy feed: a fact that disappears is
+only removed after it has stayed absent for ``hold`` seconds (a blink of the
+detector does not make the person "look away"), and a fact that appears is
+added at once.  Noise can be injected to test that (``flicker``: each fact of
+a predicate is missed at a tick with some probability; ``lost``: an entity is
+not detected at all for a while).
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from rdflib import Literal
+
+from .executors import ROBOT_REACH
+from .humans import ARM_LENGTH
+from .simulation import Simulation
+from .world import BOTTLE_HEIGHT, FURNITURE, pb
+
+Fact = tuple[str, str, Any]
+
+NEAR = 0.9
+"""A person this close to a piece of furniture (its footprint) is near it."""
+GAZE_CONE = math.radians(12)
+CAMERA_HALF_FOV = math.radians(36)
+CAMERA_RANGE = 5.0
+PLACE_TOLERANCE = 0.2
+PERSON_AT = 1.2
+"""A person within this distance of a robot place is at it (the planner's places are the
+robot's: a person at sofa-area is one the robot serves from there)."""
+SEATS = ("sofa",)
+CONTAINERS = ("trash",)
+
+
+@dataclass
+class Noise:
+    """Perception faults: per-predicate miss probability, and detection losses."""
+
+    flicker: dict[str, float] = field(default_factory=dict)
+    lost: list[tuple[str, float, float]] = field(default_factory=list)  # entity, from, to
+
+
+class Perception:
+    """Publishes the world's facts into a fact database (see the module's docstring)."""
+
+    def __init__(self, sim: Simulation, facts: Any, places: dict[str, tuple[float, float]],
+                 *, perspective: str = "robot", hold: float = 0.5, noise: Noise | None = None,
+                 rng: random.Random | None = None):
+        self.sim = sim
+        self.world = sim.world
+        self.facts = facts
+        self.places = places
+        self.perspective = perspective
+        self.hold = hold
+        self.noise = noise or Noise()
+        self.rng = rng or random.Random(0)
+        self.published: set[Fact] = set()
+        self.missing_since: dict[Fact, float] = {}
+        self.belief: dict[str, tuple[float, float, float]] = {}  # object -> where last seen
+        self.object_facts: dict[str, set[Fact]] = {}
+        self._recheck: Any = None
+
+    # -- the world's facts -------------------------------------------------------
+
+    def start(self) -> None:
+        """Publish what the robot knows at the start: it has seen every object once."""
+        for obj in self.world.bottles:
+            self.belief[obj] = self.world.position(obj)
+            self.object_facts[obj] = set(self._object_facts(obj))
+        self.update()
+
+    def update(self) -> None:
+        now = self.sim.loop.now()
+        seen = set(self._facts(now))
+        for predicate, p in self.noise.flicker.items():
+            seen = {f for f in seen if f[1] != predicate or self.rng.random() >= p}
+        for fact in seen - self.published:
+            self.facts.add(*fact, perspective=self.perspective)
+            self.published.add(fact)
+        for fact in seen:
+            self.missing_since.pop(fact, None)
+        for fact in self.published - seen:
+            since = self.missing_since.setdefault(fact, now)
+            if now - since >= self.hold - 1e-9:
+                self.facts.remove(*fact, perspective=self.perspective)
+                self.published.discard(fact)
+                del self.missing_since[fact]
+        if self.missing_since and self._recheck is None and not self.sim.busy:
+            # nothing ticks while the world is still: look again when a hold expires
+            self._recheck = self.sim.loop.call_later(self.hold, self._look_again)
+
+    def _look_again(self) -> None:
+        self._recheck = None
+        self.update()
+
+    def _lost(self, entity: str, now: float) -> bool:
+        return any(e == entity and t0 <= now < t1 for e, t0, t1 in self.noise.lost)
+
+    def _facts(self, now: float) -> Iterable[Fact]:
+        world, sim = self.world, self.sim
+        robot = sim.robot
+        rx, ry, _ = world.base_pose(robot)
+        for name, (px, py) in self.places.items():
+            if math.hypot(rx - px, ry - py) <= PLACE_TOLERANCE:
+                yield (robot, "isAt", name)
+        held = sim.held_by(robot)
+        if held is not None:
+            yield (robot, "isHolding", held)
+        camera, forward = self._camera()
+        looked = self._looked_at(camera, forward, exclude=robot)
+        if looked is not None:
+            yield (robot, "looksAt", looked)
+        mount = world.link_position(robot, "arm_mount_link")
+        for obj in world.bottles:
+            if self._lost(obj, now):
+                continue
+            if self._visible(camera, forward, world.position(obj)) or obj in sim.holder:
+                self.belief[obj] = world.position(obj)
+                self.object_facts[obj] = set(self._object_facts(obj))
+            elif obj in self.belief and self._visible(camera, forward, self.belief[obj]):
+                # looking where it was, and it is not there any more
+                del self.belief[obj]
+                self.object_facts[obj] = set()
+            yield from self.object_facts.get(obj, ())
+            where = self.belief.get(obj)
+            if where is not None and obj not in sim.holder:
+                if math.hypot(where[0] - mount[0], where[1] - mount[1]) <= ROBOT_REACH:
+                    yield (obj, "isReachableBy", robot)
+        for name, avatar in sim.people.items():
+            if self._lost(name, now):
+                continue
+            # a person is "at" the robot place from which the robot can serve them
+            place, distance = min(((p, math.hypot(avatar.x - x, avatar.y - y))
+                                   for p, (x, y) in self.places.items()), key=lambda pd: pd[1])
+            if distance <= PERSON_AT:
+                yield (name, "isAt", place)
+            held = sim.held_by(name)
+            if held is not None:
+                yield (name, "isHolding", held)
+            looked = self._looked_at(avatar.eyes, avatar.gaze_direction(), exclude=name)
+            if looked is not None:
+                yield (name, "looksAt", looked)
+            for furniture in FURNITURE:
+                if world.footprints[furniture].contains(avatar.x, avatar.y, NEAR):
+                    yield (name, "isNear", furniture)
+            if math.hypot(avatar.x - rx, avatar.y - ry) <= 1.5:
+                yield (name, "isNear", robot)
+            if avatar.seated:
+                for seat in SEATS:
+                    if world.footprints[seat].contains(avatar.x, avatar.y, 0.1):
+                        yield (name, "isSeatedOn", seat)
+            for obj in world.bottles:
+                x, y, _ = world.position(obj)
+                if obj not in sim.holder and math.hypot(x - avatar.x, y - avatar.y) <= ARM_LENGTH:
+                    yield (obj, "isReachableBy", name)
+
+    def _object_facts(self, obj: str) -> Iterable[Fact]:
+        """Where an object is, from its true pose (called when the robot sees it)."""
+        if obj in self.sim.holder:
+            return
+        x, y, z = self.world.position(obj)
+        yield (obj, "position", Literal(f"{x:.2f} {y:.2f} {z:.2f}"))
+        bottom = z - BOTTLE_HEIGHT / 2
+        for furniture in FURNITURE:
+            footprint = self.world.footprints[furniture]
+            if not footprint.contains(x, y):
+                continue
+            top = self.world.top(furniture)
+            if furniture in CONTAINERS and bottom < top:
+                yield (obj, "isIn", furniture)
+            elif abs(bottom - top) < 0.04:
+                yield (obj, "isOn", furniture)
+
+    # -- geometry -----------------------------------------------------------------
+
+    def _camera(self) -> tuple[tuple[float, float, float], np.ndarray]:
+        pos, orn = self.world.link_pose(self.sim.robot, "camera_link")
+        rot = np.array(pb.getMatrixFromQuaternion(orn)).reshape(3, 3)
+        return pos, rot[:, 0]
+
+    @staticmethod
+    def _angle(origin: Any, direction: Any, point: Any) -> float:
+        v = np.asarray(point, dtype=float) - np.asarray(origin, dtype=float)
+        n = float(np.linalg.norm(v))
+        if n < 1e-9:
+            return math.pi
+        return math.acos(max(-1.0, min(1.0, float(np.dot(v, direction)) / n)))
+
+    def _visible(self, camera: Any, forward: Any, point: Any) -> bool:
+        return (math.dist(camera, point) <= CAMERA_RANGE
+                and self._angle(camera, forward, point) <= CAMERA_HALF_FOV)
+
+    def _targets(self, exclude: str) -> Iterable[tuple[str, tuple[float, float, float]]]:
+        world, sim = self.world, self.sim
+        if sim.robot != exclude:
+            yield sim.robot, world.link_position(sim.robot, "camera_link")
+        for name, avatar in sim.people.items():
+            if name != exclude:
+                yield name, avatar.eyes
+        for obj in world.bottles:
+            yield obj, world.position(obj)
+        for furniture in FURNITURE:
+            footprint = world.footprints[furniture]
+            yield furniture, (footprint.x, footprint.y, world.top(furniture))
+
+    def _looked_at(self, eyes: Any, direction: Any, exclude: str) -> str | None:
+        """What lies closest to the line of sight, within the gaze cone."""
+        best, best_angle = None, GAZE_CONE
+        for name, point in self._targets(exclude):
+            angle = self._angle(eyes, direction, point)
+            if angle < best_angle:
+                best, best_angle = name, angle
+        return best
+

@@ -1,0 +1,317 @@
+"""Running a scenario end to end: world, people, perception, supervisor, judge, files.
+
+:func:`run_scenario` builds the living room and the scenario's people, fills
+the supervisor's ports (executors, perception into the fact database, the
+living-room planner, act listeners for the people), seeds the robot's
+a-priori knowledge (types and the planner's static attributes), adds the
+goals, and advances the one event loop until nothing is left to happen (no
+task, goal, motion or timer) or the timeout.  Then it judges the outcome
+against the scenario and writes, to the output folder: ``log.sqlite`` (the
+context log), ``tree.svg`` (the final task tree), ``timeline.svg`` (a lane per
+agent), ``summary.json``, and with ``snapshots`` PNG views at each act.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from shary.agenda import ChronicleRecognizer
+from shary.executors import ExecutorRegistry
+from shary.facts import FactDatabase
+from shary.io.recipes import load_library
+from shary.log import ContextLog, read_events
+from shary.loop import EventLoop
+from shary.planning import HatpPlanner
+from shary.supervisor import Supervisor
+
+from .executors import RobotExecutors
+from .people import Person
+from .perception import Noise, Perception
+from .scenario import Happened, Scenario, judge, load_scenario
+from .simulation import Simulation, standing_height
+from .world import BOTTLES, FURNITURE, LivingRoom, pb
+
+CHUNK = 0.5
+"""Simulated seconds advanced between two looks at whether the run is over."""
+FURNITURE_PLACE = {"coffee-table": "coffee-area", "store-table": "store-area",
+                   "trash": "trash-area", "sofa": "sofa-area"}
+"""The robot place from which each piece of furniture is manipulated (HATP's f.place)."""
+ROBOT_ATTRIBUTES = {"kind": "robot", "move_cost": 2, "pick_cost": 1, "speed": 1}
+PERSON_ATTRIBUTES = {"kind": "human", "move_cost": 4, "pick_cost": 2, "speed": 1}
+
+
+@dataclass
+class RunResult:
+    """What :func:`run_scenario` found and wrote."""
+
+    scenario: str
+    passed: bool
+    differences: list[str]
+    simulated_seconds: float
+    wall_seconds: float
+    seed: int
+    physics_steps: int
+    outputs: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def real_time_factor(self) -> float:
+        return self.simulated_seconds / self.wall_seconds if self.wall_seconds > 0 else math.inf
+
+    def summary(self) -> dict[str, Any]:
+        out = asdict(self)
+        out["outcome"] = "passed" if self.passed else "failed"
+        out["real_time_factor"] = round(self.real_time_factor, 1)
+        out["simulated_seconds"] = round(self.simulated_seconds, 2)
+        out["wall_seconds"] = round(self.wall_seconds, 3)
+        return out
+
+
+def load(path: str | Path) -> tuple[Scenario, Any]:
+    """A scenario checked against the recipe library it will run with, and that library."""
+    first = load_scenario(path)
+    library = load_library(list(first.recipes))
+    scenario = load_scenario(
+        path, known_tasks={n: tuple(t.params) for n, t in library.tasks.items()},
+        known_acts=_acts(library), known_atomic=library.atomic)
+    return scenario, library
+
+
+def _acts(library: Any) -> set[str]:
+    from shary.acts import builtin_acts
+
+    return set(builtin_acts().vocabulary())
+
+
+def run_scenario(path: str | Path, *, seed: int = 0, out: str | Path | None = None,
+                 snapshots: bool = False, gui: bool = False,
+                 report: Callable[[float, str, str], Any] | None = None) -> RunResult:
+    """Run one scenario (see the module's docstring); ``report(t, who, text)`` shows progress."""
+    scenario, library = load(path)
+    out_dir = Path(out) if out is not None else None
+    if out_dir is not None:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        for stale in out_dir.glob("snapshot-*.png"):
+            stale.unlink()
+    wall = time.perf_counter()
+    log_path = out_dir / "log.sqlite" if out_dir is not None else None
+    if log_path is not None and log_path.exists():
+        log_path.unlink()
+    with LivingRoom(gui=gui, robot=None) as world, \
+            _log(log_path, seed) as log:
+        run = _Run(scenario, library, world, log, seed, report or (lambda t, who, text: None),
+                   out_dir if snapshots else None)
+        end = run.go()
+        wall = time.perf_counter() - wall
+        happened = run.happened(end, log_path)
+        differences = judge(scenario.expect, happened)
+        if end >= scenario.timeout - 1e-9:
+            differences.append(f"the run was still going at the timeout ({scenario.timeout:g}s)")
+        result = RunResult(scenario.name, not differences, differences, end, wall, seed,
+                           run.sim.physics_steps)
+        if out_dir is not None:
+            log.flush()
+            result.outputs = run.write(out_dir, log_path)
+            (out_dir / "summary.json").write_text(json.dumps(result.summary(), indent=2) + "\n")
+            result.outputs["summary"] = str(out_dir / "summary.json")
+    return result
+
+
+class _MemoryLog:
+    """The context log's interface, kept in memory when no output folder is asked for."""
+
+    def __init__(self) -> None:
+        self.events: list[tuple[float, str, str | None, str | None, dict[str, Any]]] = []
+
+    def record(self, t: float, kind: str, *, task: str | None = None,
+               agent: str | None = None, **data: Any) -> None:
+        self.events.append((t, kind, task, agent, data))
+
+    def flush(self) -> None:
+        pass
+
+    def __enter__(self) -> _MemoryLog:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        pass
+
+
+def _log(path: Path | None, seed: int) -> Any:
+    return ContextLog(path, seed=seed) if path is not None else _MemoryLog()
+
+
+class _Run:
+    """One run's parts, wired together."""
+
+    def __init__(self, scenario: Scenario, library: Any, world: LivingRoom, log: Any, seed: int,
+                 report: Callable[[float, str, str], Any], snapshot_dir: Path | None):
+        self.scenario = scenario
+        self.world = world
+        self.log = log
+        self.report = report
+        self.snapshot_dir = snapshot_dir
+        self.snapshots: list[str] = []
+        self.loop = EventLoop(seed=seed)
+        self.facts = FactDatabase()
+        robot = scenario.robot
+        world.add_robot(robot, scenario.model, scenario.robot_at)
+        self.sim = Simulation(world, self.loop, robot)
+        self.executors = RobotExecutors(self.sim, self.say, self.learned,
+                                        lambda who, text: report(self.loop.now(), who, text))
+        registry = ExecutorRegistry({name: self.executors for name in library.atomic})
+        self.sup = Supervisor(library, self.facts, robot=robot, loop=self.loop,
+                              executors=registry, log=log,
+                              planners={"living-room": HatpPlanner("living-room",
+                                                                   budget_ms=300)})
+        self.facts.subscribe(self._fact_logged)
+        self.people: dict[str, Person] = {}
+        for spec in scenario.people:
+            self.sim.add_person(spec.name, spec.at, (*spec.shirt, 1.0))
+            person = Person(spec.name, spec.profile, self.sim, self.sup, self.loop.random,
+                            self.executors, self.say)
+            self.people[spec.name] = person
+            self.sup.act_listeners.append(person.on_act)
+            self.sim.tick_hooks.append(person.refresh)
+        self.executors.people = self.people
+        self.sup.act_listeners.append(self._act_started)
+        self._arrange_objects()
+        self._a_priori()
+        self.perception = Perception(
+            self.sim, self.facts, {n: p[:2] for n, p in world.places.items()},
+            hold=scenario.hold, noise=Noise(dict(scenario.flicker), list(scenario.lost)),
+            rng=self.loop.random)
+        self.sim.observers.append(self.perception.update)
+        self.chronicles = ChronicleRecognizer(self.sup) if library.chronicles else None
+
+    # -- setting up ----------------------------------------------------------------
+
+    def _arrange_objects(self) -> None:
+        for obj, spec in self.scenario.objects.items():
+            if "held-by" in spec:
+                self.sim.attach(obj, spec["held-by"])
+                continue
+            furniture = spec.get("on", "coffee-table")
+            f = self.world.footprints[furniture]
+            x, y = spec.get("at", (f.x, f.y))
+            self.world.call(pb.resetBasePositionAndOrientation, self.world.body(obj),
+                            [x, y, standing_height(self.world.top(furniture))], [0, 0, 0, 1])
+
+    def _a_priori(self) -> None:
+        """What the robot knows before it looks: kinds of things, the planner's constants."""
+        facts, robot = self.facts, self.scenario.robot
+        for place in self.world.places:
+            facts.add(place, "type", "Place")
+        for furniture in FURNITURE:
+            facts.add(furniture, "type", "Furniture")
+            facts.add(furniture, "place", FURNITURE_PLACE.get(furniture, "base"))
+            facts.add(furniture, "container", furniture == "trash")
+            facts.add(furniture, "seat", furniture == "sofa")
+        for obj in BOTTLES:
+            facts.add(obj, "type", "Object")
+            facts.add(obj, "type", "Bottle")
+            facts.add(obj, "color", obj.split("-")[0])
+            facts.add(obj, "drink", True)
+            facts.add(obj, "robot_reach", True)
+        facts.add(robot, "type", "Agent")
+        facts.add(robot, "type", "Robot")
+        for attribute, value in ROBOT_ATTRIBUTES.items():
+            facts.add(robot, attribute, value)
+        for spec in self.scenario.people:
+            facts.add(spec.name, "type", "Agent")
+            facts.add(spec.name, "type", "Human")
+            for attribute, value in {**PERSON_ATTRIBUTES, **spec.attributes}.items():
+                facts.add(spec.name, attribute, value)
+
+    # -- during the run ------------------------------------------------------------
+
+    def say(self, who: str, text: str) -> None:
+        self.sup.record("speech", agent=who, text=text)
+        self.report(self.loop.now(), who, text)
+
+    def learned(self, s: str, p: str, o: Any) -> None:
+        """An executor found something out by trying (the bottle is out of reach)."""
+        self.facts.set(s, p, o)
+
+    def _fact_logged(self, event: Any) -> None:
+        self.sup.record(f"fact-{event.kind}", perspective=event.perspective,
+                        s=str(event.subject), p=str(event.predicate), o=str(event.object))
+
+    def _act_started(self, run: Any, state: Any, agent: str) -> None:
+        self.report(self.loop.now(), agent, f"[{state.act}] {run.type.name}")
+        self.snapshot(f"{state.act.lower()}-{run.type.name}")
+
+    def snapshot(self, label: str) -> None:
+        if self.snapshot_dir is None:
+            return
+        name = f"snapshot-{len(self.snapshots) + 1:02d}-{self.loop.now():06.1f}s-{label}.png"
+        self.world.snapshot(self.snapshot_dir / name, 480, 360)
+        self.snapshots.append(name)
+
+    def go(self) -> float:
+        """Run until nothing is left to happen; return the simulated time at the end."""
+        for goal in self.scenario.goals:
+            self.loop.call_later(goal.at, self._add_goal, goal)
+        for person in self.people.values():
+            person.begin()
+        self.perception.start()
+        while self.loop.now() < self.scenario.timeout - 1e-9:
+            self.loop.advance(min(CHUNK, self.scenario.timeout - self.loop.now()))
+            if self._quiet():
+                break
+        self.snapshot("end")
+        return self.loop.now()
+
+    def _add_goal(self, goal: Any) -> None:
+        self.sup.agenda.add(goal.task, goal.args, priority=goal.priority)
+
+    def _quiet(self) -> bool:
+        return (not self.sup.runs and self.sup.agenda.active is None
+                and not any(g.state not in ("done", "failed") for g in self.sup.agenda.goals)
+                and not self.sim.busy and self.loop.clock.next_due() is None
+                and not any(p.pending for p in self.people.values()))
+
+    # -- after the run --------------------------------------------------------------
+
+    def happened(self, end: float, log_path: Path | None) -> Happened:
+        if log_path is not None:
+            self.log.flush()
+            events = [(e.time, e.kind, e.task, e.agent, e.data) for e in read_events(log_path)]
+        else:
+            events = self.log.events
+        acts, actions, tasks = [], [], {}
+        requests: dict[str, tuple[str, str]] = {}
+        for t, kind, _, agent, data in events:
+            if kind == "act":
+                acts.append((t, agent or "", data["act"]))
+            elif kind == "act-received":
+                acts.append((t, agent or "", data["act"]))
+            elif kind == "exec-request":
+                requests[data["request"]] = (agent or "", data["atomic"])
+                actions.append((t, agent or "", data["atomic"], "started"))
+            elif kind == "exec-result" and data["request"] in requests:
+                who, atomic = requests[data["request"]]
+                actions.append((t, who, atomic, data["status"]))
+            elif kind == "task-end":
+                tasks.setdefault(data["name"], []).append(data["outcome"] or "done")
+        facts = {(str(s), str(p), str(o)) for s, p, o in self.facts.triples("robot")}
+        return Happened(acts, actions, tasks, facts, end)
+
+    def write(self, out_dir: Path, log_path: Path | None) -> dict[str, str]:
+        from shary.display import render_tree
+        from shary.timeline import write_timeline
+
+        outputs = {"log": str(log_path)}
+        render_tree(self.sup.tree, out_dir / "tree.svg", title=f"{self.scenario.name}: task tree")
+        outputs["tree"] = str(out_dir / "tree.svg")
+        if log_path is not None:
+            write_timeline(log_path, out_dir / "timeline.svg", title=self.scenario.name)
+            outputs["timeline"] = str(out_dir / "timeline.svg")
+        if self.snapshots:
+            outputs["snapshots"] = ", ".join(str(out_dir / n) for n in self.snapshots)
+        return outputs
