@@ -40,11 +40,18 @@ class HatpPlanner:
 
     def __init__(self, domain: str | Domain, *, rules: dict[str, Any] | None = None,
                  budget_ms: float = 500.0, perspective: str = "robot"):
-        self.domain = planner.load_domain(domain) if isinstance(domain, str) else domain
+        self._domain = domain
         self.rules = dict(rules or {})
         self.budget_ms = budget_ms
         self.perspective = perspective
         self.last: planner.Result | None = None
+
+    @property
+    def domain(self) -> Domain:
+        """The domain, loaded on first use (a run that never plans never reads it)."""
+        if isinstance(self._domain, str):
+            self._domain = planner.load_domain(self._domain)
+        return self._domain
 
     def problem(self, facts: Any, task: str, args: dict[str, Any],
                 reading: dict[str, tuple[str, ...]] | None = None) -> Problem:

@@ -64,6 +64,9 @@ class _Running:
     failure: list[str] = field(default_factory=list)
     on_cancel: list[Callable[[], Any]] = field(default_factory=list)
 
+    def failed(self) -> bool:
+        return bool(self.failure)
+
 
 class RobotExecutors:
     """The robot's executors (see the module's docstring)."""
@@ -79,7 +82,8 @@ class RobotExecutors:
         self.progress = progress or (lambda who, text: None)
         self.people: dict[str, Any] = {}
         self.speech_ends = 0.0
-        self.picked_from: dict[str, tuple[tuple[float, float, float], str | None]] = {}
+        self.picked_from: dict[str, tuple[tuple[float, float, float], str | None, str]] = {}
+        """Object -> where it was picked: its position, its furniture, the robot's place."""
         self._running: dict[str, _Running] = {}
         self.started: list[tuple[float, str, dict[str, Any]]] = []
 
@@ -196,17 +200,24 @@ class RobotExecutors:
         return Wait(seconds, label="speak")
 
     def _look_at(self, running: _Running, target: str) -> Activity:
-        tx, ty, tz = self._point_of(target)
-        r = self.world.robot(self.robot)
-        pan, tilt = r.joint("head_pan_joint"), r.joint("head_tilt_joint")
-        hx, hy, hz = self.world.link_position(self.robot, "head_tilt_link")
-        _, _, yaw = self.world.base_pose(self.robot)
-        rel = math.atan2(ty - hy, tx - hx) - yaw
-        rel = math.atan2(math.sin(rel), math.cos(rel))
-        down = math.atan2(hz - tz, math.hypot(tx - hx, ty - hy))
-        goal = {pan: min(max(rel, r.limits[pan][0]), r.limits[pan][1]),
-                tilt: min(max(down, r.limits[tilt][0]), r.limits[tilt][1])}
-        return JointMotion(self.world, self.robot, goal, HEAD_SPEED)
+        return self._head_to(self._point_of(target))
+
+    def _head_to(self, point: tuple[float, float, float]) -> Activity:
+        """Turn the pan-tilt head so the camera looks at ``point``."""
+        def build() -> Activity:
+            tx, ty, tz = point
+            r = self.world.robot(self.robot)
+            pan, tilt = r.joint("head_pan_joint"), r.joint("head_tilt_joint")
+            hx, hy, hz = self.world.link_position(self.robot, "head_tilt_link")
+            _, _, yaw = self.world.base_pose(self.robot)
+            rel = math.atan2(ty - hy, tx - hx) - yaw
+            rel = math.atan2(math.sin(rel), math.cos(rel))
+            down = math.atan2(hz - tz, math.hypot(tx - hx, ty - hy))
+            goal = {pan: min(max(rel, r.limits[pan][0]), r.limits[pan][1]),
+                    tilt: min(max(down, r.limits[tilt][0]), r.limits[tilt][1])}
+            return JointMotion(self.world, self.robot, goal, HEAD_SPEED)
+
+        return Lazy(build, "look")
 
     def _navigate(self, running: _Running, place: str) -> Activity:
         if place not in self.world.places:
@@ -252,7 +263,10 @@ class RobotExecutors:
         def grasp() -> None:
             furniture = next((f for f in FURNITURE
                               if self.world.footprints[f].contains(x, y)), None)
-            self.picked_from[object] = ((x, y, z), furniture)
+            bx, by, _ = self.world.base_pose(self.robot)
+            place = min(self.world.places,
+                        key=lambda p: math.dist(self.world.places[p][:2], (bx, by)))
+            self.picked_from[object] = ((x, y, z), furniture, place)
             set_gripper(self.world, self.robot, 0.0)
             self.sim.attach(object, self.robot)
 
@@ -261,7 +275,7 @@ class RobotExecutors:
                          self._arm_to(running, lambda: (x, y, z), object),
                          Instant(grasp, "grasp"),
                          self._arm_to(running, lambda: (x, y, z + LIFT), f"above {object}")],
-                        f"pick {object}")
+                        f"pick {object}", running.failed)
 
     def _free_spot(self, furniture: str, near: tuple[float, float] | None = None
                    ) -> tuple[float, float, float]:
@@ -297,11 +311,12 @@ class RobotExecutors:
             self.sim.settle(obj)
             self.sim.observe()
 
-        return Sequence([self._arm_to(running, lambda: (x, y, z + LIFT), f"above the {furniture}"),
+        return Sequence([self._head_to(spot),
+                         self._arm_to(running, lambda: (x, y, z + LIFT), f"above the {furniture}"),
                          self._arm_to(running, lambda: (x, y, z), f"the spot on the {furniture}"),
                          Instant(let_go, "release"),
                          self._arm_to(running, lambda: (x, y, z + LIFT), f"above the {furniture}"),
-                         self._home()], f"put {obj} on {furniture}")
+                         self._home()], f"put {obj} on {furniture}", running.failed)
 
     def _holding(self, obj: str) -> None:
         if self.sim.held_by(self.robot) != obj:
@@ -318,8 +333,18 @@ class RobotExecutors:
         origin = self.picked_from.get(object)
         if origin is None or origin[1] is None:
             raise ActionFailed(f"{self.robot} does not know where {object} came from")
-        (x, y, _), furniture = origin
-        return self._put_down(running, object, self._free_spot(furniture, (x, y)), furniture)
+        (x, y, _), furniture, place = origin
+
+        def put_down() -> Activity:
+            try:
+                spot = self._free_spot(furniture, (x, y))
+            except ActionFailed as err:
+                running.failure.append(str(err))
+                return Instant(lambda: None)
+            return self._put_down(running, object, spot, furniture)
+
+        return Sequence([self._navigate(running, place), Lazy(put_down, "put down")],
+                        f"put {object} back", running.failed)
 
     def _dump(self, running: _Running, object: str, into: str) -> Activity:
         self._holding(object)
@@ -337,8 +362,9 @@ class RobotExecutors:
                 running.failure.append(f"{object} missed the {into}: it lies at "
                                        f"({x:.2f}, {y:.2f}, {z:.2f})")
 
-        return Sequence([self._arm_to(running, lambda: above, f"above the {into}"),
-                         Instant(drop, "drop"), self._home()], f"dump {object}")
+        return Sequence([self._head_to((f.x, f.y, self.world.top(into))),
+                         self._arm_to(running, lambda: above, f"above the {into}"),
+                         Instant(drop, "drop"), self._home()], f"dump {object}", running.failed)
 
     def _give(self, running: _Running, object: str, to: str) -> Activity:
         self._holding(object)
@@ -359,7 +385,8 @@ class RobotExecutors:
                          Instant(offer, "hold out"),
                          Wait(until=lambda: bool(taken) or bool(running.failure),
                               label="wait for the take"),
-                         Instant(release, "release"), self._home()], f"give {object}")
+                         Instant(release, "release"), self._home()], f"give {object}",
+                        running.failed)
 
     def take_from(self, person: str, obj: str, done: Callable[[], Any]) -> None:
         """A person holds ``obj`` out: reach their hand, grasp, tuck (the receiving side)."""
@@ -381,3 +408,4 @@ class RobotExecutors:
         self.sim.start(Sequence([self._gripper(0.04), self._arm_to(holder, lambda: hand,
                                                                    f"{person}'s hand"),
                                  Instant(grasp, "take")], f"take {obj} from {person}"))
+

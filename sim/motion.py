@@ -80,12 +80,16 @@ class Wait(Activity):
 class Sequence(Activity):
     """Activities one after another; time left over by one goes to the next."""
 
-    def __init__(self, parts: Seq[Activity], label: str = "sequence"):
+    def __init__(self, parts: Seq[Activity], label: str = "sequence",
+                 abort: Callable[[], bool] | None = None):
         self.parts = list(parts)
         self.label = label
+        self.abort = abort
 
     def advance(self, dt: float) -> bool:
         while self.parts:
+            if self.abort is not None and self.abort():
+                return True  # a part failed: the rest is not attempted
             part = self.parts[0]
             if not part.advance(dt):
                 return False

@@ -81,6 +81,9 @@ class Perception:
         self.belief: dict[str, tuple[float, float, float]] = {}  # object -> where last seen
         self.object_facts: dict[str, set[Fact]] = {}
         self._recheck: Any = None
+        self._furniture_names = list(FURNITURE)
+        self._furniture_points = [(self.world.footprints[f].x, self.world.footprints[f].y,
+                                   self.world.top(f)) for f in FURNITURE]
 
     # -- the world's facts -------------------------------------------------------
 
@@ -88,7 +91,7 @@ class Perception:
         """Publish what the robot knows at the start: it has seen every object once."""
         for obj in self.world.bottles:
             self.belief[obj] = self.world.position(obj)
-            self.object_facts[obj] = set(self._object_facts(obj))
+            self.object_facts[obj] = set(self._object_facts(obj, self.belief[obj]))
         self.update()
 
     def update(self) -> None:
@@ -128,17 +131,19 @@ class Perception:
         held = sim.held_by(robot)
         if held is not None:
             yield (robot, "isHolding", held)
+        positions = {obj: world.position(obj) for obj in world.bottles}
+        names, points = self._targets(positions)
         camera, forward = self._camera()
-        looked = self._looked_at(camera, forward, exclude=robot)
+        looked = self._looked_at(camera, forward, robot, names, points)
         if looked is not None:
             yield (robot, "looksAt", looked)
         mount = world.link_position(robot, "arm_mount_link")
-        for obj in world.bottles:
+        for obj, where_now in positions.items():
             if self._lost(obj, now):
                 continue
-            if self._visible(camera, forward, world.position(obj)) or obj in sim.holder:
-                self.belief[obj] = world.position(obj)
-                self.object_facts[obj] = set(self._object_facts(obj))
+            if obj in sim.holder or self._visible(camera, forward, where_now):
+                self.belief[obj] = where_now
+                self.object_facts[obj] = set(self._object_facts(obj, where_now))
             elif obj in self.belief and self._visible(camera, forward, self.belief[obj]):
                 # looking where it was, and it is not there any more
                 del self.belief[obj]
@@ -159,7 +164,7 @@ class Perception:
             held = sim.held_by(name)
             if held is not None:
                 yield (name, "isHolding", held)
-            looked = self._looked_at(avatar.eyes, avatar.gaze_direction(), exclude=name)
+            looked = self._looked_at(avatar.eyes, avatar.gaze_direction(), name, names, points)
             if looked is not None:
                 yield (name, "looksAt", looked)
             for furniture in FURNITURE:
@@ -171,16 +176,15 @@ class Perception:
                 for seat in SEATS:
                     if world.footprints[seat].contains(avatar.x, avatar.y, 0.1):
                         yield (name, "isSeatedOn", seat)
-            for obj in world.bottles:
-                x, y, _ = world.position(obj)
+            for obj, (x, y, _) in positions.items():
                 if obj not in sim.holder and math.hypot(x - avatar.x, y - avatar.y) <= ARM_LENGTH:
                     yield (obj, "isReachableBy", name)
 
-    def _object_facts(self, obj: str) -> Iterable[Fact]:
+    def _object_facts(self, obj: str, where: tuple[float, float, float]) -> Iterable[Fact]:
         """Where an object is, from its true pose (called when the robot sees it)."""
         if obj in self.sim.holder:
             return
-        x, y, z = self.world.position(obj)
+        x, y, z = where
         yield (obj, "position", Literal(f"{x:.2f} {y:.2f} {z:.2f}"))
         bottom = z - BOTTLE_HEIGHT / 2
         for furniture in FURNITURE:
@@ -212,25 +216,25 @@ class Perception:
         return (math.dist(camera, point) <= CAMERA_RANGE
                 and self._angle(camera, forward, point) <= CAMERA_HALF_FOV)
 
-    def _targets(self, exclude: str) -> Iterable[tuple[str, tuple[float, float, float]]]:
+    def _targets(self, positions: dict[str, tuple[float, float, float]]
+                 ) -> tuple[list[str], np.ndarray]:
+        """Everything one may look at, and where (computed once per update)."""
         world, sim = self.world, self.sim
-        if sim.robot != exclude:
-            yield sim.robot, world.link_position(sim.robot, "camera_link")
-        for name, avatar in sim.people.items():
-            if name != exclude:
-                yield name, avatar.eyes
-        for obj in world.bottles:
-            yield obj, world.position(obj)
-        for furniture in FURNITURE:
-            footprint = world.footprints[furniture]
-            yield furniture, (footprint.x, footprint.y, world.top(furniture))
+        names = [sim.robot, *sim.people, *positions, *self._furniture_names]
+        points = [world.link_position(sim.robot, "camera_link"),
+                  *(a.eyes for a in sim.people.values()), *positions.values(),
+                  *self._furniture_points]
+        return names, np.asarray(points, dtype=float)
 
-    def _looked_at(self, eyes: Any, direction: Any, exclude: str) -> str | None:
+    def _looked_at(self, eyes: Any, direction: Any, exclude: str, names: list[str],
+                   points: np.ndarray) -> str | None:
         """What lies closest to the line of sight, within the gaze cone."""
-        best, best_angle = None, GAZE_CONE
-        for name, point in self._targets(exclude):
-            angle = self._angle(eyes, direction, point)
-            if angle < best_angle:
-                best, best_angle = name, angle
-        return best
-
+        v = points - np.asarray(eyes, dtype=float)
+        norms = np.linalg.norm(v, axis=1)
+        norms[norms < 1e-9] = np.inf
+        cosines = (v @ np.asarray(direction, dtype=float)) / norms
+        for i, name in enumerate(names):
+            if name == exclude:
+                cosines[i] = -2.0
+        best = int(np.argmax(cosines))
+        return names[best] if cosines[best] >= math.cos(GAZE_CONE) else None

@@ -111,12 +111,23 @@ class Simulation:
 
     def settle(self, obj: str, at: tuple[float, float, float] | None = None) -> None:
         """Let an object go (optionally from ``at``) and step physics until it has settled."""
+        holder = self.holder.get(obj)
         self.release(obj)
         body = self.world.body(obj)
         if at is not None:
             self.world.call(pb.resetBasePositionAndOrientation, body, list(at), [0, 0, 0, 1])
         self.world.call(pb.resetBaseVelocity, body, [0, 0, 0], [0, 0, 0])
+        # the gripper still closes round the object: without this, the overlap would
+        # shoot the object away on the first physics step
+        pairs = []
+        if holder in self.world.robots:
+            robot = self.world.robots[holder]
+            pairs = [(robot.body, link) for link in range(-1, len(robot.links))]
+        for other, link in pairs:
+            self.world.call(pb.setCollisionFilterPair, other, body, link, -1, 0)
         self.physics_steps += self.world.step(SETTLE_SECONDS)
+        for other, link in pairs:
+            self.world.call(pb.setCollisionFilterPair, other, body, link, -1, 1)
 
     def held_by(self, agent: str) -> str | None:
         return next((o for o, a in self.holder.items() if a == agent), None)
@@ -156,7 +167,7 @@ class Simulation:
             raise LookupError(f"{name} finds no way from ({start[0]:.2f}, {start[1]:.2f}) "
                               f"to ({goal[0]:.2f}, {goal[1]:.2f})") from None
         path = [p for p in path if p != start]
-        if path[-1] != goal:
+        if not path or path[-1] != goal:
             path.append(goal)
         return path
 
