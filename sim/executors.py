@@ -29,6 +29,7 @@ import networkx as nx
 from .kinematics import reach, set_gripper
 from .motion import (
     HEAD_SPEED,
+    JOINT_SPEED,
     Activity,
     BaseMotion,
     Instant,
@@ -40,6 +41,8 @@ from .motion import (
 from .simulation import Simulation, standing_height
 from .world import BOTTLE_RADIUS, FURNITURE
 
+NEAR_PEOPLE_SPEED = 0.5
+"""Joint speed (rad/s) when the arm moves towards a person: slower, as near people it must."""
 REACH_TOLERANCE = 0.015
 """An IK answer further than this from the target means the target is out of reach."""
 ROBOT_REACH = 0.95
@@ -81,7 +84,6 @@ class RobotExecutors:
         self.learned = learned or (lambda s, p, o: None)
         self.progress = progress or (lambda who, text: None)
         self.people: dict[str, Any] = {}
-        self.speech_ends = 0.0
         self.picked_from: dict[str, tuple[tuple[float, float, float], str | None, str]] = {}
         """Object -> where it was picked: its position, its furniture, the robot's place."""
         self._running: dict[str, _Running] = {}
@@ -137,7 +139,7 @@ class RobotExecutors:
         return self.world.link_position(self.robot, "arm_mount_link")
 
     def _arm_to(self, running: _Running, point: Callable[[], tuple[float, float, float]],
-                what: str) -> Activity:
+                what: str, speed: float = JOINT_SPEED) -> Activity:
         """Move the arm so the gripper reaches ``point()`` (computed when the motion starts)."""
         def build() -> Activity:
             target = point()
@@ -147,7 +149,8 @@ class RobotExecutors:
                                        f"{error * 100:.0f} cm of it")
                 return Instant(lambda: None)
             arm = self.world.robot(self.robot).arm()
-            return JointMotion(self.world, self.robot, dict(zip(arm.joints, q, strict=True)))
+            return JointMotion(self.world, self.robot, dict(zip(arm.joints, q, strict=True)),
+                               speed)
 
         return Lazy(build, f"arm to {what}")
 
@@ -195,9 +198,13 @@ class RobotExecutors:
 
     def _speak(self, running: _Running, text: str) -> Activity:
         seconds = 0.4 + len(str(text).split()) / WORDS_PER_SECOND
-        self.speech_ends = self.sim.loop.now() + seconds
         self.say(self.robot, str(text))
-        return Wait(seconds, label="speak")
+
+        def heard() -> None:
+            for person in self.people.values():
+                person.heard(self.robot)
+
+        return Sequence([Wait(seconds, label="speak"), Instant(heard, "heard")], "speak")
 
     def _look_at(self, running: _Running, target: str) -> Activity:
         return self._head_to(self._point_of(target))
@@ -240,7 +247,7 @@ class RobotExecutors:
     def _move_arm(self, running: _Running, target: str) -> Activity:
         if target in self.sim.people:
             return self._arm_to(running, lambda: self._handover_point(target),
-                                f"the hand-over point towards {target}")
+                                f"the hand-over point towards {target}", NEAR_PEOPLE_SPEED)
         point = self._point_of(target)
         return self._arm_to(running, lambda: (point[0], point[1], point[2] + LIFT), target)
 
@@ -381,7 +388,7 @@ class RobotExecutors:
 
         running.on_cancel.append(person.withdraw)
         return Sequence([self._arm_to(running, lambda: self._handover_point(to),
-                                      f"the hand-over point towards {to}"),
+                                      f"the hand-over point towards {to}", NEAR_PEOPLE_SPEED),
                          Instant(offer, "hold out"),
                          Wait(until=lambda: bool(taken) or bool(running.failure),
                               label="wait for the take"),

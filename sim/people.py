@@ -23,6 +23,8 @@ from .simulation import Simulation, Walk, standing_height
 
 AWAY = "away"
 """Attention on nothing in the room (a phone call)."""
+UNSPOKEN_ANSWER = 5.0
+"""Seconds after an act begins by which a person answers even if the robot said nothing."""
 
 
 class Person:
@@ -45,6 +47,7 @@ class Person:
         self._script = list(profile.script)
         self._triggered: set[int] = set()
         self.busy: int | None = None
+        self._pending: list[tuple[Any, str, Any]] = []
 
     # -- start -------------------------------------------------------------------
 
@@ -106,15 +109,28 @@ class Person:
     # -- answering acts ---------------------------------------------------------------
 
     def on_act(self, run: Any, state: Any, agent: str) -> None:
-        """An act began in a task; answer it if it is addressed to this person."""
+        """An act began in a task; answer it once the robot has said it (or soon)."""
         if agent == self.name or self.name not in run.roles.values():
             return
         answer = self.profile.answers.get(state.act)
         if answer is None or answer.reply is None:
             return
-        speaking = max(0.0, self.robot_arm.speech_ends - self.sim.loop.now())
-        delay = speaking + self._draw(answer.after)
-        self.sim.loop.call_later(delay, self._answer, run, state.act, answer.reply)
+        pending = (run, state.act, answer)
+        self._pending.append(pending)
+        # an act with nothing to say is answered all the same, a little later
+        self.sim.loop.call_later(UNSPOKEN_ANSWER, self._reply, pending)
+
+    def heard(self, speaker: str) -> None:
+        """The robot finished saying something: answer what it was asking."""
+        for pending in list(self._pending):
+            self._reply(pending)
+
+    def _reply(self, pending: tuple[Any, str, Any]) -> None:
+        if pending not in self._pending:
+            return
+        self._pending.remove(pending)
+        run, act, answer = pending
+        self.sim.loop.call_later(self._draw(answer.after), self._answer, run, act, answer.reply)
 
     def _answer(self, run: Any, act: str, reply: str) -> None:
         if run.ended:

@@ -114,6 +114,18 @@ def find_scenario(name_or_file: str) -> Path:
     return found
 
 
+def recipe_files(path: str | Path) -> list[Path]:
+    """The extra recipe files a scenario names that exist (read before checking it whole,
+    so its goals can be checked against the tasks they define)."""
+    path = Path(path)
+    data = yamlsafe.load_file(path).data
+    files = data.get("recipes") if isinstance(data, dict) else None
+    if not isinstance(files, list):
+        return []
+    return [(path.parent / f).resolve() for f in files
+            if isinstance(f, str) and (path.parent / f).is_file()]
+
+
 def load_profile(name: str) -> Profile:
     path = PROFILES_DIR / f"{name}.yaml"
     located = yamlsafe.load_file(path)
@@ -139,8 +151,8 @@ def load_scenario(path: str | Path, *, known_tasks: dict[str, tuple[str, ...]] |
     data = located.data
     problems = []
 
-    def problem(where: tuple, message: str) -> None:
-        problems.append(located.problem(where, message))
+    def problem(where: tuple, message: str, key: bool = False) -> None:
+        problems.append(located.problem(where, message, key=key))
 
     robot = data.get("robot") or {}
     robot_at = robot.get("at", "base")
@@ -150,7 +162,7 @@ def load_scenario(path: str | Path, *, known_tasks: dict[str, tuple[str, ...]] |
     people = []
     for name, spec in (data.get("people") or {}).items():
         if name in BOTTLES or name in FURNITURE or name == robot.get("name", "jido"):
-            problem(("people", name), f"{name!r} already names something in the room")
+            problem(("people", name), f"{name!r} already names something in the room", True)
         if spec["at"] not in HUMAN_PLACES:
             problem(("people", name, "at"), f"unknown place for a person {spec['at']!r}"
                     f"{did_you_mean(spec['at'], HUMAN_PLACES)}; places: {', '.join(HUMAN_PLACES)}")
@@ -177,7 +189,7 @@ def load_scenario(path: str | Path, *, known_tasks: dict[str, tuple[str, ...]] |
     for obj, spec in (data.get("objects") or {}).items():
         if obj not in BOTTLES:
             problem(("objects", obj), f"unknown object {obj!r}{did_you_mean(obj, BOTTLES)}; "
-                    f"objects: {', '.join(BOTTLES)}")
+                    f"objects: {', '.join(BOTTLES)}", True)
         if "on" in spec and spec["on"] not in FURNITURE:
             problem(("objects", obj, "on"), f"unknown furniture {spec['on']!r}"
                     f"{did_you_mean(spec['on'], FURNITURE)}")
@@ -225,7 +237,7 @@ def load_scenario(path: str | Path, *, known_tasks: dict[str, tuple[str, ...]] |
         for task in raw_expect.get("tasks") or {}:
             if task not in known_tasks:
                 problem(("expect", "tasks", task), f"unknown task {task!r}"
-                        f"{did_you_mean(task, known_tasks)}")
+                        f"{did_you_mean(task, known_tasks)}", True)
     if problems:
         raise FileError(problems)
     expect = Expect(

@@ -1,0 +1,201 @@
+"""The scenarios of SHARY section 3 on the simulated Jido, end to end, and their files."""
+
+from __future__ import annotations
+
+import json
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+
+from shary.cli import main
+from shary.log import read_events
+from sim.run import run_scenario
+from sim.scenario import builtin_scenarios, load_scenario
+from userfiles.errors import FileError
+
+SCENARIOS = sorted(builtin_scenarios())
+
+
+def test_every_scenario_of_the_issue_is_shipped():
+    assert {"give-bottle", "give-bottle-refused", "give-bottle-distracted",
+            "give-bottle-abandoned", "clean-up", "clean-up-unreachable",
+            "serve-drink-initiative", "explore-new-objects", "give-bottle-noisy"} <= set(SCENARIOS)
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    """Each built-in scenario run once, with its files, shared by the tests below."""
+    out = tmp_path_factory.mktemp("runs")
+    return {name: (run_scenario(builtin_scenarios()[name], out=out / name), out / name)
+            for name in SCENARIOS}
+
+
+@pytest.mark.parametrize("name", SCENARIOS)
+def test_scenario_meets_its_expected_outcome(runs, name):
+    result, _ = runs[name]
+    assert result.passed, result.differences
+    assert result.simulated_seconds > 0
+
+
+def _events(runs, name, kind=None):
+    _, out = runs[name]
+    return [e for e in read_events(out / "log.sqlite") if kind is None or e.kind == kind]
+
+
+def _actions(runs, name):
+    """(atomic, status) in order of the results, for the robot."""
+    events = _events(runs, name)
+    atomic = {e.data["request"]: e.data["atomic"] for e in events if e.kind == "exec-request"}
+    return [(atomic[e.data["request"]], e.data["status"]) for e in events
+            if e.kind == "exec-result"]
+
+
+def test_distracted_stops_the_arm_waits_and_resumes_the_motion(runs):
+    actions = _actions(runs, "give-bottle-distracted")
+    arm = [status for atomic, status in actions if atomic == "move-arm"]
+    assert arm[0] == "cancelled" and arm[-1] == "done"  # stopped mid-way, then finished
+    acts = [e.data["act"] for e in _events(runs, "give-bottle-distracted", "act")]
+    assert acts.index("WAIT-ATTENTION") < acts.index("END-TASK")
+    # the resumed motion is a short one: it starts where the arm stopped
+    requests = {e.data["request"]: e.time for e in _events(runs, "give-bottle-distracted",
+                                                           "exec-request")}
+    results = [(e.time, e.data) for e in _events(runs, "give-bottle-distracted", "exec-result")]
+    arm_times = [(requests[d["request"]], t) for t, d in results
+                 if d["request"] in requests and d["status"] == "done"]
+    assert arm_times
+
+
+def test_refused_never_moves(runs):
+    actions = {atomic for atomic, _ in _actions(runs, "give-bottle-refused")}
+    assert actions <= {"look-at", "speak"}
+
+
+def test_abandoned_gives_up_after_the_timeout_and_puts_the_bottle_back(runs):
+    acts = [(e.time, e.data["act"]) for e in _events(runs, "give-bottle-abandoned", "act")]
+    wait = next(t for t, a in acts if a == "WAIT-ATTENTION")
+    give_up = next(t for t, a in acts if a == "GIVE-UP")
+    assert give_up - wait == pytest.approx(30.0, abs=0.01)
+    assert ("put-back", "done") in _actions(runs, "give-bottle-abandoned")
+
+
+def test_unreachable_pick_fails_with_its_reason_and_the_plan_asks_alice(runs):
+    results = [e.data for e in _events(runs, "clean-up-unreachable", "exec-result")]
+    assert any(d["status"] == "failed" and "out of reach" in d.get("reason", "")
+               for d in results), results
+    plans = _events(runs, "clean-up-unreachable", "plan")
+    assert any(step.endswith("askhelp") for step in plans[-1].data["steps"])
+    speech = [e.data["text"] for e in _events(runs, "clean-up-unreachable", "speech")]
+    assert any("Could you give it to me?" in text for text in speech)
+
+
+def test_initiative_comes_from_the_chronicle_not_a_request(runs):
+    goals = _events(runs, "serve-drink-initiative", "goal-added")
+    assert [g.data["source"] for g in goals] == ["chronicle:offer-a-drink"]
+    assert _events(runs, "serve-drink-initiative", "chronicle")
+
+
+def test_exploring_changes_what_the_robot_believes_about_the_table(runs):
+    events = _events(runs, "explore-new-objects")
+    went = next(e.time for e in events if e.kind == "exec-request"
+                and e.data["atomic"] == "navigate")
+    seen = [e.time for e in events if e.kind == "fact-added"
+            and (e.data["s"], e.data["p"], e.data["o"]) == ("blue-bottle", "isOn", "coffee-table")]
+    assert seen and min(seen) > went  # Bob's bottle is known only once Jido looked
+
+
+def test_noise_is_filtered_out(runs):
+    flickers = [e for e in _events(runs, "give-bottle-noisy", "fact-removed")
+                if e.data["p"] == "looksAt" and e.data["s"] == "alice"]
+    assert not flickers  # 20% misses per tick never last the 0.8 s hold
+
+
+def test_outputs_are_written_and_readable(runs):
+    result, out = runs["give-bottle"]
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["outcome"] == "passed" and summary["real_time_factor"] > 1
+    assert summary["simulated_seconds"] == pytest.approx(result.simulated_seconds, abs=0.01)
+    for svg in ("tree.svg", "timeline.svg"):
+        ET.parse(out / svg)  # well-formed
+    assert "alice" in (out / "timeline.svg").read_text()
+
+
+def test_same_seed_same_run(tmp_path):
+    path = builtin_scenarios()["give-bottle-distracted"]
+    first = run_scenario(path, seed=3, out=tmp_path / "a")
+    second = run_scenario(path, seed=3, out=tmp_path / "b")
+    strip = [(e.time, e.kind, e.task, e.agent, e.data) for e in read_events(tmp_path / "a" /
+                                                                           "log.sqlite")]
+    again = [(e.time, e.kind, e.task, e.agent, e.data) for e in read_events(tmp_path / "b" /
+                                                                           "log.sqlite")]
+    assert first.passed and second.passed and strip == again
+
+
+def test_snapshots_are_pngs(tmp_path):
+    result = run_scenario(builtin_scenarios()["give-bottle-refused"], out=tmp_path,
+                          snapshots=True)
+    shots = sorted(tmp_path.glob("snapshot-*.png"))
+    assert len(shots) >= 3 and shots[0].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert result.outputs["snapshots"]
+
+
+def test_a_failed_expectation_says_what_differed_and_exits_1(tmp_path, capsys):
+    text = builtin_scenarios()["give-bottle-refused"].read_text()
+    bad = tmp_path / "wrong.yaml"
+    bad.write_text(text.replace("no-acts: [REALIZE-TASK, GIVE-UP]",
+                                "no-acts: [GIVE-UP]\n  actions: [give]"))
+    assert main(["run", str(bad), "--out", str(tmp_path / "o"), "--quiet"]) == 1
+    out = capsys.readouterr().out
+    assert "FAILED" in out and "expected the action give done" in out
+
+
+BAD = """\
+scenario: bad
+robot: {name: jido, at: kitchen}
+people:
+  alice: {at: sofa-seat, profile: grumpy}
+objects:
+  purple-bottle: {on: coffee-table}
+goals:
+  - {task: give-objekt, with: {object: yellow-bottle}}
+expect:
+  acts: [ASK-TASKS]
+  actions: [fly]
+"""
+
+
+def test_bad_scenarios_are_refused_with_every_position(tmp_path, capsys):
+    path = tmp_path / "bad.yaml"
+    path.write_text(BAD)
+    assert main(["run", str(path)]) == 2
+    err = capsys.readouterr().err
+    for line, col, words in [(2, 25, "unknown place 'kitchen'"), (4, 35, "unknown profile"),
+                             (6, 3, "unknown object 'purple-bottle'"),
+                             (8, 12, "did you mean 'give-object'"), (10, 10, "ASK-TASKS"),
+                             (11, 13, "unknown atomic task 'fly'")]:
+        assert f"{path}:{line}:{col}: error:" in err and words in err, (line, err)
+    assert "Traceback" not in err
+
+
+def test_schema_errors_are_positioned(tmp_path):
+    path = tmp_path / "typo.yaml"
+    path.write_text("scenario: typo\nexpect: {}\ntimout: 10s\n")
+    with pytest.raises(FileError) as info:
+        load_scenario(path)
+    assert "typo.yaml:3:1: error: unknown key 'timout' (did you mean 'timeout'?)" in str(
+        info.value)
+
+
+def test_shary_scenarios_lists_them(capsys):
+    assert main(["scenarios"]) == 0
+    out = capsys.readouterr().out
+    assert all(name in out for name in SCENARIOS)
+
+
+def test_unknown_scenario_names_the_choices(capsys):
+    assert main(["run", "give-botle"]) == 2
+    assert "did you mean 'give-bottle'" in capsys.readouterr().err
+
+
+def test_scenario_files_ship_with_the_package():
+    assert all(Path(p).is_file() for p in builtin_scenarios().values())
