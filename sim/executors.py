@@ -136,7 +136,7 @@ class RobotExecutors:
     # -- geometry -------------------------------------------------------------------
 
     def _mount(self) -> tuple[float, float, float]:
-        return self.world.link_position(self.robot, "arm_mount_link")
+        return self.world.shoulder(self.robot)
 
     def _arm_to(self, running: _Running, point: Callable[[], tuple[float, float, float]],
                 what: str, speed: float = JOINT_SPEED) -> Activity:

@@ -137,7 +137,7 @@ class Perception:
         looked = self._looked_at(camera, forward, robot, names, points)
         if looked is not None:
             yield (robot, "looksAt", looked)
-        mount = world.link_position(robot, "arm_mount_link")
+        mount = world.shoulder(robot)
         for obj, where_now in positions.items():
             if self._lost(obj, now):
                 continue

@@ -93,7 +93,7 @@ class Simulation:
     def hand_of(self, agent: str) -> tuple[float, float, float]:
         if agent in self.people:
             return self.people[agent].hand_position()
-        return self.world.link_position(agent, "gripper_link")
+        return self.world.gripper(agent)
 
     def carry(self) -> None:
         """Held objects follow their holder's hand, upright."""

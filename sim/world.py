@@ -569,6 +569,14 @@ class LivingRoom:
     def link_position(self, robot: str, link: str | int) -> Vec3:
         return self.link_pose(robot, link)[0]
 
+    def shoulder(self, robot: str, arm: str | None = None) -> Vec3:
+        """Where an arm starts (its first joint), whatever the model calls its links."""
+        return self.link_position(robot, self.robot(robot).arm(arm).joints[0])
+
+    def gripper(self, robot: str, arm: str | None = None) -> Vec3:
+        """Where an arm grasps (its grasp link)."""
+        return self.link_position(robot, self.robot(robot).arm(arm).gripper_link)
+
     def joint_positions(self, robot: str, joints: Iterable[int] | None = None) -> dict[int, float]:
         r = self.robot(robot)
         joints = r.movable if joints is None else tuple(joints)

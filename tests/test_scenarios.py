@@ -199,3 +199,18 @@ def test_unknown_scenario_names_the_choices(capsys):
 
 def test_scenario_files_ship_with_the_package():
     assert all(Path(p).is_file() for p in builtin_scenarios().values())
+
+
+def test_the_pr2_like_robot_runs_the_same_scenario(tmp_path):
+    text = builtin_scenarios()["give-bottle"].read_text()
+    path = tmp_path / "pr2.yaml"
+    path.write_text(text.replace("robot: {name: jido, at: base}",
+                                 "robot: {name: jido, model: pr2like, at: base}"))
+    result = run_scenario(path)
+    assert result.passed, result.differences
+
+
+def test_the_tutorial_scenario_runs():
+    tutorial = Path(__file__).resolve().parent.parent / "docs" / "tutorial" / "tidy-table.yaml"
+    result = run_scenario(tutorial)
+    assert result.passed, result.differences
