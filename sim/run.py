@@ -277,6 +277,7 @@ class _Run:
             if self._quiet():
                 break
         self.snapshot("end")
+        self.sup.record("run-end", scenario=self.scenario.name)
         return self.loop.now()
 
     def _add_goal(self, goal: Any) -> None:

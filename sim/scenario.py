@@ -258,7 +258,7 @@ def load_scenario(path: str | Path, *, known_tasks: dict[str, tuple[str, ...]] |
 def _check_step(problem: Any, where: tuple, step: dict[str, Any]) -> None:
     if "walk" in step and step["walk"] not in HUMAN_PLACES:
         problem(where + ("walk",), f"unknown place for a person {step['walk']!r}"
-                f"{did_you_mean(step['walk'], HUMAN_PLACES)}")
+                f"{did_you_mean(step['walk'], HUMAN_PLACES)}; places: {', '.join(HUMAN_PLACES)}")
     for key in ("put", "take"):
         if key in step and step[key] not in BOTTLES:
             problem(where + (key,), f"unknown object {step[key]!r}"
