@@ -84,6 +84,8 @@ class RobotExecutors:
         self.learned = learned or (lambda s, p, o: None)
         self.progress = progress or (lambda who, text: None)
         self.people: dict[str, Any] = {}
+        self.faults: dict[str, list[str]] = {}
+        """Atomic task -> reasons of the next injected failures (a scenario's faults)."""
         self.picked_from: dict[str, tuple[tuple[float, float, float], str | None, str]] = {}
         """Object -> where it was picked: its position, its furniture, the robot's place."""
         self._running: dict[str, _Running] = {}
@@ -102,6 +104,11 @@ class RobotExecutors:
         if request.atomic != "speak":
             self.progress(self.robot, " ".join([request.atomic, *map(str, request.args.values())]))
         running = _Running(request, reporter)
+        if self.faults.get(request.atomic):
+            reason = self.faults[request.atomic].pop(0)
+            self.progress(self.robot, f"{request.atomic} failed: {reason}")
+            reporter.failed(request, reason)
+            return
         method = getattr(self, "_" + request.atomic.replace("-", "_"), None)
         if method is None:
             reporter.failed(request, f"the simulated {self.robot} cannot {request.atomic}")

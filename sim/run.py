@@ -191,6 +191,8 @@ class _Run:
             self.sup.act_listeners.append(person.on_act)
             self.sim.tick_hooks.append(person.refresh)
         self.executors.people = self.people
+        for action, reason, times in scenario.faults:
+            self.executors.faults.setdefault(action, []).extend([reason] * times)
         self.sup.act_listeners.append(self._act_started)
         self._arrange_objects()
         self._a_priori()
@@ -272,8 +274,11 @@ class _Run:
         for person in self.people.values():
             person.begin()
         self.perception.start()
+        start = time.perf_counter()
         while self.loop.now() < self.scenario.timeout - 1e-9:
             self.loop.advance(min(CHUNK, self.scenario.timeout - self.loop.now()))
+            if self.world.gui:  # someone is watching: no faster than real time
+                time.sleep(max(0.0, self.loop.now() - (time.perf_counter() - start)))
             if self._quiet():
                 break
         self.snapshot("end")

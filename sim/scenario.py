@@ -92,6 +92,7 @@ class Scenario:
     flicker: dict[str, float]
     lost: tuple[tuple[str, float, float], ...]
     hold: float
+    faults: tuple[tuple[str, str, int], ...]  # action, reason, how many times
     timeout: float
     expect: Expect
 
@@ -228,6 +229,13 @@ def load_scenario(path: str | Path, *, known_tasks: dict[str, tuple[str, ...]] |
         for i, act in enumerate(raw_expect.get(key) or []):
             if acts and act not in acts:
                 problem(("expect", key, i), f"unknown act {act!r}{did_you_mean(act, acts)}")
+    faults = []
+    for i, spec in enumerate(data.get("faults") or []):
+        if atomic and spec["action"] not in atomic:
+            problem(("faults", i, "action"), f"unknown atomic task {spec['action']!r}"
+                    f"{did_you_mean(spec['action'], atomic)}")
+        faults.append((spec["action"], spec.get("reason", "an injected fault"),
+                       int(spec.get("times", 1))))
     for key in ("actions", "no-actions", "failed-actions"):
         for i, name in enumerate(raw_expect.get(key) or []):
             if atomic and name not in atomic:
@@ -252,7 +260,8 @@ def load_scenario(path: str | Path, *, known_tasks: dict[str, tuple[str, ...]] |
         data["scenario"], path, str(data.get("doc", "")).strip(), robot.get("name", "jido"),
         robot.get("model", "jido"), robot_at, tuple(people), objects, tuple(recipes),
         tuple(goals), dict(noise.get("flicker") or {}), lost,
-        seconds(noise.get("hold", 0.5)), seconds(data.get("timeout", DEFAULT_TIMEOUT)), expect)
+        seconds(noise.get("hold", 0.5)), tuple(faults),
+        seconds(data.get("timeout", DEFAULT_TIMEOUT)), expect)
 
 
 def _check_step(problem: Any, where: tuple, step: dict[str, Any]) -> None:

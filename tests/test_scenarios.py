@@ -214,3 +214,16 @@ def test_the_tutorial_scenario_runs():
     tutorial = Path(__file__).resolve().parent.parent / "docs" / "tutorial" / "tidy-table.yaml"
     result = run_scenario(tutorial)
     assert result.passed, result.differences
+
+
+def test_an_injected_fault_is_recovered_from(tmp_path):
+    text = builtin_scenarios()["give-bottle"].read_text()
+    path = tmp_path / "slip.yaml"
+    path.write_text(text.replace("goals:", "faults:\n  - {action: pick, reason: the bottle "
+                                 "slipped}\ngoals:").replace("expect:", "expect:\n  "
+                                                            "failed-actions: [pick]"))
+    result = run_scenario(path, out=tmp_path / "out")
+    assert result.passed, result.differences
+    reasons = [e.data.get("reason") for e in read_events(tmp_path / "out" / "log.sqlite")
+               if e.kind == "exec-result" and e.data["status"] == "failed"]
+    assert reasons == ["the bottle slipped"]
