@@ -48,7 +48,7 @@ class HatpPlanner:
 
     @property
     def domain(self) -> Domain:
-        """The domain, loaded on first use (a run that never plans never reads it)."""
+        """The domain (given by name, it is read on first use)."""
         if isinstance(self._domain, str):
             self._domain = planner.load_domain(self._domain)
         return self._domain
@@ -112,8 +112,9 @@ class HatpPlanner:
 
         Each action is a unit, unless it lies under a method named in
         ``refine``: then the outermost such method's subtree is one unit.
-        A unit comes after every unit it has a causal link, an ordering or an
-        earlier action of its agent's stream from.
+        A unit comes after every unit that one of its actions has a causal
+        link, an ordering or an earlier action of the same agent's stream
+        from (for a collapsed subtree, the streams of the agents acting in it).
         """
         unit_of: dict[int, int] = {}   # action index -> its unit (first action index)
         units: dict[int, tuple[str, str, dict[str, Any], str]] = {}

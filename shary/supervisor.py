@@ -393,6 +393,8 @@ class TaskRun(SchemeListener):
         self.acts.clear()
         self.ended = True
         self.outcome = "cancelled"
+        self.sup.record("task-end", task=self.node, name=self.type.name, outcome="cancelled",
+                        reason=reason)
         self.sup.forget(self)
         if self.node in self.sup.tree:
             self.sup.tree.set_state(self.node, CANCELLED, reason)

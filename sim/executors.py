@@ -89,18 +89,15 @@ class RobotExecutors:
         self.picked_from: dict[str, tuple[tuple[float, float, float], str | None, str]] = {}
         """Object -> where it was picked: its position, its furniture, the robot's place."""
         self._running: dict[str, _Running] = {}
-        self.started: list[tuple[float, str, dict[str, Any]]] = []
+        self.speaking = False
 
     # -- the executor port ---------------------------------------------------------
 
     def start(self, request: Any, reporter: Any) -> None:
-        self.started.append((self.sim.loop.now(), request.atomic, dict(request.args)))
         if request.agent != self.robot:
             reporter.failed(request, f"{request.agent} is a person: the robot does not command "
                             f"people; it asks them in a joint task (ask-help)")
             return
-        for person in self.people.values():
-            person.robot_started(request.atomic, request.args)
         if request.atomic != "speak":
             self.progress(self.robot, " ".join([request.atomic, *map(str, request.args.values())]))
         running = _Running(request, reporter)
@@ -121,12 +118,16 @@ class RobotExecutors:
             return
         self._running[request.id] = running
         running.handle = self.sim.start(activity, lambda: self._finished(running))
+        for person in self.people.values():
+            person.robot_started(request.atomic, request.args)
 
     def cancel(self, request: Any) -> None:
         running = self._running.pop(request.id, None)
         if running is None:
             return
         self.sim.stop(running.handle)
+        if request.atomic == "speak":
+            self.speaking = False
         for undo in running.on_cancel:
             undo()
         running.reporter.cancelled(request, "cancelled; stopped where it was")
@@ -206,10 +207,12 @@ class RobotExecutors:
     def _speak(self, running: _Running, text: str) -> Activity:
         seconds = 0.4 + len(str(text).split()) / WORDS_PER_SECOND
         self.say(self.robot, str(text))
+        self.speaking = True
 
         def heard() -> None:
+            self.speaking = False
             for person in self.people.values():
-                person.heard(self.robot)
+                person.heard()
 
         return Sequence([Wait(seconds, label="speak"), Instant(heard, "heard")], "speak")
 

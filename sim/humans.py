@@ -39,7 +39,7 @@ HUMAN_PLACES: dict[str, tuple[float, float, float, bool]] = {
     "sofa-end": (1.2, 1.2, -math.pi / 2, False),
     "coffee-north": (-0.3, 0.62, -math.pi / 2, False),
     "coffee-east": (0.85, 0.0, math.pi, False),
-    "store-side": (1.5, 1.75, 0.0, False),
+    "store-side": (1.25, 1.7, 0.0, False),
     "door": (2.55, -2.05, math.pi / 2, False),
     "corridor": (2.55, 0.2, math.pi, False),
 }
@@ -172,22 +172,29 @@ class Avatar:
         return ((gx - ex) / n, (gy - ey) / n, (gz - ez) / n)
 
 
-def parse_range(value: Any) -> tuple[float, float]:
-    """``2s``, ``2`` or ``[1s, 3s]`` -> (low, high) in seconds."""
+def seconds(value: Any) -> float:
+    """A duration from a file (its form checked by the schema): a number of seconds, or
+    ``5s``, ``2 min``, ``500ms``."""
     from shary.model import parse_duration
 
-    def one(v: Any) -> float:
-        return float(v) if isinstance(v, int | float) else parse_duration(str(v))
+    if isinstance(value, int | float):
+        return float(value)
+    text = "".join(str(value).split())
+    try:
+        return float(text)
+    except ValueError:
+        return parse_duration(text)
 
+
+def parse_range(value: Any) -> tuple[float, float]:
+    """``2s``, ``2`` or ``[1s, 3s]`` -> (low, high) in seconds."""
     if isinstance(value, list):
-        return one(value[0]), one(value[1])
-    return one(value), one(value)
+        return seconds(value[0]), seconds(value[1])
+    return seconds(value), seconds(value)
 
 
 def profile_from(name: str, data: dict[str, Any]) -> Profile:
     """A :class:`Profile` from checked YAML data (see sim/schemas/profile.schema.json)."""
-    from shary.model import parse_duration
-
     answers = {}
     for act, spec in (data.get("answers") or {}).items():
         answers[act] = Answer(spec.get("reply"), parse_range(spec.get("after", "1s")))
@@ -197,14 +204,14 @@ def profile_from(name: str, data: dict[str, Any]) -> Profile:
         duration = spec.get("for", "never")
         distractions.append(Distraction(
             str(spec.get("look", "away")), parse_range(spec.get("after", 0)),
-            parse_duration(str(when["at"])) if "at" in when else None,
+            seconds(when["at"]) if "at" in when else None,
             when.get("robot-starts"),
             None if duration == "never" else parse_range(duration)[0]))
     takes = data.get("takes", {"after": "1s"})
     script = []
     for spec in data.get("script") or []:
         script.append(ScriptStep(parse_range(spec.get("after", 0)),
-                                 parse_duration(str(spec["at"])) if "at" in spec else None,
+                                 seconds(spec["at"]) if "at" in spec else None,
                                  spec.get("walk"), spec.get("put"), spec.get("on"),
                                  spec.get("take"), spec.get("look")))
     return Profile(name, answers, str(data.get("attention", "robot")), tuple(distractions),

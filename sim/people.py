@@ -48,6 +48,7 @@ class Person:
         self._triggered: set[int] = set()
         self.busy: int | None = None
         self._pending: list[tuple[Any, str, Any]] = []
+        self._current_step: Any = None
 
     # -- start -------------------------------------------------------------------
 
@@ -118,9 +119,14 @@ class Person:
         pending = (run, state.act, answer)
         self._pending.append(pending)
         # an act with nothing to say is answered all the same, a little later
-        self.sim.loop.call_later(UNSPOKEN_ANSWER, self._reply, pending)
+        self.sim.loop.call_later(UNSPOKEN_ANSWER, self._unspoken, pending)
 
-    def heard(self, speaker: str) -> None:
+    def _unspoken(self, pending: tuple[Any, str, Any]) -> None:
+        if self.robot_arm.speaking:
+            return  # it is saying it now: the answer comes when it has finished
+        self._reply(pending)
+
+    def heard(self) -> None:
         """The robot finished saying something: answer what it was asking."""
         for pending in list(self._pending):
             self._reply(pending)
@@ -183,21 +189,32 @@ class Person:
 
         self.busy = self.sim.start(activity, over)
 
+    def _walk(self, goal: Callable[[], tuple[float, float, float]], seated: bool = False,
+              what: str = "walk") -> Activity:
+        """Walk to ``goal()`` = (x, y, final heading), computed when the walk starts; a
+        person who finds no way says so and stays (their next steps may still work)."""
+        def build() -> Activity:
+            try:
+                x, y, yaw = goal()
+                return Walk(self.avatar, self.sim.person_path(self.name, (x, y), yaw),
+                            self.profile.speed, yaw, seated)
+            except LookupError as err:
+                self.say(self.name, f"({err})")
+                return Instant(lambda: None)
+        return Lazy(build, what)
+
     def walk_to(self, place: str) -> Activity:
         x, y, yaw, seated = HUMAN_PLACES[place]
-        return Lazy(lambda: Walk(self.avatar, self.sim.person_path(self.name, (x, y), yaw),
-                                 self.profile.speed, yaw, seated), f"walk to {place}")
+        return self._walk(lambda: (x, y, yaw), seated, f"walk to {place}")
 
     def _walk_near(self, obj: str) -> Activity:
-        def build() -> Activity:
+        def goal() -> tuple[float, float, float]:
             target = self.sim.world.position(obj)
             place = min(HUMAN_PLACES, key=lambda p: math.dist(HUMAN_PLACES[p][:2], target[:2])
                         if not HUMAN_PLACES[p][3] else math.inf)
             x, y, _, _ = HUMAN_PLACES[place]
-            yaw = math.atan2(target[1] - y, target[0] - x)
-            return Walk(self.avatar, self.sim.person_path(self.name, (x, y)), self.profile.speed,
-                        yaw)
-        return Lazy(build, f"walk to {obj}")
+            return x, y, math.atan2(target[1] - y, target[0] - x)
+        return self._walk(goal, what=f"walk to {obj}")
 
     def _reach(self, point: Callable[[], tuple[float, float, float]] | None) -> Activity:
         def act() -> None:
@@ -218,11 +235,10 @@ class Person:
 
     def help(self, obj: str) -> None:
         """Fetch ``obj`` and hand it to the robot (the helper's part of Fig. 10)."""
-        def to_robot() -> Activity:
+        def beside_robot() -> tuple[float, float, float]:
             x, y = self.sim.meeting_point(self.name)
             rx, ry, _ = self.sim.world.base_pose(self.sim.robot)
-            return Walk(self.avatar, self.sim.person_path(self.name, (x, y)), self.profile.speed,
-                        math.atan2(ry - y, rx - x))
+            return x, y, math.atan2(ry - y, rx - x)
 
         def hold_out() -> tuple[float, float, float]:
             a = self.avatar
@@ -235,9 +251,11 @@ class Person:
         steps: list[Activity] = []
         if self.sim.held_by(self.name) != obj:
             steps += [self._walk_near(obj), self._pick(obj)]
-        steps += [Lazy(to_robot, "walk to the robot"), self._reach(hold_out),
+        steps += [self._walk(beside_robot, what="walk to the robot"), self._reach(hold_out),
                   Instant(hand_over, "hold out")]
-        self._run(Sequence(steps, f"help with {obj}"))
+        if self.busy is not None and self._current_step is not None:
+            self._script.insert(0, self._current_step)  # helping first, then back to it
+        self._run(Sequence(steps, f"help with {obj}"), self._next_script_step)
 
     def _handed(self) -> None:
         self.avatar.hand_out = None
@@ -255,6 +273,7 @@ class Person:
         self.sim.loop.call_later(delay, self._do, step)
 
     def _do(self, step: Any) -> None:
+        self._current_step = step
         if step.look is not None:
             self.look(step.look)
         activity: Activity | None = None
@@ -266,9 +285,14 @@ class Person:
         elif step.put is not None:
             activity = self._put(step.put, step.on or "coffee-table")
         if activity is None:
+            self._current_step = None
             self._next_script_step()
         else:
-            self._run(activity, self._next_script_step)
+            self._run(activity, self._step_done)
+
+    def _step_done(self) -> None:
+        self._current_step = None
+        self._next_script_step()
 
     def _put(self, obj: str, furniture: str) -> Activity:
         def spot() -> tuple[float, float, float]:

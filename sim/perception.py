@@ -36,7 +36,7 @@ from rdflib import Literal
 
 from .executors import ROBOT_REACH
 from .humans import ARM_LENGTH
-from .simulation import Simulation
+from .simulation import TICK, Simulation
 from .world import BOTTLE_HEIGHT, FURNITURE, pb
 
 Fact = tuple[str, str, Any]
@@ -47,7 +47,7 @@ GAZE_CONE = math.radians(12)
 CAMERA_HALF_FOV = math.radians(36)
 CAMERA_RANGE = 5.0
 PLACE_TOLERANCE = 0.2
-PERSON_AT = 1.2
+PERSON_AT = 1.5
 """A person within this distance of a robot place is at it (the planner's places are the
 robot's: a person at sofa-area is one the robot serves from there)."""
 SEATS = ("sofa",)
@@ -76,10 +76,12 @@ class Perception:
         self.hold = hold
         self.noise = noise or Noise()
         self.rng = rng or random.Random(0)
-        self.published: set[Fact] = set()
+        self.published: dict[Fact, None] = {}
+        self.misses = 0
+        """Facts the injected noise made the detector miss, over the run."""
         self.missing_since: dict[Fact, float] = {}
         self.belief: dict[str, tuple[float, float, float]] = {}  # object -> where last seen
-        self.object_facts: dict[str, set[Fact]] = {}
+        self.object_facts: dict[str, tuple[Fact, ...]] = {}
         self._recheck: Any = None
         self._furniture_names = list(FURNITURE)
         self._furniture_points = [(self.world.footprints[f].x, self.world.footprints[f].y,
@@ -91,28 +93,35 @@ class Perception:
         """Publish what the robot knows at the start: it has seen every object once."""
         for obj in self.world.bottles:
             self.belief[obj] = self.world.position(obj)
-            self.object_facts[obj] = set(self._object_facts(obj, self.belief[obj]))
+            self.object_facts[obj] = tuple(self._object_facts(obj, self.belief[obj]))
         self.update()
 
     def update(self) -> None:
         now = self.sim.loop.now()
-        seen = set(self._facts(now))
-        for predicate, p in self.noise.flicker.items():
-            seen = {f for f in seen if f[1] != predicate or self.rng.random() >= p}
-        for fact in seen - self.published:
-            self.facts.add(*fact, perspective=self.perspective)
-            self.published.add(fact)
+        # lists and dicts, never sets: the order facts are published in (and so the
+        # order subscribers hear them, and which fact each noise draw falls on) must
+        # not depend on the process's string hashing
+        seen = dict.fromkeys(self._facts(now))
+        for predicate, p in sorted(self.noise.flicker.items()):
+            for fact in [f for f in seen if f[1] == predicate]:
+                if self.rng.random() < p:
+                    del seen[fact]
+                    self.misses += 1
         for fact in seen:
             self.missing_since.pop(fact, None)
-        for fact in self.published - seen:
+            if fact not in self.published:
+                self.facts.add(*fact, perspective=self.perspective)
+                self.published[fact] = None
+        for fact in [f for f in self.published if f not in seen]:
             since = self.missing_since.setdefault(fact, now)
             if now - since >= self.hold - 1e-9:
                 self.facts.remove(*fact, perspective=self.perspective)
-                self.published.discard(fact)
+                del self.published[fact]
                 del self.missing_since[fact]
         if self.missing_since and self._recheck is None and not self.sim.busy:
-            # nothing ticks while the world is still: look again when a hold expires
-            self._recheck = self.sim.loop.call_later(self.hold, self._look_again)
+            # nothing ticks while the world is still: keep looking at the tick's rate
+            # until every missing fact is back or gone
+            self._recheck = self.sim.loop.call_later(TICK, self._look_again)
 
     def _look_again(self) -> None:
         self._recheck = None
@@ -128,9 +137,9 @@ class Perception:
         for name, (px, py) in self.places.items():
             if math.hypot(rx - px, ry - py) <= PLACE_TOLERANCE:
                 yield (robot, "isAt", name)
-        held = sim.held_by(robot)
-        if held is not None:
-            yield (robot, "isHolding", held)
+        for obj, holder in sim.holder.items():
+            if holder == robot:
+                yield (robot, "isHolding", obj)
         positions = {obj: world.position(obj) for obj in world.bottles}
         names, points = self._targets(positions)
         camera, forward = self._camera()
@@ -143,11 +152,11 @@ class Perception:
                 continue
             if obj in sim.holder or self._visible(camera, forward, where_now):
                 self.belief[obj] = where_now
-                self.object_facts[obj] = set(self._object_facts(obj, where_now))
+                self.object_facts[obj] = tuple(self._object_facts(obj, where_now))
             elif obj in self.belief and self._visible(camera, forward, self.belief[obj]):
                 # looking where it was, and it is not there any more
                 del self.belief[obj]
-                self.object_facts[obj] = set()
+                self.object_facts[obj] = ()
             yield from self.object_facts.get(obj, ())
             where = self.belief.get(obj)
             if where is not None and obj not in sim.holder:
@@ -161,9 +170,9 @@ class Perception:
                                    for p, (x, y) in self.places.items()), key=lambda pd: pd[1])
             if distance <= PERSON_AT:
                 yield (name, "isAt", place)
-            held = sim.held_by(name)
-            if held is not None:
-                yield (name, "isHolding", held)
+            for obj, holder in sim.holder.items():
+                if holder == name and not self._lost(obj, now):
+                    yield (name, "isHolding", obj)
             looked = self._looked_at(avatar.eyes, avatar.gaze_direction(), name, names, points)
             if looked is not None:
                 yield (name, "looksAt", looked)
@@ -176,8 +185,9 @@ class Perception:
                 for seat in SEATS:
                     if world.footprints[seat].contains(avatar.x, avatar.y, 0.1):
                         yield (name, "isSeatedOn", seat)
-            for obj, (x, y, _) in positions.items():
-                if obj not in sim.holder and math.hypot(x - avatar.x, y - avatar.y) <= ARM_LENGTH:
+            for obj, where in self.belief.items():  # what the robot believes is where
+                if (obj not in sim.holder and not self._lost(obj, now)
+                        and math.hypot(where[0] - avatar.x, where[1] - avatar.y) <= ARM_LENGTH):
                     yield (obj, "isReachableBy", name)
 
     def _object_facts(self, obj: str, where: tuple[float, float, float]) -> Iterable[Fact]:

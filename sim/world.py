@@ -143,6 +143,23 @@ FURNITURE: dict[str, tuple[float, float, float, list[Part]]] = {
     "cupboard": (-2.72, 1.0, 0.0, _cupboard((0.55, 0.38, 0.22, 1))),
 }
 
+
+
+def footprint(x: float, y: float, yaw: float, parts: Sequence[Part]) -> Footprint:
+    """The bounding rectangle on the floor of boxes placed at (x, y, yaw)."""
+    lo_x = min(p.offset[0] - p.half_extents[0] for p in parts)
+    hi_x = max(p.offset[0] + p.half_extents[0] for p in parts)
+    lo_y = min(p.offset[1] - p.half_extents[1] for p in parts)
+    hi_y = max(p.offset[1] + p.half_extents[1] for p in parts)
+    cx, cy = (lo_x + hi_x) / 2, (lo_y + hi_y) / 2
+    c, s = math.cos(yaw), math.sin(yaw)
+    return Footprint(x + c * cx - s * cy, y + s * cx + c * cy, yaw,
+                     (hi_x - lo_x) / 2, (hi_y - lo_y) / 2)
+
+
+FOOTPRINTS = {name: footprint(x, y, yaw, parts) for name, (x, y, yaw, parts) in FURNITURE.items()}
+"""Each piece of furniture's footprint, known without building a world (to check files)."""
+
 ROOM = (-3.0, 3.0, -2.5, 2.6)  # x min, x max, y min, y max of the floor
 WALL_HEIGHT = 1.4
 FLOOR_RGBA: Colour = (0.78, 0.72, 0.6, 1.0)
@@ -428,14 +445,7 @@ class LivingRoom:
                          baseVisualShapeIndex=vis, basePosition=[x, y, 0],
                          baseOrientation=yaw_quaternion(yaw))
         self._bodies[name] = body
-        lo_x = min(p.offset[0] - p.half_extents[0] for p in parts)
-        hi_x = max(p.offset[0] + p.half_extents[0] for p in parts)
-        lo_y = min(p.offset[1] - p.half_extents[1] for p in parts)
-        hi_y = max(p.offset[1] + p.half_extents[1] for p in parts)
-        cx, cy = (lo_x + hi_x) / 2, (lo_y + hi_y) / 2
-        c, s = math.cos(yaw), math.sin(yaw)
-        self.footprints[name] = Footprint(x + c * cx - s * cy, y + s * cx + c * cy, yaw,
-                                          (hi_x - lo_x) / 2, (hi_y - lo_y) / 2)
+        self.footprints[name] = footprint(x, y, yaw, parts)
         return body
 
     def _build_room(self) -> None:
