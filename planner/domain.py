@@ -56,6 +56,9 @@ class Action:
     cost: Expr | float
     duration: Expr | float
     doc: str = ""
+    deletes: tuple[tuple[str, Callable[[dict[str, Any]], tuple]], ...] = ()
+    """HDDL: the goal facts it deletes whatever the state, as a predicate and a function
+    of the arguments giving the fact's arguments (for the search's goal protection)."""
 
     def performer(self, env: dict[str, Any]) -> str:
         """The agent that carries out this action with these arguments."""
@@ -89,10 +92,10 @@ Binder = Callable[[dict[str, Any], Any], Iterable[dict[str, Any]]]
 @dataclass(frozen=True)
 class Decomposition:
     """One way to decompose a method.  Its variables are bound, for each choice, to
-    every combination of entities of their types, in name order; or, when ``bind`` is
-    given (HDDL methods), to what it proposes (it reads the state's fact index, so that
-    only bindings that make the precondition's facts true are tried).  Either way the
-    precondition ``pre`` is then checked: a binder only narrows the candidates."""
+    every combination of entities of their types, in name order, and the precondition
+    ``pre`` is checked; or, when ``bind`` is given (HDDL methods), to the bindings it
+    proposes, which satisfy ``pre`` already (it looks facts up in the state's index and
+    tests each conjunct as soon as it can: :mod:`planner.binding`)."""
 
     name: str
     vars: tuple[tuple[str, str], ...]
@@ -148,8 +151,26 @@ class Domain:
     """For each predicate, the argument positions the binders look facts up by (the
     state keeps an index for each)."""
 
+    adds: dict[str, dict[str, tuple[tuple[Any, ...], ...]]] = field(default_factory=dict)
+    """HDDL: for each task, by predicate, the facts its decompositions may add, lifted:
+    each argument is the index of a task parameter (int), a constant (str), or None
+    (any value).  A task absent from it adds nothing."""
+
     def task(self, name: str) -> Action | Method | None:
         return self.actions.get(name) or self.methods.get(name)
+
+    def may_add(self, task: str, args: tuple, pred: str, fact: tuple) -> bool:
+        """Whether some decomposition of ``task(args)`` may make the fact ``pred(fact)``
+        true (a lifted over-approximation: False is a certainty)."""
+        for pattern in self.adds.get(task, {}).get(pred, ()):
+            for entry, value in zip(pattern, fact, strict=True):
+                if entry is None:
+                    continue
+                if (args[entry] if entry.__class__ is int else entry) != value:
+                    break
+            else:
+                return True
+        return False
 
     def is_subtype(self, kind: str | None, wanted: str) -> bool:
         """Whether ``kind`` is ``wanted`` or one of its subtypes."""

@@ -20,6 +20,11 @@ in the IPC's HTN track) it stops at the first plan instead.
 HDDL methods bind their free variables from the state's facts
 (:class:`~planner.domain.Decomposition` ``bind``, :mod:`planner.binding`),
 and their states index those facts (:class:`~planner.state.FactState`).
+HDDL problems also have goal protection: an action that deletes a goal fact
+that no task left on the agenda may add again (``Domain.adds``, a lifted
+analysis of the hierarchy) ends its branch there, rather than at the goal
+check after the last task -- which, in Blocksworld-GTOHP, is the difference
+between backtracking one choice and backtracking over the whole plan.
 
 Left recursion -- a task whose decomposition starts, before any action, with
 the very same task (IPC feature test ``abort-iteration``) -- would send a
@@ -230,6 +235,13 @@ class Search:
         length = action.duration(env, get) if callable(action.duration) else action.duration
         child = state.child()
         action.apply(env, get, child.set)
+        for pred, key in action.deletes:
+            fact = key(env)
+            if (self.problem.goals.get((pred, fact)) is True and get(pred, fact) is True
+                    and child.get(pred, fact) is not True and not self._may_add(rest, pred, fact)):
+                self._fail(parent, _label(action.name, args), f"deletes ({pred} "
+                           f"{' '.join(fact)}), a goal that no task left can make true again")
+                return
         agent = action.performer(env)
         kind = self.kinds.get(agent)
         node = next(self.ids)
@@ -237,6 +249,16 @@ class Search:
         yield (child, rest, (record, trail), cost + price,
                human + (price if kind == "human" else 0.0),
                robot + (price if kind == "robot" else 0.0), steps + 1)
+
+    def _may_add(self, agenda: Any, pred: str, fact: tuple) -> bool:
+        """Whether a task of ``agenda`` may make the fact true again (goal protection: a
+        goal fact deleted for good dooms the branch, however far its end)."""
+        may_add = self.domain.may_add
+        while agenda is not None:
+            (name, args, _), agenda = agenda
+            if may_add(name, args, pred, fact):
+                return True
+        return False
 
     def _repeated(self, name: str, args: tuple, parent: int, steps: int) -> bool:
         """Whether decomposing ``name(args)`` now would repeat an ancestor's decomposition
@@ -280,7 +302,7 @@ class Search:
             matched = False
             for binding in candidates:
                 local = {**env, **binding}
-                if dec.pre is not None and not dec.pre(local, get):
+                if dec.bind is None and dec.pre is not None and not dec.pre(local, get):
                     continue
                 matched = applied = True
                 node = self._node(parent, f"{label}[{dec.name}]", root)
