@@ -59,6 +59,11 @@ class Action:
     deletes: tuple[tuple[str, Callable[[dict[str, Any]], tuple]], ...] = ()
     """HDDL: the goal facts it deletes whatever the state, as a predicate and a function
     of the arguments giving the fact's arguments (for the search's goal protection)."""
+    names: tuple[str, ...] = field(init=False, repr=False, compare=False)
+    """The parameters' names, in order (the search zips them with arguments)."""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "names", tuple(p for p, _ in self.params))
 
     def performer(self, env: dict[str, Any]) -> str:
         """The agent that carries out this action with these arguments."""
@@ -71,9 +76,9 @@ class Action:
             if isinstance(effect, ConditionalEffect):
                 if effect.condition(env, get):
                     for inner in effect.effects:
-                        inner(env, get, set)
+                        inner.fn(env, get, set)
             else:
-                effect(env, get, set)
+                effect.fn(env, get, set)
 
 
 @dataclass(frozen=True)

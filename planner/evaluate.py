@@ -108,23 +108,27 @@ class Evaluator:
                         if r.rule.kind == "state" and r.rule.during]
         violations: list[str] = []
         penalties: dict[str, float] = {name: 0.0 for name in problem.rules}
+        reads: set[tuple[str, str]] = set()
+        writes: list[tuple[tuple[str, str], Any]] = []
+
+        def get(entity: str, attribute: str) -> Any:
+            key = (entity, attribute)
+            reads.add(key)
+            return values.get(key)
+
+        def put(entity: str, attribute: str, value: Any) -> None:
+            writes.append(((entity, attribute), value))
+
+        domain_actions = self.domain.actions
         for index, act in enumerate(actions):
-            action = self.domain.actions[act.name]
-            env = {p: a for (p, _), a in zip(action.params, act.args, strict=True)}
-            reads: set[tuple[str, str]] = set()
-            writes: list[tuple[tuple[str, str], Any]] = []
-
-            def get(entity: str, attribute: str, _reads: set = reads) -> Any:
-                _reads.add((entity, attribute))
-                return values.get((entity, attribute))
-
-            def put(entity: str, attribute: str, value: Any, _writes: list = writes) -> None:
-                _writes.append(((entity, attribute), value))
-
+            action = domain_actions[act.name]
+            env = dict(zip(action.names, act.args, strict=True))
+            reads.clear()
+            writes.clear()
             if action.pre is not None:
-                action.pre(env, get)
+                action.pre.fn(env, get)
             action.apply(env, get, put)
-            for key in sorted(reads):
+            for key in reads:  # the links are sorted at the end
                 producer = writer.get(key)
                 if producer is not None and producer != index:
                     links.setdefault((producer, index, key),
@@ -139,7 +143,11 @@ class Evaluator:
                 readers[key] = []
                 values[key] = value
             for key in reads:
-                readers.setdefault(key, []).append(index)
+                known = readers.get(key)
+                if known is None:
+                    readers[key] = [index]
+                else:
+                    known.append(index)
             for selected in during_rules:
                 self._state_rule(selected, values, writer, actions, penalties, violations)
         for selected in problem.rules.values():

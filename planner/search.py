@@ -104,7 +104,9 @@ class Search:
         self.evaluator = Evaluator(problem)
         self.on_improvement = on_improvement
         self.ids = itertools.count(1)
-        self.parents: dict[int, tuple[int | None, str, int]] = {}
+        self.parents: dict[int, tuple[int | None, Any, int]] = {}
+        """Each node's parent, label (a text, or a decomposition's task, arguments and
+        decomposition name: formatted only when a failure is explained) and top task."""
         self.heads: dict[int, tuple[str, tuple, int]] = {}
         """Decomposition nodes: the task, its arguments, and the actions done before it."""
         self.failures: dict[int, Failure] = {}
@@ -115,7 +117,7 @@ class Search:
 
     # -- bookkeeping for explanations --------------------------------------------
 
-    def _node(self, parent: int | None, label: str, root: int) -> int:
+    def _node(self, parent: int | None, label: Any, root: int) -> int:
         node = next(self.ids)
         self.parents[node] = (parent, label, root)
         return node
@@ -126,7 +128,8 @@ class Search:
         root = 0
         while node is not None:
             up, text, root = self.parents[node]
-            path.append(text)
+            path.append(text if isinstance(text, str) else
+                        f"{_label(text[0], text[1])}[{text[2]}]")
             node = up
         path.reverse()
         known = self.failures.get(root)
@@ -169,20 +172,25 @@ class Search:
         found = 0
         expansions = 0
         improvements: list[tuple[float, float]] = []
-        stack: list[Iterator[tuple]] = [iter([(state, agenda, None, 0.0, 0.0, 0.0, 0)])]
+        stack: list[Iterator[tuple]] = []
+        node: tuple | None = (state, agenda, None, 0.0, 0.0, 0.0, 0)
         complete = True
         bound = self.evaluator.lower_bound
-        while stack:
-            try:
-                node = next(stack[-1])
-            except StopIteration:
-                stack.pop()
-                continue
+        actions, methods = self.domain.actions, self.domain.methods
+        while True:
+            if node is None:  # back to the latest choice point
+                if not stack:
+                    break
+                node = next(stack[-1], None)
+                if node is None:
+                    stack.pop()
+                    continue
             expansions += 1
             if expansions % CHECK_EVERY == 0 and time.perf_counter() > deadline:
                 complete = False
                 break
-            state, agenda, trail, cost, human, robot, _ = node
+            state, agenda, trail, cost, human, robot, steps = node
+            node = None
             if bound(cost, human, robot) >= best_score:
                 continue
             if agenda is None:
@@ -203,34 +211,31 @@ class Search:
                     complete = False
                     break
                 continue
-            stack.append(self._expand(node))
+            (name, args, parent), rest = agenda
+            action = actions.get(name)
+            if action is not None:  # one successor at most: no choice point
+                node = self._apply(action, args, parent, state, rest, trail, cost, human,
+                                   robot, steps)
+            else:
+                stack.append(self._decompose(methods[name], args, parent, state, rest, trail,
+                                             cost, human, robot, steps))
         elapsed = (time.perf_counter() - start) * 1000
         failures = [self.failures[k] for k in sorted(self.failures, key=lambda k: (k < 0, k))
                     ] if best is None else []
         return Result(best, found, expansions, complete, elapsed, failures, improvements,
                       first and best is not None)
 
-    def _expand(self, node: tuple) -> Iterator[tuple]:
-        state, agenda, trail, cost, human, robot, steps = node
-        (name, args, parent), rest = agenda
-        task = self.domain.task(name)
-        if isinstance(task, Action):
-            yield from self._apply(task, args, parent, state, rest, trail, cost, human, robot,
-                                   steps)
-        else:
-            assert isinstance(task, Method)
-            yield from self._decompose(task, args, parent, state, rest, trail, cost, human,
-                                       robot, steps)
-
     def _apply(self, action: Action, args: tuple, parent: int, state: State, rest: Any,
                trail: Any, cost: float, human: float, robot: float,
-               steps: int) -> Iterator[tuple]:
-        env = {p: a for (p, _), a in zip(action.params, args, strict=True)}
+               steps: int) -> tuple | None:
+        """The search node after ``action``, or None when it cannot be done (or dooms
+        the plan: goal protection)."""
+        env = dict(zip(action.names, args, strict=True))
         get = state.get
-        if action.pre is not None and not action.pre(env, get):
+        if action.pre is not None and not action.pre.fn(env, get):
             self._fail(parent, _label(action.name, args),
                        f"precondition false: {action.pre.text}")
-            return
+            return None
         price = action.cost(env, get) if callable(action.cost) else action.cost
         length = action.duration(env, get) if callable(action.duration) else action.duration
         child = state.child()
@@ -241,14 +246,14 @@ class Search:
                     and child.get(pred, fact) is not True and not self._may_add(rest, pred, fact)):
                 self._fail(parent, _label(action.name, args), f"deletes ({pred} "
                            f"{' '.join(fact)}), a goal that no task left can make true again")
-                return
+                return None
         agent = action.performer(env)
         kind = self.kinds.get(agent)
         node = next(self.ids)
         record = ("act", node, parent, action.name, args, agent, price, length)
-        yield (child, rest, (record, trail), cost + price,
-               human + (price if kind == "human" else 0.0),
-               robot + (price if kind == "robot" else 0.0), steps + 1)
+        return (child, rest, (record, trail), cost + price,
+                human + (price if kind == "human" else 0.0),
+                robot + (price if kind == "robot" else 0.0), steps + 1)
 
     def _may_add(self, agenda: Any, pred: str, fact: tuple) -> bool:
         """Whether a task of ``agenda`` may make the fact true again (goal protection: a
@@ -280,9 +285,9 @@ class Search:
     def _decompose(self, method: Method, args: tuple, parent: int, state: State, rest: Any,
                    trail: Any, cost: float, human: float, robot: float,
                    steps: int) -> Iterator[tuple]:
-        label = _label(method.name, args)
         if self._repeated(method.name, args, parent, steps):
             self.pruned = True
+            label = _label(method.name, args)
             self._fail(parent, label, f"left recursion: {label} again before any action "
                        f"(more than {self.repeats} time(s))")
             return
@@ -305,11 +310,12 @@ class Search:
                 if dec.bind is None and dec.pre is not None and not dec.pre(local, get):
                     continue
                 matched = applied = True
-                node = self._node(parent, f"{label}[{dec.name}]", root)
+                node = self._node(parent, (method.name, args, dec.name), root)
                 self.heads[node] = (method.name, args, steps)
                 agenda = rest
                 for sub in reversed(dec.subtasks):
-                    agenda = ((sub.task, tuple(a(local, get) for a in sub.args), node), agenda)
+                    agenda = ((sub.task, tuple([a.fn(local, get) for a in sub.args]), node),
+                              agenda)
                 record = ("method", node, parent, method.name, args, dec.name, binding)
                 yield (state, agenda, (record, trail), cost, human, robot, steps)
             if not matched:
@@ -320,7 +326,8 @@ class Search:
                 else:
                     tried.append(f"{dec.name}: {dec.pre.text if dec.pre else 'no binding'}")
         if not applied:
-            self._fail(parent, label, "no decomposition applies (" + "; ".join(tried) + ")")
+            self._fail(parent, _label(method.name, args),
+                       "no decomposition applies (" + "; ".join(tried) + ")")
 
 
 def plan(problem: Problem, budget_ms: float | None = None,

@@ -72,7 +72,8 @@ class FactState(State):
     def __init__(self, base: dict[tuple[str, Any], Any], patterns: Patterns,
                  delta: dict | None = None, ibase: dict[BucketKey, Bucket] | None = None,
                  idelta: dict[BucketKey, Bucket] | None = None):
-        super().__init__(base, delta)
+        self.base = base
+        self.delta = delta if delta is not None else {}
         self.patterns = patterns
         if ibase is None:
             ibase = {}
