@@ -52,6 +52,8 @@ from planner.state import FactState, State
 
 CHECK_EVERY = 256
 """Expansions between two looks at the clock."""
+MAX_REPEATS = 8
+"""The most repetitions of a left-recursive decomposition the deepening allows."""
 
 
 @dataclass(frozen=True)
@@ -154,7 +156,8 @@ class Search:
             self.pruned = False
             self.failures = {}
             result = self._search(start, deadline, first)
-            if result.plan is not None or not result.complete or not self.pruned:
+            if (result.plan is not None or not result.complete or not self.pruned
+                    or self.repeats >= MAX_REPEATS):
                 return result
             self.repeats += 1
 
@@ -244,8 +247,9 @@ class Search:
             fact = key(env)
             if (self.problem.goals.get((pred, fact)) is True and get(pred, fact) is True
                     and child.get(pred, fact) is not True and not self._may_add(rest, pred, fact)):
-                self._fail(parent, _label(action.name, args), f"deletes ({pred} "
-                           f"{' '.join(fact)}), a goal that no task left can make true again")
+                self._fail(parent, _label(action.name, args),
+                           f"deletes ({' '.join((pred, *fact))}), a goal that no task left "
+                           "can make true again")
                 return None
         agent = action.performer(env)
         kind = self.kinds.get(agent)
