@@ -32,9 +32,9 @@ depth-first search down forever.  The search therefore refuses to decompose a
 task again in the state where an ancestor decomposed it, more than
 ``repeats`` times on the path; ``repeats`` starts at 0 and, if the search
 ends without a plan because of that refusal, it starts again with one more,
-within the same time budget (iterative deepening on the repetitions, so no
-plan is lost for good; with a plan in hand, plans that need more repetitions
-are not looked for).
+within the same time budget, up to :data:`MAX_REPEATS` (iterative deepening
+on the repetitions: a plan that needs a few repetitions is still found; with a
+plan in hand, plans that need more repetitions are not looked for).
 """
 
 from __future__ import annotations
