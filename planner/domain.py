@@ -88,6 +88,9 @@ class Subtask:
     task: str
     args: tuple[Expr, ...]
     text: str
+    values: Callable[[dict[str, Any]], tuple] | None = None
+    """HDDL: all the arguments' values at once, from the variables (they are variables
+    and constants only): one call where ``args`` takes one per argument."""
 
 
 Binder = Callable[[dict[str, Any], Any], Iterable[dict[str, Any]]]

@@ -38,6 +38,8 @@ class Evaluator:
         self.scale = {name: problem.scale.get(name, 1.0) for name in self.weights}
         self._bound = tuple((self.weights.get(c, 0.0) / self.scale.get(c, 1.0))
                             for c in MONOTONE)
+        self.kinds: dict[str, str | None] = {}
+        """Each agent's kind, as first looked up (the problem's static attribute)."""
 
     def lower_bound(self, cost: float, human: float, robot: float) -> float:
         """A score no completion of a partial plan can go below."""
@@ -72,10 +74,11 @@ class Evaluator:
         for root, (name, args) in zip(root_ids, self.problem.tasks, strict=True):
             tree[root] = TreeNode(root, name, tuple(args))
             roots.append(root)
+        top = set(roots)
         for record in records:
             if record[0] == "method":
                 _, node, parent, name, args, dec, binding = record
-                if parent in roots and tree[parent].decomposition is None \
+                if parent in top and tree[parent].decomposition is None \
                         and tree[parent].action is None and not tree[parent].children:
                     tree[parent].decomposition = dec
                     tree[parent].bindings = dict(binding)
@@ -87,7 +90,7 @@ class Evaluator:
                 index = len(actions)
                 actions.append(PlanAction(index, name, tuple(args), agent, float(price),
                                           float(length)))
-                if parent in roots and not tree[parent].children \
+                if parent in top and not tree[parent].children \
                         and tree[parent].decomposition is None:
                     tree[parent].action = index
                 else:
@@ -185,7 +188,12 @@ class Evaluator:
     # -- social rules ------------------------------------------------------------------------
 
     def _kind(self, agent: str | None) -> str | None:
-        return self.problem.kind(agent) if agent is not None else None
+        if agent is None:
+            return None
+        kind = self.kinds.get(agent, self)
+        if kind is self:
+            kind = self.kinds[agent] = self.problem.kind(agent)
+        return kind  # type: ignore[return-value]
 
     def _charge(self, selected: SelectedRule, agent: str | None, amount: float,
                 penalties: dict[str, float], violations: list[str], what: str) -> None:

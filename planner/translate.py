@@ -175,13 +175,7 @@ class _Translator:
         pre = self.expr(action.precondition, action.params)
         effects: tuple[Effect, ...] = ()
         if action.effect is not None:
-            deletes = self.write(action.effect, False)
-            adds = self.write(action.effect, True)
-
-            def apply(env: dict, get: Any, set: Any) -> None:
-                deletes(env, get, set)
-                adds(env, get, set)
-
+            apply = self.effect(action.effect)
             preds = {f.children[0] for f in action.effect.walk() if f.kind == "pred"}
             effects = (Effect(str(action.effect), apply, ",".join(sorted(preds)),
                               frozenset(p for p, _ in action.params), frozenset(preds)),)
@@ -217,7 +211,8 @@ class _Translator:
             tests += [self.test(f, rename) for f in _conjuncts(action.precondition)]
         bind, patterns = compile_binder(dict(method.params), head, tests, self.typed)
         subtasks = tuple(Subtask(s.name, tuple(_term(t) for t in s.args),
-                                 f"({' '.join((s.name, *s.args))})") for s in method.subtasks)
+                                 f"({' '.join((s.name, *s.args))})", args_of(s.args))
+                         for s in method.subtasks)
         return Decomposition(method.name, method.params, pre, subtasks, bind=bind), patterns
 
     def test(self, formula: hddl.Formula, rename: dict[str, str]) -> Test:
@@ -300,6 +295,30 @@ class _Translator:
         return quantified
 
     # -- effects ---------------------------------------------------------------------------
+
+    def effect(self, formula: hddl.Formula) -> Write:
+        """A closure applying an effect: deletions first, then additions."""
+        literals = _conjuncts(formula)
+        if all(_literal(f) for f in literals):  # the common case, in one flat closure
+            deletes = tuple((f.children[0].children[0], args_of(f.children[0].children[1]))
+                            for f in literals if f.kind == "not")
+            adds = tuple((f.children[0], args_of(f.children[1]))
+                         for f in literals if f.kind == "pred")
+
+            def flat(env: dict, get: Any, set: Any) -> None:
+                for pred, key in deletes:
+                    set(pred, key(env), None)
+                for pred, key in adds:
+                    set(pred, key(env), True)
+
+            return flat
+        deleting, adding = self.write(formula, False), self.write(formula, True)
+
+        def apply(env: dict, get: Any, set: Any) -> None:
+            deleting(env, get, set)
+            adding(env, get, set)
+
+        return apply
 
     def write(self, formula: hddl.Formula, adding: bool) -> Write:
         """A closure making the additions (or the deletions) of an effect."""
