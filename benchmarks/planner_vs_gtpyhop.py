@@ -6,16 +6,18 @@ timed), then searched to the first plan (``plan(problem, first=True)``, which
 returns an evaluated plan: tree, streams, causal links); each plan is checked
 by our validator (not timed) and counts only if valid.
 
-GTPyhop plans its own hand translations of the same instances, bundled in the
-``gtpyhop-examples`` wheel that ``pip install gtpyhop`` (the ``bench`` extra)
-brings: ``gtpyhop/examples/ipc-2020-total-order/{Blocksworld-GTOHP,Childsnack}``
-(Blocksworld p01-p20, Childsnack p01-p30).  They are run as that package's own
-``benchmarking.py`` runs them -- the problem's ``:goal`` as a ``Multigoal``
-(``on`` or ``served``), from a copy of the bundled state (the copy is not
-timed) -- but through plain ``gtpyhop.find_plan`` (the session wrapper only
-adds overhead).  Note that the translations are not the HDDL: GTPyhop
-achieves the ``:goal`` only, and its ``m2_do_on_table`` looks for the block on
-top of ``?x``, where the HDDL unstacks ``?x`` from the block below it.
+GTPyhop plans its own hand translations of the same instances, which come
+from PyPI with it (the ``bench`` extra: ``pip install -e '.[bench]'``):
+``gtpyhop/examples/ipc-2020-total-order/{Blocksworld-GTOHP,Childsnack}``,
+inside the ``gtpyhop`` wheel from 1.4, in the ``gtpyhop-examples`` wheel (a
+dependency of ``gtpyhop``) from 2.0 (Blocksworld p01-p20, Childsnack
+p01-p30).  They are run as that package's own ``benchmarking.py`` runs
+them -- the problem's ``:goal`` as a ``Multigoal`` (``on`` or ``served``),
+from a copy of the bundled state (the copy is not timed) -- but through plain
+``gtpyhop.find_plan`` (the session wrapper only adds overhead).  The
+translations are not the HDDL: GTPyhop achieves the ``:goal`` only (ours:
+the task network, then the goal), and its ``m2_do_on_table`` looks for the
+block on top of ``?x``, where the HDDL unstacks ``?x`` from the block below.
 
 Measured per instance: CPU time (``time.process_time``: the machines here are
 shared), median of ``--runs`` runs (3 when one run takes over 2 s), ours and
@@ -23,7 +25,7 @@ GTPyhop interleaved; plan lengths; solved within ``--limit`` seconds.  The
 JSON line has ``median_ratio`` (GTPyhop time over ours, on the instances both
 solve), ``ours_solved``, ``gtpyhop_solved`` and more.
 
-    python benchmarks/planner_vs_gtpyhop.py [--json] [--runs 5] [--limit 60]
+    python benchmarks/planner_vs_gtpyhop.py [--json] [--runs 5] [--limit 60] [--upto 30]
 """
 
 from __future__ import annotations
@@ -132,6 +134,8 @@ def main() -> int:
     parser.add_argument("--limit", type=float, default=60.0, metavar="S",
                         help="time limit per run, in CPU seconds")
     parser.add_argument("--suite", type=Path, default=SUITE, help="the ipc2020 folder")
+    parser.add_argument("--upto", type=int, default=30, metavar="N",
+                        help="only instances p01 to pN of each domain")
     args = parser.parse_args()
     total = args.suite / "total-order"
     if not total.is_dir():
@@ -143,7 +147,7 @@ def main() -> int:
           f"{'ratio':>7}")
     for name, (attribute, count) in DOMAINS.items():
         theirs = gtpyhop_instances(name, packages[name])
-        for number in range(1, count + 1):
+        for number in range(1, min(count, args.upto) + 1):
             problem = load_hddl(total / name / "domain.hddl", total / name / f"p{number:02d}.hddl")
             ours_s, result = measure(
                 lambda p=problem: timed(lambda: plan(p, args.limit * 1000, first=True)),
@@ -177,7 +181,8 @@ def main() -> int:
                   f"{_show(row['ours_ms'] if ours_ok else None):>10} "
                   f"{_show(row['ours_length']):>5} "
                   f"{_show(theirs_ms, number in theirs):>11} "
-                  f"{_show(row['gtpyhop_length']):>5} {_show(ratio):>7}", flush=True)
+                  f"{_show(row['gtpyhop_length'], number in theirs):>5} "
+                  f"{_show(ratio, ratio is not None):>7}", flush=True)
     both = [r for r in rows if r["ratio"] is not None]
     figures = {
         "instances": len(rows),

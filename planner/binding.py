@@ -154,21 +154,42 @@ def compile_binder(variables: dict[str, str], head: list[tuple[str, str]], tests
                 yield from extend(index + 1, binding, state)
             binding.pop(var, None)
 
-    def bind(env: dict[str, Any], state: FactState) -> Iterator[dict[str, Any]]:
+    def unify(env: dict[str, Any]) -> dict[str, Any] | None:
+        """The binding the task's arguments give, or None when they do not fit."""
         binding: dict[str, Any] = {}
         for term, param in head:
             value = env[param]
             if not is_variable(term):
                 if value != term:
-                    return
+                    return None
             elif term in binding:
                 if binding[term] != value:
-                    return
+                    return None
             elif value in members[term]:
                 binding[term] = value
             else:
-                return
-        yield from extend(0, binding, state)
+                return None
+        return binding
+
+    if all(step[0] == _TEST for step in compiled):  # the task binds everything: no search
+        tests = tuple(step[1] for step in compiled)
+
+        def check(env: dict[str, Any], state: FactState) -> tuple[dict[str, Any], ...]:
+            binding = unify(env)
+            if binding is None:
+                return ()
+            get = state.get
+            for test in tests:
+                if not test(binding, get):
+                    return ()
+            return (binding,)
+
+        return check, patterns
+
+    def bind(env: dict[str, Any], state: FactState) -> Iterator[dict[str, Any]]:
+        binding = unify(env)
+        if binding is not None:
+            yield from extend(0, binding, state)
 
     return bind, patterns
 

@@ -63,7 +63,7 @@ class Evaluator:
         tree: dict[int, TreeNode] = {}
         roots: list[int] = []
         alias: dict[int, int] = {}
-        actions: list[PlanAction] = []
+        actions: list[tuple] = []  # (name, args, agent, cost, duration): timed later
 
         def attach(parent: int, node: TreeNode) -> None:
             parent = alias.get(parent, parent)
@@ -88,8 +88,7 @@ class Evaluator:
             else:
                 _, node, parent, name, args, agent, price, length = record
                 index = len(actions)
-                actions.append(PlanAction(index, name, tuple(args), agent, float(price),
-                                          float(length)))
+                actions.append((name, tuple(args), agent, float(price), float(length)))
                 if parent in top and not tree[parent].children \
                         and tree[parent].decomposition is None:
                     tree[parent].action = index
@@ -99,8 +98,10 @@ class Evaluator:
 
     # -- links, times, criteria ----------------------------------------------------------
 
-    def evaluate(self, actions: list[PlanAction], tree: dict[int, TreeNode],
+    def evaluate(self, actions: list[tuple], tree: dict[int, TreeNode],
                  roots: list[int]) -> Plan:
+        """Links, orderings, times, rules and score of the actions ``(name, args, agent,
+        cost, duration)`` in plan order."""
         problem = self.problem
         values = dict(problem.initial)
         writer: dict[tuple[str, str], int] = {}
@@ -123,9 +124,9 @@ class Evaluator:
             writes.append(((entity, attribute), value))
 
         domain_actions = self.domain.actions
-        for index, act in enumerate(actions):
-            action = domain_actions[act.name]
-            env = dict(zip(action.names, act.args, strict=True))
+        for index, (name, args, *_) in enumerate(actions):
+            action = domain_actions[name]
+            env = dict(zip(action.names, args, strict=True))
             reads.clear()
             writes.clear()
             if action.pre is not None:
@@ -164,25 +165,36 @@ class Evaluator:
         self._score(plan, penalties, violations)
         return plan
 
-    def _schedule(self, actions: list[PlanAction], links: list[CausalLink],
+    def _schedule(self, actions: list[tuple], links: list[CausalLink],
                   orderings: set[tuple[int, int]]) -> list[PlanAction]:
-        before: dict[int, set[int]] = {a.index: set() for a in actions}
+        """Each action starts when its predecessors (links, orderings, its agent's
+        previous action) are over."""
+        if len({agent for _, _, agent, _, _ in actions}) <= 1:
+            # One agent: its chain orders everything, and every predecessor of an action
+            # ends by the end of the action just before it.
+            timed, clock = [], 0.0
+            for index, (name, args, agent, cost, duration) in enumerate(actions):
+                timed.append(PlanAction(index, name, args, agent, cost, duration, clock,
+                                        clock + duration))
+                clock += duration
+            return timed
+        before: dict[int, set[int]] = {index: set() for index in range(len(actions))}
         for link in links:
             before[link.consumer].add(link.producer)
         for first, second in orderings:
             before[second].add(first)
         last: dict[str, int] = {}
-        for act in actions:
-            if act.agent in last:
-                before[act.index].add(last[act.agent])
-            last[act.agent] = act.index
+        for index, (_, _, agent, _, _) in enumerate(actions):
+            if agent in last:
+                before[index].add(last[agent])
+            last[agent] = index
         ends: dict[int, float] = {}
         timed = []
-        for act in actions:
-            start = max((ends[p] for p in before[act.index]), default=0.0)
-            ends[act.index] = start + act.duration
-            timed.append(PlanAction(act.index, act.name, act.args, act.agent, act.cost,
-                                    act.duration, start, start + act.duration))
+        for index, (name, args, agent, cost, duration) in enumerate(actions):
+            start = max((ends[p] for p in before[index]), default=0.0)
+            ends[index] = start + duration
+            timed.append(PlanAction(index, name, args, agent, cost, duration, start,
+                                    start + duration))
         return timed
 
     # -- social rules ------------------------------------------------------------------------
@@ -203,7 +215,7 @@ class Evaluator:
             violations.append(f"{selected.rule.name}: {what} (+{cost:g})")
 
     def _state_rule(self, selected: SelectedRule, values: dict, writer: dict,
-                    actions: list[PlanAction], penalties: dict, violations: list) -> None:
+                    actions: list[tuple], penalties: dict, violations: list) -> None:
         rule = selected.rule
         names = [v for v, _ in rule.vars]
         choices = [self.problem.of_type(t) for _, t in rule.vars]
@@ -217,7 +229,7 @@ class Evaluator:
 
             if rule.when is not None and rule.when(env, get):
                 culprits = [writer[k] for k in reads if k in writer]
-                agent = actions[max(culprits)].agent if culprits else None
+                agent = actions[max(culprits)][2] if culprits else None
                 self._charge(selected, agent, 1.0, penalties, violations,
                              f"{rule.when.text} with " + ", ".join(
                                  f"{k}={v}" for k, v in env.items()))
