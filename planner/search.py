@@ -46,7 +46,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
-from planner.domain import Action, Method, Problem
+from planner.domain import SOLE_AGENT, Action, Method, Problem
 from planner.evaluate import Evaluator
 from planner.plan import Plan
 from planner.state import FactState, State
@@ -207,7 +207,7 @@ class Search:
                 break
             state, agenda, trail, cost, human, robot, steps = node
             node = None
-            if bound(cost, human, robot) >= best_score:
+            if best is not None and bound(cost, human, robot) >= best_score:
                 continue
             if agenda is None:
                 missed = [f"{e}.{a} == {v!r}" for (e, a), v in self.problem.goals.items()
@@ -264,7 +264,7 @@ class Search:
                            f"deletes ({' '.join((pred, *fact))}), a goal that no task left "
                            "can make true again")
                 return None
-        agent = action.performer(env)
+        agent = SOLE_AGENT if action.agent is None else env[action.agent]
         kind = self.kinds.get(agent)
         node = next(self.ids)
         record = ("act", node, parent, action.name, args, agent, price, length)
