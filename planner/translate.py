@@ -22,6 +22,10 @@ read into a :class:`~planner.domain.Domain` and :class:`~planner.domain.Problem`
 * actions have no agent parameter: they are all the sole agent's
   (:data:`~planner.domain.SOLE_AGENT`); each costs 1.
 
+A method's ``:constraints`` (``=``, ``not =``: conditions; ``sortof``: a
+narrower type for a variable) are read by the reader and met like its
+precondition.
+
 Refused, by name and position, besides what the reader refuses: partial
 order (:func:`planner.hddl.refuse_partial_order`), an initial task network
 with parameters, and goals other than a conjunction of literals.
@@ -190,7 +194,11 @@ class _Translator:
                       ) -> tuple[Decomposition, set[tuple[str, tuple[int, ...]]]]:
         head = [(term, param[1:]) for term, (param, _) in zip(method.task.args, task_params,
                                                               strict=True)]
-        condition = self.condition(method.precondition) if method.precondition else None
+        whole = method.precondition
+        if method.constraints is not None:  # '=' and 'not =' constraints are conditions too
+            whole = (method.constraints if whole is None else
+                     hddl.Formula("and", (whole, method.constraints), whole.line, whole.col))
+        condition = self.condition(whole) if whole else None
 
         def matches(env: dict, get: Any) -> bool:
             for term, param in head:
@@ -199,11 +207,10 @@ class _Translator:
             return condition is None or condition(env, get)
 
         call = f"({method.task.name} {' '.join(method.task.args)})".replace(" )", ")")
-        text = f"task {call}, {method.precondition or '()'}"
-        reads = ({f.children[0] for f in method.precondition.walk() if f.kind == "pred"}
-                 if method.precondition else set())
+        text = f"task {call}, {whole or '()'}"
+        reads = {f.children[0] for f in whole.walk() if f.kind == "pred"} if whole else set()
         pre = Expr(text, matches, frozenset(dict(method.params)), frozenset(reads), "bool")
-        tests = [self.test(f, {}) for f in _conjuncts(method.precondition)]
+        tests = [self.test(f, {}) for f in _conjuncts(whole)]
         if method.subtasks and method.subtasks[0].name in domain.actions:
             first = method.subtasks[0]
             action = domain.actions[first.name]

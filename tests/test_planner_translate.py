@@ -229,3 +229,40 @@ def test_hatp_problems_keep_their_own_semantics():
     assert not domain.predicates and all(a.agent for a in domain.actions.values())
     result = plan(dataclasses.replace(problem), 500)
     assert result.plan is not None and validate(problem, result.plan) == []
+
+
+SORTS = """\
+(define (domain sorts)
+  (:requirements :typing :hierarchy)
+  (:types small - item)
+  (:predicates (free ?x - item))
+  (:task pick :parameters ())
+  (:method two
+    :parameters (?x ?y - item)
+    :task (pick)
+    :constraints (and (sortof ?x - small) (not (= ?x ?y)))
+    :ordered-subtasks (and (take ?x ?y)))
+  (:action take :parameters (?x ?y - item) :precondition (and (free ?x) (free ?y))))
+"""
+
+
+def test_method_constraints_narrow_types_and_separate_variables(write):
+    problem, result = _solve(write, SORTS, """\
+        (define (problem p) (:domain sorts)
+          (:objects aa bb - item zz - small)
+          (:htn :ordered-subtasks (and (pick)))
+          (:init (free aa) (free zz)))
+        """)
+    # ?x must be a small (zz, though aa comes first) and ?y another item: aa.
+    assert [str(a) for a in result.plan.actions] == ["take(zz, aa)"]
+    assert validate(problem, result.plan) == []
+
+
+def test_a_sortof_that_widens_a_type_is_refused_at_the_type(write):
+    text = SORTS.replace("(sortof ?x - small)", "(sortof ?x - object)")
+    with pytest.raises(FileError) as caught:
+        _solve(write, text, "(define (problem p) (:domain sorts))")
+    (found,) = caught.value.problems
+    line = text.splitlines().index(next(t for t in text.splitlines() if "sortof" in t)) + 1
+    assert (found.line, found.col) == (line, text.splitlines()[line - 1].index("object") + 1)
+    assert found.message == "'object' is not a subtype of ?x's type 'item'"
