@@ -269,7 +269,7 @@ class Evaluator:
                     if producer.agent != consumer.agent:
                         self._charge(selected, consumer.agent, 1.0, penalties, violations,
                                      f"{producer} ({producer.agent}) -> {consumer} "
-                                     f"({consumer.agent}) on {link.entity}.{link.attribute}")
+                                     f"({consumer.agent}) on {link.fact}")
 
     def _first_agent(self, plan: Plan, node: TreeNode) -> str | None:
         stack = [node]

@@ -48,7 +48,7 @@ from typing import Any
 
 from planner.domain import SOLE_AGENT, Action, Method, Problem
 from planner.evaluate import Evaluator
-from planner.plan import Plan
+from planner.plan import Plan, fact_text
 from planner.state import FactState, State
 
 CHECK_EVERY = 256
@@ -210,8 +210,8 @@ class Search:
             if best is not None and bound(cost, human, robot) >= best_score:
                 continue
             if agenda is None:
-                missed = [f"{e}.{a} == {v!r}" for (e, a), v in self.problem.goals.items()
-                          if state.get(e, a) != v]
+                missed = [f"{fact_text(e, a)} == {v!r}"
+                          for (e, a), v in self.problem.goals.items() if state.get(e, a) != v]
                 if missed:
                     self.failures.setdefault(-1, Failure(0, ("goals",), "a decomposition of "
                                              "every task ends without " + ", ".join(missed)))

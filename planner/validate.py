@@ -15,7 +15,7 @@ from __future__ import annotations
 from typing import Any
 
 from planner.domain import Problem
-from planner.plan import Plan
+from planner.plan import Plan, fact_text
 
 
 def validate(problem: Problem, plan: Plan) -> list[str]:
@@ -91,6 +91,6 @@ def validate(problem: Problem, plan: Plan) -> list[str]:
                       "actions")
     for (entity, attribute), wanted in problem.goals.items():
         if values.get((entity, attribute)) != wanted:
-            errors.append(f"goal {entity}.{attribute} == {wanted!r} does not hold at the end "
-                          f"({values.get((entity, attribute))!r})")
+            errors.append(f"goal {fact_text(entity, attribute)} == {wanted!r} does not hold at "
+                          f"the end ({values.get((entity, attribute))!r})")
     return errors

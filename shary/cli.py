@@ -397,7 +397,7 @@ def _plan_json(problem, result, errors) -> dict:  # type: ignore[no-untyped-def]
         "actions": [{"index": a.index, "name": a.name, "args": list(a.args), "agent": a.agent,
                      "cost": a.cost, "start": a.start, "end": a.end} for a in best.actions],
         "streams": {agent: [a.index for a in acts] for agent, acts in best.streams.items()},
-        "links": [{"from": k.producer, "to": k.consumer, "fact": f"{k.entity}.{k.attribute}"}
+        "links": [{"from": k.producer, "to": k.consumer, "fact": k.fact}
                   for k in best.links]})
     return out
 
@@ -425,7 +425,7 @@ def _print_plan(problem, result, errors) -> None:  # type: ignore[no-untyped-def
         _out.print("[bold]links between streams[/bold]")
         for link in crossing:
             _out.print(f"  {_escape(names[link.producer])} -> {_escape(names[link.consumer])}"
-                       f"  ({link.entity}.{link.attribute})")
+                       f"  ({link.fact})")
     _out.print(f"[bold]score {best.score:g}[/bold] (makespan {best.makespan:g} s)")
     weighed = [n for n in best.criteria if best.weights.get(n, 0.0)]
     for name in weighed:

@@ -59,6 +59,7 @@ def test_types_constants_free_variables_forall_and_conditional_effects(write):
     assert validate(problem, result.plan) == []
     assert problem.is_a("big", "crate") and not problem.is_a("t1", "crate")
     assert {a.agent for a in result.plan.actions} == {"agent"}
+    assert "(in big t2)" in {link.fact for link in result.plan.links}
 
 
 def test_deletions_come_before_additions(write):
