@@ -95,10 +95,13 @@ class FactState(State):
                          dict(self.idelta))
 
     def set(self, entity: str, attribute: Any, value: Any) -> None:
+        shapes = self.patterns.get(entity)
+        if not shapes:  # a predicate no binder looks up
+            self.delta[(entity, attribute)] = value
+            return
         old = self.get(entity, attribute)
         self.delta[(entity, attribute)] = value
-        shapes = self.patterns.get(entity)
-        if not shapes or bool(old) == bool(value):
+        if bool(old) == bool(value):
             return
         for positions in shapes:
             key = (entity, positions, tuple(attribute[i] for i in positions))
