@@ -135,8 +135,12 @@ class Evaluator:
             for key in reads:  # the links are sorted at the end
                 producer = writer.get(key)
                 if producer is not None and producer != index:
-                    links.setdefault((producer, index, key),
-                                     CausalLink(producer, index, key[0], key[1]))
+                    links[(producer, index, key)] = CausalLink(producer, index, key[0], key[1])
+                known = readers.get(key)
+                if known is None:
+                    readers[key] = [index]
+                else:
+                    known.append(index)
             for key, value in writes:
                 for reader in readers.get(key, ()):
                     if reader != index:
@@ -144,14 +148,10 @@ class Evaluator:
                 if key in writer and writer[key] != index:
                     orderings.add((writer[key], index))
                 writer[key] = index
+                # Its later writers are ordered after this action as its writer; as a
+                # reader of the key too, it would only give the same pairs.
                 readers[key] = []
                 values[key] = value
-            for key in reads:
-                known = readers.get(key)
-                if known is None:
-                    readers[key] = [index]
-                else:
-                    known.append(index)
             for selected in during_rules:
                 self._state_rule(selected, values, writer, actions, penalties, violations)
         for selected in problem.rules.values():
