@@ -14,7 +14,9 @@ Actions first (``ID NAME ARGS``, in plan order), then ``root`` and the ids of
 the top tasks, then one line per compound task: ``ID TASK ARGS -> METHOD
 CHILD-IDS``.  A top task that is an action is listed by its action id.  Ids
 are ours to choose: actions are numbered 0, 1, ... in plan order, compound
-tasks after them, depth first.  :func:`shape` forgets the ids, so that two
+tasks after them, depth first.  The task that stands for an initial task
+network with parameters (:data:`planner.translate.NETWORK`) is left out: its
+subtasks are the top tasks.  :func:`shape` forgets the ids, so that two
 plans can be compared (the feature tests' ``plans/``).
 """
 
@@ -24,6 +26,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from planner.plan import Plan
+from planner.translate import NETWORK
 from userfiles.errors import FileError
 from userfiles.errors import Problem as FileProblem
 
@@ -33,7 +36,11 @@ def write_ipc(plan: Plan) -> str:
     count = len(plan.actions)
     ids: dict[int, int] = {}
     order: list[int] = []
-    stack = list(reversed(plan.roots))
+    roots: list[int] = []
+    for root in plan.roots:  # a network with parameters: its tasks are the top tasks
+        node = plan.tree[root]
+        roots.extend(node.children if node.task == NETWORK else [root])
+    stack = list(reversed(roots))
     while stack:
         node = plan.tree[stack.pop()]
         if node.action is not None:
@@ -44,7 +51,7 @@ def write_ipc(plan: Plan) -> str:
         stack.extend(reversed(node.children))
     lines = ["==>"]
     lines += [_words(str(i), a.name, *map(str, a.args)) for i, a in enumerate(plan.actions)]
-    lines.append(_words("root", *(str(ids[r]) for r in plan.roots)))
+    lines.append(_words("root", *(str(ids[r]) for r in roots)))
     for node_id in order:
         node = plan.tree[node_id]
         lines.append(_words(str(ids[node_id]), node.task, *map(str, node.args), "->",

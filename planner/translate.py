@@ -26,9 +26,13 @@ A method's ``:constraints`` (``=``, ``not =``: conditions; ``sortof``: a
 narrower type for a variable) are read by the reader and met like its
 precondition.
 
+An initial task network with ``:parameters`` becomes one task,
+:data:`NETWORK`, whose one method has them as variables and the network as
+subtasks (:func:`planner.ipc.write_ipc` leaves it out of the plans it writes).
+
 Refused, by name and position, besides what the reader refuses: partial
-order (:func:`planner.hddl.refuse_partial_order`), an initial task network
-with parameters, and goals other than a conjunction of literals.
+order (:func:`planner.hddl.refuse_partial_order`) and goals other than a
+conjunction of literals.
 """
 
 from __future__ import annotations
@@ -47,6 +51,9 @@ from userfiles.errors import Problem as FileProblem
 
 BUDGET_MS = 60_000
 """Default time budget of an HDDL problem (the files give none)."""
+NETWORK = ":htn"
+"""The task standing for an initial task network with ``:parameters``: its one method
+binds them (no HDDL name starts with ':', so it cannot clash with the domain's)."""
 
 Condition = Callable[[dict[str, Any], Any], bool]
 Write = Callable[[dict[str, Any], Any, Any], None]
@@ -69,10 +76,6 @@ def translate(domain: hddl.HDDLDomain, problem: hddl.HDDLProblem) -> Problem:
 
 def _refuse(problem: hddl.HDDLProblem) -> None:
     found = []
-    if problem.htn_params:
-        found.append(FileProblem(problem.file, problem.htn_line, problem.htn_col,
-                                 "an initial task network with ':parameters' is not supported "
-                                 "(give its tasks objects)"))
     for formula in _conjuncts(problem.goal):
         if not _literal(formula):
             found.append(FileProblem(problem.file, formula.line, formula.col,
@@ -132,11 +135,21 @@ class _Translator:
                         patterns.setdefault(pred, set()).add(positions)
             methods[task] = Method(task, tuple((p[1:], k) for p, k in params),
                                    tuple(decompositions))
+        initial: dict[tuple[str, Any], Any] = {(f.pred, f.args): True for f in hproblem.init}
+        tasks = tuple((s.name, s.args) for s in hproblem.htn_subtasks)
+        if hproblem.htn_params:  # the search binds them: one task, one method
+            line, col = hproblem.htn_line, hproblem.htn_col
+            network = hddl.HMethod(NETWORK, hproblem.htn_params, hddl.Call(NETWORK, (), line, col),
+                                   None, hproblem.htn_subtasks, True, line, col)
+            dec, needed = self.decomposition(network, (), hdomain)
+            for pred, positions in needed:
+                patterns.setdefault(pred, set()).add(positions)
+            methods[NETWORK] = Method(NETWORK, (), (dec,),
+                                      "the initial task network, its parameters bound")
+            tasks = ((NETWORK, ()),)
         domain = Domain(hdomain.name, self.types, actions, methods, {}, "", hdomain.file,
                         dict(hdomain.predicates),
                         {p: tuple(sorted(s)) for p, s in patterns.items()}, self.additions())
-        initial: dict[tuple[str, Any], Any] = {(f.pred, f.args): True for f in hproblem.init}
-        tasks = tuple((s.name, s.args) for s in hproblem.htn_subtasks)
         return Problem(hproblem.name, domain, dict(self.objects), initial, tasks, goals,
                        budget_ms=BUDGET_MS, file=hproblem.file)
 

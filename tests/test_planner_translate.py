@@ -171,15 +171,21 @@ def test_left_recursion_alone_ends_the_search(write):
     assert "left recursion" in result.explain()
 
 
-def test_an_initial_task_network_with_parameters_is_refused_at_its_position(write):
-    with pytest.raises(FileError) as caught:
-        _solve(write, GUARD, """\
-            (define (problem p) (:domain guard)
-              (:htn :parameters (?x - object) :ordered-subtasks (and (step))))
-            """)
-    (found,) = caught.value.problems
-    assert (found.line, found.col) == (2, 3)
-    assert "initial task network with ':parameters'" in found.message
+def test_an_initial_task_network_with_parameters_has_them_bound(write):
+    problem, result = _solve(write, DEPOT, """\
+        (define (problem p) (:domain depot)
+          (:objects yard - object big - heavy small - crate t1 t2 - truck)
+          (:htn :parameters (?c - crate) :ordered-subtasks (and (deliver ?c)))
+          (:init (at big yard) (at small yard)) (:goal (at small dock)))
+        """)
+    assert [str(a) for a in result.plan.actions] == ["load(small, t1, yard)",
+                                                     "unload-all(t1)"]
+    assert validate(problem, result.plan) == []
+    root = result.plan.tree[result.plan.roots[0]]
+    assert (root.task, root.bindings) == (":htn", {"?c": "small"})
+    lines = write_ipc(result.plan).splitlines()
+    assert lines[3] == "root 2" and lines[4] == "2 deliver small -> by-truck 0 1"
+    assert ":htn" not in write_ipc(result.plan)
 
 
 def test_a_goal_that_is_not_a_conjunction_of_literals_is_refused_at_its_position(write):
