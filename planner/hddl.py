@@ -3,7 +3,7 @@
 This is a *reader*: it turns a domain file and a problem file into a typed
 syntax tree where every piece keeps the line and column it came from, and it
 checks the meaning that can be checked without planning.  Translating the tree
-into the planner's own model is another step (not here).
+into the planner's own model is :mod:`planner.translate`'s work.
 
 Three layers, each usable alone:
 
