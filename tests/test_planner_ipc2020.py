@@ -75,8 +75,8 @@ def test_a_domain_alone_reads_and_plans_with_a_problem_of_ours(write):
     assert [result.plan.tree[r].decomposition for r in result.plan.roots] == ["donothing"] * 2
 
 
-@pytest.mark.parametrize("domain,number", [("Blocksworld-GTOHP", n) for n in range(1, 6)]
-                         + [("Childsnack", n) for n in range(1, 6)])
+@pytest.mark.parametrize("domain,number", [("Blocksworld-GTOHP", n) for n in range(1, 11)]
+                         + [("Childsnack", n) for n in range(1, 11)])
 def test_benchmark_instances_are_solved_and_validated(domain, number):
     problem = load_hddl(TOTAL / domain / "domain.hddl", TOTAL / domain / f"p{number:02d}.hddl")
     result = plan(problem, 60_000, first=True)
