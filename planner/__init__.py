@@ -12,12 +12,18 @@ causal links between the streams, and scores them with action costs plus
     result = plan(problem, budget_ms=200)
     for agent, actions in result.plan.streams.items(): ...
     assert validate(problem, result.plan) == []
+
+HDDL (the IPC's HTN language, total-order subset) is translated into the same
+model: ``problem = load_hddl("domain.hddl", "p01.hddl")``, then
+``plan(problem, first=True)``; :mod:`planner.ipc` writes the plan in the IPC
+format.
 """
 
 from planner.domain import Domain, Problem
 from planner.io import builtin_domains, builtin_problems, find_domain, load_domain, load_problem
 from planner.plan import CausalLink, Plan, PlanAction, TreeNode
 from planner.search import Result, plan
+from planner.translate import load_hddl
 from planner.validate import validate
 
 __all__ = [
@@ -32,6 +38,7 @@ __all__ = [
     "builtin_problems",
     "find_domain",
     "load_domain",
+    "load_hddl",
     "load_problem",
     "plan",
     "validate",

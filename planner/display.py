@@ -217,6 +217,6 @@ def streams_dot(plan: Plan, title: str = "") -> str:
             continue
         line = colours[producer][1]
         graph.edge(f"a{link.producer}", f"a{link.consumer}",
-                   label=_label(f"{link.entity}.{link.attribute}"), style="dashed",
+                   label=_label(link.fact), style="dashed",
                    color=line, fontcolor=line, penwidth="1.3")
     return graph.source

@@ -9,12 +9,15 @@ compiled: conditions, effects, costs and subtask arguments are
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
 from planner.expr import Effect, Expr
 
 AGENT_KINDS = ("robot", "human")
+SOLE_AGENT = "agent"
+"""Who performs an action that names no agent (HDDL actions: one implicit executor)."""
 
 
 @dataclass(frozen=True)
@@ -24,6 +27,8 @@ class EntityType:
     dynamic: dict[str, str]
     agent: bool = False
     doc: str = ""
+    parent: str | None = None
+    """The supertype (HDDL type hierarchies); an entity of this type is also one of its."""
 
     @property
     def attributes(self) -> dict[str, str]:
@@ -40,16 +45,29 @@ class ConditionalEffect:
 
 @dataclass(frozen=True)
 class Action:
-    """A primitive task, performed by the agent named by its ``agent`` parameter."""
+    """A primitive task, performed by the agent named by its ``agent`` parameter (or, when
+    ``agent`` is None, by :data:`SOLE_AGENT`)."""
 
     name: str
     params: tuple[tuple[str, str], ...]
-    agent: str
+    agent: str | None
     pre: Expr | None
     effects: tuple[Effect | ConditionalEffect, ...]
     cost: Expr | float
     duration: Expr | float
     doc: str = ""
+    deletes: tuple[tuple[str, Callable[[dict[str, Any]], tuple]], ...] = ()
+    """HDDL: the goal facts it deletes whatever the state, as a predicate and a function
+    of the arguments giving the fact's arguments (for the search's goal protection)."""
+    names: tuple[str, ...] = field(init=False, repr=False, compare=False)
+    """The parameters' names, in order (the search zips them with arguments)."""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "names", tuple(p for p, _ in self.params))
+
+    def performer(self, env: dict[str, Any]) -> str:
+        """The agent that carries out this action with these arguments."""
+        return SOLE_AGENT if self.agent is None else env[self.agent]
 
     def apply(self, env: dict[str, Any], get: Any, set: Any) -> None:
         """Run the effects (conditional ones when their condition holds), reading the state
@@ -58,9 +76,9 @@ class Action:
             if isinstance(effect, ConditionalEffect):
                 if effect.condition(env, get):
                     for inner in effect.effects:
-                        inner(env, get, set)
+                        inner.fn(env, get, set)
             else:
-                effect(env, get, set)
+                effect.fn(env, get, set)
 
 
 @dataclass(frozen=True)
@@ -70,15 +88,29 @@ class Subtask:
     task: str
     args: tuple[Expr, ...]
     text: str
+    values: Callable[[dict[str, Any]], tuple] | None = None
+    """HDDL: all the arguments' values at once, from the variables (they are variables
+    and constants only): one call where ``args`` takes one per argument."""
+
+
+Binder = Callable[[dict[str, Any], Any], Iterable[dict[str, Any]]]
+"""``bind(env, state)``: candidate values for a decomposition's variables."""
 
 
 @dataclass(frozen=True)
 class Decomposition:
+    """One way to decompose a method.  Its variables are bound, for each choice, to
+    every combination of entities of their types, in name order, and the precondition
+    ``pre`` is checked; or, when ``bind`` is given (HDDL methods), to the bindings it
+    proposes, which satisfy ``pre`` already (it looks facts up in the state's index and
+    tests each conjunct as soon as it can: :mod:`planner.binding`)."""
+
     name: str
     vars: tuple[tuple[str, str], ...]
     pre: Expr | None
     subtasks: tuple[Subtask, ...]
     doc: str = ""
+    bind: Binder | None = None
 
 
 @dataclass(frozen=True)
@@ -120,9 +152,44 @@ class Domain:
     rules: dict[str, Rule]
     doc: str = ""
     file: str = ""
+    predicates: dict[str, tuple[tuple[str, str], ...]] = field(default_factory=dict)
+    """HDDL predicates; a fact ``(pred, args)`` is a state key whose value is True while it
+    holds (None otherwise).  Empty for HATP domains, whose states are attribute values."""
+    patterns: dict[str, tuple[tuple[int, ...], ...]] = field(default_factory=dict)
+    """For each predicate, the argument positions the binders look facts up by (the
+    state keeps an index for each)."""
+
+    adds: dict[str, dict[str, tuple[tuple[Any, ...], ...]]] = field(default_factory=dict)
+    """HDDL: for each task, by predicate, the facts its decompositions may add, lifted:
+    each argument is the index of a task parameter (int), a constant (str), or None
+    (any value).  A task absent from it adds nothing."""
 
     def task(self, name: str) -> Action | Method | None:
         return self.actions.get(name) or self.methods.get(name)
+
+    def may_add(self, task: str, args: tuple, pred: str, fact: tuple) -> bool:
+        """Whether some decomposition of ``task(args)`` may make the fact ``pred(fact)``
+        true (a lifted over-approximation: False is a certainty)."""
+        for pattern in self.adds.get(task, {}).get(pred, ()):
+            for entry, value in zip(pattern, fact, strict=True):
+                if entry is None:
+                    continue
+                if (args[entry] if entry.__class__ is int else entry) != value:
+                    break
+            else:
+                return True
+        return False
+
+    def is_subtype(self, kind: str | None, wanted: str) -> bool:
+        """Whether ``kind`` is ``wanted`` or one of its subtypes."""
+        seen = 0
+        while kind is not None and seen <= len(self.types):
+            if kind == wanted:
+                return True
+            etype = self.types.get(kind)
+            kind = etype.parent if etype is not None else None
+            seen += 1
+        return False
 
 
 @dataclass(frozen=True)
@@ -173,8 +240,14 @@ class Problem:
                             if k in chosen or k not in self.domain.rules}
 
     def of_type(self, type_name: str) -> list[str]:
-        """The entities of a type, sorted by name (the search's deterministic order)."""
-        return sorted(e for e, t in self.entities.items() if t == type_name)
+        """The entities of a type (or of its subtypes), sorted by name (the search's
+        deterministic order)."""
+        return sorted(e for e, t in self.entities.items()
+                      if t == type_name or self.domain.is_subtype(t, type_name))
+
+    def is_a(self, entity: Any, type_name: str) -> bool:
+        """Whether ``entity`` is an entity of ``type_name`` (or of one of its subtypes)."""
+        return self.domain.is_subtype(self.entities.get(entity), type_name)
 
     def kind(self, agent: str) -> str | None:
         value = self.initial.get((agent, "kind"))

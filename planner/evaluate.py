@@ -38,6 +38,8 @@ class Evaluator:
         self.scale = {name: problem.scale.get(name, 1.0) for name in self.weights}
         self._bound = tuple((self.weights.get(c, 0.0) / self.scale.get(c, 1.0))
                             for c in MONOTONE)
+        self.kinds: dict[str, str | None] = {}
+        """Each agent's kind, as first looked up (the problem's static attribute)."""
 
     def lower_bound(self, cost: float, human: float, robot: float) -> float:
         """A score no completion of a partial plan can go below."""
@@ -61,7 +63,7 @@ class Evaluator:
         tree: dict[int, TreeNode] = {}
         roots: list[int] = []
         alias: dict[int, int] = {}
-        actions: list[PlanAction] = []
+        actions: list[tuple] = []  # (name, args, agent, cost, duration): timed later
 
         def attach(parent: int, node: TreeNode) -> None:
             parent = alias.get(parent, parent)
@@ -72,10 +74,11 @@ class Evaluator:
         for root, (name, args) in zip(root_ids, self.problem.tasks, strict=True):
             tree[root] = TreeNode(root, name, tuple(args))
             roots.append(root)
+        top = set(roots)
         for record in records:
             if record[0] == "method":
                 _, node, parent, name, args, dec, binding = record
-                if parent in roots and tree[parent].decomposition is None \
+                if parent in top and tree[parent].decomposition is None \
                         and tree[parent].action is None and not tree[parent].children:
                     tree[parent].decomposition = dec
                     tree[parent].bindings = dict(binding)
@@ -85,9 +88,8 @@ class Evaluator:
             else:
                 _, node, parent, name, args, agent, price, length = record
                 index = len(actions)
-                actions.append(PlanAction(index, name, tuple(args), agent, float(price),
-                                          float(length)))
-                if parent in roots and not tree[parent].children \
+                actions.append((name, tuple(args), agent, float(price), float(length)))
+                if parent in top and not tree[parent].children \
                         and tree[parent].decomposition is None:
                     tree[parent].action = index
                 else:
@@ -96,8 +98,10 @@ class Evaluator:
 
     # -- links, times, criteria ----------------------------------------------------------
 
-    def evaluate(self, actions: list[PlanAction], tree: dict[int, TreeNode],
+    def evaluate(self, actions: list[tuple], tree: dict[int, TreeNode],
                  roots: list[int]) -> Plan:
+        """Links, orderings, times, rules and score of the actions ``(name, args, agent,
+        cost, duration)`` in plan order."""
         problem = self.problem
         values = dict(problem.initial)
         writer: dict[tuple[str, str], int] = {}
@@ -108,27 +112,35 @@ class Evaluator:
                         if r.rule.kind == "state" and r.rule.during]
         violations: list[str] = []
         penalties: dict[str, float] = {name: 0.0 for name in problem.rules}
-        for index, act in enumerate(actions):
-            action = self.domain.actions[act.name]
-            env = {p: a for (p, _), a in zip(action.params, act.args, strict=True)}
-            reads: set[tuple[str, str]] = set()
-            writes: list[tuple[tuple[str, str], Any]] = []
+        reads: set[tuple[str, str]] = set()
+        writes: list[tuple[tuple[str, str], Any]] = []
 
-            def get(entity: str, attribute: str, _reads: set = reads) -> Any:
-                _reads.add((entity, attribute))
-                return values.get((entity, attribute))
+        def get(entity: str, attribute: str) -> Any:
+            key = (entity, attribute)
+            reads.add(key)
+            return values.get(key)
 
-            def put(entity: str, attribute: str, value: Any, _writes: list = writes) -> None:
-                _writes.append(((entity, attribute), value))
+        def put(entity: str, attribute: str, value: Any) -> None:
+            writes.append(((entity, attribute), value))
 
+        domain_actions = self.domain.actions
+        for index, (name, args, *_) in enumerate(actions):
+            action = domain_actions[name]
+            env = dict(zip(action.names, args, strict=True))
+            reads.clear()
+            writes.clear()
             if action.pre is not None:
-                action.pre(env, get)
+                action.pre.fn(env, get)
             action.apply(env, get, put)
-            for key in sorted(reads):
+            for key in reads:  # the links are sorted at the end
                 producer = writer.get(key)
                 if producer is not None and producer != index:
-                    links.setdefault((producer, index, key),
-                                     CausalLink(producer, index, key[0], key[1]))
+                    links[(producer, index, key)] = CausalLink(producer, index, key[0], key[1])
+                known = readers.get(key)
+                if known is None:
+                    readers[key] = [index]
+                else:
+                    known.append(index)
             for key, value in writes:
                 for reader in readers.get(key, ()):
                     if reader != index:
@@ -136,10 +148,10 @@ class Evaluator:
                 if key in writer and writer[key] != index:
                     orderings.add((writer[key], index))
                 writer[key] = index
+                # Its later writers are ordered after this action as its writer; as a
+                # reader of the key too, it would only give the same pairs.
                 readers[key] = []
                 values[key] = value
-            for key in reads:
-                readers.setdefault(key, []).append(index)
             for selected in during_rules:
                 self._state_rule(selected, values, writer, actions, penalties, violations)
         for selected in problem.rules.values():
@@ -153,31 +165,47 @@ class Evaluator:
         self._score(plan, penalties, violations)
         return plan
 
-    def _schedule(self, actions: list[PlanAction], links: list[CausalLink],
+    def _schedule(self, actions: list[tuple], links: list[CausalLink],
                   orderings: set[tuple[int, int]]) -> list[PlanAction]:
-        before: dict[int, set[int]] = {a.index: set() for a in actions}
+        """Each action starts when its predecessors (links, orderings, its agent's
+        previous action) are over."""
+        if len({agent for _, _, agent, _, _ in actions}) <= 1:
+            # One agent: its chain orders everything, and every predecessor of an action
+            # ends by the end of the action just before it.
+            timed, clock = [], 0.0
+            for index, (name, args, agent, cost, duration) in enumerate(actions):
+                timed.append(PlanAction(index, name, args, agent, cost, duration, clock,
+                                        clock + duration))
+                clock += duration
+            return timed
+        before: dict[int, set[int]] = {index: set() for index in range(len(actions))}
         for link in links:
             before[link.consumer].add(link.producer)
         for first, second in orderings:
             before[second].add(first)
         last: dict[str, int] = {}
-        for act in actions:
-            if act.agent in last:
-                before[act.index].add(last[act.agent])
-            last[act.agent] = act.index
+        for index, (_, _, agent, _, _) in enumerate(actions):
+            if agent in last:
+                before[index].add(last[agent])
+            last[agent] = index
         ends: dict[int, float] = {}
         timed = []
-        for act in actions:
-            start = max((ends[p] for p in before[act.index]), default=0.0)
-            ends[act.index] = start + act.duration
-            timed.append(PlanAction(act.index, act.name, act.args, act.agent, act.cost,
-                                    act.duration, start, start + act.duration))
+        for index, (name, args, agent, cost, duration) in enumerate(actions):
+            start = max((ends[p] for p in before[index]), default=0.0)
+            ends[index] = start + duration
+            timed.append(PlanAction(index, name, args, agent, cost, duration, start,
+                                    start + duration))
         return timed
 
     # -- social rules ------------------------------------------------------------------------
 
     def _kind(self, agent: str | None) -> str | None:
-        return self.problem.kind(agent) if agent is not None else None
+        if agent is None:
+            return None
+        kind = self.kinds.get(agent, self)
+        if kind is self:
+            kind = self.kinds[agent] = self.problem.kind(agent)
+        return kind  # type: ignore[return-value]
 
     def _charge(self, selected: SelectedRule, agent: str | None, amount: float,
                 penalties: dict[str, float], violations: list[str], what: str) -> None:
@@ -187,7 +215,7 @@ class Evaluator:
             violations.append(f"{selected.rule.name}: {what} (+{cost:g})")
 
     def _state_rule(self, selected: SelectedRule, values: dict, writer: dict,
-                    actions: list[PlanAction], penalties: dict, violations: list) -> None:
+                    actions: list[tuple], penalties: dict, violations: list) -> None:
         rule = selected.rule
         names = [v for v, _ in rule.vars]
         choices = [self.problem.of_type(t) for _, t in rule.vars]
@@ -201,7 +229,7 @@ class Evaluator:
 
             if rule.when is not None and rule.when(env, get):
                 culprits = [writer[k] for k in reads if k in writer]
-                agent = actions[max(culprits)].agent if culprits else None
+                agent = actions[max(culprits)][2] if culprits else None
                 self._charge(selected, agent, 1.0, penalties, violations,
                              f"{rule.when.text} with " + ", ".join(
                                  f"{k}={v}" for k, v in env.items()))
@@ -241,7 +269,7 @@ class Evaluator:
                     if producer.agent != consumer.agent:
                         self._charge(selected, consumer.agent, 1.0, penalties, violations,
                                      f"{producer} ({producer.agent}) -> {consumer} "
-                                     f"({consumer.agent}) on {link.entity}.{link.attribute}")
+                                     f"({consumer.agent}) on {link.fact}")
 
     def _first_agent(self, plan: Plan, node: TreeNode) -> str | None:
         stack = [node]

@@ -3,7 +3,7 @@
 This is a *reader*: it turns a domain file and a problem file into a typed
 syntax tree where every piece keeps the line and column it came from, and it
 checks the meaning that can be checked without planning.  Translating the tree
-into the planner's own model is another step (not here).
+into the planner's own model is :mod:`planner.translate`'s work.
 
 Three layers, each usable alone:
 
@@ -68,8 +68,9 @@ are recorded as ``ordered=False``) so that a caller can say why it refuses.
 
 Refused by name (``FileError``): numeric fluents (``:functions``, ``increase``
 ..., numeric comparisons, ``(= (f) 3)`` in ``:init``), durative actions,
-derived predicates, ``:constraints`` (problem trajectory constraints and
-task-network constraints such as ``sortof``), preferences, ``:metric``,
+derived predicates, ``:constraints`` (problem trajectory constraints, and the
+initial task network's; a method's ``:constraints`` are read: ``=``,
+``(not (= ...))`` and ``(sortof ?v - type)``), preferences, ``:metric``,
 ``either`` types, method effects, abstract tasks with preconditions or effects,
 causal links, timed initial literals, task insertion (``:tihtn``) and the
 requirements that announce them.
@@ -339,6 +340,9 @@ class HMethod:
     line: int
     col: int
     ordering: tuple[tuple[str, str], ...] = ()
+    constraints: Formula | None = None
+    """The method's ``:constraints`` that are conditions: ``=`` and ``not =``, as an
+    ``and``; its ``sortof`` constraints narrow the types of ``params`` instead."""
 
 
 @dataclass
@@ -490,7 +494,7 @@ _SUBTASK_KEYS = {":subtasks": ":subtasks", ":tasks": ":subtasks",
                  ":ordered-subtasks": ":ordered-subtasks", ":ordered-tasks": ":ordered-subtasks",
                  ":ordering": ":ordering", ":order": ":ordering"}
 _NETWORK_UNSUPPORTED = {
-    ":constraints": "task-network constraints such as 'sortof' or '='",
+    ":constraints": "task-network constraints (supported in methods only)",
     ":causal-links": "causal links",
     ":causallinks": "causal links",
 }
@@ -1349,8 +1353,11 @@ class _DomainReader(_Reader):
         text = label.text
         what = f"method '{text}'"
         keys = self.keyed(node.items[2:], {":parameters": ":parameters", ":task": ":task",
-                                           ":precondition": ":precondition", **_SUBTASK_KEYS},
-                          {":effect": "method effects", **_NETWORK_UNSUPPORTED}, what)
+                                           ":precondition": ":precondition",
+                                           ":constraints": ":constraints", **_SUBTASK_KEYS},
+                          {":effect": "method effects", **{
+                              k: v for k, v in _NETWORK_UNSUPPORTED.items()
+                              if k != ":constraints"}}, what)
         duplicate = ("method", name) in where
         if duplicate:
             line, col = where[("method", name)]
@@ -1359,6 +1366,10 @@ class _DomainReader(_Reader):
             where[("method", name)] = (node.line, node.col)
         params = self.params(keys[":parameters"][1] if ":parameters" in keys else None, what)
         scope = dict(params)
+        constraints, narrowed = (self.constraints(keys[":constraints"][1], scope)
+                                 if ":constraints" in keys else (None, {}))
+        params = tuple((var, narrowed.get(var, kind)) for var, kind in params)
+        scope = dict(params)
         task = self.method_task(keys.get(":task"), scope, what, node)
         pre = keys.get(":precondition")
         precondition = self.condition(pre[1], scope) if pre else None
@@ -1366,7 +1377,65 @@ class _DomainReader(_Reader):
         if task is None or duplicate:
             return None
         return HMethod(name, params, task, precondition, subtasks, ordered, node.line, node.col,
-                       ordering)
+                       ordering, constraints)
+
+    def constraints(self, node: Node, scope: dict[str, str]
+                    ) -> tuple[Formula | None, dict[str, str]]:
+        """A method's ``:constraints``: ``(= a b)``, ``(not (= a b))`` and
+        ``(sortof ?v - type)`` (``?v`` must be of ``type``, a subtype of its own), in an
+        ``and`` or alone.  The conditions, and the narrowed type of each variable."""
+        if not isinstance(node, SList):
+            self.error(node, f"expected constraints like '(and (sortof ?x - type))', found "
+                             f"{_show(node)}")
+            return None, {}
+        items = node.items
+        if items and isinstance(items[0], Symbol) and items[0].value == "and":
+            items = items[1:]
+        elif items:
+            items = (node,)
+        parts: list[Formula] = []
+        narrowed: dict[str, str] = {}
+        for item in items:
+            head = item.items[0] if isinstance(item, SList) and item.items else None
+            word = head.value if isinstance(head, Symbol) else ""
+            inner = (item.items[1] if word == "not" and isinstance(item, SList)
+                     and len(item.items) == 2 else None)
+            if word == "=" or (isinstance(inner, SList) and inner.items
+                               and isinstance(inner.items[0], Symbol)
+                               and inner.items[0].value == "="):
+                formula = self.gd(item, scope)
+                if formula is not None:
+                    parts.append(formula)
+            elif word == "sortof":
+                assert isinstance(item, SList) and isinstance(head, Symbol)
+                self.sortof(item, head, scope, narrowed)
+            else:
+                at = head if head is not None else item
+                self.error(at, f"'{_show(at)[1:-1] if isinstance(at, Symbol) else 'a list'}' "
+                               "is not a supported method constraint (supported: '=', "
+                               "'(not (= ...))' and 'sortof')")
+        formula = Formula("and", tuple(parts), node.line, node.col) if parts else None
+        return formula, narrowed
+
+    def sortof(self, item: SList, head: Symbol, scope: dict[str, str],
+               narrowed: dict[str, str]) -> None:
+        """``(sortof ?v - type)``: record ``type`` for ``?v`` when it fits."""
+        args = item.items[1:]
+        if (len(args) != 3 or not all(isinstance(a, Symbol) for a in args)
+                or args[1].value != "-"):
+            self.error(head, "expected '(sortof ?variable - type)'")
+            return
+        var, _, kind = args
+        assert isinstance(var, Symbol) and isinstance(kind, Symbol)
+        if var.value not in scope:
+            self.error(var, f"variable '{var.text}' is not a parameter of the method"
+                            f"{_hint(var.value, scope)}")
+        elif self.known_type(kind, kind.value):
+            if not self.fits(kind.value, scope[var.value]):
+                self.error(kind, f"'{kind.text}' is not a subtype of {var.text}'s type "
+                                 f"'{scope[var.value]}'")
+            else:
+                narrowed[var.value] = kind.value
 
     def method_task(self, entry: tuple[Symbol, Node] | None, scope: dict[str, str], what: str,
                     node: SList) -> Call | None:

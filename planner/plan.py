@@ -28,6 +28,14 @@ class PlanAction:
         return f"{self.name}({', '.join(str(a) for a in self.args)})"
 
 
+def fact_text(entity: str, attribute: Any) -> str:
+    """A state key as people read it: ``obj.holder``, or an HDDL fact ``(on b1 b2)``
+    (whose key is the predicate and the tuple of its arguments)."""
+    if isinstance(attribute, tuple):
+        return "(" + " ".join((entity, *map(str, attribute))) + ")"
+    return f"{entity}.{attribute}"
+
+
 @dataclass(frozen=True)
 class CausalLink:
     """``consumer`` needs the value of ``entity.attribute`` that ``producer`` set."""
@@ -35,7 +43,12 @@ class CausalLink:
     producer: int
     consumer: int
     entity: str
-    attribute: str
+    attribute: Any
+
+    @property
+    def fact(self) -> str:
+        """What the link carries, as people read it (see :func:`fact_text`)."""
+        return fact_text(self.entity, self.attribute)
 
 
 @dataclass

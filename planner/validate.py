@@ -15,7 +15,7 @@ from __future__ import annotations
 from typing import Any
 
 from planner.domain import Problem
-from planner.plan import Plan
+from planner.plan import Plan, fact_text
 
 
 def validate(problem: Problem, plan: Plan) -> list[str]:
@@ -50,8 +50,8 @@ def validate(problem: Problem, plan: Plan) -> list[str]:
                 errors.append(f"{label}: the tree and the action list disagree ({act})")
                 continue
             env = {p: a for (p, _), a in zip(action.params, act.args, strict=True)}
-            if env[action.agent] != act.agent:
-                errors.append(f"{label}: performed by {act.agent}, not {env[action.agent]}")
+            if action.performer(env) != act.agent:
+                errors.append(f"{label}: performed by {act.agent}, not {action.performer(env)}")
             if action.pre is not None and not action.pre(env, get):
                 errors.append(f"{label}: precondition false when its turn comes: "
                               f"{action.pre.text}")
@@ -74,7 +74,7 @@ def validate(problem: Problem, plan: Plan) -> list[str]:
         env = {p: a for (p, _), a in zip(method.params, node.args, strict=True)}
         for var, kind in dec.vars:
             value = node.bindings.get(var)
-            if problem.entities.get(value) != kind:
+            if not problem.is_a(value, kind):
                 errors.append(f"{label}: variable {var} is bound to {value!r}, not a {kind}")
             env[var] = value
         if dec.pre is not None and not dec.pre(env, get):
@@ -91,6 +91,6 @@ def validate(problem: Problem, plan: Plan) -> list[str]:
                       "actions")
     for (entity, attribute), wanted in problem.goals.items():
         if values.get((entity, attribute)) != wanted:
-            errors.append(f"goal {entity}.{attribute} == {wanted!r} does not hold at the end "
-                          f"({values.get((entity, attribute))!r})")
+            errors.append(f"goal {fact_text(entity, attribute)} == {wanted!r} does not hold at "
+                          f"the end ({values.get((entity, attribute))!r})")
     return errors

@@ -96,6 +96,11 @@ def _parser() -> argparse.ArgumentParser:
                    help="draw the decomposition tree or the per-agent streams")
     p.add_argument("-o", "--output", type=Path, metavar="OUT",
                    help="where --render draws (.svg, .png, .dot)")
+    p.add_argument("--hddl", action="store_true",
+                   help="DOMAIN and PROBLEM are HDDL files (total order, as in the IPC 2020 "
+                   "HTN track); the search stops at the first plan")
+    p.add_argument("--ipc", action="store_true",
+                   help="print the plan in the IPC plan format (for HDDL problems)")
     p.set_defaults(func=cmd_plan)
 
     from shary.log import add_log_command
@@ -401,8 +406,12 @@ def cmd_plan(args: argparse.Namespace) -> int:
     if args.render and args.output is None:
         _err.print("[bold red]error:[/bold red] --render needs -o OUT")
         return EXIT_BAD_FILE
-    domain = planner.load_domain(args.domain)
-    problem = planner.load_problem(args.problem, domain)
+    if args.hddl:
+        problem = planner.load_hddl(args.domain, args.problem)
+        domain = problem.domain
+    else:
+        domain = planner.load_domain(args.domain)
+        problem = planner.load_problem(args.problem, domain)
     if args.rules is not None:
         try:
             problem.select_rules([] if args.rules == "none" else
@@ -410,10 +419,17 @@ def cmd_plan(args: argparse.Namespace) -> int:
         except KeyError as err:
             _err.print(f"[bold red]error:[/bold red] {_escape(str(err.args[0]))}")
             return EXIT_BAD_FILE
-    result = planner.plan(problem, args.budget_ms)
+    result = planner.plan(problem, args.budget_ms, first=args.hddl)
     best = result.plan
     errors = planner.validate(problem, best) if best is not None else []
-    if args.json:
+    if args.ipc:
+        from planner.ipc import write_ipc
+
+        if best is None:
+            _err.print("[bold red]no plan[/bold red]: " + _escape(result.explain()))
+        else:
+            sys.stdout.write(write_ipc(best))
+    elif args.json:
         print(json.dumps(_plan_json(problem, result, errors), sort_keys=True))
     else:
         _print_plan(problem, result, errors)
@@ -443,14 +459,15 @@ def _plan_json(problem, result, errors) -> dict:  # type: ignore[no-untyped-def]
         "actions": [{"index": a.index, "name": a.name, "args": list(a.args), "agent": a.agent,
                      "cost": a.cost, "start": a.start, "end": a.end} for a in best.actions],
         "streams": {agent: [a.index for a in acts] for agent, acts in best.streams.items()},
-        "links": [{"from": k.producer, "to": k.consumer, "fact": f"{k.entity}.{k.attribute}"}
+        "links": [{"from": k.producer, "to": k.consumer, "fact": k.fact}
                   for k in best.links]})
     return out
 
 
 def _print_plan(problem, result, errors) -> None:  # type: ignore[no-untyped-def]
     best = result.plan
-    state = "search complete" if result.complete else "time budget reached: best so far"
+    state = ("first plan" if result.first else "search complete" if result.complete
+             else "time budget reached: best so far")
     _out.print(f"[bold]{problem.name}[/bold] ({problem.domain.name}): {result.plans_found} "
                f"plan(s) in {result.elapsed_ms:.1f} ms, {result.expansions} expansions, {state}")
     if best is None:
@@ -470,7 +487,7 @@ def _print_plan(problem, result, errors) -> None:  # type: ignore[no-untyped-def
         _out.print("[bold]links between streams[/bold]")
         for link in crossing:
             _out.print(f"  {_escape(names[link.producer])} -> {_escape(names[link.consumer])}"
-                       f"  ({link.entity}.{link.attribute})")
+                       f"  ({link.fact})")
     _out.print(f"[bold]score {best.score:g}[/bold] (makespan {best.makespan:g} s)")
     weighed = [n for n in best.criteria if best.weights.get(n, 0.0)]
     for name in weighed:

@@ -3,11 +3,8 @@
 The suite is read where it lies (/work/shared/suites/ipc2020, never copied here); the
 tests that need it are skipped, saying so, when it is absent.
 
-Feature tests of the suite that are refused, and why:
-
-* ``sortof-domain.hddl`` (and so ``sortof.hddl``): its method ``donothing`` has
-  ``:constraints (and (sortof ?b - A))``, a task-network constraint; the reader refuses
-  ``:constraints`` by name.
+Every feature test of the suite reads: ``sortof-domain.hddl``'s method ``donothing`` has
+``:constraints (and (sortof ?b - A))``, which narrows ``?b`` to type ``A``.
 
 No feature test is partially ordered: ``:subtasks`` there have one subtask or a total
 ``:ordering`` (``synonymes``).  ``empty-methods2-domain.hddl`` has no problem file; it is
@@ -42,7 +39,6 @@ IPC = SUITES / "ipc2020"
 FEATURES = IPC / "tests" / "ipc2020-feature-tests"
 TOTAL = IPC / "total-order"
 MISSING = f"the IPC 2020 HDDL suite is not at {IPC}"
-REFUSED = {"sortof-domain.hddl": "':constraints' is not supported in method 'donothing'"}
 
 
 def _suite(folder: Path, pattern: str) -> list:
@@ -489,8 +485,9 @@ def test_problem_errors_are_reported_at_their_position(tidy, tmp_path, old, new,
      "(?x - block) :task (tidy ?x) :effect (clear ?x)", ":effect (clear",
      "':effect' is not supported in method 'm-done' (method effects)"),
     ("(:method m-done :parameters (?x - block) :task (tidy ?x)", "(:method m-done :parameters "
-     "(?x - block) :task (tidy ?x) :constraints (and (sortof ?x - block))", ":constraints",
-     "':constraints' is not supported in method 'm-done' (task-network constraints"),
+     "(?x - block) :task (tidy ?x) :constraints (and (typeof ?x - block))", "typeof",
+     "'typeof' is not a supported method constraint (supported: '=', '(not (= ...))' and "
+     "'sortof')"),
     ("(:task tidy :parameters (?x - block))", "(:task tidy :parameters (?x - block) "
      ":precondition (clear ?x))", ":precondition (clear", "':precondition' is not supported in "
      "task 'tidy' (abstract tasks with preconditions)"),
@@ -568,13 +565,7 @@ def test_a_partially_ordered_initial_task_network(tidy, tmp_path):
 
 
 @pytest.mark.parametrize("path", _suite(FEATURES, "*-domain.hddl"))
-def test_every_feature_test_reads_or_is_refused_by_name(path):
-    if path.name in REFUSED:
-        with pytest.raises(FileError) as caught:
-            read_domain(path)
-        assert REFUSED[path.name] in str(caught.value)
-        assert str(caught.value).startswith(f"{path}:")
-        return
+def test_every_feature_test_reads(path):
     domain = read_domain(path)
     assert is_total_order(domain)
     problem_path = path.with_name(path.name.replace("-domain", ""))
@@ -596,6 +587,9 @@ def test_what_the_feature_tests_say():
     problem = read_problem(FEATURES / "constants.hddl", constants)
     assert problem.objects == {} and problem.init[0].args == ("a",)  # 'a' is a constant
     assert problem.htn_subtasks[0].id == "task0"
+    sortof = read_domain(FEATURES / "sortof-domain.hddl")
+    assert sortof.methods[0].params == (("?b", "a"),)  # (sortof ?b - A) narrows ?b - B
+    assert sortof.methods[0].constraints is None
     forall = read_domain(FEATURES / "forall2-domain.hddl")
     assert str(forall.actions["noop"].precondition) == "(forall (?a - a) (foo ?a ?b))"
     abort = read_domain(FEATURES / "abort-iteration-domain.hddl")

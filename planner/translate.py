@@ -1,0 +1,452 @@
+"""HDDL into the planner's own model, so that search, validator and rendering work on it.
+
+:mod:`planner.hddl` reads and checks the files; this module compiles what it
+read into a :class:`~planner.domain.Domain` and :class:`~planner.domain.Problem`:
+
+* types become :class:`~planner.domain.EntityType` with their parent (the
+  planner's type checks accept subtypes);
+* a fact ``(on b1 b2)`` is the state key ``("on", ("b1", "b2"))`` mapped to
+  True (deleted: None), so the search's copy-on-write states, the evaluator's
+  causal links and the validator's replay need nothing new;
+* preconditions, goals and effects become closures over ``(env, get)`` like the
+  planner's own expressions (:class:`~planner.expr.Expr`,
+  :class:`~planner.expr.Effect`), with PDDL's semantics: conditions of
+  conditional effects are read in the state before the action, deletions are
+  applied before additions; ``forall`` and ``exists`` range over the objects of
+  the type and its subtypes;
+* a compound task becomes a :class:`~planner.domain.Method` whose parameters are
+  the task's own (without the ``?``); each HDDL method is one of its
+  decompositions, with the method's variables as its variables, a precondition
+  that also checks that they match the task's arguments, and a binder
+  (:mod:`planner.binding`) that proposes bindings from the state's facts;
+* actions have no agent parameter: they are all the sole agent's
+  (:data:`~planner.domain.SOLE_AGENT`); each costs 1.
+
+A method's ``:constraints`` (``=``, ``not =``: conditions; ``sortof``: a
+narrower type for a variable) are read by the reader and met like its
+precondition.
+
+An initial task network with ``:parameters`` becomes one task,
+:data:`NETWORK`, whose one method has them as variables and the network as
+subtasks (:func:`planner.ipc.write_ipc` leaves it out of the plans it writes).
+
+Refused, by name and position, besides what the reader refuses: partial
+order (:func:`planner.hddl.refuse_partial_order`) and goals other than a
+conjunction of literals.
+"""
+
+from __future__ import annotations
+
+import itertools
+import os
+from collections.abc import Callable
+from typing import Any
+
+from planner import hddl
+from planner.binding import Atom, Test, args_of, compile_binder, is_variable
+from planner.domain import Action, Decomposition, Domain, EntityType, Method, Problem, Subtask
+from planner.expr import Effect, Expr
+from userfiles.errors import FileError
+from userfiles.errors import Problem as FileProblem
+
+BUDGET_MS = 60_000
+"""Default time budget of an HDDL problem (the files give none)."""
+NETWORK = ":htn"
+"""The task standing for an initial task network with ``:parameters``: its one method
+binds them (no HDDL name starts with ':', so it cannot clash with the domain's)."""
+
+Condition = Callable[[dict[str, Any], Any], bool]
+Write = Callable[[dict[str, Any], Any, Any], None]
+
+
+def load_hddl(domain_path: str | os.PathLike[str],
+              problem_path: str | os.PathLike[str]) -> Problem:
+    """Read an HDDL domain and problem and translate them; ``FileError`` on any problem."""
+    domain = hddl.read_domain(domain_path)
+    problem = hddl.read_problem(problem_path, domain)
+    return translate(domain, problem)
+
+
+def translate(domain: hddl.HDDLDomain, problem: hddl.HDDLProblem) -> Problem:
+    """The planner's problem (with its own domain) for a read HDDL domain and problem."""
+    hddl.refuse_partial_order(domain, problem)
+    _refuse(problem)
+    return _Translator(domain, problem).problem()
+
+
+def _refuse(problem: hddl.HDDLProblem) -> None:
+    found = []
+    for formula in _conjuncts(problem.goal):
+        if not _literal(formula):
+            found.append(FileProblem(problem.file, formula.line, formula.col,
+                                     f"goal '{formula.kind}' is not supported: a goal is a "
+                                     "conjunction of facts and negated facts"))
+    if found:
+        raise FileError(found)
+
+
+def _conjuncts(formula: hddl.Formula | None) -> list[hddl.Formula]:
+    """The top-level conjuncts of a formula (nested 'and's flattened)."""
+    if formula is None:
+        return []
+    if formula.kind != "and":
+        return [formula]
+    return [part for child in formula.children for part in _conjuncts(child)]
+
+
+def _literal(formula: hddl.Formula) -> bool:
+    return formula.kind == "pred" or (formula.kind == "not"
+                                      and formula.children[0].kind == "pred")
+
+
+class _Translator:
+    def __init__(self, domain: hddl.HDDLDomain, problem: hddl.HDDLProblem):
+        self.hdomain = domain
+        self.hproblem = problem
+        self.objects = hddl.all_objects(domain, problem)
+        self.types = {name: EntityType(name, {}, {}, parent=parent)
+                      for name, parent in domain.types.items()}
+        self.typed: dict[str, list[str]] = {}
+        for name in domain.types:
+            kinds = set()
+            for kind in domain.types:
+                if name in hddl.supertypes(domain, kind):
+                    kinds.add(kind)
+            self.typed[name] = sorted(o for o, t in self.objects.items() if t in kinds)
+
+    def problem(self) -> Problem:
+        hdomain, hproblem = self.hdomain, self.hproblem
+        goals: dict[tuple[str, Any], Any] = {}
+        for formula in _conjuncts(hproblem.goal):
+            positive = formula.kind == "pred"
+            pred, terms = (formula if positive else formula.children[0]).children
+            goals[(pred, terms)] = True if positive else None
+        protected = {pred for (pred, _), value in goals.items() if value is True}
+        actions = {name: self.action(a, protected) for name, a in hdomain.actions.items()}
+        patterns: dict[str, set[tuple[int, ...]]] = {}
+        methods = {}
+        for task, params in hdomain.tasks.items():
+            decompositions = []
+            for method in hdomain.methods:
+                if method.task.name == task:
+                    dec, needed = self.decomposition(method, params, hdomain)
+                    decompositions.append(dec)
+                    for pred, positions in needed:
+                        patterns.setdefault(pred, set()).add(positions)
+            methods[task] = Method(task, tuple((p[1:], k) for p, k in params),
+                                   tuple(decompositions))
+        initial: dict[tuple[str, Any], Any] = {(f.pred, f.args): True for f in hproblem.init}
+        tasks = tuple((s.name, s.args) for s in hproblem.htn_subtasks)
+        if hproblem.htn_params:  # the search binds them: one task, one method
+            line, col = hproblem.htn_line, hproblem.htn_col
+            network = hddl.HMethod(NETWORK, hproblem.htn_params, hddl.Call(NETWORK, (), line, col),
+                                   None, hproblem.htn_subtasks, True, line, col)
+            dec, needed = self.decomposition(network, (), hdomain)
+            for pred, positions in needed:
+                patterns.setdefault(pred, set()).add(positions)
+            methods[NETWORK] = Method(NETWORK, (), (dec,),
+                                      "the initial task network, its parameters bound")
+            tasks = ((NETWORK, ()),)
+        domain = Domain(hdomain.name, self.types, actions, methods, {}, "", hdomain.file,
+                        dict(hdomain.predicates),
+                        {p: tuple(sorted(s)) for p, s in patterns.items()}, self.additions())
+        return Problem(hproblem.name, domain, dict(self.objects), initial, tasks, goals,
+                       budget_ms=BUDGET_MS, file=hproblem.file)
+
+    # -- actions and methods ---------------------------------------------------------
+
+    def additions(self) -> dict[str, dict[str, tuple[tuple[Any, ...], ...]]]:
+        """What each task may add (``Domain.adds``): the actions' additions, lifted to
+        the compound tasks through their methods' subtasks until nothing changes."""
+        found: dict[str, set[tuple[str, tuple[Any, ...]]]] = {}
+        for name, action in self.hdomain.actions.items():
+            index = {p: i for i, (p, _) in enumerate(action.params)}
+            found[name] = {(pred, tuple(index.get(t) if is_variable(t) else t for t in terms))
+                           for pred, terms in _effect_atoms(action.effect, True)}
+        heads = []
+        for method in self.hdomain.methods:
+            head: dict[str, int] = {}
+            for position, term in enumerate(method.task.args):
+                head.setdefault(term, position)
+            heads.append((method, head))
+        changed = True
+        while changed:
+            changed = False
+            for method, head in heads:
+                target = found.setdefault(method.task.name, set())
+                for sub in method.subtasks:
+                    for pred, pattern in list(found.get(sub.name, ())):
+                        lifted = (pred, tuple(_lift(entry, sub.args, head) for entry in pattern))
+                        if lifted not in target:
+                            target.add(lifted)
+                            changed = True
+        out: dict[str, dict[str, tuple[tuple[Any, ...], ...]]] = {}
+        for task, atoms in found.items():
+            by_pred: dict[str, list[tuple[Any, ...]]] = {}
+            for pred, pattern in sorted(atoms, key=repr):
+                by_pred.setdefault(pred, []).append(pattern)
+            out[task] = {pred: tuple(patterns) for pred, patterns in by_pred.items()}
+        return out
+
+    def action(self, action: hddl.HAction, protected: set[str]) -> Action:
+        pre = self.expr(action.precondition, action.params)
+        effects: tuple[Effect, ...] = ()
+        if action.effect is not None:
+            apply = self.effect(action.effect)
+            preds = {f.children[0] for f in action.effect.walk() if f.kind == "pred"}
+            effects = (Effect(str(action.effect), apply, ",".join(sorted(preds)),
+                              frozenset(p for p, _ in action.params), frozenset(preds)),)
+        threats = tuple((f.children[0].children[0], args_of(f.children[0].children[1]))
+                        for f in _conjuncts(action.effect)
+                        if f.kind == "not" and f.children[0].children[0] in protected)
+        return Action(action.name, action.params, None, pre, effects, 1.0, 1.0,
+                      deletes=threats)
+
+    def decomposition(self, method: hddl.HMethod, task_params: hddl.Params,
+                      domain: hddl.HDDLDomain
+                      ) -> tuple[Decomposition, set[tuple[str, tuple[int, ...]]]]:
+        head = [(term, param[1:]) for term, (param, _) in zip(method.task.args, task_params,
+                                                              strict=True)]
+        whole = method.precondition
+        if method.constraints is not None:  # '=' and 'not =' constraints are conditions too
+            whole = (method.constraints if whole is None else
+                     hddl.Formula("and", (whole, method.constraints), whole.line, whole.col))
+        condition = self.condition(whole) if whole else None
+
+        def matches(env: dict, get: Any) -> bool:
+            for term, param in head:
+                if env[param] != (env[term] if is_variable(term) else term):
+                    return False
+            return condition is None or condition(env, get)
+
+        call = f"({method.task.name} {' '.join(method.task.args)})".replace(" )", ")")
+        text = f"task {call}, {whole or '()'}"
+        reads = {f.children[0] for f in whole.walk() if f.kind == "pred"} if whole else set()
+        pre = Expr(text, matches, frozenset(dict(method.params)), frozenset(reads), "bool")
+        tests = [self.test(f, {}) for f in _conjuncts(whole)]
+        if method.subtasks and method.subtasks[0].name in domain.actions:
+            first = method.subtasks[0]
+            action = domain.actions[first.name]
+            rename = {p: t for (p, _), t in zip(action.params, first.args, strict=True)}
+            tests += [self.test(f, rename) for f in _conjuncts(action.precondition)]
+        bind, patterns = compile_binder(dict(method.params), head, tests, self.typed)
+        subtasks = tuple(Subtask(s.name, tuple(_term(t) for t in s.args),
+                                 f"({' '.join((s.name, *s.args))})", args_of(s.args))
+                         for s in method.subtasks)
+        return Decomposition(method.name, method.params, pre, subtasks, bind=bind), patterns
+
+    def test(self, formula: hddl.Formula, rename: dict[str, str]) -> Test:
+        """A conjunct for a binder; ``rename`` maps an action's parameters to the terms
+        a method gives them (empty: the formula is the method's own)."""
+        variables = frozenset(t for t in (rename.get(v, v) for v in _free(formula))
+                              if is_variable(t))
+        if formula.kind == "pred":
+            pred, terms = formula.children
+            atom = (pred, tuple(rename.get(t, t) for t in terms))
+            return Test(variables, _holds(*atom), atom)
+        condition = self.condition(formula)
+        if not rename:
+            return Test(variables, condition)
+        pairs = tuple(rename.items())
+
+        def holds(binding: dict, get: Any) -> bool:
+            return condition({p: binding[t] if is_variable(t) else t for p, t in pairs}, get)
+
+        return Test(variables, holds)
+
+    # -- conditions --------------------------------------------------------------------
+
+    def expr(self, formula: hddl.Formula | None, params: hddl.Params) -> Expr | None:
+        if formula is None:
+            return None
+        reads = {f.children[0] for f in formula.walk() if f.kind == "pred"}
+        return Expr(str(formula), self.condition(formula), frozenset(p for p, _ in params),
+                    frozenset(reads), "bool")
+
+    def condition(self, formula: hddl.Formula) -> Condition:
+        """A closure telling whether ``formula`` holds, given the variables and the state."""
+        kind, children = formula.kind, formula.children
+        if kind == "pred":
+            return _holds(*children)
+        if kind == "=":
+            left, right = (_term(t) for t in children)
+            return lambda env, get: left.fn(env, get) == right.fn(env, get)
+        if kind == "not":
+            inner = self.condition(children[0])
+            return lambda env, get: not inner(env, get)
+        if kind in ("and", "or"):
+            parts = tuple(self.condition(c) for c in children)
+            if len(parts) == 1:
+                return parts[0]
+            if kind == "and":
+
+                def conjunction(env: dict, get: Any) -> bool:
+                    for part in parts:
+                        if not part(env, get):
+                            return False
+                    return True
+
+                return conjunction
+
+            def disjunction(env: dict, get: Any) -> bool:
+                for part in parts:
+                    if part(env, get):
+                        return True
+                return False
+
+            return disjunction
+        if kind == "imply":
+            a, b = (self.condition(c) for c in children)
+            return lambda env, get: not a(env, get) or b(env, get)
+        params, body = children
+        test = self.condition(body)
+        names = [v for v, _ in params]
+        domains = [self.typed.get(t, []) for _, t in params]
+        every = kind == "forall"
+
+        def quantified(env: dict, get: Any) -> bool:
+            local = dict(env)
+            for values in itertools.product(*domains):
+                local.update(zip(names, values, strict=True))
+                if test(local, get) is not every:
+                    return not every
+            return every
+
+        return quantified
+
+    # -- effects ---------------------------------------------------------------------------
+
+    def effect(self, formula: hddl.Formula) -> Write:
+        """A closure applying an effect: deletions first, then additions."""
+        literals = _conjuncts(formula)
+        if all(_literal(f) for f in literals):  # the common case, in one flat closure
+            deletes = tuple((f.children[0].children[0], args_of(f.children[0].children[1]))
+                            for f in literals if f.kind == "not")
+            adds = tuple((f.children[0], args_of(f.children[1]))
+                         for f in literals if f.kind == "pred")
+
+            def flat(env: dict, get: Any, set: Any) -> None:
+                for pred, key in deletes:
+                    set(pred, key(env), None)
+                for pred, key in adds:
+                    set(pred, key(env), True)
+
+            return flat
+        deleting, adding = self.write(formula, False), self.write(formula, True)
+
+        def apply(env: dict, get: Any, set: Any) -> None:
+            deleting(env, get, set)
+            adding(env, get, set)
+
+        return apply
+
+    def write(self, formula: hddl.Formula, adding: bool) -> Write:
+        """A closure making the additions (or the deletions) of an effect."""
+        kind, children = formula.kind, formula.children
+        if kind == "pred":
+            if not adding:
+                return _nothing
+            pred, key = children[0], args_of(children[1])
+            return lambda env, get, set: set(pred, key(env), True)
+        if kind == "not":
+            if adding:
+                return _nothing
+            pred, key = children[0].children[0], args_of(children[0].children[1])
+            return lambda env, get, set: set(pred, key(env), None)
+        if kind == "and":
+            parts = tuple(self.write(c, adding) for c in children)
+            parts = tuple(p for p in parts if p is not _nothing)
+            if not parts:
+                return _nothing
+
+            def every(env: dict, get: Any, set: Any) -> None:
+                for part in parts:
+                    part(env, get, set)
+
+            return every
+        if kind == "when":
+            condition, inner = self.condition(children[0]), self.write(children[1], adding)
+            if inner is _nothing:
+                return _nothing
+
+            def when(env: dict, get: Any, set: Any) -> None:
+                if condition(env, get):
+                    inner(env, get, set)
+
+            return when
+        params, body = children  # forall
+        inner = self.write(body, adding)
+        if inner is _nothing:
+            return _nothing
+        names = [v for v, _ in params]
+        domains = [self.typed.get(t, []) for _, t in params]
+
+        def each(env: dict, get: Any, set: Any) -> None:
+            local = dict(env)
+            for values in itertools.product(*domains):
+                local.update(zip(names, values, strict=True))
+                inner(local, get, set)
+
+        return each
+
+
+def _nothing(env: dict, get: Any, set: Any) -> None:
+    """An effect part with nothing to write in this pass."""
+
+
+def _effect_atoms(formula: hddl.Formula | None, adding: bool) -> list[Atom]:
+    """The facts an effect may add (or delete), conditional ones included."""
+    if formula is None:
+        return []
+    kind, children = formula.kind, formula.children
+    if kind == "pred":
+        return [children] if adding else []
+    if kind == "not":
+        return [] if adding else [children[0].children]
+    if kind == "and":
+        return [atom for child in children for atom in _effect_atoms(child, adding)]
+    return _effect_atoms(children[1], adding)  # when (condition, effect), forall (params, e)
+
+
+def _lift(entry: Any, args: tuple[str, ...], head: dict[str, int]) -> Any:
+    """A subtask's lifted argument seen from the method's task: the index of the task
+    parameter it is, a constant, or None (a variable the task does not fix)."""
+    if entry.__class__ is not int:
+        return entry
+    term = args[entry]
+    return head.get(term) if is_variable(term) else term
+
+
+def _free(formula: hddl.Formula) -> set[str]:
+    """The variables a formula leaves to be bound (its quantifiers bind the others)."""
+    kind, children = formula.kind, formula.children
+    if kind == "pred":
+        return {t for t in children[1] if is_variable(t)}
+    if kind == "=":
+        return {t for t in children if is_variable(t)}
+    if kind in ("forall", "exists"):
+        return _free(children[1]) - {v for v, _ in children[0]}
+    return set().union(*(_free(c) for c in children))
+
+
+def _term(term: str) -> Expr:
+    """A subtask argument or an '=' operand: a variable's value or a constant."""
+    if is_variable(term):
+        return Expr(term, lambda env, get: env[term], frozenset({term}), frozenset(), None)
+    return Expr(term, lambda env, get: term, frozenset(), frozenset(), None)
+
+
+def _holds(pred: str, terms: tuple[str, ...]) -> Condition:
+    """Whether a fact holds; the common shapes get a closure of their own (the search
+    checks preconditions millions of times)."""
+    if not terms:
+        return lambda env, get: get(pred, ()) is True
+    if all(is_variable(t) for t in terms):
+        if len(terms) == 1:
+            (a,) = terms
+            return lambda env, get: get(pred, (env[a],)) is True
+        if len(terms) == 2:
+            a, b = terms
+            return lambda env, get: get(pred, (env[a], env[b])) is True
+    key = args_of(terms)
+    return lambda env, get: get(pred, key(env)) is True
