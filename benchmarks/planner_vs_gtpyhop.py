@@ -129,7 +129,7 @@ def timed(call: Callable[[], Any]) -> tuple[Any, float]:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--json", action="store_true", help="end with one JSON line of figures")
+    parser.add_argument("--json", action="store_true", help="print one JSON line of figures (the table goes to stderr)")
     parser.add_argument("--runs", type=int, default=5, help="runs per instance (median)")
     parser.add_argument("--limit", type=float, default=60.0, metavar="S",
                         help="time limit per run, in CPU seconds")
@@ -143,8 +143,9 @@ def main() -> int:
         return 2
     gtpyhop, packages = gtpyhop_bundle()
     rows = []
+    table = sys.stderr if args.json else sys.stdout  # with --json, stdout is one JSON line
     print(f"{'instance':<24} {'ours ms':>10} {'len':>5} {'GTPyhop ms':>11} {'len':>5} "
-          f"{'ratio':>7}")
+          f"{'ratio':>7}", file=table)
     for name, (attribute, count) in DOMAINS.items():
         theirs = gtpyhop_instances(name, packages[name])
         for number in range(1, min(count, args.upto) + 1):
@@ -182,7 +183,7 @@ def main() -> int:
                   f"{_show(row['ours_length']):>5} "
                   f"{_show(theirs_ms, number in theirs):>11} "
                   f"{_show(row['gtpyhop_length'], number in theirs):>5} "
-                  f"{_show(ratio, ratio is not None):>7}", flush=True)
+                  f"{_show(ratio, ratio is not None):>7}", file=table, flush=True)
     both = [r for r in rows if r["ratio"] is not None]
     figures = {
         "instances": len(rows),
@@ -207,8 +208,9 @@ def main() -> int:
             round(solved[-1]["ours_ms"], 1) if solved else None)
     print(f"\nsolved: ours {figures['ours_solved']}/{figures['instances']}, GTPyhop "
           f"{figures['gtpyhop_solved']}/{figures['gtpyhop_instances']} (its translations); "
-          f"median ratio GTPyhop/ours on the {len(both)} both solve: {figures['median_ratio']}")
-    print(f"solved by ours only: {', '.join(figures['only_ours']) or 'none'}")
+          f"median ratio GTPyhop/ours on the {len(both)} both solve: {figures['median_ratio']}",
+          file=table)
+    print(f"solved by ours only: {', '.join(figures['only_ours']) or 'none'}", file=table)
     if args.json:
         print(json.dumps(figures))
     return 0
