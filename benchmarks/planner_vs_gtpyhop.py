@@ -129,7 +129,8 @@ def timed(call: Callable[[], Any]) -> tuple[Any, float]:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--json", action="store_true", help="print one JSON line of figures (the table goes to stderr)")
+    parser.add_argument("--json", action="store_true",
+                        help="print one JSON line of figures (the table goes to stderr)")
     parser.add_argument("--runs", type=int, default=5, help="runs per instance (median)")
     parser.add_argument("--limit", type=float, default=60.0, metavar="S",
                         help="time limit per run, in CPU seconds")
