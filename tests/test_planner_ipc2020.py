@@ -14,7 +14,7 @@ import pytest
 
 from planner import load_hddl, plan, validate
 from planner.ipc import read_ipc, shape, write_ipc
-from tests.conftest import SUITES, problems
+from conftest import SUITES, problems
 
 SUITE = SUITES / "ipc2020"
 FEATURES = SUITE / "tests" / "ipc2020-feature-tests"
