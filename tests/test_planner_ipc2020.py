@@ -11,10 +11,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from conftest import SUITES, problems
 
 from planner import load_hddl, plan, validate
 from planner.ipc import read_ipc, shape, write_ipc
-from conftest import SUITES, problems
 
 SUITE = SUITES / "ipc2020"
 FEATURES = SUITE / "tests" / "ipc2020-feature-tests"
