@@ -52,9 +52,12 @@ def test_clean_up_runs_the_plan_of_fig_9b():
                     ("dump", {"object": "yellow-bottle", "into": "trash"})]
 
 
-def test_unreachable_bottle_replans_with_the_human_as_in_fig_10():
-    world = living_room_world()
-    agents = []
+def fig10_world(**kwargs) -> tuple[World, list[tuple[str, str]]]:
+    """The clean-up of Fig. 10, scripted: Jido's pick fails (out of reach); asked for
+    help, Alice agrees and hands the bottle over.  Also returns the (atomic, agent) list
+    of the requests, filled as the run goes."""
+    world = living_room_world(**kwargs)
+    agents: list[tuple[str, str]] = []
     original = world.executor.start
 
     def start(request, reporter):
@@ -72,6 +75,11 @@ def test_unreachable_bottle_replans_with_the_human_as_in_fig_10():
         original(request, reporter)
 
     world.executor.start = start
+    return world, agents
+
+
+def test_unreachable_bottle_replans_with_the_human_as_in_fig_10():
+    world, agents = fig10_world()
     run = world.sup.start_task("clean-up", {"object": "yellow-bottle"})
     world.run(120)
     assert run.outcome == "done"

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 from scripted import World
-from test_planning import living_room_world
+from test_planning import fig10_world
 
 from shary.log import ContextLog, LogEvent, read_events
 from shary.timeline import render_timeline, write_timeline
@@ -65,21 +65,7 @@ def clean_up(tmp_path: Path) -> Path:
     she agrees and hands the bottle over, and Jido dumps it (as in test_planning)."""
     path = tmp_path / "clean-up.sqlite"
     with ContextLog(path) as log:
-        world = living_room_world(log=log)
-        start = world.executor.start
-
-        def out_of_reach(request, reporter):
-            if request.atomic == "pick" and request.agent == "jido":
-                world.facts.set("yellow-bottle", "robot_reach", False)
-                world.executor.failures["pick"] = ["out of reach"]
-            if request.atomic == "speak" and "cannot reach" in request.args["text"]:
-                world.loop.call_later(2, world.sup.receive_act, "alice", "H-AGREE")
-                world.loop.call_later(10, world.facts.remove, "yellow-bottle", "isOn",
-                                      "coffee-table")
-                world.loop.call_later(10, world.facts.add, "jido", "isHolding", "yellow-bottle")
-            start(request, reporter)
-
-        world.executor.start = out_of_reach
+        world, _ = fig10_world(log=log)
         run = world.sup.start_task("clean-up", {"object": "yellow-bottle"})
         world.run(120)
         assert run.outcome == "done"
