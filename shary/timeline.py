@@ -12,9 +12,10 @@ common time axis in engine seconds. Inside a lane:
   act x task node is suspended; acts the agent *sent* (``act-received``,
   H-AGREE …) are diamonds, hollow when no task expected them
   (``act-unexpected``);
-* **actions** (``exec-request`` … ``exec-result``, paired by request id) are
-  bars coloured by how they ended: done, failed, cancelled, or still running
-  when the log ends (hatched, up to the end of the log);
+* **actions** (``exec-request`` … ``exec-result``, paired by request id; and a
+  simulated person's own actions, ``person-action`` … ``person-action-end``)
+  are bars coloured by how they ended: done, failed, cancelled, or still
+  running when the log ends (hatched, up to the end of the log);
 * **attention** (``fact-added`` / ``fact-removed`` of ``AGENT looksAt X``) is
   a thin row, drawn only when the log holds such facts.
 
@@ -206,13 +207,15 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
                     item.kind = "unexpected"
                     item.tooltip += "\nexpected by no task"
                     break
-        elif e.kind == "exec-request" and e.agent and isinstance(d.get("request"), str):
+        elif (e.kind in ("exec-request", "person-action") and e.agent
+              and isinstance(d.get("request"), str)):
             item = _action_item(e)
             open_actions[d["request"]] = item
             items.append(item)
         elif e.kind == "exec-cancel" and isinstance(d.get("request"), str):
             cancels[d["request"]] = f"cancel asked at {_t(e.time)} s: {d.get('reason', '')}"
-        elif e.kind == "exec-result" and isinstance(d.get("request"), str):
+        elif (e.kind in ("exec-result", "person-action-end")
+              and isinstance(d.get("request"), str)):
             item = open_actions.pop(d["request"], None)
             if item is not None:
                 status = str(d.get("status", "done"))

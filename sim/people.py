@@ -27,6 +27,27 @@ UNSPOKEN_ANSWER = 5.0
 """Seconds after an act begins by which a person answers even if the robot said nothing."""
 
 
+class _Logged(Activity):
+    """A person's action, logged like the robot's (``person-action`` … ``-end``) so that
+    the timeline shows each person's stream, as HATP's plans do (Fig. 10)."""
+
+    def __init__(self, person: Person, inner: Activity, atomic: str, args: dict[str, Any]):
+        self.person = person
+        self.inner = inner
+        self.atomic = atomic
+        self.args = args
+        self.label = atomic
+        self.id = ""
+
+    def advance(self, dt: float) -> bool:
+        if not self.id:
+            self.id = self.person.log_start(self)
+        if self.inner.advance(dt):
+            self.person.log_end(self, "done")
+            return True
+        return False
+
+
 class Person:
     """One simulated person (see the module's docstring)."""
 
@@ -49,6 +70,8 @@ class Person:
         self.busy: int | None = None
         self._pending: list[tuple[Any, str, Any]] = []
         self._current_step: Any = None
+        self._open: list[_Logged] = []
+        self._action_ids = 0
 
     # -- start -------------------------------------------------------------------
 
@@ -178,9 +201,28 @@ class Person:
 
     # -- doing things ------------------------------------------------------------------
 
+    def _logged(self, activity: Activity, atomic: str, **args: Any) -> Activity:
+        return _Logged(self, activity, atomic, args)
+
+    def log_start(self, action: _Logged) -> str:
+        self._action_ids += 1
+        action_id = f"{self.name}-{self._action_ids}"
+        self._open.append(action)
+        self.sup.record("person-action", agent=self.name, atomic=action.atomic,
+                        args=action.args, request=action_id)
+        return action_id
+
+    def log_end(self, action: _Logged, status: str) -> None:
+        if action in self._open:
+            self._open.remove(action)
+            self.sup.record("person-action-end", agent=self.name, request=action.id,
+                            status=status)
+
     def _run(self, activity: Activity, done: Callable[[], Any] | None = None) -> None:
         if self.busy is not None:
             self.sim.stop(self.busy)
+            for action in list(self._open):
+                self.log_end(action, "cancelled")
 
         def over() -> None:
             self.busy = None
@@ -205,7 +247,8 @@ class Person:
 
     def walk_to(self, place: str) -> Activity:
         x, y, yaw, seated = HUMAN_PLACES[place]
-        return self._walk(lambda: (x, y, yaw), seated, f"walk to {place}")
+        return self._logged(self._walk(lambda: (x, y, yaw), seated, f"walk to {place}"),
+                            "walk", to=place)
 
     def _walk_near(self, obj: str) -> Activity:
         def goal() -> tuple[float, float, float]:
@@ -214,7 +257,7 @@ class Person:
                         if not HUMAN_PLACES[p][3] else math.inf)
             x, y, _, _ = HUMAN_PLACES[place]
             return x, y, math.atan2(target[1] - y, target[0] - x)
-        return self._walk(goal, what=f"walk to {obj}")
+        return self._logged(self._walk(goal, what=f"walk to {obj}"), "walk", to=obj)
 
     def _reach(self, point: Callable[[], tuple[float, float, float]] | None) -> Activity:
         def act() -> None:
@@ -230,8 +273,9 @@ class Person:
                 self.sim.attach(obj, self.name)
             else:
                 self.say(self.name, f"(cannot reach the {obj})")
-        return Sequence([self._reach(lambda: self.sim.world.position(obj)), Instant(grab),
-                         self._reach(None)], f"pick {obj}")
+        return self._logged(Sequence([self._reach(lambda: self.sim.world.position(obj)),
+                                      Instant(grab), self._reach(None)], f"pick {obj}"),
+                            "pick", object=obj)
 
     def help(self, obj: str) -> None:
         """Fetch ``obj`` and hand it to the robot (the helper's part of Fig. 10)."""
@@ -251,8 +295,11 @@ class Person:
         steps: list[Activity] = []
         if self.sim.held_by(self.name) != obj:
             steps += [self._walk_near(obj), self._pick(obj)]
-        steps += [self._walk(beside_robot, what="walk to the robot"), self._reach(hold_out),
-                  Instant(hand_over, "hold out")]
+        robot = self.sim.robot
+        steps += [self._logged(self._walk(beside_robot, what=f"walk to {robot}"), "walk",
+                               to=robot),
+                  self._logged(Sequence([self._reach(hold_out), Instant(hand_over, "hold out")],
+                                        "give"), "give", object=obj, to=robot)]
         if self.busy is not None and self._current_step is not None:
             self._script.insert(0, self._current_step)  # helping first, then back to it
         self._run(Sequence(steps, f"help with {obj}"), self._next_script_step)
@@ -308,8 +355,9 @@ class Person:
                 self.sim.settle(obj, spot())
                 self.sim.observe()
 
-        return Sequence([self._reach(spot), Instant(let_go, f"put {obj}"), self._reach(None)],
-                        f"put {obj} on {furniture}")
+        return self._logged(Sequence([self._reach(spot), Instant(let_go, f"put {obj}"),
+                                      self._reach(None)], f"put {obj} on {furniture}"),
+                            "place", object=obj, on=furniture)
 
     @property
     def pending(self) -> bool:

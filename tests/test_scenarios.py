@@ -93,6 +93,10 @@ def test_unreachable_pick_fails_with_its_reason_and_the_plan_asks_alice(runs):
     assert any(step.endswith("askhelp") for step in plans[-1].data["steps"])
     speech = [e.data["text"] for e in _events(runs, "clean-up-unreachable", "speech")]
     assert any("Could you give it to me?" in text for text in speech)
+    # Alice's own stream, as in Fig. 10: she fetches the bottle and hands it over
+    alice = [e.data["atomic"] for e in _events(runs, "clean-up-unreachable", "person-action")]
+    assert alice == ["walk", "pick", "walk", "give"]
+    assert 'data-atomic="pick"' in (runs["clean-up-unreachable"][1] / "timeline.svg").read_text()
 
 
 def test_initiative_comes_from_the_chronicle_not_a_request(runs):
