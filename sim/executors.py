@@ -405,10 +405,15 @@ class RobotExecutors:
                          Instant(release, "release"), self._home()], f"give {object}",
                         running.failed)
 
-    def take_from(self, person: str, obj: str, done: Callable[[], Any]) -> None:
-        """A person holds ``obj`` out: reach their hand, grasp, tuck (the receiving side)."""
+    def take_from(self, person: str, obj: str, done: Callable[[], Any]) -> bool:
+        """A person holds ``obj`` out: reach their hand and grasp (the receiving side).
+
+        Not a request of the supervisor's (the person acts; the robot's ask-help act
+        only watches for the object in its hand), so nothing can cancel it: it is a
+        second or two of arm motion.  False when the robot's gripper is not free.
+        """
         if self.sim.held_by(self.robot) is not None or self.sim.holder.get(obj) != person:
-            return
+            return False
 
         def grasp() -> None:
             if failure:  # the hand was out of reach: nothing changes hands
@@ -425,4 +430,4 @@ class RobotExecutors:
         self.sim.start(Sequence([self._gripper(0.04), self._arm_to(holder, lambda: hand,
                                                                    f"{person}'s hand"),
                                  Instant(grasp, "take")], f"take {obj} from {person}"))
-
+        return True

@@ -289,8 +289,11 @@ class Person:
             return (a.x + 0.45 * math.cos(a.yaw), a.y + 0.45 * math.sin(a.yaw), 0.85)
 
         def hand_over() -> None:
-            if self.sim.held_by(self.name) == obj:
-                self.robot_arm.take_from(self.name, obj, self._handed)
+            if self.sim.held_by(self.name) != obj:
+                return
+            if not self.robot_arm.take_from(self.name, obj, self._handed):
+                self.say(self.name, f"({self.sim.robot}'s hand is not free; keeps the {obj})")
+                self._handed()
 
         steps: list[Activity] = []
         if self.sim.held_by(self.name) != obj:
