@@ -149,13 +149,16 @@ def cmd_validate(args: argparse.Namespace) -> int:
     from shary.facts import FactDatabase
     from shary.io.recipes import builtin_library_files, load_library
     from shary.io.schemes import parse_scheme
+    from sim.scenario import builtin_profiles, builtin_scenarios
 
     paths = list(args.paths) or (builtin.files("schemes") + builtin_library_files()
-                                 + planner.builtin_domains() + planner.builtin_problems())
+                                 + planner.builtin_domains() + planner.builtin_problems()
+                                 + builtin_profiles() + list(builtin_scenarios().values()))
     problems: list[Problem] = []
     schemes: list[yamlsafe.Located] = []
     libraries: list[Path] = []
     planning: list[tuple[Path, yamlsafe.Located]] = []
+    simulated: list[tuple[str, Path]] = []
     acts: ActRegistry = builtin_acts()
     for path in paths:
         if path.suffix == ".ttl":
@@ -181,13 +184,17 @@ def cmd_validate(args: argparse.Namespace) -> int:
             libraries.append(path)
         elif kind in ("domain", "problem"):
             planning.append((path, located))
+        elif kind in ("scenario", "profile"):
+            simulated.append((kind, path))
         else:
             problems.extend(located.problems)
             what = "a mapping" if isinstance(located.data, dict) else "expected a mapping"
-            problems.append(located.problem((), f"not a scheme, acts, recipe, domain or "
-                                            f"problem file: {what} with 'scheme:', 'acts:', "
-                                            "'domain:', 'problem:', or some of 'predicates:', "
-                                            "'atomic:', 'tasks:', 'recipes:', 'chronicles:'"))
+            problems.append(located.problem((), f"not a scheme, acts, recipe, domain, "
+                                            f"problem, scenario or profile file: {what} with "
+                                            "'scheme:', 'acts:', 'domain:', 'problem:', "
+                                            "'scenario:', 'profile:', or some of "
+                                            "'predicates:', 'atomic:', 'tasks:', 'recipes:', "
+                                            "'chronicles:'"))
     conditions = ConditionRegistry.installed()
     for located in schemes:
         try:
@@ -201,6 +208,8 @@ def cmd_validate(args: argparse.Namespace) -> int:
             problems.extend(err.problems)
     for path, located in planning:
         problems.extend(_check_planning(path, located))
+    for kind, path in simulated:
+        problems.extend(_check_simulated(kind, path, acts))
     _print_problems(sorted(problems))
     bad = {p.file for p in problems}
     for path in paths:
@@ -210,6 +219,21 @@ def cmd_validate(args: argparse.Namespace) -> int:
         _err.print(f"{len(problems)} problem(s) in {len(bad)} file(s) of {len(paths)} checked")
         return EXIT_BAD_FILE
     return 0
+
+
+def _check_simulated(kind: str, path: Path, acts: ActRegistry) -> list[Problem]:
+    """Problems of a scenario (with the recipes it names) or of a people's profile."""
+    from sim.run import load
+    from sim.scenario import load_profile
+
+    try:
+        if kind == "scenario":
+            load(path)
+        else:
+            load_profile(path, acts=set(acts.vocabulary()))
+    except FileError as err:
+        return list(err.problems)
+    return []
 
 
 def _check_planning(path: Path, located: yamlsafe.Located) -> list[Problem]:
@@ -240,6 +264,10 @@ def _kind_of(located: yamlsafe.Located) -> str | None:
         return "domain"
     if "problem" in data:
         return "problem"
+    if "scenario" in data:
+        return "scenario"
+    if "profile" in data:
+        return "profile"
     if "scheme" in data or "states" in data:
         return "scheme"
     if set(data) == {"acts"}:

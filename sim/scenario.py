@@ -84,6 +84,10 @@ class Scenario:
     expect: Expect
 
 
+def builtin_profiles() -> list[Path]:
+    return sorted(PROFILES_DIR.glob("*.yaml"))
+
+
 def builtin_scenarios() -> dict[str, Path]:
     """Scenario name -> file, for the scenarios shipped in ``sim/scenarios``."""
     return {p.stem: p for p in sorted(SCENARIOS_DIR.glob("*.yaml"))}
@@ -114,11 +118,11 @@ def recipe_files(path: str | Path) -> list[Path]:
             if isinstance(f, str) and (path.parent / f).is_file()]
 
 
-def load_profile(name: str, things: set[str] = frozenset(), acts: set[str] = frozenset(),
-                 atomic: set[str] = frozenset()) -> Profile:
-    """A named profile (``sim/profiles/NAME.yaml``), checked; the names, acts and atomic
-    tasks given (when given) are what its targets and answers may name."""
-    path = PROFILES_DIR / f"{name}.yaml"
+def load_profile(name: str | Path, things: set[str] = frozenset(),
+                 acts: set[str] = frozenset(), atomic: set[str] = frozenset()) -> Profile:
+    """A profile, by name (``sim/profiles/NAME.yaml``) or file, checked; the names, acts
+    and atomic tasks given (when given) are what its targets and answers may name."""
+    path = Path(name) if isinstance(name, Path) else PROFILES_DIR / f"{name}.yaml"
     located = yamlsafe.load_file(path)
     problems = check(located, validator(SCHEMAS_DIR, "profile"))
     if not problems:
@@ -126,7 +130,7 @@ def load_profile(name: str, things: set[str] = frozenset(), acts: set[str] = fro
             located.problem(where, message, key=key)), (), located.data, things, acts, atomic)
     if problems:
         raise FileError(problems)
-    return profile_from(name, located.data)
+    return profile_from(path.stem, located.data)
 
 
 def load_scenario(path: str | Path, *, known_tasks: dict[str, tuple[str, ...]] | None = None,

@@ -270,3 +270,12 @@ def test_bare_numbers_and_spaces_are_durations(tmp_path):
     path.write_text(text.replace("within: 20s", "within: 20").replace(
         "goals:", 'timeout: "60 s"\ngoals:'))
     assert run_scenario(path).passed
+
+
+def test_shary_validate_checks_scenarios_and_profiles(tmp_path, capsys):
+    profile = tmp_path / "p.yaml"
+    profile.write_text("profile: p\nanswers: {ASK-TAKS: {reply: H-AGREE}}\n")
+    assert main(["validate", str(profile), str(builtin_scenarios()["give-bottle"])]) == 2
+    captured = capsys.readouterr()
+    assert f"{profile}:2:11: error: unknown act 'ASK-TAKS'" in captured.err
+    assert "ok    " in captured.out and "give-bottle.yaml" in captured.out
