@@ -19,10 +19,12 @@ import itertools
 from typing import Any
 
 from planner.domain import Problem, SelectedRule
-from planner.plan import CausalLink, Plan, PlanAction, TreeNode
+from planner.plan import CausalLink, Plan, PlanAction, Relations, TreeNode
 
 BASE_CRITERIA = ("cost", "duration", "human-effort", "robot-effort", "rules")
 MONOTONE = ("cost", "human-effort", "robot-effort")
+REPLAYED = ("state", "crossed-links")
+"""The kinds of rule that score what the replay finds: states, causal links."""
 
 
 class Evaluator:
@@ -40,6 +42,10 @@ class Evaluator:
                             for c in MONOTONE)
         self.kinds: dict[str, str | None] = {}
         """Each agent's kind, as first looked up (the problem's static attribute)."""
+        self.initial = dict(problem.initial)
+        """The state the plans start from (a plan may derive its links after the search)."""
+        self.replays = any(r.rule.kind in REPLAYED for r in problem.rules.values())
+        """Whether the score needs the replay of every plan (see :meth:`evaluate`)."""
 
     def lower_bound(self, cost: float, human: float, robot: float) -> float:
         """A score no completion of a partial plan can go below."""
@@ -101,17 +107,34 @@ class Evaluator:
     def evaluate(self, actions: list[tuple], tree: dict[int, TreeNode],
                  roots: list[int]) -> Plan:
         """Links, orderings, times, rules and score of the actions ``(name, args, agent,
-        cost, duration)`` in plan order."""
+        cost, duration)`` in plan order.  When the score needs no replay of the plan (one
+        agent, whose chain times everything, and no rule on states or links), the links
+        and orderings are left for the plan to derive if they are ever read."""
+        penalties: dict[str, float] = {name: 0.0 for name in self.problem.rules}
+        violations: list[str] = []
+        if self.replays or len({agent for _, _, agent, _, _ in actions}) > 1:
+            links, orderings = self._replay(actions, penalties, violations)
+            plan = Plan(self._schedule(actions, links, orderings), links, orderings, tree,
+                        roots)
+        else:
+            plan = Plan(self._schedule(actions, [], []), None, None, tree, roots,
+                        relate=lambda: self._replay(actions, {}, []))
+        self._plan_rules(plan, penalties, violations)
+        self._score(plan, penalties, violations)
+        return plan
+
+    def _replay(self, actions: list[tuple], penalties: dict[str, float],
+                violations: list[str]) -> Relations:
+        """Replay the actions from the initial state: their causal links and orderings
+        (sorted), and the state rules' penalties and violations on the way."""
         problem = self.problem
-        values = dict(problem.initial)
+        values = dict(self.initial)
         writer: dict[tuple[str, str], int] = {}
         readers: dict[tuple[str, str], list[int]] = {}
         links: dict[tuple, CausalLink] = {}
         orderings: set[tuple[int, int]] = set()
         during_rules = [r for r in problem.rules.values()
                         if r.rule.kind == "state" and r.rule.during]
-        violations: list[str] = []
-        penalties: dict[str, float] = {name: 0.0 for name in problem.rules}
         reads: set[tuple[str, str]] = set()
         writes: list[tuple[tuple[str, str], Any]] = []
 
@@ -157,16 +180,12 @@ class Evaluator:
         for selected in problem.rules.values():
             if selected.rule.kind == "state" and not selected.rule.during:
                 self._state_rule(selected, values, writer, actions, penalties, violations)
-        timed = self._schedule(actions, list(links.values()), orderings)
-        plan = Plan(timed, sorted(links.values(), key=lambda k: (k.consumer, k.producer,
-                                                                  k.entity, k.attribute)),
-                    sorted(orderings), tree, roots)
-        self._plan_rules(plan, penalties, violations)
-        self._score(plan, penalties, violations)
-        return plan
+        return (sorted(links.values(), key=lambda k: (k.consumer, k.producer, k.entity,
+                                                       k.attribute)),
+                sorted(orderings))
 
     def _schedule(self, actions: list[tuple], links: list[CausalLink],
-                  orderings: set[tuple[int, int]]) -> list[PlanAction]:
+                  orderings: list[tuple[int, int]]) -> list[PlanAction]:
         """Each action starts when its predecessors (links, orderings, its agent's
         previous action) are over."""
         if len({agent for _, _, agent, _, _ in actions}) <= 1:
