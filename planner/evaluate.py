@@ -68,38 +68,36 @@ class Evaluator:
         ``root_ids`` are the tree ids of the problem's top tasks."""
         tree: dict[int, TreeNode] = {}
         roots: list[int] = []
-        alias: dict[int, int] = {}
-        actions: list[tuple] = []  # (name, args, agent, cost, duration): timed later
-
-        def attach(parent: int, node: TreeNode) -> None:
-            parent = alias.get(parent, parent)
-            if parent in tree:
-                tree[parent].children.append(node.id)
-            tree[node.id] = node
-
         for root, (name, args) in zip(root_ids, self.problem.tasks, strict=True):
             tree[root] = TreeNode(root, name, tuple(args))
             roots.append(root)
-        top = set(roots)
+        # The top tasks nothing was recorded under yet: the first record under one is
+        # its own decomposition (or action), which the top node then stands for (alias).
+        fresh = set(roots)
+        alias: dict[int, int] = {}
+        actions: list[tuple] = []  # (name, args, agent, cost, duration): timed later
         for record in records:
+            parent = record[2]
             if record[0] == "method":
-                _, node, parent, name, args, dec, binding = record
-                if parent in top and tree[parent].decomposition is None \
-                        and tree[parent].action is None and not tree[parent].children:
-                    tree[parent].decomposition = dec
-                    tree[parent].bindings = dict(binding)
+                _, node, _, name, args, dec, binding = record
+                if parent in fresh:
+                    fresh.discard(parent)
+                    top = tree[parent]
+                    top.decomposition = dec
+                    top.bindings = dict(binding)
                     alias[node] = parent
-                else:
-                    attach(parent, TreeNode(node, name, tuple(args), dec, bindings=dict(binding)))
+                    continue
+                tree[node] = TreeNode(node, name, tuple(args), dec, [], None, dict(binding))
             else:
-                _, node, parent, name, args, agent, price, length = record
+                _, node, _, name, args, agent, price, length = record
                 index = len(actions)
                 actions.append((name, tuple(args), agent, float(price), float(length)))
-                if parent in top and not tree[parent].children \
-                        and tree[parent].decomposition is None:
+                if parent in fresh:
+                    fresh.discard(parent)
                     tree[parent].action = index
-                else:
-                    attach(parent, TreeNode(node, name, tuple(args), action=index))
+                    continue
+                tree[node] = TreeNode(node, name, tuple(args), None, [], index, {})
+            tree[alias.get(parent, parent)].children.append(node)
         return self.evaluate(actions, tree, roots)
 
     # -- links, times, criteria ----------------------------------------------------------
@@ -254,6 +252,8 @@ class Evaluator:
                                  f"{k}={v}" for k, v in env.items()))
 
     def _plan_rules(self, plan: Plan, penalties: dict, violations: list) -> None:
+        if not self.problem.rules:
+            return
         actions = sorted(plan.actions, key=lambda a: a.index)
         for selected in self.problem.rules.values():
             rule = selected.rule
@@ -340,11 +340,12 @@ class Evaluator:
 
     def _score(self, plan: Plan, penalties: dict[str, float], violations: list[str]) -> None:
         actions = plan.actions
+        kinds = {agent: self._kind(agent) for agent in {a.agent for a in actions}}
         criteria = {
             "cost": sum(a.cost for a in actions),
             "duration": plan.makespan,
-            "human-effort": sum(a.cost for a in actions if self._kind(a.agent) == "human"),
-            "robot-effort": sum(a.cost for a in actions if self._kind(a.agent) == "robot"),
+            "human-effort": sum(a.cost for a in actions if kinds[a.agent] == "human"),
+            "robot-effort": sum(a.cost for a in actions if kinds[a.agent] == "robot"),
         }
         weighted = {name: self.problem.rules[name].weight * value
                     for name, value in penalties.items()}
