@@ -191,8 +191,8 @@ class Evaluator:
             # ends by the end of the action just before it.
             timed, clock = [], 0.0
             for index, (name, args, agent, cost, duration) in enumerate(actions):
-                timed.append(PlanAction(index, name, args, agent, cost, duration, clock,
-                                        clock + duration))
+                timed.append(PlanAction.timed(index, name, args, agent, cost, duration, clock,
+                                              clock + duration))
                 clock += duration
             return timed
         before: dict[int, set[int]] = {index: set() for index in range(len(actions))}
@@ -210,8 +210,8 @@ class Evaluator:
         for index, (name, args, agent, cost, duration) in enumerate(actions):
             start = max((ends[p] for p in before[index]), default=0.0)
             ends[index] = start + duration
-            timed.append(PlanAction(index, name, args, agent, cost, duration, start,
-                                    start + duration))
+            timed.append(PlanAction.timed(index, name, args, agent, cost, duration, start,
+                                          start + duration))
         return timed
 
     # -- social rules ------------------------------------------------------------------------
