@@ -154,12 +154,14 @@ def compile_binder(variables: dict[str, str], head: list[tuple[str, str]], tests
                 yield from extend(index + 1, binding, state)
             binding.pop(var, None)
 
+    terms = [(term, param, is_variable(term)) for term, param in head]
+
     def unify(env: dict[str, Any]) -> dict[str, Any] | None:
         """The binding the task's arguments give, or None when they do not fit."""
         binding: dict[str, Any] = {}
-        for term, param in head:
+        for term, param, variable in terms:
             value = env[param]
-            if not is_variable(term):
+            if not variable:
                 if value != term:
                     return None
             elif term in binding:

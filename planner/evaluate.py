@@ -19,10 +19,12 @@ import itertools
 from typing import Any
 
 from planner.domain import Problem, SelectedRule
-from planner.plan import CausalLink, Plan, PlanAction, TreeNode
+from planner.plan import CausalLink, Plan, PlanAction, Relations, TreeNode
 
 BASE_CRITERIA = ("cost", "duration", "human-effort", "robot-effort", "rules")
 MONOTONE = ("cost", "human-effort", "robot-effort")
+REPLAYED = ("state", "crossed-links")
+"""The kinds of rule that score what the replay finds: states, causal links."""
 
 
 class Evaluator:
@@ -40,6 +42,10 @@ class Evaluator:
                             for c in MONOTONE)
         self.kinds: dict[str, str | None] = {}
         """Each agent's kind, as first looked up (the problem's static attribute)."""
+        self.initial = dict(problem.initial)
+        """The state the plans start from (a plan may derive its links after the search)."""
+        self.replays = any(r.rule.kind in REPLAYED for r in problem.rules.values())
+        """Whether the score needs the replay of every plan (see :meth:`evaluate`)."""
 
     def lower_bound(self, cost: float, human: float, robot: float) -> float:
         """A score no completion of a partial plan can go below."""
@@ -62,38 +68,36 @@ class Evaluator:
         ``root_ids`` are the tree ids of the problem's top tasks."""
         tree: dict[int, TreeNode] = {}
         roots: list[int] = []
-        alias: dict[int, int] = {}
-        actions: list[tuple] = []  # (name, args, agent, cost, duration): timed later
-
-        def attach(parent: int, node: TreeNode) -> None:
-            parent = alias.get(parent, parent)
-            if parent in tree:
-                tree[parent].children.append(node.id)
-            tree[node.id] = node
-
         for root, (name, args) in zip(root_ids, self.problem.tasks, strict=True):
             tree[root] = TreeNode(root, name, tuple(args))
             roots.append(root)
-        top = set(roots)
+        # The top tasks nothing was recorded under yet: the first record under one is
+        # its own decomposition (or action), which the top node then stands for (alias).
+        fresh = set(roots)
+        alias: dict[int, int] = {}
+        actions: list[tuple] = []  # (name, args, agent, cost, duration): timed later
         for record in records:
+            parent = record[2]
             if record[0] == "method":
-                _, node, parent, name, args, dec, binding = record
-                if parent in top and tree[parent].decomposition is None \
-                        and tree[parent].action is None and not tree[parent].children:
-                    tree[parent].decomposition = dec
-                    tree[parent].bindings = dict(binding)
+                _, node, _, name, args, dec, binding = record
+                if parent in fresh:
+                    fresh.discard(parent)
+                    top = tree[parent]
+                    top.decomposition = dec
+                    top.bindings = dict(binding)
                     alias[node] = parent
-                else:
-                    attach(parent, TreeNode(node, name, tuple(args), dec, bindings=dict(binding)))
+                    continue
+                tree[node] = TreeNode(node, name, tuple(args), dec, [], None, dict(binding))
             else:
-                _, node, parent, name, args, agent, price, length = record
+                _, node, _, name, args, agent, price, length = record
                 index = len(actions)
                 actions.append((name, tuple(args), agent, float(price), float(length)))
-                if parent in top and not tree[parent].children \
-                        and tree[parent].decomposition is None:
+                if parent in fresh:
+                    fresh.discard(parent)
                     tree[parent].action = index
-                else:
-                    attach(parent, TreeNode(node, name, tuple(args), action=index))
+                    continue
+                tree[node] = TreeNode(node, name, tuple(args), None, [], index, {})
+            tree[alias.get(parent, parent)].children.append(node)
         return self.evaluate(actions, tree, roots)
 
     # -- links, times, criteria ----------------------------------------------------------
@@ -101,17 +105,34 @@ class Evaluator:
     def evaluate(self, actions: list[tuple], tree: dict[int, TreeNode],
                  roots: list[int]) -> Plan:
         """Links, orderings, times, rules and score of the actions ``(name, args, agent,
-        cost, duration)`` in plan order."""
+        cost, duration)`` in plan order.  When the score needs no replay of the plan (one
+        agent, whose chain times everything, and no rule on states or links), the links
+        and orderings are left for the plan to derive if they are ever read."""
+        penalties: dict[str, float] = {name: 0.0 for name in self.problem.rules}
+        violations: list[str] = []
+        if self.replays or len({agent for _, _, agent, _, _ in actions}) > 1:
+            links, orderings = self._replay(actions, penalties, violations)
+            plan = Plan(self._schedule(actions, links, orderings), links, orderings, tree,
+                        roots)
+        else:
+            plan = Plan(self._schedule(actions, [], []), None, None, tree, roots,
+                        relate=lambda: self._replay(actions, {}, []))
+        self._plan_rules(plan, penalties, violations)
+        self._score(plan, penalties, violations)
+        return plan
+
+    def _replay(self, actions: list[tuple], penalties: dict[str, float],
+                violations: list[str]) -> Relations:
+        """Replay the actions from the initial state: their causal links and orderings
+        (sorted), and the state rules' penalties and violations on the way."""
         problem = self.problem
-        values = dict(problem.initial)
+        values = dict(self.initial)
         writer: dict[tuple[str, str], int] = {}
         readers: dict[tuple[str, str], list[int]] = {}
         links: dict[tuple, CausalLink] = {}
         orderings: set[tuple[int, int]] = set()
         during_rules = [r for r in problem.rules.values()
                         if r.rule.kind == "state" and r.rule.during]
-        violations: list[str] = []
-        penalties: dict[str, float] = {name: 0.0 for name in problem.rules}
         reads: set[tuple[str, str]] = set()
         writes: list[tuple[tuple[str, str], Any]] = []
 
@@ -157,16 +178,12 @@ class Evaluator:
         for selected in problem.rules.values():
             if selected.rule.kind == "state" and not selected.rule.during:
                 self._state_rule(selected, values, writer, actions, penalties, violations)
-        timed = self._schedule(actions, list(links.values()), orderings)
-        plan = Plan(timed, sorted(links.values(), key=lambda k: (k.consumer, k.producer,
-                                                                  k.entity, k.attribute)),
-                    sorted(orderings), tree, roots)
-        self._plan_rules(plan, penalties, violations)
-        self._score(plan, penalties, violations)
-        return plan
+        return (sorted(links.values(), key=lambda k: (k.consumer, k.producer, k.entity,
+                                                       k.attribute)),
+                sorted(orderings))
 
     def _schedule(self, actions: list[tuple], links: list[CausalLink],
-                  orderings: set[tuple[int, int]]) -> list[PlanAction]:
+                  orderings: list[tuple[int, int]]) -> list[PlanAction]:
         """Each action starts when its predecessors (links, orderings, its agent's
         previous action) are over."""
         if len({agent for _, _, agent, _, _ in actions}) <= 1:
@@ -174,8 +191,8 @@ class Evaluator:
             # ends by the end of the action just before it.
             timed, clock = [], 0.0
             for index, (name, args, agent, cost, duration) in enumerate(actions):
-                timed.append(PlanAction(index, name, args, agent, cost, duration, clock,
-                                        clock + duration))
+                timed.append(PlanAction.timed(index, name, args, agent, cost, duration, clock,
+                                              clock + duration))
                 clock += duration
             return timed
         before: dict[int, set[int]] = {index: set() for index in range(len(actions))}
@@ -193,8 +210,8 @@ class Evaluator:
         for index, (name, args, agent, cost, duration) in enumerate(actions):
             start = max((ends[p] for p in before[index]), default=0.0)
             ends[index] = start + duration
-            timed.append(PlanAction(index, name, args, agent, cost, duration, start,
-                                    start + duration))
+            timed.append(PlanAction.timed(index, name, args, agent, cost, duration, start,
+                                          start + duration))
         return timed
 
     # -- social rules ------------------------------------------------------------------------
@@ -235,6 +252,8 @@ class Evaluator:
                                  f"{k}={v}" for k, v in env.items()))
 
     def _plan_rules(self, plan: Plan, penalties: dict, violations: list) -> None:
+        if not self.problem.rules:
+            return
         actions = sorted(plan.actions, key=lambda a: a.index)
         for selected in self.problem.rules.values():
             rule = selected.rule
@@ -321,11 +340,12 @@ class Evaluator:
 
     def _score(self, plan: Plan, penalties: dict[str, float], violations: list[str]) -> None:
         actions = plan.actions
+        kinds = {agent: self._kind(agent) for agent in {a.agent for a in actions}}
         criteria = {
             "cost": sum(a.cost for a in actions),
             "duration": plan.makespan,
-            "human-effort": sum(a.cost for a in actions if self._kind(a.agent) == "human"),
-            "robot-effort": sum(a.cost for a in actions if self._kind(a.agent) == "robot"),
+            "human-effort": sum(a.cost for a in actions if kinds[a.agent] == "human"),
+            "robot-effort": sum(a.cost for a in actions if kinds[a.agent] == "robot"),
         }
         weighted = {name: self.problem.rules[name].weight * value
                     for name, value in penalties.items()}

@@ -95,17 +95,20 @@ class FactState(State):
                          dict(self.idelta))
 
     def set(self, entity: str, attribute: Any, value: Any) -> None:
+        key = (entity, attribute)
+        delta = self.delta
         shapes = self.patterns.get(entity)
         if not shapes:  # a predicate no binder looks up
-            self.delta[(entity, attribute)] = value
+            delta[key] = value
             return
-        old = self.get(entity, attribute)
-        self.delta[(entity, attribute)] = value
+        old = delta.get(key, _MISSING)
+        if old is _MISSING:
+            old = self.base.get(key)
+        delta[key] = value
         if bool(old) == bool(value):
             return
         for positions in shapes:
-            key = (entity, positions, tuple(attribute[i] for i in positions))
-            bucket = self._own(key)
+            bucket = self._own((entity, positions, tuple(attribute[i] for i in positions)))
             if value:
                 bucket[attribute] = None
             else:

@@ -3,12 +3,13 @@ explanations, the validator, and bad domain files."""
 
 from __future__ import annotations
 
+import dataclasses
 import textwrap
 from pathlib import Path
 
 import pytest
 
-from planner import load_domain, load_problem, plan, validate
+from planner import PlanAction, load_domain, load_problem, plan, validate
 from planner.domain import SelectedRule
 from userfiles.errors import FileError
 
@@ -268,3 +269,13 @@ def test_inconsistent_ahp_matrix_is_an_error(fig6, write):
     with pytest.raises(FileError) as err:
         load_problem(write("bad-ahp.yaml", text), fig6)
     assert "inconsistent" in str(err.value) or "CR" in str(err.value)
+
+
+def test_a_timed_action_is_the_frozen_dataclass_the_constructor_makes():
+    fast = PlanAction.timed(3, "Give", ("alice", "jido"), "alice", 1.0, 2.0, 4.0, 6.0)
+    assert fast == PlanAction(3, "Give", ("alice", "jido"), "alice", 1.0, 2.0, 4.0, 6.0)
+    assert hash(fast) == hash(PlanAction(3, "Give", ("alice", "jido"), "alice", 1.0, 2.0,
+                                         4.0, 6.0))
+    assert (fast.start, fast.end, str(fast)) == (4.0, 6.0, "Give(alice, jido)")
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        fast.start = 0.0

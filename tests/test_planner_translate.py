@@ -62,6 +62,18 @@ def test_types_constants_free_variables_forall_and_conditional_effects(write):
     assert "(in big t2)" in {link.fact for link in result.plan.links}
 
 
+def test_links_are_derived_when_first_read_from_the_state_the_search_started_from(write):
+    problem, result = _solve(write, DEPOT, DEPOT_PROBLEM)
+    # One agent and no rules: the score needs no replay, so the plan replays when asked.
+    assert result.plan.relate is not None
+    problem.initial.clear()
+    assert [(k.producer, k.consumer, k.fact) for k in result.plan.links] == [
+        (0, 1, "(in big t2)"), (1, 2, "(loaded t2)"), (1, 3, "(in big t2)"),
+        (2, 3, "(in small t2)")]
+    assert result.plan.orderings == [(0, 1), (1, 2), (1, 3), (2, 3)]
+    assert result.plan.relate is None
+
+
 def test_deletions_come_before_additions(write):
     problem, result = _solve(write, DEPOT, DEPOT_PROBLEM)
     # unload-all deletes (ready) and adds it: PDDL applies deletions first, so it holds.
