@@ -287,9 +287,14 @@ def cmd_schemes(args: argparse.Namespace) -> int:
         if path.stem == "acts":
             continue
         scheme = load_scheme(path)
-        first = re.split(r"(?<!Fig)\.\s", " ".join(scheme.doc.split()), maxsplit=1)[0]
-        _out.print(f"[bold]{scheme.name:<24}[/bold] {_escape(first.rstrip('.'))}.")
+        _out.print(f"[bold]{scheme.name:<24}[/bold] {_escape(_first_sentence(scheme.doc))}")
     return 0
+
+
+def _first_sentence(doc: str) -> str:
+    """A doc's first sentence, for one-line listings ("Fig. 2" does not end it)."""
+    first = re.split(r"(?<!Fig)\.\s", " ".join(doc.split()), maxsplit=1)[0]
+    return first.rstrip(".") + "."
 
 
 def cmd_scenarios(args: argparse.Namespace) -> int:
@@ -297,8 +302,7 @@ def cmd_scenarios(args: argparse.Namespace) -> int:
 
     for name, path in builtin_scenarios().items():
         scenario = load_scenario(path)
-        first = re.split(r"(?<!Fig)\.\s", " ".join(scenario.doc.split()), maxsplit=1)[0]
-        _out.print(f"[bold]{name:<26}[/bold] {_escape(first.rstrip('.'))}.")
+        _out.print(f"[bold]{name:<26}[/bold] {_escape(_first_sentence(scenario.doc))}")
     return 0
 
 

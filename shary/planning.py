@@ -167,11 +167,10 @@ class HatpPlanner:
                                                     strict=True)}
                 unit_of[action.index] = action.index
                 units[action.index] = (action.name, refine[action.name], values, action.agent)
-            elif node.task in refine and _leaves(plan, node.id):
+            elif node.task in refine and (leaves := _leaves(plan, node.id)):
                 method = self.domain.methods[node.task]
                 values = {p: a for (p, _), a in zip(method.params, node.args, strict=True)}
                 values.update(node.bindings)
-                leaves = _leaves(plan, node.id)
                 first = min(leaves)
                 for index in leaves:
                     unit_of[index] = first

@@ -39,7 +39,7 @@ from .motion import (
     Wait,
 )
 from .simulation import Simulation, standing_height
-from .world import BOTTLE_RADIUS, FURNITURE
+from .world import BOTTLE_RADIUS, FURNITURE, MANIPULATION_PLACES
 
 NEAR_PEOPLE_SPEED = 0.5
 """Joint speed (rad/s) when the arm moves towards a person: slower, as near people it must."""
@@ -50,8 +50,7 @@ ROBOT_REACH = 0.95
 reaches table height up to about this far; IK decides below it)."""
 LIFT = 0.12
 WORDS_PER_SECOND = 2.6
-PLACE_FURNITURE = {"coffee-area": "coffee-table", "store-area": "store-table",
-                   "trash-area": "trash", "sofa-area": "sofa"}
+PLACE_FURNITURE = {place: furniture for furniture, place in MANIPULATION_PLACES.items()}
 """What the robot looks at when it looks at a place."""
 
 
@@ -241,7 +240,7 @@ class RobotExecutors:
             raise ActionFailed(f"{place!r} is not a place of the roadmap "
                                f"({', '.join(self.world.places)})")
         x, y, _ = self.world.base_pose(self.robot)
-        here = min(self.world.places, key=lambda p: math.dist(self.world.places[p][:2], (x, y)))
+        here, _ = self.world.nearest_place(x, y)
         graph = nx.Graph()
         for a, neighbours in self.world.roadmap.items():
             for b in neighbours:
@@ -280,9 +279,7 @@ class RobotExecutors:
         def grasp() -> None:
             furniture = next((f for f in FURNITURE
                               if self.world.footprints[f].contains(x, y)), None)
-            bx, by, _ = self.world.base_pose(self.robot)
-            place = min(self.world.places,
-                        key=lambda p: math.dist(self.world.places[p][:2], (bx, by)))
+            place, _ = self.world.nearest_place(*self.world.base_pose(self.robot)[:2])
             self.picked_from[object] = ((x, y, z), furniture, place)
             set_gripper(self.world, self.robot, 0.0)
             self.sim.attach(object, self.robot)

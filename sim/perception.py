@@ -37,7 +37,7 @@ from rdflib import Literal
 from .executors import ROBOT_REACH
 from .humans import ARM_LENGTH
 from .simulation import TICK, Simulation
-from .world import BOTTLE_HEIGHT, FURNITURE, pb
+from .world import BOTTLE_HEIGHT, CONTAINERS, FURNITURE, SEATS, pb
 
 Fact = tuple[str, str, Any]
 
@@ -50,8 +50,6 @@ PLACE_TOLERANCE = 0.2
 PERSON_AT = 1.5
 """A person within this distance of a robot place is at it (the planner's places are the
 robot's: a person at sofa-area is one the robot serves from there)."""
-SEATS = ("sofa",)
-CONTAINERS = ("trash",)
 
 
 @dataclass
@@ -65,13 +63,12 @@ class Noise:
 class Perception:
     """Publishes the world's facts into a fact database (see the module's docstring)."""
 
-    def __init__(self, sim: Simulation, facts: Any, places: dict[str, tuple[float, float]],
+    def __init__(self, sim: Simulation, facts: Any,
                  *, perspective: str = "robot", hold: float = 0.5, noise: Noise | None = None,
                  rng: random.Random | None = None):
         self.sim = sim
         self.world = sim.world
         self.facts = facts
-        self.places = places
         self.perspective = perspective
         self.hold = hold
         self.noise = noise or Noise()
@@ -134,9 +131,9 @@ class Perception:
         world, sim = self.world, self.sim
         robot = sim.robot
         rx, ry, _ = world.base_pose(robot)
-        for name, (px, py) in self.places.items():
-            if math.hypot(rx - px, ry - py) <= PLACE_TOLERANCE:
-                yield (robot, "isAt", name)
+        place, distance = world.nearest_place(rx, ry)
+        if distance <= PLACE_TOLERANCE:
+            yield (robot, "isAt", place)
         for obj, holder in sim.holder.items():
             if holder == robot:
                 yield (robot, "isHolding", obj)
@@ -166,8 +163,7 @@ class Perception:
             if self._lost(name, now):
                 continue
             # a person is "at" the robot place from which the robot can serve them
-            place, distance = min(((p, math.hypot(avatar.x - x, avatar.y - y))
-                                   for p, (x, y) in self.places.items()), key=lambda pd: pd[1])
+            place, distance = world.nearest_place(avatar.x, avatar.y)
             if distance <= PERSON_AT:
                 yield (name, "isAt", place)
             for obj, holder in sim.holder.items():

@@ -41,14 +41,11 @@ from .people import Person
 from .perception import Noise, Perception
 from .scenario import Happened, Scenario, judge, load_scenario, recipe_files
 from .simulation import Simulation, standing_height
-from .world import BOTTLES, FURNITURE, LivingRoom, pb
+from .world import BOTTLES, CONTAINERS, FURNITURE, MANIPULATION_PLACES, SEATS, LivingRoom, pb
 
 CHUNK = 0.1
 """Simulated seconds advanced between two looks at whether the run is over (so the
 reported end is at most this much after the last thing that happened)."""
-FURNITURE_PLACE = {"coffee-table": "coffee-area", "store-table": "store-area",
-                   "trash": "trash-area", "sofa": "sofa-area"}
-"""The robot place from which each piece of furniture is manipulated (HATP's f.place)."""
 ROBOT_ATTRIBUTES = {"kind": "robot", "move_cost": 2, "pick_cost": 1, "speed": 1}
 PERSON_ATTRIBUTES = {"kind": "human", "move_cost": 4, "pick_cost": 2, "speed": 1}
 
@@ -201,9 +198,8 @@ class _Run:
         self._arrange_objects()
         self._a_priori()
         self.perception = Perception(
-            self.sim, self.facts, {n: p[:2] for n, p in world.places.items()},
-            hold=scenario.hold, noise=Noise(dict(scenario.flicker), list(scenario.lost)),
-            rng=self.loop.random)
+            self.sim, self.facts, hold=scenario.hold,
+            noise=Noise(dict(scenario.flicker), list(scenario.lost)), rng=self.loop.random)
         self.sim.observers.append(self.perception.update)
         self.chronicles = ChronicleRecognizer(self.sup) if library.chronicles else None
 
@@ -227,9 +223,9 @@ class _Run:
             facts.add(place, "type", "Place")
         for furniture in FURNITURE:
             facts.add(furniture, "type", "Furniture")
-            facts.add(furniture, "place", FURNITURE_PLACE.get(furniture, "base"))
-            facts.add(furniture, "container", furniture == "trash")
-            facts.add(furniture, "seat", furniture == "sofa")
+            facts.add(furniture, "place", MANIPULATION_PLACES.get(furniture, "base"))
+            facts.add(furniture, "container", furniture in CONTAINERS)
+            facts.add(furniture, "seat", furniture in SEATS)
         for obj in BOTTLES:
             facts.add(obj, "type", "Object")
             facts.add(obj, "type", "Bottle")

@@ -187,6 +187,15 @@ PLACES: dict[str, Place] = {
     "sofa-area": (1.4, 0.75, 3 * math.pi / 4),
 }
 
+MANIPULATION_PLACES: dict[str, str] = {"coffee-table": "coffee-area",
+                                       "store-table": "store-area",
+                                       "trash": "trash-area", "sofa": "sofa-area"}
+"""Furniture -> the place a robot handles it from (HATP's ``f.place``)."""
+CONTAINERS = ("trash",)
+"""Furniture things are put *in* (and fall into), not *on*."""
+SEATS = ("sofa",)
+"""Furniture people sit on."""
+
 # A robot base is kept this far from furniture footprints when the roadmap is
 # built: Jido's base radius (0.3 m) plus a margin.
 CLEARANCE = 0.35
@@ -669,6 +678,11 @@ class LivingRoom:
                     edges[a].append(b)
                     edges[b].append(a)
         return {n: tuple(sorted(v)) for n, v in edges.items()}
+
+    def nearest_place(self, x: float, y: float) -> tuple[str, float]:
+        """The place of the roadmap nearest to (x, y), and how far it is."""
+        return min(((name, math.hypot(x - px, y - py))
+                    for name, (px, py, _) in self.places.items()), key=lambda nd: nd[1])
 
     # ----------------------------------------------------------------- images
 
