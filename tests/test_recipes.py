@@ -182,3 +182,16 @@ def test_same_inputs_same_log(tmp_path):
     kinds = {kind for _, kind, _, _, _ in first}
     assert {"act", "enter", "exit", "task-state", "exec-request", "exec-result", "monitor",
             "node", "node-removed", "event", "recipe"} <= kinds
+
+
+def test_plan_fact_readings_are_checked(shary, write):
+    path = write("facts.yaml", BASE + """\
+recipes:
+  - task: greet
+    act: REALIZE-TASK
+    plan: {domain: living-room, task: Greet, facts: {on: [isOnn], at: 3}}
+""")
+    found = _problems(shary, path)
+    assert (13, 59, "unknown predicate 'isOnn' (did you mean 'isOn'?)") in found
+    assert any(line == 13 and "expected a string here, got a number (3)" in msg
+               for line, _, msg in found), found

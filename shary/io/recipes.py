@@ -202,7 +202,8 @@ class _Builder:
                 self._check_refinement(located, path + ("plan", "refine", action), text)
             facts = {}
             for attribute, given in _items(raw.get("facts")):
-                predicates = (given,) if isinstance(given, str) else tuple(given or ())
+                predicates = ((given,) if isinstance(given, str)
+                              else tuple(given) if isinstance(given, list) else ())
                 for i, predicate in enumerate(predicates):
                     name = str(predicate).removeprefix("^")
                     if name not in self.library.predicates:
