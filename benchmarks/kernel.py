@@ -81,6 +81,7 @@ def setup(tasks: int):
     people = [f"person{i}" for i in range(tasks)]
     for person in people:
         facts.add(person, "looksAt", "jido")
+        facts.add(f"cup-{person}", "isReachableBy", "jido")  # picked where it stands
     return loop, facts, sup, arm, people
 
 
