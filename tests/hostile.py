@@ -1,0 +1,132 @@
+"""One rule for hostile input, measured: the harness every hostile corpus uses.
+
+The rule (docs/architecture.md, "User files"): a refused file gives
+``FILE:LINE:COL: error: …`` at a line the file has, exit status 2, no Python
+traceback, in under :data:`MAX_SECONDS` and :data:`MAX_MB`.  The corpora live in
+``tests/hostile/<format>/``; each ``tests/test_hostile_<format>.py`` feeds them
+to the command a user would run and asserts the rule with :func:`assert_refused`.
+
+Two ways to run a command, both measured:
+
+* :func:`run_inprocess` calls :func:`shary.cli.main` in this process and traces
+  Python allocations with :mod:`tracemalloc` (fast: for the many small files);
+* :func:`run_subprocess` runs ``python -m shary`` in a child and reads its peak
+  resident memory from ``wait4`` (exact: for the few large or deep inputs, and
+  for anything that could hurt the test process itself).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import re
+import subprocess
+import sys
+import threading
+import time
+import tracemalloc
+from dataclasses import dataclass
+from pathlib import Path
+
+MAX_SECONDS = 10.0
+"""A refusal takes less than this, whatever the input."""
+MAX_MB = 500.0
+"""A refusal needs less memory than this, whatever the input."""
+
+HOSTILE = Path(__file__).resolve().parent / "hostile"
+PROBLEM = re.compile(r"^(?P<file>.+?):(?P<line>\d+):(?P<col>\d+): error: (?P<message>.+)$")
+
+
+@dataclass
+class Outcome:
+    """What one run of the command did, and what it cost."""
+
+    status: int
+    out: str
+    err: str
+    seconds: float
+    peak_mb: float
+
+    def problems(self) -> list[re.Match]:
+        """The ``FILE:LINE:COL: error:`` lines of standard error."""
+        found = (PROBLEM.match(line) for line in self.err.splitlines())
+        return [m for m in found if m]
+
+
+def run_inprocess(*argv: object) -> Outcome:
+    """Run ``shary ARGV`` here; memory is the peak of Python allocations."""
+    from shary.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    tracemalloc.start()
+    start = time.perf_counter()
+    try:
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            status = main([str(a) for a in argv])
+    finally:
+        seconds = time.perf_counter() - start
+        _, peak = tracemalloc.get_traced_memory()
+        tracemalloc.stop()
+    return Outcome(int(status), out.getvalue(), err.getvalue(), seconds, peak / 2**20)
+
+
+def run_subprocess(*argv: object, cwd: Path | None = None,
+                   timeout: float = 3 * MAX_SECONDS) -> Outcome:
+    """Run ``python -m shary ARGV`` in a child; memory is its own peak resident size."""
+    env = dict(os.environ, COLUMNS="200")
+    start = time.perf_counter()
+    proc = subprocess.Popen([sys.executable, "-m", "shary", *map(str, argv)], cwd=cwd,
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    streams: dict[str, bytes] = {}
+    readers = [threading.Thread(target=lambda n=name, f=f: streams.__setitem__(n, f.read()))
+               for name, f in (("out", proc.stdout), ("err", proc.stderr))]
+    for reader in readers:
+        reader.start()
+    killer = threading.Timer(timeout, proc.kill)
+    killer.start()
+    try:
+        _, status, usage = os.wait4(proc.pid, 0)  # reaps the child: its own rusage
+    finally:
+        killer.cancel()
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    for reader in readers:
+        reader.join()
+    seconds = time.perf_counter() - start
+    if seconds >= timeout:
+        raise AssertionError(f"shary {' '.join(map(str, argv))} killed after {timeout:.0f} s")
+    decode = lambda b: b.decode("utf-8", "replace")  # noqa: E731
+    return Outcome(proc.returncode, decode(streams["out"]), decode(streams["err"]), seconds,
+                   usage.ru_maxrss / 1024)
+
+
+def assert_refused(outcome: Outcome, *files: Path, message: str | None = None) -> None:
+    """Assert the rule: exit 2, positioned errors on lines the files have, no traceback.
+
+    ``files`` are the user's files that may be blamed; every problem line must
+    name one of them (by the name the user gave) at a line that exists in it.
+    ``message``, if given, is a regular expression that some problem must match.
+    """
+    where = f"\n--- stderr ---\n{outcome.err[-3000:]}\n--- stdout ---\n{outcome.out[-1000:]}"
+    assert "Traceback (most recent call last)" not in outcome.err + outcome.out, where
+    assert outcome.status == 2, f"exit status {outcome.status}, not 2{where}"
+    found = outcome.problems()
+    assert found, f"no FILE:LINE:COL: error: line{where}"
+    lines = {str(f): _line_count(f) for f in files}
+    for m in found:
+        if lines:
+            assert m["file"] in lines, f"blames {m['file']!r}, not one of {list(lines)}{where}"
+            assert 1 <= int(m["line"]) <= max(lines[m["file"]], 1), \
+                f"line {m['line']} is not in {m['file']} ({lines[m['file']]} lines){where}"
+        assert int(m["col"]) >= 1, where
+    if message is not None:
+        assert any(re.search(message, m["message"]) for m in found), \
+            f"no problem matches {message!r}{where}"
+    assert outcome.seconds < MAX_SECONDS, f"took {outcome.seconds:.1f} s{where}"
+    assert outcome.peak_mb < MAX_MB, f"needed {outcome.peak_mb:.0f} MB{where}"
+
+
+def _line_count(path: Path) -> int:
+    """Lines of a file as an editor shows them (a last line without newline counts)."""
+    data = Path(path).read_bytes()
+    return data.count(b"\n") + (0 if data.endswith(b"\n") or not data else 1)
