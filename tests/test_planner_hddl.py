@@ -486,7 +486,7 @@ def test_problem_errors_are_reported_at_their_position(tidy, tmp_path, old, new,
      "':effect' is not supported in method 'm-done' (method effects)"),
     ("(:method m-done :parameters (?x - block) :task (tidy ?x)", "(:method m-done :parameters "
      "(?x - block) :task (tidy ?x) :constraints (and (typeof ?x - block))", "typeof",
-     "'typeof' is not a supported method constraint (supported: '=', '(not (= ...))' and "
+     "'typeof' is not a supported task-network constraint (supported: '=', '(not (= ...))' and "
      "'sortof')"),
     ("(:task tidy :parameters (?x - block))", "(:task tidy :parameters (?x - block) "
      ":precondition (clear ?x))", ":precondition (clear", "':precondition' is not supported in "

@@ -136,10 +136,15 @@ class _DomainReader(_Networks):
             return None
         what = f"{kind} '{label.text}'"
         if kind == "task":
-            keys = self.keyed(node.items[2:], {":parameters": ":parameters"}, {
-                ":precondition": "abstract tasks with preconditions",
-                ":effect": "abstract tasks with effects",
-            }, what)
+            keys = self.keyed(node.items[2:], {":parameters": ":parameters",
+                                               ":precondition": ":precondition",
+                                               ":effect": ":effect"}, {}, what)
+            for key in (":precondition", ":effect"):  # '()' is written, and means nothing
+                if key in keys:
+                    word, value = keys[key]
+                    if not isinstance(value, SList) or value.items:
+                        self.error(word, f"'{word.text}' is not supported in {what} (abstract "
+                                         f"tasks with {key[1:]}s)")
         else:
             keys = self.keyed(node.items[2:], {":parameters": ":parameters",
                                                ":precondition": ":precondition",
@@ -176,9 +181,7 @@ class _DomainReader(_Networks):
         keys = self.keyed(node.items[2:], {":parameters": ":parameters", ":task": ":task",
                                            ":precondition": ":precondition",
                                            ":constraints": ":constraints", **_SUBTASK_KEYS},
-                          {":effect": "method effects", **{
-                              k: v for k, v in _NETWORK_UNSUPPORTED.items()
-                              if k != ":constraints"}}, what)
+                          {":effect": "method effects", **_NETWORK_UNSUPPORTED}, what)
         duplicate = ("method", name) in where
         if duplicate:
             line, col = where[("method", name)]

@@ -147,6 +147,9 @@ class HDDLProblem:
     htn_line: int = 0
     htn_col: int = 0
     where: dict[tuple[str, str], tuple[int, int]] = field(default_factory=dict)
+    htn_constraints: Formula | None = None
+    """The initial task network's ``:constraints`` that are conditions (``=``, ``not =``),
+    as an ``and``; its ``sortof`` constraints narrow the types of ``htn_params``."""
 
 
 def supertypes(domain: HDDLDomain, type_name: str) -> list[str]:

@@ -148,7 +148,7 @@ class _Networks(_Reader):
 
     def constraints(self, node: Node, scope: dict[str, str]
                     ) -> tuple[Formula | None, dict[str, str]]:
-        """A method's ``:constraints``: ``(= a b)``, ``(not (= a b))`` and
+        """A method's or the ``:htn``'s ``:constraints``: ``(= a b)``, ``(not (= a b))`` and
         ``(sortof ?v - type)`` (``?v`` must be of ``type``, a subtype of its own), in an
         ``and`` or alone.  The conditions, and the narrowed type of each variable."""
         if not isinstance(node, SList):
@@ -179,7 +179,7 @@ class _Networks(_Reader):
             else:
                 at = head if head is not None else item
                 self.error(at, f"'{_show(at)[1:-1] if isinstance(at, Symbol) else 'a list'}' "
-                               "is not a supported method constraint (supported: '=', "
+                               "is not a supported task-network constraint (supported: '=', "
                                "'(not (= ...))' and 'sortof')")
         formula = Formula("and", tuple(parts), node.line, node.col) if parts else None
         return formula, narrowed
@@ -195,7 +195,7 @@ class _Networks(_Reader):
         var, _, kind = args
         assert isinstance(var, Symbol) and isinstance(kind, Symbol)
         if var.value not in scope:
-            self.error(var, f"variable '{var.text}' is not a parameter of the method"
+            self.error(var, f"variable '{var.text}' is not a parameter of this task network"
                             f"{_hint(var.value, scope)}")
         elif self.known_type(kind, kind.value):
             if not self.fits(kind.value, scope[var.value]):

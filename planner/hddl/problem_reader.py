@@ -61,14 +61,19 @@ class _ProblemReader(_Networks):
         subtasks: tuple[Subtask, ...] = ()
         ordered, ordering = True, ()
         htn_line = htn_col = 0
+        constraints = None
         if ":htn" in first:
             node = first[":htn"]
             htn_line, htn_col = node.line, node.col
-            keys = self.keyed(node.items[1:], {":parameters": ":parameters", **_SUBTASK_KEYS},
+            keys = self.keyed(node.items[1:], {":parameters": ":parameters",
+                                               ":constraints": ":constraints", **_SUBTASK_KEYS},
                               _NETWORK_UNSUPPORTED,
                               "the initial task network (':htn')")
             params = self.params(keys[":parameters"][1] if ":parameters" in keys else None,
                                  "':htn'")
+            if ":constraints" in keys:
+                constraints, narrowed = self.constraints(keys[":constraints"][1], dict(params))
+                params = tuple((var, narrowed.get(var, kind)) for var, kind in params)
             subtasks, ordered, ordering = self.network(keys, dict(params),
                                                        "the initial task network")
         goal = None
@@ -81,7 +86,7 @@ class _ProblemReader(_Networks):
                 goal = self.condition(node.items[1], {})
         return HDDLProblem(problem_name, domain_name, own, tuple(init), params, subtasks, ordered,
                            goal, self.file, define.line, define.col, tuple(requirements),
-                           ordering, htn_line, htn_col, where)
+                           ordering, htn_line, htn_col, where, constraints)
 
     def read_objects(self, node: SList, own: dict[str, str], where: dict) -> None:
         body = node._replace(items=node.items[1:])

@@ -50,7 +50,6 @@ _SUBTASK_KEYS = {":subtasks": ":subtasks", ":tasks": ":subtasks",
                  ":ordered-subtasks": ":ordered-subtasks", ":ordered-tasks": ":ordered-subtasks",
                  ":ordering": ":ordering", ":order": ":ordering"}
 _NETWORK_UNSUPPORTED = {
-    ":constraints": "task-network constraints (supported in methods only)",
     ":causal-links": "causal links",
     ":causallinks": "causal links",
 }
