@@ -70,6 +70,13 @@ def first_plan(problem: Problem, budget_ms: float | None = None,
     return DepthFirst(problem).run(budget, max_nodes, on_improvement)
 
 
+Path = tuple
+"""Where a task sits in the tree being grown: ``(parent path or None, label, index of
+its top task, hash of the state it was decomposed in or 0, node id)``; the label is a
+text for a top task, ``(task, args)`` for a decomposition.  Kept only by the agenda
+entries below it, so that an abandoned branch frees its paths."""
+
+
 def _label(name: str, args: tuple) -> str:
     return f"{name}({', '.join(str(a) for a in args)})"
 
@@ -86,9 +93,6 @@ class DepthFirst:
         self.domain = problem.domain
         self.goals = tuple((pred, args, value) for (pred, args), value in problem.goals.items())
         self.ids = itertools.count(1)
-        self.parents: dict[int, tuple[int | None, Any, int, int]] = {}
-        """Each node's parent, label (a text, or a task and its arguments), top task, and
-        the hash of the state its task was decomposed in (0 for other nodes)."""
         self.failures: dict[int, Failure] = {}
         self.repeats = 0
         self.repeated = False
@@ -96,15 +100,14 @@ class DepthFirst:
 
     # -- explanations ------------------------------------------------------------------
 
-    def _fail(self, parent: int, label: str, reason: str) -> None:
+    def _fail(self, parent: Path, label: str, reason: str) -> None:
         """Keep, for each top task, the deepest point where the search got stuck."""
         path = [label]
-        node: int | None = parent
+        node: Path | None = parent
         root = 0
         while node is not None:
-            up, text, root, _ = self.parents[node]
+            node, text, root, _, _ = node
             path.append(text if isinstance(text, str) else _label(*text))
-            node = up
         known = self.failures.get(root)
         if known is None or len(path) > known.depth:
             path.reverse()
@@ -155,14 +158,12 @@ class DepthFirst:
     def _search(self, deadline: float, max_nodes: int) -> tuple[Any, list[int]]:
         """One pass; the trail of the first plan (or None) and the ids of the top tasks."""
         problem = self.problem
-        roots = []
-        for index, (name, args) in enumerate(problem.tasks):
-            root = next(self.ids)
-            self.parents[root] = (None, _label(name, args), index, 0)
-            roots.append(root)
+        tops = [(None, _label(name, args), index, 0, next(self.ids))
+                for index, (name, args) in enumerate(problem.tasks)]
+        roots = [top[4] for top in tops]
         agenda = None
-        for root, (name, args) in reversed(list(zip(roots, problem.tasks, strict=True))):
-            agenda = (name, args, root, hash((name, args, agenda[3] if agenda else 0)), agenda)
+        for top, (name, args) in reversed(list(zip(tops, problem.tasks, strict=True))):
+            agenda = (name, args, top, hash((name, args, agenda[3] if agenda else 0)), agenda)
         initial = dict(problem.initial)
         state: State = (FactState(initial, self.domain.patterns) if self.domain.predicates
                         else State(initial))
@@ -209,7 +210,7 @@ class DepthFirst:
                 stack.append(self._decompose(methods[name], args, parent, state, state_hash,
                                              rest, trail))
 
-    def _apply(self, action: Action, args: tuple, parent: int, state: State, state_hash: int,
+    def _apply(self, action: Action, args: tuple, parent: Path, state: State, state_hash: int,
                rest: Any, trail: Any) -> tuple | None:
         """The node after ``action``, or None when it cannot be done (or dooms the plan)."""
         env = dict(zip(action.names, args, strict=True))
@@ -240,7 +241,7 @@ class DepthFirst:
         agent = SOLE_AGENT if action.agent is None else env[action.agent]
         price = action.cost(env, get) if callable(action.cost) else action.cost
         length = action.duration(env, get) if callable(action.duration) else action.duration
-        record = ("act", next(self.ids), parent, action.name, args, agent, price, length)
+        record = ("act", next(self.ids), parent[4], action.name, args, agent, price, length)
         return child, state_hash, rest, (record, trail)
 
     def _may_add(self, agenda: Any, pred: str, fact: tuple) -> bool:
@@ -251,22 +252,20 @@ class DepthFirst:
                 return True
         return False
 
-    def _repeats(self, name: str, args: tuple, parent: int, state_hash: int) -> bool:
+    def _repeats(self, name: str, args: tuple, parent: Path, state_hash: int) -> bool:
         """Whether an ancestor decomposed ``name(args)`` in this very state more than
         ``repeats`` times already."""
         count = 0
-        parents = self.parents
-        node: int | None = parent
+        node: Path | None = parent
         while node is not None:
-            up, label, _, at = parents[node]
+            node, label, _, at, _ = node
             if at == state_hash and label == (name, args):
                 count += 1
                 if count > self.repeats:
                     return True
-            node = up
         return False
 
-    def _decompose(self, method: Method, args: tuple, parent: int, state: State,
+    def _decompose(self, method: Method, args: tuple, parent: Path, state: State,
                    state_hash: int, rest: Any, trail: Any) -> Iterator[tuple]:
         if self._repeats(method.name, args, parent, state_hash):
             self.repeated = True
@@ -276,8 +275,7 @@ class DepthFirst:
                        f"than {self.repeats} time(s)")
             return
         env = {p: a for (p, _), a in zip(method.params, args, strict=True)}
-        parents = self.parents
-        root = parents[parent][2]
+        root = parent[2]
         tried = []
         for dec in method.decompositions:
             matched = False
@@ -285,15 +283,14 @@ class DepthFirst:
             for binding in dec.bind(env, state):
                 matched = True
                 local = {**env, **binding}
-                node = next(self.ids)
-                parents[node] = (parent, (method.name, args), root, state_hash)
+                node = (parent, (method.name, args), root, state_hash, next(self.ids))
                 agenda = rest
                 for sub in reversed(dec.subtasks):
                     values = (sub.values(local) if sub.values is not None
                               else tuple([a.fn(local, state.get) for a in sub.args]))
                     agenda = (sub.task, values, node,
                               hash((sub.task, values, agenda[3] if agenda else 0)), agenda)
-                record = ("method", node, parent, method.name, args, dec.name, binding)
+                record = ("method", node[4], parent[4], method.name, args, dec.name, binding)
                 yield state, state_hash, agenda, (record, trail)
             if not matched:
                 tried.append(f"{dec.name}: {dec.pre.text if dec.pre else 'no binding'}")
