@@ -109,7 +109,7 @@ __all__ = [
     "read_problem", "read_sexpr", "refuse_partial_order", "supertypes", "tokenize",
 ]
 
-MAX_BYTES = 32 * 1024 * 1024
+MAX_BYTES = 8 * 1024 * 1024
 """Largest HDDL file accepted by default (the largest problem of the suite here is 150 KB)."""
 
 

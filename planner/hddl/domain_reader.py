@@ -5,7 +5,7 @@ from __future__ import annotations
 from planner.hddl.lexer import Node, SList, Symbol
 from planner.hddl.model import Call, HAction, HDDLDomain, HMethod
 from planner.hddl.networks import _Networks
-from planner.hddl.reader import _NETWORK_UNSUPPORTED, _SUBTASK_KEYS, _hint, _show
+from planner.hddl.reader import _NETWORK_UNSUPPORTED, _SUBTASK_KEYS, _show
 
 
 class _DomainReader(_Networks):
@@ -220,7 +220,7 @@ class _DomainReader(_Networks):
                 self.error(head, f"{what} decomposes '{head.text}', which is an action, not a "
                                  "task")
             else:
-                self.error(head, f"unknown task '{head.text}'{_hint(head.value, self.tasks)}")
+                self.error(head, f"unknown task '{head.text}'{self.hint(head.value, self.tasks)}")
             self.terms(value.items[1:], scope, None, "")
             return None
         signature = self.tasks[head.value]

@@ -32,6 +32,10 @@ class Token(NamedTuple):
 
 
 _TOKEN = re.compile(r"\n|[()]|;[^\n]*|[^\s();]+")
+_ROW_TOKEN = re.compile(r"[()]|;.*|[^\s();]+")
+"""A token within one line (the reader goes line by line: no newline tokens to skip)."""
+MAX_STRAYS = 200
+"""Stray ')' reported one by one (then a count)."""
 
 
 def tokenize(text: str) -> list[Token]:
@@ -86,33 +90,41 @@ def read_sexpr(text: str, file: str = "<string>") -> list[Node]:
     stack: list[list[Node]] = [[]]
     top = stack[0]
     opens: list[tuple[int, int]] = []
-    line, start, end = 1, 0, (1, 1)
-    for match in _TOKEN.finditer(text):
-        word = match.group()
-        if word == "\n":
-            line, start = line + 1, match.end()
-            continue
-        col = match.start() - start + 1
-        if word == "(":
-            if len(opens) >= MAX_DEPTH:
-                raise FileError([Problem(file, line, col,
-                                         f"parentheses nested deeper than {MAX_DEPTH} levels")])
-            opens.append((line, col))
-            top = []
-            stack.append(top)
-        elif word == ")":
-            if not opens:
-                problems.append(Problem(file, line, col, "unexpected ')': no '(' is open here"))
-                continue
-            opened_line, opened_col = opens.pop()
-            items = stack.pop()
-            top = stack[-1]
-            top.append(new(SList, (tuple(items), opened_line, opened_col, line, col)))
-        elif word[0] != ";":
-            top.append(new(Symbol, (word.lower(), word, line, col)))
-        else:
-            continue
-        end = (line, col + len(word))
+    end = (1, 1)
+    strays = 0
+    finditer = _ROW_TOKEN.finditer
+    for line, row in enumerate(text.split("\n"), 1):
+        match = None
+        for match in finditer(row):
+            word = match.group()
+            col = match.start() + 1
+            if word == "(":
+                if len(opens) >= MAX_DEPTH:
+                    raise FileError([Problem(file, line, col, f"parentheses nested deeper "
+                                                              f"than {MAX_DEPTH} levels")])
+                opens.append((line, col))
+                top = []
+                stack.append(top)
+            elif word == ")":
+                if not opens:
+                    strays += 1
+                    if strays <= MAX_STRAYS:
+                        problems.append(Problem(file, line, col,
+                                                "unexpected ')': no '(' is open here"))
+                    continue
+                opened_line, opened_col = opens.pop()
+                items = stack.pop()
+                top = stack[-1]
+                top.append(new(SList, (tuple(items), opened_line, opened_col, line, col)))
+            elif word[0] != ";":
+                top.append(new(Symbol, (word.lower(), word, line, col)))
+            else:
+                break
+        if match is not None and match.group()[0] != ";":
+            end = (line, match.end() + 1)
+    if strays > MAX_STRAYS:
+        problems.append(Problem(file, end[0], end[1],
+                                f"... and {strays - MAX_STRAYS} more unexpected ')'"))
     if problems and len(stack[0]) > 1 and isinstance(stack[0][0], SList):
         first, after = stack[0][0], stack[0][1]
         problems.append(Problem(file, first.end_line, first.end_col,

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from planner.hddl.lexer import Node, SList, Symbol
 from planner.hddl.model import Formula, Subtask, _label, _order
-from planner.hddl.reader import _hint, _Reader, _show
+from planner.hddl.reader import _Reader, _show
 
 
 class _Networks(_Reader):
@@ -44,7 +44,7 @@ class _Networks(_Reader):
                 if symbol.value not in ids:
                     known = ", ".join(ids) or "none"
                     self.error(symbol, f"unknown subtask id '{symbol.text}' in the ordering of "
-                                       f"{what} (ids: {known}){_hint(symbol.value, ids)}")
+                                       f"{what} (ids: {known}){self.hint(symbol.value, ids)}")
                     good = False
             if good and before.value == after.value:
                 self.error(before, f"subtask '{before.text}' cannot come before itself")
@@ -107,7 +107,7 @@ class _Networks(_Reader):
             if what:
                 self.error(head, f"'{head.text}' is a predicate, not a task or an action")
             else:
-                self.error(head, f"unknown task or action '{head.text}'{_hint(name, known)}")
+                self.error(head, f"unknown task or action '{head.text}'{self.hint(name, known)}")
             self.terms(call.items[1:], scope, None, "")
             # Kept (the file is refused anyway) so that its id does not look unknown.
             return Subtask(ident, name, (), entry.line, entry.col)
@@ -196,7 +196,7 @@ class _Networks(_Reader):
         assert isinstance(var, Symbol) and isinstance(kind, Symbol)
         if var.value not in scope:
             self.error(var, f"variable '{var.text}' is not a parameter of this task network"
-                            f"{_hint(var.value, scope)}")
+                            f"{self.hint(var.value, scope)}")
         elif self.known_type(kind, kind.value):
             if not self.fits(kind.value, scope[var.value]):
                 self.error(kind, f"'{kind.text}' is not a subtype of {var.text}'s type "

@@ -14,6 +14,16 @@ from userfiles.errors import FileError, Problem
 
 MAX_PROBLEMS = 200
 """At most this many problems are reported for one file (then a count of the rest)."""
+KEPT_PROBLEMS = 10 * MAX_PROBLEMS
+"""Problems kept while reading (the first :data:`MAX_PROBLEMS` by position are reported;
+a file is read in a few passes, so more are kept than reported); the others are only
+counted, so that a file with a million mistakes costs no more than one with a thousand."""
+MAX_HINTS = 20
+"""At most this many "did you mean" hints are looked for in one file: each compares a
+word with every name it could have been (a thousand names at most), and a hostile file
+with a hundred thousand misspellings must still be refused in a moment."""
+HINT_POOL = 1000
+"""The most names a hint compares a word with (beyond, no hint)."""
 
 _NAME = re.compile(r"[a-z_][a-z0-9_\-]*\Z")
 _NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?\Z")
@@ -53,14 +63,6 @@ _NETWORK_UNSUPPORTED = {
     ":causal-links": "causal links",
     ":causallinks": "causal links",
 }
-
-
-def _hint(word: str, choices: Iterable[str]) -> str:
-    pool = list(choices)
-    if not pool or len(pool) > 5000:
-        return ""
-    close = difflib.get_close_matches(word, pool, n=1, cutoff=0.6)
-    return f" (did you mean '{close[0]}'?)" if close else ""
 
 
 def _a(word: str) -> str:
@@ -126,21 +128,41 @@ class _Reader:
         self.objects: dict[str, str] = {}
         """Every name a term may be: constants (and, in a problem, objects)."""
         self.object_word = "constant"
+        self.hints = 0
+        """How many hints were looked for (see :data:`MAX_HINTS`)."""
+        self.dropped = 0
+        """Problems found beyond :data:`KEPT_PROBLEMS`, counted only."""
 
     # -- problems
 
+    def hint(self, word: str, choices: Iterable[str]) -> str:
+        """`` (did you mean 'X'?)`` for a close name, or nothing (see :data:`MAX_HINTS`)."""
+        if self.hints >= MAX_HINTS:
+            return ""
+        self.hints += 1
+        pool = [c for c in choices if abs(len(c) - len(word)) <= 3]
+        if not pool or len(pool) > HINT_POOL:
+            return ""
+        close = difflib.get_close_matches(word, pool, n=1, cutoff=0.6)
+        return f" (did you mean '{close[0]}'?)" if close else ""
+
     def error(self, at: Node | Token | Subtask, message: str) -> None:
-        self.problems.append(Problem(self.file, at.line, at.col, message))
+        if len(self.problems) < KEPT_PROBLEMS:
+            self.problems.append(Problem(self.file, at.line, at.col, message))
+        else:
+            self.dropped += 1
 
     def finish(self) -> None:
+        """Raise every problem found, first in the file first (at most :data:`MAX_PROBLEMS`,
+        then a count of the others)."""
         if not self.problems:
             return
-        found = sorted(set(self.problems))
-        if len(found) > MAX_PROBLEMS:
-            rest = found[MAX_PROBLEMS]
+        found = sorted(set(self.problems), key=lambda p: (p.line, p.col, p.message))
+        more = len(found) - MAX_PROBLEMS + self.dropped
+        if more > 0:
+            rest = found[min(MAX_PROBLEMS, len(found) - 1)]
             found = [*found[:MAX_PROBLEMS],
-                     Problem(self.file, rest.line, rest.col,
-                             f"... and {len(found) - MAX_PROBLEMS} more problems")]
+                     Problem(self.file, rest.line, rest.col, f"... and {more} more problems")]
         raise FileError(found)
 
     # -- names
@@ -176,7 +198,7 @@ class _Reader:
         if kind in self.types:
             return True
         self.error(node, f"unknown type '{node.text if isinstance(node, Symbol) else kind}'"
-                         f"{_hint(kind, self.types)}")
+                         f"{self.hint(kind, self.types)}")
         return False
 
     # -- typed lists
@@ -274,7 +296,7 @@ class _Reader:
                     known = (f"declared: {', '.join(scope)}" if scope else
                              "no variables are in scope here")
                     self.error(item, f"variable '{item.text}' is not declared ({known})"
-                                     f"{_hint(value, scope)}")
+                                     f"{self.hint(value, scope)}")
                     good = False
             elif _NUMBER.match(value):
                 self.error(item, f"number '{item.text}' where a constant is expected (numeric "
@@ -283,7 +305,7 @@ class _Reader:
             elif value not in self.objects:
                 if _NAME.match(value):
                     self.error(item, f"unknown {self.object_word} '{item.text}'"
-                                     f"{_hint(value, self.objects)}")
+                                     f"{self.hint(value, self.objects)}")
                 else:
                     self.error(item, f"expected a variable or a constant, found '{item.text}'")
                 good = False
@@ -315,7 +337,7 @@ class _Reader:
                 self.error(head, f"expected a predicate, found the variable '{head.text}'")
             else:
                 self.error(head, f"unknown predicate '{head.text}'"
-                                 f"{_hint(name, self.predicates)}")
+                                 f"{self.hint(name, self.predicates)}")
             self.terms(node.items[1:], scope, None, "")
             return None
         signature = self.predicates[name]
@@ -497,7 +519,7 @@ class _Reader:
                 continue
             if key.value not in allowed:
                 self.error(key, f"unknown keyword '{key.text}' in {what}"
-                                f"{_hint(key.value, allowed)}")
+                                f"{self.hint(key.value, allowed)}")
                 continue
             canonical = allowed[key.value]
             if canonical in out:
@@ -539,7 +561,7 @@ class _Reader:
                                  f"({_UNSUPPORTED_SECTIONS[head.value]})")
                 continue
             if head.value not in known:
-                self.error(head, f"unknown section '{head.text}'{_hint(head.value, known)}"
+                self.error(head, f"unknown section '{head.text}'{self.hint(head.value, known)}"
                                  f"; expected one of {', '.join(sorted(known))}")
                 continue
             out.append((head.value, node))
