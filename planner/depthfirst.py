@@ -16,8 +16,8 @@ prunings that keep recursive domains finite:
   either led to the plan or failed.  This ends the random walks of tail
   recursion (Snake's ``move``, Transport's ``get_to``).
 * **repeated decomposition**: decomposing a task (name and arguments) in the
-  very state where an ancestor decomposed the same task is refused more than
-  ``repeats`` times on the path (Satellite's ``do_switching`` that switches an
+  very state where one of its :data:`WINDOW` nearest ancestors decomposed the
+  same task is refused more than ``repeats`` times (Satellite's ``do_switching`` that switches an
   instrument off and on to decompose itself again).  ``repeats`` starts at 0;
   when a pass ends without a plan and this refusal was used, the search starts
   again with one more, up to :data:`MAX_REPEATS` (as :mod:`planner.search`
@@ -29,12 +29,14 @@ Early precondition checks are the binders' (:mod:`planner.binding`): a
 method's variables are bound from its precondition, its first action's
 precondition and the static facts every later action needs.
 
-A search is bounded by a time budget and by a **node budget**
-(:data:`MAX_NODES` nodes by default): a recursion that never ends cannot
-allocate without bound; it ends with ``no plan`` and the explanation
-``search budget exhausted``.  The plan found is evaluated once, like the other
-search's (tree, streams, causal links), so that the validator, the renderers
-and the IPC writer work on it unchanged.
+A search is bounded by a time budget, a **node budget** (:data:`MAX_NODES`
+nodes by default) and a depth (:data:`MAX_DEPTH`): a recursion that never ends
+cannot allocate without bound; it ends with ``no plan`` and the explanation
+``search budget exhausted``, then the deepest points reached.
+
+The plan found is evaluated once, like the other search's (tree, streams,
+causal links), so that the validator, the renderers and the IPC writer work on
+it unchanged.
 """
 
 from __future__ import annotations
@@ -51,8 +53,17 @@ from planner.plan import Plan, fact_text
 from planner.search import Failure, Result
 from planner.state import FactState, State
 
-MAX_NODES = 5_000_000
-"""Default node budget: search nodes expanded, over every pass, before giving up."""
+MAX_NODES = 2_000_000
+"""Default node budget: search nodes expanded, over every pass, before giving up (the
+set of nodes seen then holds about 100 MB)."""
+MAX_DEPTH = 10_000
+"""Deepest decomposition tree searched: a branch deeper than this is cut (each level
+keeps a state and a choice point: about 9 KB)."""
+SHOWN = 12
+"""The most tasks an explanation shows on the path to a failure."""
+WINDOW = 64
+"""How many ancestors the repeated-decomposition check looks at (a loop of
+decompositions longer than this is left to the budgets)."""
 MAX_REPEATS = 4
 """The most repetitions of a decomposition in one state that the deepening allows."""
 CHECK_EVERY = 256
@@ -72,7 +83,7 @@ def first_plan(problem: Problem, budget_ms: float | None = None,
 
 Path = tuple
 """Where a task sits in the tree being grown: ``(parent path or None, label, index of
-its top task, hash of the state it was decomposed in or 0, node id)``; the label is a
+its top task, hash of the state it was decomposed in or 0, node id, depth)``; the label is a
 text for a top task, ``(task, args)`` for a decomposition.  Kept only by the agenda
 entries below it, so that an abandoned branch frees its paths."""
 
@@ -93,25 +104,38 @@ class DepthFirst:
         self.domain = problem.domain
         self.goals = tuple((pred, args, value) for (pred, args), value in problem.goals.items())
         self.ids = itertools.count(1)
-        self.failures: dict[int, Failure] = {}
+        self.failures: dict[int, tuple[int, Path, str, str]] = {}
+        """For each top task, the deepest failure: its depth, parent, label and reason."""
         self.repeats = 0
         self.repeated = False
+        self.cut = False
+        """A branch was cut at :data:`MAX_DEPTH`."""
+        self.missed = ""
+        """The goals the first complete decomposition missed (when one did)."""
         self.expansions = 0
 
     # -- explanations ------------------------------------------------------------------
 
     def _fail(self, parent: Path, label: str, reason: str) -> None:
-        """Keep, for each top task, the deepest point where the search got stuck."""
+        """Keep, for each top task, the deepest point where the search got stuck (as it is:
+        it is put in words only if the search ends without a plan)."""
+        root, depth = parent[2], parent[5] + 2
+        known = self.failures.get(root)
+        if known is None or depth > known[0]:
+            self.failures[root] = (depth, parent, label, reason)
+
+    def _failure(self, depth: int, parent: Path, label: str, reason: str) -> Failure:
+        """A kept failure in words: the path from its top task, the middle of a very deep
+        one left out."""
         path = [label]
         node: Path | None = parent
-        root = 0
         while node is not None:
-            node, text, root, _, _ = node
+            node, text, _, _, _, _ = node
             path.append(text if isinstance(text, str) else _label(*text))
-        known = self.failures.get(root)
-        if known is None or len(path) > known.depth:
-            path.reverse()
-            self.failures[root] = Failure(len(path), tuple(path), reason)
+        path.reverse()
+        if len(path) > SHOWN:
+            path[SHOWN // 2:-SHOWN // 2] = [f"... ({len(path) - SHOWN} more) ..."]
+        return Failure(depth, tuple(path), reason)
 
     # -- the search ----------------------------------------------------------------------
 
@@ -145,11 +169,17 @@ class DepthFirst:
                 on_improvement(plan)
         elapsed = (time.perf_counter() - start) * 1000
         failures = [] if plan is not None else [
-            self.failures[k] for k in sorted(self.failures, key=lambda k: (k < 0, k))]
-        if stopped == "nodes":
+            self._failure(*self.failures[k]) for k in sorted(self.failures)]
+        if plan is None and self.missed:
+            failures.append(Failure(0, ("goals",), "a decomposition of every task ends "
+                                    "without " + self.missed))
+        if plan is None and (stopped or self.cut):
+            why = {"nodes": f"the node budget ({max_nodes}) ran out",
+                   "time": f"the time budget ({budget_ms:g} ms) ran out",
+                   "": f"branches deeper than {MAX_DEPTH} decompositions were cut"}[stopped]
             failures.insert(0, Failure(0, (BUDGET_EXHAUSTED,), (
-                f"{self.expansions} search nodes expanded (the budget is {max_nodes}) without "
-                "a plan; the deepest points reached follow")))
+                f"{why} after {self.expansions} search nodes, without a plan; the deepest "
+                "points reached follow")))
         improvements = [(elapsed, plan.score)] if plan is not None else []
         return Result(plan, int(plan is not None), self.expansions,
                       plan is None and not stopped, elapsed, failures, improvements,
@@ -158,7 +188,7 @@ class DepthFirst:
     def _search(self, deadline: float, max_nodes: int) -> tuple[Any, list[int]]:
         """One pass; the trail of the first plan (or None) and the ids of the top tasks."""
         problem = self.problem
-        tops = [(None, _label(name, args), index, 0, next(self.ids))
+        tops = [(None, _label(name, args), index, 0, next(self.ids), 0)
                 for index, (name, args) in enumerate(problem.tasks)]
         roots = [top[4] for top in tops]
         agenda = None
@@ -199,8 +229,7 @@ class DepthFirst:
                           if state.get(p, a) != v]
                 if not missed:
                     return (None, trail), roots
-                self.failures.setdefault(-1, Failure(0, ("goals",), "a decomposition of "
-                                         "every task ends without " + ", ".join(missed)))
+                self.missed = self.missed or ", ".join(missed)
                 continue
             name, args, parent, _, rest = agenda
             action = actions.get(name)
@@ -257,8 +286,10 @@ class DepthFirst:
         ``repeats`` times already."""
         count = 0
         node: Path | None = parent
-        while node is not None:
-            node, label, _, at, _ = node
+        for _ in range(WINDOW):
+            if node is None:
+                break
+            node, label, _, at, _, _ = node
             if at == state_hash and label == (name, args):
                 count += 1
                 if count > self.repeats:
@@ -274,6 +305,12 @@ class DepthFirst:
                        "decomposed it (left recursion, or actions that change nothing), more "
                        f"than {self.repeats} time(s)")
             return
+        depth = parent[5] + 1
+        if depth > MAX_DEPTH:
+            self.cut = True
+            self._fail(parent, _label(method.name, args),
+                       f"deeper than {MAX_DEPTH} decompositions: cut")
+            return
         env = {p: a for (p, _), a in zip(method.params, args, strict=True)}
         root = parent[2]
         tried = []
@@ -283,7 +320,7 @@ class DepthFirst:
             for binding in dec.bind(env, state):
                 matched = True
                 local = {**env, **binding}
-                node = (parent, (method.name, args), root, state_hash, next(self.ids))
+                node = (parent, (method.name, args), root, state_hash, next(self.ids), depth)
                 agenda = rest
                 for sub in reversed(dec.subtasks):
                     values = (sub.values(local) if sub.values is not None
