@@ -222,6 +222,9 @@ class DepthFirst:
             node = None
             key = hash((state_hash, agenda[3] if agenda is not None else 0))
             if key in seen:
+                if agenda is not None:
+                    self._fail(agenda[2], _label(agenda[0], agenda[1]),
+                               "searched before, in this very state (a loop)")
                 continue
             seen.add(key)
             if agenda is None:

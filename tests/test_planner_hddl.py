@@ -1,4 +1,4 @@
-"""The HDDL reader (the planner/hddl package): tokens, S-expressions, the checked tree, the IPC 2020 suite.
+"""The HDDL reader (planner/hddl/): tokens, S-expressions, the checked tree, the IPC 2020 suite.
 
 The suite is read where it lies (/work/shared/suites/ipc2020, never copied here); the
 tests that need it are skipped, saying so, when it is absent.

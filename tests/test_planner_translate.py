@@ -287,7 +287,7 @@ def test_a_sortof_that_widens_a_type_is_refused_at_the_type(write):
     assert found.message == "'object' is not a subtype of ?x's type 'item'"
 
 
-# --------------------------------------------------------------------------- the total-order fragment
+# ---------------------------------------------------------------- the total-order fragment
 
 FRAGMENT = """\
 (define (domain yard)
