@@ -88,6 +88,37 @@ text for a top task, ``(task, args)`` for a decomposition.  Kept only by the age
 entries below it, so that an abandoned branch frees its paths."""
 
 
+def improve(problem: Problem, budget_ms: float | None = None,
+            on_improvement: Callable[[Plan], None] | None = None) -> Result:
+    """Anytime HDDL planning: the first plan of this search, then better ones from the
+    branch-and-bound search (:mod:`planner.search`) for what is left of the budget; the
+    best plan of the two, with every improvement reported as it is found."""
+    from planner.search import Search
+
+    budget = problem.budget_ms if budget_ms is None else budget_ms
+    start = time.perf_counter()
+    best: list[Plan] = []
+
+    def better(plan: Plan) -> None:
+        if not best or plan.score < best[-1].score:
+            best.append(plan)
+            if on_improvement is not None:
+                on_improvement(plan)
+
+    first = first_plan(problem, budget, better)
+    left = budget - (time.perf_counter() - start) * 1000
+    if first.plan is None or left <= 0:
+        return first
+    more = Search(problem, better).run(left)
+    plan = best[-1]
+    elapsed = (time.perf_counter() - start) * 1000
+    return Result(plan, first.plans_found + more.plans_found,
+                  first.expansions + more.expansions, more.complete, elapsed, [],
+                  [*first.improvements, *((first.elapsed_ms + t, score)
+                                          for t, score in more.improvements
+                                          if score < first.plan.score)])
+
+
 def _label(name: str, args: tuple) -> str:
     return f"{name}({', '.join(str(a) for a in args)})"
 
