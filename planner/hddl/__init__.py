@@ -68,12 +68,18 @@ are recorded as ``ordered=False``) so that a caller can say why it refuses.
 
 Refused by name (``FileError``): numeric fluents (``:functions``, ``increase``
 ..., numeric comparisons, ``(= (f) 3)`` in ``:init``), durative actions,
-derived predicates, ``:constraints`` (problem trajectory constraints, and the
-initial task network's; a method's ``:constraints`` are read: ``=``,
-``(not (= ...))`` and ``(sortof ?v - type)``), preferences, ``:metric``,
-``either`` types, method effects, abstract tasks with preconditions or effects,
-causal links, timed initial literals, task insertion (``:tihtn``) and the
-requirements that announce them.
+derived predicates, state-trajectory ``:constraints`` (a method's and the
+initial task network's ``:constraints`` are read: ``=``, ``(not (= ...))`` and
+``(sortof ?v - type)``; others are refused by name), preferences, ``:metric``,
+``either`` types, method effects, abstract tasks with (non-empty) preconditions
+or effects, causal links, timed initial literals, task insertion (``:tihtn``)
+and the requirements that announce them.
+
+The modules: :mod:`~planner.hddl.lexer` (tokens, S-expressions),
+:mod:`~planner.hddl.model` (the tree, types, total order),
+:mod:`~planner.hddl.reader` (what both readers share),
+:mod:`~planner.hddl.networks` (task networks and their constraints),
+:mod:`~planner.hddl.domain_reader`, :mod:`~planner.hddl.problem_reader`.
 """
 
 
@@ -110,7 +116,9 @@ __all__ = [
 ]
 
 MAX_BYTES = 8 * 1024 * 1024
-"""Largest HDDL file accepted by default (the largest problem of the suite here is 150 KB)."""
+"""Largest HDDL file accepted by default (the largest problem of the suite here is 150 KB;
+the reader takes about a second per megabyte on a loaded machine, and a refusal must take
+under 10 s)."""
 
 
 def read_domain(path: str | os.PathLike[str], *, max_bytes: int = MAX_BYTES) -> HDDLDomain:
