@@ -15,22 +15,37 @@ import re
 from pathlib import Path
 from typing import Any
 
-from jsonschema import Draft202012Validator
+from jsonschema import Draft202012Validator, FormatChecker
 from jsonschema.exceptions import ValidationError, best_match
 from referencing import Registry, Resource
 
 from userfiles.errors import Problem
+from userfiles.limits import MAX_DURATION, seconds, show_seconds
 from userfiles.yamlsafe import Located
+
+FORMATS = FormatChecker(formats=())
+"""Formats that carry a limit: ``"format": "duration"`` on a schema's duration
+definition bounds every duration of that format at once (see limits.py)."""
+
+
+@FORMATS.checks("duration")
+def _duration(value: Any) -> bool:
+    try:
+        amount = seconds(value)
+    except (ValueError, TypeError):
+        return True  # the shape is the pattern's business, reported once, there
+    return not amount > MAX_DURATION  # NaN was reported by yamlsafe, once
 
 
 def validator(folder: Path, name: str) -> Draft202012Validator:
-    """A validator for ``folder/NAME.schema.json``, resolving ``$ref`` to its siblings."""
+    """A validator for ``folder/NAME.schema.json``, resolving ``$ref`` to its siblings,
+    with the limits of :data:`FORMATS` checked."""
     documents = [json.loads(f.read_text("utf-8")) for f in sorted(folder.iterdir())
                  if f.name.endswith(".schema.json")]
     registry = Registry().with_resources(
         (doc["$id"], Resource.from_contents(doc)) for doc in documents)
     main = json.loads((folder / f"{name}.schema.json").read_text("utf-8"))
-    return Draft202012Validator(main, registry=registry)
+    return Draft202012Validator(main, registry=registry, format_checker=FORMATS)
 
 
 def did_you_mean(word: str, choices: Any) -> str:
@@ -83,6 +98,15 @@ def _explain(located: Located, error: ValidationError) -> list[Problem]:
     if error.validator == "pattern":
         what = error.schema.get("description", f"must match {error.validator_value}")
         return [located.problem(path, f"{error.instance!r}: {what}")]
+    if error.validator == "format" and error.validator_value == "duration":
+        return [located.problem(path, f"duration {error.instance} is too long (the limit is "
+                                      f"{show_seconds(MAX_DURATION)})")]
+    if error.validator in ("maximum", "exclusiveMaximum"):
+        return [located.problem(path, f"{error.instance} is too large (the limit is "
+                                      f"{error.validator_value})")]
+    if error.validator in ("maxProperties", "maxItems"):
+        return [located.problem(path, f"{len(error.instance)} entries: too many (the limit "
+                                      f"is {error.validator_value})")]
     if error.validator == "propertyNames":
         return [located.problem(path, error.message)]
     return [located.problem(path, error.message)]
