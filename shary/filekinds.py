@@ -150,7 +150,7 @@ def _reports(paths: Sequence[str | os.PathLike[str]], given: dict[Path, str],
     by_file: dict[str, list[Problem]] = {}
     for problem in problems:
         full = Path(problem.file).resolve()
-        name = given.get(full) or spelled(full)
+        name = given.get(full) or spelled(full, like=os.fspath(paths[0]) if paths else "")
         by_file.setdefault(name, []).append(
             Problem(name, problem.line, problem.col, problem.message))
     bad = set(by_file)
@@ -241,7 +241,7 @@ def _check_problems(files: list[tuple[Path, Any]], context: Context) -> list[Pro
                 except FileError as err:
                     problems.extend(err.problems)
                     problems.append(located.problem(
-                        ("domain",), f"depends on {spelled(full)}, which has errors"))
+                        ("domain",), f"depends on {spelled(full, like=path)}, which has errors"))
                     continue
             else:
                 domain = planner.load_domain(name)

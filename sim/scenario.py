@@ -170,9 +170,10 @@ class _Reading:
             full = reader.confined_path(("recipes", i), name)
             if full is not None:
                 files.append(full)
-                named[spelled(full)] = i
+                named[spelled(full, like=reader.file)] = i
         try:
-            library = load_library([spelled(f) for f in files], acts=self.extra_acts)
+            library = load_library([spelled(f, like=reader.file) for f in files],
+                                   acts=self.extra_acts)
         except FileError as err:
             reader.problems.extend(err.problems)
             for file in sorted({p.file for p in err.problems}):

@@ -144,10 +144,12 @@ def confine(file: str | os.PathLike[str], name: str, *,
     return full, None
 
 
-def spelled(path: str | os.PathLike[str]) -> str:
-    """How to name a file in a message: relative to the working folder when it is below
-    it (as a user would type it), else absolute."""
+def spelled(path: str | os.PathLike[str], *, like: str | os.PathLike[str] = "") -> str:
+    """How to name a file in a message: as the file that names it is named (absolute if
+    ``like`` is), else relative to the working folder when it is below it."""
     full = Path(path).resolve()
+    if Path(like).is_absolute():
+        return str(full)
     try:
         return str(full.relative_to(Path.cwd()))
     except ValueError:

@@ -47,7 +47,12 @@ cost or coordinate that means something, and exact as a float."""
 Path = tuple[Any, ...]
 Mark = tuple[int, int]
 
-class _Loader(yaml.SafeLoader):
+_SafeLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+"""libyaml's parser when PyYAML was built with it: about ten times faster on big files
+(a 600 KB scenario parses in a fraction of a second instead of seconds)."""
+
+
+class _Loader(_SafeLoader):  # type: ignore[misc, valid-type]
     """PyYAML's safe loader with YAML 1.2 booleans: only true and false.
 
     Under YAML 1.1, ``on``, ``off``, ``yes`` and ``no`` are booleans, so a

@@ -168,7 +168,7 @@ class _Builder:
             if refusal is not None:
                 self.problem(located, path, refusal)
                 return None
-            ref = spelled(full)
+            ref = spelled(full, like=located.file)
         if ref not in self.schemes:
             try:
                 self.schemes[ref] = load_scheme(ref, acts=self.acts)
