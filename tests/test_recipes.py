@@ -196,3 +196,15 @@ recipes:
     assert (13, 59, "unknown predicate 'isOnn' (did you mean 'isOn'?)") in found
     assert any(line == 13 and "expected a string here, got a number (3)" in msg
                for line, _, msg in found), found
+
+
+def test_custom_act_of_a_scheme_runs_end_to_end(tmp_path):
+    """OFFER-AGAIN, declared in the user's scheme, is usable by their recipes and by their
+    scenario's expectations (issue 17): validated together, then run."""
+    from conftest import REPO
+    from shary.cli import main
+
+    folder = REPO / "docs" / "tutorial" / "offer-again"
+    files = sorted(folder.glob("*.yaml"))
+    assert main(["validate", *map(str, files)]) == 0
+    assert main(["run", str(folder / "scenario.yaml"), "--out", str(tmp_path), "--quiet"]) == 0
