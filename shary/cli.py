@@ -19,6 +19,7 @@ from rich.console import Console
 from shary import builtin
 from userfiles import yamlsafe
 from userfiles.errors import FileError, Problem
+from userfiles.reader import allow_paths
 
 EXIT_BAD_FILE = 2
 
@@ -29,6 +30,7 @@ _err = Console(stderr=True, highlight=False, soft_wrap=True)
 def main(argv: Sequence[str] | None = None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
+    allow_paths(args.allow_path)
     try:
         return int(args.func(args) or 0)
     except FileError as err:
@@ -42,6 +44,9 @@ def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="shary", description="A SHARY-style supervision engine for robots that work "
         "with people.")
+    parser.add_argument("--allow-path", action="append", default=[], type=Path,
+                        metavar="FOLDER", help="a folder that user files may name files in, "
+                        "besides their own folder (repeatable)")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     p = sub.add_parser("validate", help="check schemes, acts, recipe libraries and Turtle files "

@@ -171,6 +171,8 @@ class _Reading:
             if full is not None:
                 files.append(full)
                 named[spelled(full, like=reader.file)] = i
+        if len(files) < len(reader.data.get("recipes") or []):
+            return None, files  # a refused file: its tasks and acts are unknown, not wrong
         try:
             library = load_library([spelled(f, like=reader.file) for f in files],
                                    acts=self.extra_acts)

@@ -202,6 +202,7 @@ def test_custom_act_of_a_scheme_runs_end_to_end(tmp_path):
     """OFFER-AGAIN, declared in the user's scheme, is usable by their recipes and by their
     scenario's expectations (issue 17): validated together, then run."""
     from conftest import REPO
+
     from shary.cli import main
 
     folder = REPO / "docs" / "tutorial" / "offer-again"
