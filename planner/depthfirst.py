@@ -141,6 +141,8 @@ class DepthFirst:
         self.repeated = False
         self.cut = False
         """A branch was cut at :data:`MAX_DEPTH`."""
+        self.decomposed: set[int] = set()
+        """The (task, arguments, state) hashes of every decomposition made so far."""
         self.missed = ""
         """The goals the first complete decomposition missed (when one did)."""
         self.expansions = 0
@@ -251,13 +253,6 @@ class DepthFirst:
                 raise _Stop("time")
             state, state_hash, agenda, trail = node
             node = None
-            key = hash((state_hash, agenda[3] if agenda is not None else 0))
-            if key in seen:
-                if agenda is not None:
-                    self._fail(agenda[2], _label(agenda[0], agenda[1]),
-                               "searched before, in this very state (a loop)")
-                continue
-            seen.add(key)
             if agenda is None:
                 missed = [f"{fact_text(p, a)} == {v!r}" for p, a, v in self.goals
                           if state.get(p, a) != v]
@@ -265,11 +260,18 @@ class DepthFirst:
                     return (None, trail), roots
                 self.missed = self.missed or ", ".join(missed)
                 continue
-            name, args, parent, _, rest = agenda
+            name, args, parent, agenda_hash, rest = agenda
             action = actions.get(name)
             if action is not None:  # one successor at most: no choice point
                 node = self._apply(action, args, parent, state, state_hash, rest, trail)
             else:
+                # A loop goes through a decomposition: the nodes seen are those.
+                key = hash((state_hash, agenda_hash))
+                if key in seen:
+                    self._fail(parent, _label(name, args),
+                               "searched before, in this very state (a loop)")
+                    continue
+                seen.add(key)
                 stack.append(self._decompose(methods[name], args, parent, state, state_hash,
                                              rest, trail))
 
@@ -317,7 +319,12 @@ class DepthFirst:
 
     def _repeats(self, name: str, args: tuple, parent: Path, state_hash: int) -> bool:
         """Whether an ancestor decomposed ``name(args)`` in this very state more than
-        ``repeats`` times already."""
+        ``repeats`` times already (the ancestors are looked at only when the search
+        decomposed that task in that state somewhere before)."""
+        key = hash((name, args, state_hash))
+        if key not in self.decomposed:
+            self.decomposed.add(key)
+            return False
         count = 0
         node: Path | None = parent
         for _ in range(WINDOW):
