@@ -47,7 +47,8 @@ def test_import_translates_and_prunes(write):
     ('<transition event="e" cond="x &gt; 1" target="a"/>', "cond= needs a data model"),
     ("<onentry><script>x = 1</script></onentry>", "<script> needs a data model"),
     ('<onentry><send event="e" target="#_parent"/></onentry>', "another target"),
-    ('<invoke src="x"/>', "<invoke> needs a data model"),
+    ('<invoke src="../x.scxml"/>', "leaves the chart's folder"),
+    ('<invoke srcexpr="x"/>', "needs a data model"),
     ('<onentry><send event="e" delay="soon"/></onentry>', "is not a time"),
 ])
 def test_unsupported_constructs_are_refused_by_name(shary, write, tmp_path, fragment, message):
