@@ -364,19 +364,23 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         return EXIT_BAD_FILE
     clock = SimulatedClock()
 
+    def who(instance) -> str:  # an invoked child's states read "helper/ask"
+        return f"{instance.invoke_path}/" if instance.parent is not None else ""
+
     class Trace(SchemeListener):
         def entered(self, instance, state, event):  # type: ignore[override]
             act = f"  [cyan]{state.act} ({state.act_type.name})[/cyan]" if state.act_type else ""
-            _out.print(f"{clock.now():8.2f}s  enter  {state.name}{act}")
+            _out.print(f"{clock.now():8.2f}s  enter  {who(instance)}{state.name}{act}")
 
         def exited(self, instance, state, event):  # type: ignore[override]
-            _out.print(f"{clock.now():8.2f}s  exit   {state.name}")
+            _out.print(f"{clock.now():8.2f}s  exit   {who(instance)}{state.name}")
 
         def logged(self, instance, text):  # type: ignore[override]
-            _out.print(f"{clock.now():8.2f}s  log    {_escape(text)}")
+            _out.print(f"{clock.now():8.2f}s  log    {who(instance)}{_escape(text)}")
 
         def finished(self, instance, state):  # type: ignore[override]
-            _out.print(f"{clock.now():8.2f}s  [bold]finished in {state.name}[/bold]")
+            _out.print(f"{clock.now():8.2f}s  [bold]{who(instance)}finished in "
+                       f"{state.name}[/bold]")
 
     _out.print(f"[bold]{scheme.name}[/bold]: {_escape(scheme.doc.strip())}")
     try:

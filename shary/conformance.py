@@ -22,6 +22,7 @@ with the reason, in bounded time.
 
 from __future__ import annotations
 
+import json
 import os
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -33,8 +34,8 @@ from shary.instance import LivelockError
 from shary.io import schema
 from shary.io.schemes import parse_scheme
 from shary.io.scxml import import_scxml
-from userfiles.errors import FileError
-from userfiles.yamlsafe import load_file, load_text
+from userfiles.errors import FileError, Problem
+from userfiles.yamlsafe import Located, load_text, read_text
 
 PLAIN_CHART_TIME_LIMIT = 60.0
 """Simulated seconds a plain chart may take to reach ``pass``."""
@@ -110,8 +111,27 @@ def run_test(chart: Path, root: Path | None = None) -> Outcome:
 
 
 def read_trace(path: Path) -> dict:
-    """A SCION trace, read safely and checked against its schema; :class:`FileError` if bad."""
-    located = load_file(path)
+    """A SCION trace, read safely and checked against its schema; :class:`FileError` if bad.
+
+    The YAML reader gives the positions (and refuses hostile nesting, size and
+    duplicate keys); the values are JSON's, so that ``1e15`` is a number and
+    ``NaN`` or ``Infinity`` are not.
+    """
+    text = read_text(path)
+    try:
+        located = load_text(text, str(path))
+    except FileError as err:
+        if not err.problems[0].message.startswith("YAML syntax"):
+            raise
+        located = Located(str(path), None)
+    try:
+        located.data = json.loads(text, parse_constant=str)
+    except ValueError as err:
+        at = min(getattr(err, "pos", 0), len(text.rstrip()))
+        line = text.count("\n", 0, at) + 1
+        col = at - (text.rfind("\n", 0, at) + 1) + 1
+        message = getattr(err, "msg", str(err))
+        raise FileError([Problem(str(path), line, col, f"JSON syntax: {message}")]) from None
     problems = located.problems + schema.check(located, "trace")
     if problems:
         raise FileError(problems)

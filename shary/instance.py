@@ -133,6 +133,16 @@ class SchemeInstance:
     def is_active(self, name: str) -> bool:
         return name in self.active
 
+    @property
+    def invoke_path(self) -> str:
+        """The invoke ids from the top instance down to this one, joined by ``/`` ('' at the top)."""
+        ids = []
+        node: SchemeInstance | None = self
+        while node is not None and node.parent is not None:
+            ids.append(node.invoke_id or "")
+            node = node.parent
+        return "/".join(reversed(ids))
+
     # -- running ---------------------------------------------------------
 
     def freeze(self) -> None:

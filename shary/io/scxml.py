@@ -257,9 +257,9 @@ class _Translator:
 
     def src(self, element: _Element, src: str) -> dict[str, Any] | None:
         """The chart an ``<invoke src>`` names: a file below this chart's folder."""
-        parts = src.replace("\\", "/").removeprefix("file:").split("/")
+        parts = src.replace("\\", "/").split("/")
         if src.startswith(("/", "\\")) or ".." in parts or ":" in parts[0] \
-                or os.path.isabs(src):
+                or os.path.isabs(src):  # a colon first: a URL or a drive
             self.refuse(element, f"invoke src {src!r} leaves the chart's folder: write a path "
                         "relative to it, without '..'")
             return None
