@@ -24,9 +24,9 @@ from userfiles.errors import Problem
 if TYPE_CHECKING:
     from shary.compiler import CompiledScheme
 
-MAX_MICROSTEPS = 10_000
+MAX_MICROSTEPS = 1_000
 """Microsteps allowed in one macrostep before the scheme is declared to be looping."""
-MAX_ECHOES = 10_000
+MAX_ECHOES = 1_000
 """Events an instance may send itself at one instant of its clock (zero-delay sends and
 timers) with no outside event in between, before it is declared to be looping."""
 
@@ -135,7 +135,7 @@ class SchemeInstance:
 
     @property
     def invoke_path(self) -> str:
-        """The invoke ids from the top instance down to this one, joined by ``/`` ('' at the top)."""
+        """The invoke ids from the top instance down to this one, joined by ``/``."""
         ids = []
         node: SchemeInstance | None = self
         while node is not None and node.parent is not None:

@@ -340,7 +340,7 @@ def test_scxml_initial_content_imports(tmp_path):
 
 @pytest.mark.parametrize("states, message", [
     ("a: {on_entry: [{raise: ping}], on: {ping: {target: a, do: [{raise: ping}]}}}",
-     "more than 10000 microsteps"),
+     "more than 1000 microsteps"),
     ("a: {on: {go: b}}\n  b: {on: {always: c}}\n  c: {on: {always: b}}", "microsteps"),
     ("a: {on: {go: b}}\n  b: {on_entry: [{send: again}], on: {again: {target: b}}}",
      "zero-delay send or timer loop"),
