@@ -1,5 +1,6 @@
 """Hostile schemes: bad invokes, invoke cycles, schemes that loop; refused with positions.
 
+Each corpus file starts with ``# expect: REGEX`` (tests/hostile_files.py).
 Files named ``simulate-*`` are valid schemes that loop once an event comes:
 ``shary simulate FILE go`` refuses them (a livelock, placed at the looping
 transition) in bounded time.  The others are refused by ``shary validate``.
@@ -9,35 +10,17 @@ Chains and fans of invokes too big for git are generated in ``tmp_path``.
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import pytest
 from hostile import HOSTILE, MAX_SECONDS, assert_refused, run_inprocess, run_subprocess
+from hostile_files import blamable, corpus, expected
 
 from shary.io.invokes import MAX_DEPTH
 
 SCHEMES = HOSTILE / "scheme"
 
-EXPECTED = {
-    "invoke-self": r"invoke cycle: invoke-self.yaml -> invoke-self.yaml",
-    "invoke-cycle-a": r"invoke cycle: invoke-cycle-a.yaml -> invoke-cycle-b.yaml -> "
-                      r"invoke-cycle-a.yaml",
-    "invoke-cycle-b": r"invoke cycle: invoke-cycle-b.yaml -> invoke-cycle-a.yaml -> "
-                      r"invoke-cycle-b.yaml",
-    "invoke-parent-folder": "leaves this scheme's folder",
-    "invoke-absolute": "leaves this scheme's folder",
-    "invoke-unknown": r"unknown scheme 'give-objekt' \(did you mean 'give-object'\?\)",
-    "invoke-missing-file": "no such scheme file 'parts/none.yaml'",
-    "invoke-not-a-scheme": "unknown scheme 'acts'",
-    "invoke-inline-broken": "unknown target state 'nowhere'",
-    "invoke-duplicate-id": "duplicate invoke id 'kid'",
-    "invoke-on-final": "a final state cannot have 'invoke'",
-    "invoke-unknown-key": "autoforwrd",
-    "initial-do-bad": "explode",
-    "simulate-raise-loop": "livelock .*microsteps",
-    "simulate-eventless-loop": "livelock .*microsteps",
-    "simulate-zero-send-loop": "livelock .*zero-delay send or timer loop",
-    "simulate-zero-timer-loop": "livelock .*zero-delay send or timer loop",
-}
+CASES = corpus("scheme")
 
 
 @pytest.fixture(autouse=True, scope="module")
@@ -46,19 +29,14 @@ def warm() -> None:
     run_inprocess("validate", SCHEMES / "invoke-self.yaml")
 
 
-def test_every_corpus_file_has_an_expectation():
-    assert {p.stem for p in SCHEMES.glob("*.yaml")} == set(EXPECTED)
-
-
-@pytest.mark.parametrize("name", sorted(EXPECTED))
-def test_hostile_scheme_is_refused(name):
-    path = SCHEMES / f"{name}.yaml"
-    if name.startswith("simulate-"):
+@pytest.mark.parametrize("path", CASES, ids=[p.stem for p in CASES])
+def test_hostile_scheme_is_refused(path: Path) -> None:
+    if path.stem.startswith("simulate-"):
         outcome = run_inprocess("simulate", path, "go", "1s")
     else:
         outcome = run_inprocess("validate", path)
-    others = [p for p in SCHEMES.glob("invoke-cycle-*.yaml")] if "cycle" in name else []
-    assert_refused(outcome, path, *others, message=EXPECTED[name])
+    partners = sorted(SCHEMES.glob("invoke-cycle-*.yaml")) if "cycle" in path.stem else []
+    assert_refused(outcome, *blamable(path), *partners, message=expected(path))
 
 
 def test_a_chain_of_invokes_too_long_is_refused(tmp_path):
@@ -96,4 +74,4 @@ def test_a_symbolic_link_out_of_the_folder_is_refused(tmp_path):
     scheme = folder / "top.yaml"
     scheme.write_text("scheme: top\nstates:\n  a:\n    invoke: {scheme: link.yaml}\n")
     assert_refused(run_inprocess("validate", scheme), scheme,
-                   message="outside this scheme's folder")
+                   message="'link.yaml' is outside the folder of top.yaml")

@@ -225,10 +225,10 @@ def test_builtin_and_path_invokes(tmp_path):
 
 
 @pytest.mark.parametrize("target, message", [
-    ("../outside.yaml", "leaves this scheme's folder"),
-    ("/etc/passwd", "leaves this scheme's folder"),
+    ("../outside.yaml", "is outside the folder of self.yaml"),
+    ("/etc/passwd", "is outside the folder of self.yaml"),
     ("give-objet", "unknown scheme 'give-objet' (did you mean 'give-object'?)"),
-    ("missing.yaml", "no such scheme file"),
+    ("missing.yaml", "no file 'missing.yaml' next to self.yaml"),
     ("self.yaml", r"invoke cycle: self.yaml -> self.yaml"),
 ])
 def test_bad_invoke_targets_are_refused(shary, tmp_path, target, message):

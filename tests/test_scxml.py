@@ -47,7 +47,7 @@ def test_import_translates_and_prunes(write):
     ('<transition event="e" cond="x &gt; 1" target="a"/>', "cond= needs a data model"),
     ("<onentry><script>x = 1</script></onentry>", "<script> needs a data model"),
     ('<onentry><send event="e" target="#_parent"/></onentry>', "another target"),
-    ('<invoke src="../x.scxml"/>', "leaves the chart's folder"),
+    ('<invoke src="../x.scxml"/>', "is outside the folder of u.scxml"),
     ('<invoke srcexpr="x"/>', "needs a data model"),
     ('<onentry><send event="e" delay="soon"/></onentry>', "is not a time"),
 ])

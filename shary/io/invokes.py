@@ -4,8 +4,8 @@ An invoke names its child scheme in one of three ways: a built-in scheme by
 name (``give-object``), a file by a path relative to the invoking scheme's own
 folder (``parts/hand-over.yaml``), or a whole scheme written inline (what an
 SCXML ``<invoke>`` with ``<content>`` becomes).  A path never leaves that
-folder: no ``..``, no absolute path, no symbolic link pointing outside, so a
-scheme handed to a robot cannot make it read other files.
+folder (or an ``--allow-path`` folder: :func:`userfiles.reader.confine`), so
+a scheme handed to a robot cannot make it read other files.
 
 Children are loaded with every check a scheme gets, and their own problems are
 reported in their own files.  A scheme that invokes itself, directly or
@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 from shary import builtin
 from shary.model import Scheme
 from userfiles.errors import FileError
+from userfiles.reader import confine, spelled
 from userfiles.schema import did_you_mean
 from userfiles.yamlsafe import Located
 
@@ -111,22 +112,11 @@ def _below(builder: _Builder, value: str, path: tuple) -> str | None:
         builder.problem(path, f"{value!r} is a path, but this scheme was not read from a "
                         "file: name a built-in scheme or write the child inline")
         return None
-    parts = Path(value.replace("\\", "/")).parts
-    if os.path.isabs(value) or value.startswith(("/", "\\")) or ".." in parts \
-            or (parts and ":" in parts[0]):
-        builder.problem(path, f"invoke path {value!r} leaves this scheme's folder: write a "
-                        "path relative to it, without '..'")
+    full, refusal = confine(file, value)
+    if refusal is not None:
+        builder.problem(path, refusal)
         return None
-    folder = Path(os.path.realpath(Path(file).parent))
-    target = Path(os.path.realpath(folder / Path(*parts)))
-    if not target.is_relative_to(folder):
-        builder.problem(path, f"invoke path {value!r} leads outside this scheme's folder "
-                        "(through a symbolic link)")
-        return None
-    if not target.is_file():
-        builder.problem(path, f"no such scheme file {value!r} below {str(folder)!r}")
-        return None
-    return str(Path(file).parent / Path(*parts))
+    return spelled(full, like=file)
 
 
 def rooted(located: Located, prefix: tuple) -> Located:

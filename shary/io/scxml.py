@@ -38,6 +38,7 @@ import yaml
 from shary.io.schemes import parse_scheme, unreachable
 from shary.model import Coverage
 from userfiles.errors import FileError, Problem
+from userfiles.reader import confine, spelled
 from userfiles.yamlsafe import Located, read_text
 
 MAX_DEPTH = 28
@@ -257,17 +258,11 @@ class _Translator:
 
     def src(self, element: _Element, src: str) -> dict[str, Any] | None:
         """The chart an ``<invoke src>`` names: a file below this chart's folder."""
-        parts = src.replace("\\", "/").split("/")
-        if src.startswith(("/", "\\")) or ".." in parts or ":" in parts[0] \
-                or os.path.isabs(src):  # a colon first: a URL or a drive
-            self.refuse(element, f"invoke src {src!r} leaves the chart's folder: write a path "
-                        "relative to it, without '..'")
+        full, refusal = confine(self.file, src)
+        if refusal is not None:
+            self.refuse(element, refusal)
             return None
-        folder = os.path.realpath(os.path.dirname(self.chain[-1]))
-        path = os.path.realpath(os.path.join(folder, *parts))
-        if os.path.commonpath([folder, path]) != folder:
-            self.refuse(element, f"invoke src {src!r} leads outside the chart's folder")
-            return None
+        path = str(full)
         if path in self.chain:
             names = [os.path.basename(f) for f in self.chain[self.chain.index(path):]]
             self.refuse(element, f"invoke cycle: {' -> '.join([*names, os.path.basename(path)])}")
@@ -275,10 +270,7 @@ class _Translator:
         if len(self.chain) >= MAX_INVOKE_DEPTH:
             self.refuse(element, f"invokes nest more than {MAX_INVOKE_DEPTH} charts deep")
             return None
-        if not os.path.isfile(path):
-            self.refuse(element, f"invoke src {src!r}: no such file below {folder!r}")
-            return None
-        shown = os.path.join(os.path.dirname(self.file), *parts)
+        shown = spelled(path, like=self.file)
         try:
             root = _parse(read_text(shown), shown, self.budget)
         except FileError as err:
