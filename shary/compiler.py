@@ -151,6 +151,7 @@ class CompiledScheme:
                           if t.after is not None and t.events)
             for s in scheme.states.values()}
         self._children: dict[int, CompiledScheme] = {}
+        self._descriptors: list[str] | None = None
 
     def child(self, invoke: Invoke) -> CompiledScheme:
         """The compiled child scheme of an invoke (compiled once, on first use)."""
@@ -163,19 +164,21 @@ class CompiledScheme:
     def descriptors(self) -> list[str]:
         """Every event descriptor a transition of the scheme names, in document order.
 
-        Timeouts are left out (they are the instance's own events), and so are
-        ``done.*`` events the engine itself raises.  Children invoked with
-        ``autoforward`` count: the events they take reach them through this scheme.
+        Timeouts are left out (they are the instance's own events).  Children
+        invoked with ``autoforward`` count: what they take reaches them through
+        this scheme.  This is what an event sent from outside is checked against.
         """
-        out: dict[str, None] = {}
-        for state in self.scheme.all_states():
-            for t in state.transitions:
-                if t.after is None and t.events is not None:
-                    out.update(dict.fromkeys(t.events))
-            for invoke in state.invokes:
-                if invoke.autoforward:
-                    out.update(dict.fromkeys(self.child(invoke).descriptors()))
-        return list(out)
+        if self._descriptors is None:
+            out: dict[str, None] = {}
+            for state in self.scheme.all_states():
+                for t in state.transitions:
+                    if t.after is None and t.events is not None:
+                        out.update(dict.fromkeys(t.events))
+                for invoke in state.invokes:
+                    if invoke.autoforward:
+                        out.update(dict.fromkeys(self.child(invoke).descriptors()))
+            self._descriptors = list(out)
+        return self._descriptors
 
     def can_take(self, event: str) -> bool:
         """Whether some state of the scheme (or an autoforwarded child) has a transition on it."""

@@ -180,8 +180,11 @@ class SchemeInstance:
 
     def send(self, name: str, data: Any = None) -> None:
         """Deliver an outside event and run to completion (queued if the instance is busy)."""
-        event = Event(name, data)
         self._echoes = 0
+        self._deliver(Event(name, data))
+
+    def _deliver(self, event: Event) -> None:
+        """Run ``event`` to completion, or queue it when the instance is busy."""
         if self._busy:
             self._external.append(event)
             return
@@ -250,8 +253,9 @@ class SchemeInstance:
             self._echo_at, self._echoes = now, 0
         self._echoes += 1
         if self._echoes > MAX_ECHOES:
-            self._livelock(event, f"it sent itself more than {MAX_ECHOES} events at "
-                           f"{now:g} s without time passing (a zero-delay send or timer loop)")
+            self._livelock(event, f"it sent itself more than {MAX_ECHOES} events at {now:g} s "
+                           "without time passing (a zero-delay loop of sends, timers or "
+                           "invokes)")
 
     def _play(self, step: Step, target: str, event: Event | None) -> None:
         """Play one microstep computed by :mod:`shary.statechart` (called by the machine)."""
@@ -354,9 +358,10 @@ class SchemeInstance:
                     self._invoked[name] = kept  # type: ignore[index]
                 else:
                     del self._invoked[name]  # type: ignore[union-attr]
-                self.send(f"done.invoke.{child.invoke_id}.{state.outcome}",
-                          {"invoke": child.invoke_id, "outcome": state.outcome,
-                           "state": state.name})
+                name = f"done.invoke.{child.invoke_id}.{state.outcome}"
+                self._echo(name)
+                self._deliver(Event(name, {"invoke": child.invoke_id,
+                                           "outcome": state.outcome, "state": state.name}))
                 return
 
     def cancel(self) -> None:
@@ -390,10 +395,8 @@ class SchemeInstance:
     def _fire(self, key: str, event: str) -> None:
         if self._timers is not None:
             self._timers.pop(key, None)
-        echoes, at = self._echoes, self._echo_at
-        self.send(event)
-        self._echoes, self._echo_at = echoes, at
         self._echo(event)
+        self._deliver(Event(event))
 
     def _run(self, actions: tuple) -> None:
         for action in actions:

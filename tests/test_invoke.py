@@ -343,8 +343,10 @@ def test_scxml_initial_content_imports(tmp_path):
      "more than 1000 microsteps"),
     ("a: {on: {go: b}}\n  b: {on: {always: c}}\n  c: {on: {always: b}}", "microsteps"),
     ("a: {on: {go: b}}\n  b: {on_entry: [{send: again}], on: {again: {target: b}}}",
-     "zero-delay send or timer loop"),
-    ("a: {on: {go: b}}\n  b: {on: {after 0s: b}}", "zero-delay send or timer loop"),
+     "zero-delay loop of sends, timers or invokes"),
+    ("a: {on: {go: b}}\n  b: {on: {after 0s: b}}", "zero-delay loop of sends, timers or invokes"),
+    ("a: {on: {go: b}}\n  b:\n    invoke: {scheme: {scheme: k, states: {end: {final: true}}}}"
+     "\n    on: {done.invoke: b}", "zero-delay loop of sends, timers or invokes"),
 ])
 def test_loops_are_livelock_errors_placed_in_the_file(states, message):
     compiled = compile_scheme(scheme(f"scheme: loop\ninitial: a\nstates:\n  {states}\n",
