@@ -388,3 +388,47 @@ def test_conformance_reports_loops_as_failed_charts(shary, tmp_path):
     assert "FAIL raise.scxml: livelock" in out and "FAIL timer.scxml: livelock" in out
     assert "FAIL tiny.scxml:" in out and "timer events" in out
     assert out.strip().endswith("0 passed, 3 failed")
+
+
+def test_conformance_runs_an_invoking_chart(tmp_path):
+    chart = tmp_path / "kid-ends.scxml"
+    chart.write_text("""\
+<scxml xmlns="http://www.w3.org/2005/07/scxml" initial="s0">
+  <state id="s0">
+    <invoke id="kid"><content><scxml initial="k">
+      <state id="k"><onentry><send event="tick" delay="1s"/></onentry>
+        <transition event="tick" target="kend"/></state>
+      <final id="kend"/>
+    </scxml></content></invoke>
+    <transition event="done.invoke.kid" target="pass"/>
+    <transition event="tick" target="fail"/>
+  </state>
+  <final id="pass"/>
+  <final id="fail"/>
+</scxml>
+""")
+    outcome = run_test(chart)
+    assert outcome.passed, outcome.reason
+
+
+def test_scxml_history_default_declared_later_with_content(tmp_path):
+    chart = tmp_path / "h.scxml"
+    chart.write_text("""\
+<scxml xmlns="http://www.w3.org/2005/07/scxml" initial="a">
+  <state id="a"><transition event="t" target="h"/></state>
+  <state id="p" initial="first">
+    <history id="h" type="deep">
+      <transition target="inner"><raise event="go"/></transition>
+    </history>
+    <state id="first"/>
+    <state id="q">
+      <state id="x"/><state id="inner"><transition event="go" target="pass"/></state>
+    </state>
+  </state>
+  <final id="pass"/>
+</scxml>
+""")
+    (tmp_path / "h.json").write_text('{"initialConfiguration": ["a"], "events": '
+                                     '[{"event": {"name": "t"}, "nextConfiguration": ["pass"]}]}')
+    outcome = run_test(chart)
+    assert outcome.passed, outcome.reason
