@@ -149,8 +149,11 @@ class SchemeInstance:
         """Stop the instance's clock: pending timeouts keep their remaining time.
 
         Used when a whole task is suspended by a more urgent one: its scheme
-        must not give up on its partner while it is not even running.
+        must not give up on its partner while it is not even running.  The
+        children it invoked are frozen with it.
         """
+        for child in self._children():
+            child.freeze()
         if self._frozen is not None or not self._timers:
             self._frozen = self._frozen or {}
             return
@@ -165,6 +168,12 @@ class SchemeInstance:
         frozen, self._frozen = self._frozen or {}, None
         for key, (remaining, args) in frozen.items():
             self._start_timer(key, remaining, args[1])
+        for child in self._children():
+            child.thaw()
+
+    def _children(self) -> list[SchemeInstance]:
+        """The invoked children still running."""
+        return [c for kids in (self._invoked or {}).values() for _, c in kids if not c.finished]
 
     def start(self) -> None:
         """Enter the initial states and settle (called once by ``CompiledScheme.start``)."""

@@ -432,3 +432,13 @@ def test_scxml_history_default_declared_later_with_content(tmp_path):
                                      '[{"event": {"name": "t"}, "nextConfiguration": ["pass"]}]}')
     outcome = run_test(chart)
     assert outcome.passed, outcome.reason
+
+
+def test_freezing_a_parent_freezes_its_children(parent_text):
+    instance, _, clock = run(parent_text.replace("AUTO", "autoforward: false"))
+    instance.freeze()
+    clock.advance(5)  # the child's 2 s timeout is frozen with it
+    assert instance.configuration == ("ask",)
+    instance.thaw()
+    clock.advance(2)
+    assert instance.configuration == ("ended",)
