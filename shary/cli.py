@@ -266,6 +266,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         return f"{instance.invoke_path}/" if instance.parent is not None else ""
 
     class Trace(SchemeListener):
+        def invoking(self, instance, state, invoke):  # type: ignore[override]
+            return self  # trace the invoked children too
+
         def entered(self, instance, state, event):  # type: ignore[override]
             act = f"  [cyan]{state.act} ({state.act_type.name})[/cyan]" if state.act_type else ""
             _out.print(f"{clock.now():8.2f}s  enter  {who(instance)}{state.name}{act}")

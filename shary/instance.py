@@ -69,11 +69,13 @@ class SchemeListener:
     def invoking(self, instance: SchemeInstance, state: State, invoke: Invoke) -> Any:
         """The listener of the child scheme that ``state`` is about to invoke.
 
-        By default the child reports to this same listener (``instance.parent``
-        and ``instance.invoke_id`` tell a child's calls from its parent's);
-        return another listener, or None for a silent child.
+        None by default: the child runs silently, and its parent hears of it
+        through ``done.invoke.ID.OUTCOME``.  Return ``self`` to hear the
+        child's states too (``instance.parent`` and ``instance.invoke_id`` tell
+        its calls from the parent's; note that ``finished`` then also comes for
+        the child), or another listener.
         """
-        return self
+        return None
 
 
 class LivelockError(RuntimeError):
@@ -337,10 +339,8 @@ class SchemeInstance:
         for state in pending:
             for invoke in state.invokes:
                 child_def = compiled.child(invoke)
-                listener = self.listener
-                hook = getattr(listener, "invoking", None)
-                if hook is not None:
-                    listener = hook(self, state, invoke)
+                hook = getattr(self.listener, "invoking", None)
+                listener = hook(self, state, invoke) if hook is not None else None
                 child = SchemeInstance(child_def, self.clock, listener, self.context)
                 child.parent = self
                 child.invoke_id = invoke.id

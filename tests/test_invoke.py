@@ -32,6 +32,9 @@ class Record(SchemeListener):
     def __init__(self) -> None:
         self.seen: list[str] = []
 
+    def invoking(self, instance, state, invoke):  # type: ignore[override]
+        return self
+
     def entered(self, instance, state, event):  # type: ignore[override]
         self.seen.append(f"{instance.invoke_id or 'top'}:enter:{state.name}")
 
@@ -442,3 +445,15 @@ def test_freezing_a_parent_freezes_its_children(parent_text):
     instance.thaw()
     clock.advance(2)
     assert instance.configuration == ("ended",)
+
+
+def test_children_are_silent_unless_the_listener_asks(parent_text):
+    class Parent(Record):
+        def invoking(self, instance, state, invoke):  # type: ignore[override]
+            return None
+
+    record = Parent()
+    instance = compile_scheme(scheme(parent_text.replace("AUTO", "autoforward: true"))).start(
+        clock=SimulatedClock(), listener=record)
+    instance.send("finish")
+    assert record.seen == ["top:enter:ask", "top:exit:ask", "top:enter:ended"]
