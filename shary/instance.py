@@ -191,11 +191,8 @@ class SchemeInstance:
 
     def send(self, name: str, data: Any = None) -> None:
         """Deliver an outside event and run to completion (queued if the instance is busy)."""
+        event = Event(name, data)
         self._echoes = 0
-        self._deliver(Event(name, data))
-
-    def _deliver(self, event: Event) -> None:
-        """Run ``event`` to completion, or queue it when the instance is busy."""
         if self._busy:
             self._external.append(event)
             return
@@ -257,6 +254,13 @@ class SchemeInstance:
                   f"last in {', '.join(self.configuration) or 'no state'}"
         raise LivelockError(message, Problem(scheme.file, *where, message))
 
+    def _send_self(self, name: str, data: Any = None) -> None:
+        """Send an event the instance gives itself (a timer, a child's end): counted."""
+        self._echo(name)
+        count = self._echoes
+        self.send(name, data)  # which resets the count, as an outside event does
+        self._echoes = max(self._echoes, count)
+
     def _echo(self, event: str) -> None:
         """Count an event the instance gives itself; too many at one instant is a loop."""
         now = self.clock.now()
@@ -273,8 +277,8 @@ class SchemeInstance:
         timers = self.definition.timers
         listener = self.listener
         for state in step.exits:
-            if self._to_invoke and state in self._to_invoke:
-                self._to_invoke.remove(state)
+            if state.invokes and self._to_invoke and state in self._to_invoke:
+                self._to_invoke.remove(state)  # left in the macrostep that entered it
             if self._timers and timers[state.name]:
                 for name, _ in timers[state.name]:
                     pending = self._timers.pop(name, None)
@@ -282,7 +286,7 @@ class SchemeInstance:
                         pending.cancel()
             if state.on_exit:
                 self._run(state.on_exit)
-            if self._invoked and state.name in self._invoked:
+            if state.invokes and self._invoked and state.name in self._invoked:
                 for _, child in self._invoked.pop(state.name):
                     child.cancel()
             if listener is not None:
@@ -367,10 +371,9 @@ class SchemeInstance:
                     self._invoked[name] = kept  # type: ignore[index]
                 else:
                     del self._invoked[name]  # type: ignore[union-attr]
-                name = f"done.invoke.{child.invoke_id}.{state.outcome}"
-                self._echo(name)
-                self._deliver(Event(name, {"invoke": child.invoke_id,
-                                           "outcome": state.outcome, "state": state.name}))
+                self._send_self(f"done.invoke.{child.invoke_id}.{state.outcome}",
+                                {"invoke": child.invoke_id, "outcome": state.outcome,
+                                 "state": state.name})
                 return
 
     def cancel(self) -> None:
@@ -404,8 +407,7 @@ class SchemeInstance:
     def _fire(self, key: str, event: str) -> None:
         if self._timers is not None:
             self._timers.pop(key, None)
-        self._echo(event)
-        self._deliver(Event(event))
+        self._send_self(event)
 
     def _run(self, actions: tuple) -> None:
         for action in actions:
