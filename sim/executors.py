@@ -20,6 +20,7 @@ simulated behaviour lives in :mod:`sim.people`.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -38,6 +39,7 @@ from .motion import (
     Sequence,
     Wait,
 )
+from .narration import action_text
 from .simulation import Simulation, standing_height
 from .world import BOTTLE_RADIUS, FURNITURE, MANIPULATION_PLACES
 
@@ -70,18 +72,30 @@ class _Running:
         return bool(self.failure)
 
 
+_NAME = re.compile(r"\b([a-z]+(?:-[a-z]+)+)\b")
+
+
+def spoken(text: str) -> str:
+    """Text as said aloud: the names of things lose their hyphens ("the yellow bottle").
+
+    Names in the world are identifiers (``yellow-bottle``, ``coffee-table``);
+    recipes put them into sentences, where a listener expects words.
+    """
+    return _NAME.sub(lambda m: m.group(1).replace("-", " "), text)
+
+
 class RobotExecutors:
     """The robot's executors (see the module's docstring)."""
 
     def __init__(self, sim: Simulation, say: Callable[[str, str], Any],
                  learned: Callable[[str, str, Any], Any] | None = None,
-                 progress: Callable[[str, str], Any] | None = None):
+                 progress: Callable[[str, str, str], Any] | None = None):
         self.sim = sim
         self.world = sim.world
         self.robot = sim.robot
         self.say = say
         self.learned = learned or (lambda s, p, o: None)
-        self.progress = progress or (lambda who, text: None)
+        self.progress = progress or (lambda who, kind, text: None)
         self.people: dict[str, Any] = {}
         self.faults: dict[str, list[str]] = {}
         """Atomic task -> reasons of the next injected failures (a scenario's faults)."""
@@ -98,11 +112,11 @@ class RobotExecutors:
                             f"people; it asks them in a joint task (ask-help)")
             return
         if request.atomic != "speak":
-            self.progress(self.robot, " ".join([request.atomic, *map(str, request.args.values())]))
+            self.progress(self.robot, "action", action_text(request.atomic, request.args))
         running = _Running(request, reporter)
         if self.faults.get(request.atomic):
             reason = self.faults[request.atomic].pop(0)
-            self.progress(self.robot, f"{request.atomic} failed: {reason}")
+            self.progress(self.robot, "failed", f"{request.atomic} failed: {reason}")
             reporter.failed(request, reason)
             return
         method = getattr(self, "_" + request.atomic.replace("-", "_"), None)
@@ -112,7 +126,7 @@ class RobotExecutors:
         try:
             activity = method(running, **request.args)
         except ActionFailed as err:
-            self.progress(self.robot, f"{request.atomic} failed: {err}")
+            self.progress(self.robot, "failed", f"{request.atomic} failed: {err}")
             reporter.failed(request, str(err))
             return
         self._running[request.id] = running
@@ -135,7 +149,8 @@ class RobotExecutors:
         if self._running.pop(running.request.id, None) is None:
             return
         if running.failure:
-            self.progress(self.robot, f"{running.request.atomic} failed: {running.failure[0]}")
+            self.progress(self.robot, "failed",
+                          f"{running.request.atomic} failed: {running.failure[0]}")
             running.reporter.failed(running.request, running.failure[0])
         else:
             running.reporter.done(running.request)
@@ -204,8 +219,9 @@ class RobotExecutors:
     # -- the atomic tasks -------------------------------------------------------------
 
     def _speak(self, running: _Running, text: str) -> Activity:
-        seconds = 0.4 + len(str(text).split()) / WORDS_PER_SECOND
-        self.say(self.robot, str(text))
+        text = spoken(str(text))
+        seconds = 0.4 + len(text.split()) / WORDS_PER_SECOND
+        self.say(self.robot, text)
         self.speaking = True
 
         def heard() -> None:

@@ -21,7 +21,6 @@ from __future__ import annotations
 import json
 import math
 import time
-from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -37,6 +36,7 @@ from shary.planning import HatpPlanner
 from shary.supervisor import Supervisor
 
 from .executors import RobotExecutors
+from .narration import Narrator, Report
 from .people import Person
 from .perception import Noise, Perception
 from .scenario import Happened, Scenario, judge, load_scenario, recipe_files
@@ -101,8 +101,9 @@ def _acts() -> set[str]:
 
 def run_scenario(path: str | Path, *, seed: int = 0, out: str | Path | None = None,
                  snapshots: bool = False, gui: bool = False,
-                 report: Callable[[float, str, str], Any] | None = None) -> RunResult:
-    """Run one scenario (see the module's docstring); ``report(t, who, text)`` shows progress."""
+                 report: Report | None = None) -> RunResult:
+    """Run one scenario (see the module's docstring); ``report`` is told the story as it
+    happens (see :mod:`sim.narration`; :class:`sim.narration.ConsoleReport` prints it)."""
     scenario, library, domain = load(path)
     out_dir = Path(out) if out is not None else None
     if out_dir is not None:
@@ -116,7 +117,7 @@ def run_scenario(path: str | Path, *, seed: int = 0, out: str | Path | None = No
     with LivingRoom(gui=gui, robot=None) as world, \
             _log(log_path, seed) as log:
         run = _Run(scenario, library, domain, world, log, seed,
-                   report or (lambda t, who, text: None), out_dir if snapshots else None)
+                   report or (lambda t, who, kind, text: None), out_dir if snapshots else None)
         setup = time.perf_counter() - wall
         wall = time.perf_counter()
         end = run.go()
@@ -155,6 +156,22 @@ class _MemoryLog:
         pass
 
 
+class _Told:
+    """The context log, with each event also shown to the narrator of the run's story."""
+
+    def __init__(self, log: Any, narrator: Narrator):
+        self.log = log
+        self.narrator = narrator
+
+    def record(self, t: float, kind: str, *, task: str | None = None,
+               agent: str | None = None, **data: Any) -> None:
+        self.log.record(t, kind, task=task, agent=agent, **data)
+        self.narrator.event(t, kind, agent, data)
+
+    def flush(self) -> None:
+        self.log.flush()
+
+
 def _log(path: Path | None, seed: int) -> Any:
     return ContextLog(path, seed=seed) if path is not None else _MemoryLog()
 
@@ -163,7 +180,7 @@ class _Run:
     """One run's parts, wired together."""
 
     def __init__(self, scenario: Scenario, library: Any, domain: Any, world: LivingRoom,
-                 log: Any, seed: int, report: Callable[[float, str, str], Any],
+                 log: Any, seed: int, report: Report,
                  snapshot_dir: Path | None):
         self.scenario = scenario
         self.world = world
@@ -176,12 +193,16 @@ class _Run:
         robot = scenario.robot
         world.add_robot(robot, scenario.model, scenario.robot_at)
         self.sim = Simulation(world, self.loop, robot)
-        self.executors = RobotExecutors(self.sim, self.say, self.learned,
-                                        lambda who, text: report(self.loop.now(), who, text))
+        self.executors = RobotExecutors(
+            self.sim, self.say, self.learned,
+            lambda who, kind, text: report(self.loop.now(), who, kind, text))
         registry = ExecutorRegistry({name: self.executors for name in library.atomic})
+        hatp = HatpPlanner(domain, budget_ms=300)
+        self.narrator = Narrator(report, robot, {p.name for p in scenario.people},
+                                 last_plan=lambda: hatp.last.plan if hatp.last else None)
         self.sup = Supervisor(library, self.facts, robot=robot, loop=self.loop,
-                              executors=registry, log=log,
-                              planners={"living-room": HatpPlanner(domain, budget_ms=300)})
+                              executors=registry, log=_Told(log, self.narrator),
+                              planners={"living-room": hatp})
         self.facts.subscribe(self._fact_logged)
         self.people: dict[str, Person] = {}
         for spec in scenario.people:
@@ -246,7 +267,7 @@ class _Run:
 
     def say(self, who: str, text: str) -> None:
         self.sup.record("speech", agent=who, text=text)
-        self.report(self.loop.now(), who, text)
+        self.report(self.loop.now(), who, "speech", text)
 
     def learned(self, s: str, p: str, o: Any) -> None:
         """An executor found something out by trying (the bottle is out of reach)."""
@@ -257,7 +278,7 @@ class _Run:
                         s=str(event.subject), p=str(event.predicate), o=str(event.object))
 
     def _act_started(self, run: Any, state: Any, agent: str) -> None:
-        self.report(self.loop.now(), agent, f"[{state.act}] {run.type.name}")
+        self.report(self.loop.now(), agent, "act", f"[{state.act}] {run.type.name}")
         self.snapshot(f"{state.act.lower()}-{run.type.name}")
 
     def snapshot(self, label: str) -> None:

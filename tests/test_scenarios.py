@@ -26,12 +26,55 @@ def test_every_scenario_of_the_issue_is_shipped():
             "serve-drink-initiative", "explore-new-objects", "give-bottle-noisy"} <= set(SCENARIOS)
 
 
+STORIES: dict[str, list[tuple[float, str, str, str]]] = {}
+"""What each run of the ``runs`` fixture told its console: (t, who, kind, text)."""
+
+
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
     """Each built-in scenario run once, with its files, shared by the tests below."""
     out = tmp_path_factory.mktemp("runs")
-    return {name: (run_scenario(builtin_scenarios()[name], out=out / name), out / name)
-            for name in SCENARIOS}
+    found = {}
+    for name in SCENARIOS:
+        story = STORIES[name] = []
+        found[name] = (run_scenario(builtin_scenarios()[name], out=out / name,
+                                    report=lambda *line, story=story: story.append(line)),
+                       out / name)
+    return found
+
+
+def _told(name, kind, who=None):
+    return [text for _, w, k, text in STORIES[name] if k == kind and who in (None, w)]
+
+
+def test_the_console_tells_the_new_plan_after_a_failure(runs):
+    plans = _told("clean-up-unreachable", "plan")
+    assert any(p.startswith("plan, 4 actions") for p in plans)
+    assert any(p.startswith("new plan, 5 actions, since 2-pick failed") for p in plans)
+    # the new plan's streams, one line per agent: Alice picks and gives, Jido dumps
+    assert any("Pick(yellow-bottle" in p and "Give(jido" in p
+               for p in _told("clean-up-unreachable", "plan", "alice"))
+
+
+def test_the_console_tells_what_people_do_and_where_they_look(runs):
+    assert "give yellow-bottle to jido" in _told("clean-up-unreachable", "person", "alice")
+    assert "place blue-bottle on coffee-table" in _told("explore-new-objects", "person", "bob")
+    attention = _told("give-bottle-distracted", "attention", "alice")
+    away = next(i for i, text in enumerate(attention) if text.startswith("looks away from jido"))
+    assert "looks back at jido" in attention[away + 1:]
+    assert not any("looks away" in text for text in _told("give-bottle", "attention"))
+
+
+def test_end_task_says_what_happened(runs):
+    def said(name):
+        return _told(name, "speech", "jido")
+
+    assert said("give-bottle")[-1] == "Here is the yellow bottle."
+    assert said("give-bottle-refused")[-1] == "All right, I won't give you the yellow bottle."
+    assert "I have finished." not in said("give-bottle-refused")
+    assert said("give-bottle-abandoned")[-1].startswith("You are busy, so I will not give you")
+    assert "Thank you for the yellow bottle." in said("clean-up-unreachable")
+    assert said("explore-new-objects")[-1] == "I have looked at the coffee area."
 
 
 @pytest.mark.parametrize("name", SCENARIOS)
