@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from .png import write_png
+from .png import caption_height, with_caption, write_png
 from .quiet import silenced
 
 with silenced():  # the import prints a "pybullet build time" banner on stderr
@@ -244,6 +244,36 @@ CAMERAS: dict[str, Camera] = {
     "top": Camera((0.0, 0.05, 7.5), (0.0, 0.05, 0.0), 48.0, up=(0.0, 1.0, 0.0)),
 }
 LIGHT_DIRECTION = (1.0, -0.6, 2.0)
+
+
+def framing(points: list[Vec3], aspect: float, fov: float = 50.0,
+            looking_from: Camera = CAMERAS["overview"]) -> Camera:
+    """A camera that frames ``points``: the robot first, then its partners.
+
+    It looks across the line from the robot to the first partner, so that
+    neither stands in front of the other, from the side nearer the direction
+    of ``looking_from`` and as high above the floor (over the walls); it is
+    pulled back until a sphere around all the points fits the narrower field
+    of view.  The fixed overview shows the whole room, where a person on the
+    sofa is a few pixels tall and may stand behind the robot.
+    """
+    pts = np.array(points, dtype=float)
+    centre = pts.mean(axis=0)
+    centre[2] = 0.7  # about the height of hands and tables
+    radius = max(float(np.max(np.linalg.norm(pts - centre, axis=1))), 0.8) + 0.7
+    half = math.radians(fov) / 2
+    narrower = min(half, math.atan(math.tan(half) * aspect))
+    usual = np.subtract(looking_from.eye, looking_from.target)
+    flat = math.hypot(usual[0], usual[1])
+    side = usual[:2] / flat
+    if len(pts) > 1 and np.linalg.norm(pts[1, :2] - pts[0, :2]) > 1e-6:
+        line = (pts[1, :2] - pts[0, :2]) / np.linalg.norm(pts[1, :2] - pts[0, :2])
+        across = np.array([-line[1], line[0]])
+        side = across if across @ side >= 0 else -across
+    direction = np.array([side[0] * flat, side[1] * flat, usual[2]])
+    direction /= np.linalg.norm(direction)
+    eye = centre + direction * max(radius / math.sin(narrower), 2.5)
+    return Camera(tuple(eye.tolist()), tuple(centre.tolist()), fov)
 
 
 # --------------------------------------------------------------------- robots
@@ -686,10 +716,11 @@ class LivingRoom:
 
     # ----------------------------------------------------------------- images
 
-    def _view(self, camera: str, width: int, height: int) -> tuple[list[float], list[float]]:
+    def _view(self, camera: str | Camera, width: int,
+              height: int) -> tuple[list[float], list[float]]:
         aspect = width / height
-        if camera in CAMERAS:
-            cam = CAMERAS[camera]
+        if isinstance(camera, Camera) or camera in CAMERAS:
+            cam = camera if isinstance(camera, Camera) else CAMERAS[camera]
             view = pb.computeViewMatrix(cam.eye, cam.target, cam.up)
             proj = pb.computeProjectionMatrixFOV(cam.fov, aspect, 0.1, 30.0)
             return view, proj
@@ -705,8 +736,8 @@ class LivingRoom:
         raise KeyError(f"unknown camera {camera!r} (cameras: {', '.join(known)})")
 
     def image(self, width: int = 320, height: int = 240,
-              camera: str = "overview") -> bytes:
-        """RGB bytes (rows top to bottom) seen by a named camera or a robot's camera.
+              camera: str | Camera = "overview") -> bytes:
+        """RGB bytes (rows top to bottom) seen by a camera, a named one or a robot's.
 
         ER_TINY_RENDERER is the software renderer: it works headless and needs
         no GPU or display.
@@ -720,6 +751,13 @@ class LivingRoom:
         return pixels[:, :, :3].tobytes()
 
     def snapshot(self, path: str | Path, width: int = 320, height: int = 240,
-                 camera: str = "overview") -> Path:
-        """Write a PNG of what ``camera`` sees (``overview``, ``top`` or a robot's name)."""
-        return write_png(path, width, height, self.image(width, height, camera))
+                 camera: str | Camera = "overview", caption: list[str] = ()) -> Path:
+        """Write a PNG of what ``camera`` sees (``overview``, ``top``, a robot's name or
+        a :class:`Camera`), ``width`` x ``height`` in all: with a ``caption``, its
+        lines are written in a strip along the bottom of the picture."""
+        if not caption:
+            return write_png(path, width, height, self.image(width, height, camera))
+        band = caption_height(len(caption), height)
+        pixels = self.image(width, height - band, camera)
+        return write_png(path, width, height, with_caption(pixels, width, height - band,
+                                                           caption, band))

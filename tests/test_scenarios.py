@@ -9,6 +9,7 @@ import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from shary.cli import main
@@ -190,12 +191,42 @@ def test_same_seed_same_run_in_another_process(tmp_path):
     assert logs[0] == logs[1]
 
 
-def test_snapshots_are_pngs(tmp_path):
+def test_snapshots_are_large_captioned_pngs_framing_robot_and_partner(tmp_path):
+    from sim.png import CAPTION_BACKGROUND, read_png
+    from sim.run import SNAPSHOT_SIZE
+
     result = run_scenario(builtin_scenarios()["give-bottle-refused"], out=tmp_path,
                           snapshots=True)
     shots = sorted(tmp_path.glob("snapshot-*.png"))
     assert len(shots) >= 3 and shots[0].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert result.outputs["snapshots"]
+    width, height, channels, pixels = read_png(shots[0])
+    assert (width, height) == SNAPSHOT_SIZE and width >= 800
+    rgb = np.frombuffer(pixels, dtype=np.uint8).reshape(height, width, channels)
+    band = rgb[-height // 12:]  # the caption strip: dark, with light text on it
+    background = (np.abs(band.astype(int) - CAPTION_BACKGROUND).max(axis=2) <= 8).mean()
+    ink = (band.min(axis=2) > 150).sum()
+    assert background > 0.6 and ink > 200
+    # Alice (her blue shirt) is large in the picture, not a few pixels far away
+    scene = rgb[:-height // 12].reshape(-1, 3).astype(int)
+    shirt = (np.abs(scene - (40, 90, 200)).max(axis=1) <= 45).sum()
+    assert shirt > 2000
+
+
+def test_the_framing_camera_keeps_everyone_in_view():
+    from sim.world import framing
+
+    camera = framing([(0.0, -1.0, 0.6), (-2.0, 1.5, 1.2)], 4 / 3)
+    eye, target = np.array(camera.eye), np.array(camera.target)
+    assert target[:2] == pytest.approx([-1.0, 0.25])
+    forward = (target - eye) / np.linalg.norm(target - eye)
+    for point in [(0.0, -1.0, 0.6), (-2.0, 1.5, 1.2)]:
+        to = np.array(point) - eye
+        angle = np.degrees(np.arccos(to @ forward / np.linalg.norm(to)))
+        assert angle < camera.fov / 2
+    # it looks across the line from the robot to the partner, not along it
+    line = np.array([-2.0, 2.5]) / np.linalg.norm([-2.0, 2.5])
+    assert abs(forward[:2] @ line) < 1e-6
 
 
 def test_a_failed_expectation_says_what_differed_and_exits_1(tmp_path, capsys):
