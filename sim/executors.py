@@ -41,7 +41,7 @@ from .motion import (
 )
 from .narration import action_text
 from .simulation import Simulation, standing_height
-from .world import BOTTLE_RADIUS, FURNITURE, MANIPULATION_PLACES
+from .world import FURNITURE, MANIPULATION_PLACES
 
 NEAR_PEOPLE_SPEED = 0.5
 """Joint speed (rad/s) when the arm moves towards a person: slower, as near people it must."""
@@ -282,6 +282,13 @@ class RobotExecutors:
             raise ActionFailed(f"{self.robot} already holds {held}")
         if object in self.sim.holder:
             raise ActionFailed(f"{self.sim.holder[object]} holds {object}")
+        if object not in self.world.sizes:
+            raise ActionFailed(f"{object!r} is not an object that can be picked up")
+        width = self.world.sizes[object][1]
+        opening = self._gripper_opening()
+        if width > opening:
+            raise ActionFailed(f"{object} is too big to grasp: {width * 100:.0f} cm wide, "
+                               f"the gripper opens to {opening * 100:.0f} cm")
         try:
             x, y, z = self._check_reach(object)
             _, error = reach(self.world, self.robot, (x, y, z))
@@ -297,7 +304,7 @@ class RobotExecutors:
                               if self.world.footprints[f].contains(x, y)), None)
             place, _ = self.world.nearest_place(*self.world.base_pose(self.robot)[:2])
             self.picked_from[object] = ((x, y, z), furniture, place)
-            set_gripper(self.world, self.robot, 0.0)
+            set_gripper(self.world, self.robot, width / 2)  # the fingers close on its sides
             self.sim.attach(object, self.robot)
 
         return Sequence([self._gripper(0.04),
@@ -307,12 +314,19 @@ class RobotExecutors:
                          self._arm_to(running, lambda: (x, y, z + LIFT), f"above {object}")],
                         f"pick {object}", running.failed)
 
-    def _free_spot(self, furniture: str, near: tuple[float, float] | None = None
+    def _gripper_opening(self) -> float:
+        """How wide the robot's gripper opens (metres, between the fingers)."""
+        r = self.world.robot(self.robot)
+        return 2 * min(r.limits[j][1] for j in r.arm().fingers)
+
+    def _free_spot(self, obj: str, furniture: str, near: tuple[float, float] | None = None
                    ) -> tuple[float, float, float]:
         f = self.world.footprints[furniture]
         mx, my, _ = self._mount()
-        z = standing_height(self.world.top(furniture))
-        others = [self.world.position(b) for b in self.world.bottles if b not in self.sim.holder]
+        height, width = self.world.sizes[obj]
+        z = standing_height(self.world.top(furniture), height)
+        others = [(*self.world.position(b)[:2], self.world.sizes[b][1])
+                  for b in self.world.movables if b not in self.sim.holder]
         candidates = []
         steps = 9
         for i in range(steps):
@@ -323,7 +337,7 @@ class RobotExecutors:
                 x, y = f.x + c * lx - s * ly, f.y + s * lx + c * ly
                 if math.hypot(x - mx, y - my) > ROBOT_REACH - 0.1:
                     continue
-                if any(math.hypot(x - o[0], y - o[1]) < 4 * BOTTLE_RADIUS for o in others):
+                if any(math.hypot(x - o[0], y - o[1]) < width + o[2] for o in others):
                     continue
                 key = math.dist((x, y), near) if near else math.hypot(x - mx, y - my)
                 candidates.append((key, x, y))
@@ -356,7 +370,7 @@ class RobotExecutors:
         self._holding(object)
         if on not in FURNITURE:
             raise ActionFailed(f"{on!r} is not a piece of furniture")
-        return self._put_down(running, object, self._free_spot(on), on)
+        return self._put_down(running, object, self._free_spot(object, on), on)
 
     def _put_back(self, running: _Running, object: str) -> Activity:
         self._holding(object)
@@ -367,7 +381,7 @@ class RobotExecutors:
 
         def put_down() -> Activity:
             try:
-                spot = self._free_spot(furniture, (x, y))
+                spot = self._free_spot(object, furniture, (x, y))
             except ActionFailed as err:
                 running.failure.append(str(err))
                 return Instant(lambda: None)

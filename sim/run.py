@@ -37,6 +37,7 @@ from shary.supervisor import Supervisor
 
 from .executors import RobotExecutors
 from .narration import Narrator, Report
+from .objects import is_new, new_object
 from .people import Person
 from .perception import Noise, Perception
 from .scenario import Happened, Scenario, judge, load_scenario, recipe_files
@@ -239,15 +240,19 @@ class _Run:
     # -- setting up ----------------------------------------------------------------
 
     def _arrange_objects(self) -> None:
+        """Add the scenario's new objects to the room, and put every object in its place."""
         for obj, spec in self.scenario.objects.items():
-            if "held-by" in spec:
-                self.sim.attach(obj, spec["held-by"])
-                continue
             furniture = spec.get("on", "coffee-table")
             f = self.world.footprints[furniture]
             x, y = spec.get("at", (f.x, f.y))
+            if is_new(spec):
+                self.world.add_object(new_object(obj, spec), x, y, self.world.top(furniture))
+            if "held-by" in spec:
+                self.sim.attach(obj, spec["held-by"])
+                continue
+            z = standing_height(self.world.top(furniture), self.world.sizes[obj][0])
             self.world.call(pb.resetBasePositionAndOrientation, self.world.body(obj),
-                            [x, y, standing_height(self.world.top(furniture))], [0, 0, 0, 1])
+                            [x, y, z], [0, 0, 0, 1])
 
     def _a_priori(self) -> None:
         """What the robot knows before it looks: kinds of things, the planner's constants."""
@@ -265,6 +270,13 @@ class _Run:
             facts.add(obj, "color", obj.split("-")[0])
             facts.add(obj, "drink", True)
             facts.add(obj, "robot_reach", True)
+        for obj in self.world.added.values():
+            facts.add(obj.name, "type", "Object")
+            facts.add(obj.name, "type", obj.kind[:1].upper() + obj.kind[1:])
+            facts.add(obj.name, "color", obj.colour)
+            facts.add(obj.name, "shape", obj.shape)
+            facts.add(obj.name, "drink", False)
+            facts.add(obj.name, "robot_reach", True)
         facts.add(robot, "type", "Agent")
         facts.add(robot, "type", "Robot")
         for attribute, value in ROBOT_ATTRIBUTES.items():

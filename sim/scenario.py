@@ -23,6 +23,7 @@ from userfiles.errors import FileError
 from userfiles.schema import check, did_you_mean, validator
 
 from .humans import HUMAN_PLACES, Profile, profile_from, seconds
+from .objects import check_new_objects, is_new
 from .world import BOTTLES, FOOTPRINTS, FURNITURE, PLACES
 
 HERE = Path(__file__).resolve().parent
@@ -157,7 +158,7 @@ def load_scenario(path: str | Path, *, known_tasks: dict[str, tuple[str, ...]] |
     atomic = set(known_atomic)
     robot = data.get("robot") or {}
     everyone = {robot.get("name", "jido"), *(data.get("people") or {})}
-    things = everyone | set(BOTTLES) | set(FURNITURE)
+    things = everyone | set(BOTTLES) | set(FURNITURE) | set(data.get("objects") or {})
     robot_at = robot.get("at", "base")
     if robot_at not in PLACES:
         problem(("robot", "at"), f"unknown place {robot_at!r}{did_you_mean(robot_at, PLACES)}; "
@@ -188,8 +189,10 @@ def load_scenario(path: str | Path, *, known_tasks: dict[str, tuple[str, ...]] |
         people.append(Person(name, spec["at"], profile, shirt, dict(spec.get("kind") or {})))
     names = {p.name for p in people}
     objects = {}
+    check_new_objects(data.get("objects") or {},
+                      everyone | set(BOTTLES) | set(FURNITURE) | set(PLACES), problem)
     for obj, spec in (data.get("objects") or {}).items():
-        if obj not in BOTTLES:
+        if obj not in BOTTLES and not is_new(spec):
             problem(("objects", obj), f"unknown object {obj!r}{did_you_mean(obj, BOTTLES)}; "
                     f"objects: {', '.join(BOTTLES)}", True)
         if "on" in spec and spec["on"] not in FURNITURE:

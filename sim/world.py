@@ -36,6 +36,7 @@ from typing import Any
 
 import numpy as np
 
+from .objects import NewObject
 from .png import caption_height, with_caption, write_png
 from .quiet import silenced
 
@@ -415,6 +416,10 @@ class LivingRoom:
         self.timestep = timestep
         self.time = 0.0
         self._bodies: dict[str, int] = {}
+        self.sizes: dict[str, tuple[float, float]] = {}
+        """Each movable object's (height, width to grasp) in metres."""
+        self.added: dict[str, NewObject] = {}
+        """The objects a scenario added (:mod:`sim.objects`), beside the bottles."""
         self.robots: dict[str, Robot] = {}
         self.footprints: dict[str, Footprint] = {}
         self.places: dict[str, Place] = dict(PLACES)
@@ -512,6 +517,37 @@ class LivingRoom:
         self.call(pb.changeDynamics, body, -1, lateralFriction=0.8, rollingFriction=0.001,
                   spinningFriction=0.001)
         self._bodies[name] = body
+        self.sizes[name] = (BOTTLE_HEIGHT, 2 * BOTTLE_RADIUS)
+        return body
+
+    def add_object(self, obj: NewObject, x: float, y: float, z_bottom: float) -> int:
+        """A scenario's new object (a box, a cylinder or a sphere with mass) resting
+        at (x, y) on a surface at ``z_bottom``."""
+        rgba = [*obj.rgb, 1.0]
+        if obj.shape == "box":
+            half = [v / 2 for v in obj.size]
+            col = self.call(pb.createCollisionShape, pb.GEOM_BOX, halfExtents=half)
+            vis = self.call(pb.createVisualShape, pb.GEOM_BOX, halfExtents=half, rgbaColor=rgba)
+        elif obj.shape == "cylinder":
+            radius, height = obj.size[0] / 2, obj.size[1]
+            col = self.call(pb.createCollisionShape, pb.GEOM_CYLINDER, radius=radius,
+                            height=height)
+            vis = self.call(pb.createVisualShape, pb.GEOM_CYLINDER, radius=radius,
+                            length=height, rgbaColor=rgba)
+        else:
+            col = self.call(pb.createCollisionShape, pb.GEOM_SPHERE, radius=obj.size[0] / 2)
+            vis = self.call(pb.createVisualShape, pb.GEOM_SPHERE, radius=obj.size[0] / 2,
+                            rgbaColor=rgba)
+        body = self.call(pb.createMultiBody, baseMass=obj.mass, baseCollisionShapeIndex=col,
+                         baseVisualShapeIndex=vis,
+                         basePosition=[x, y, z_bottom + obj.height / 2 + 1e-4])
+        # a ball must not roll off the table: friction that stops rolling
+        self.call(pb.changeDynamics, body, -1, lateralFriction=0.8,
+                  rollingFriction=0.05 if obj.shape == "sphere" else 0.001,
+                  spinningFriction=0.001)
+        self._bodies[obj.name] = body
+        self.sizes[obj.name] = (obj.height, obj.grasp_width)
+        self.added[obj.name] = obj
         return body
 
     def add_robot(self, name: str, model: str | None = None,
@@ -553,6 +589,11 @@ class LivingRoom:
     @property
     def bottles(self) -> list[str]:
         return [n for n in self._bodies if n.endswith("-bottle")]
+
+    @property
+    def movables(self) -> list[str]:
+        """The objects that can be picked, carried and put down: bottles and added ones."""
+        return [n for n in self._bodies if n in self.sizes]
 
     @property
     def furniture(self) -> list[str]:

@@ -353,3 +353,61 @@ def test_shary_validate_checks_scenarios_and_profiles(tmp_path, capsys):
     captured = capsys.readouterr()
     assert f"{profile}:2:11: error: unknown act 'ASK-TAKS'" in captured.err
     assert "ok    " in captured.out and "give-bottle.yaml" in captured.out
+
+
+OBJECTS_HEAD = """\
+scenario: objects
+robot: {name: jido, at: base}
+people:
+  alice: {at: sofa-seat}
+goals:
+  - {task: give-object, with: {object: red-cup, partner: alice}}
+expect: {tasks: {give-object: done}}
+objects:
+"""
+
+
+@pytest.mark.parametrize("entry, at, message", [
+    ("  red-cup: {shape: cylinder, colour: red, size: [0.07, 0.1], on: kitchen-table}",
+     "kitchen-table", r"unknown furniture 'kitchen-table'"),
+    ("  yellow-bottle: {shape: box, colour: red, size: [0.1, 0.1, 0.1]}",
+     "yellow-bottle", r"'yellow-bottle' already names something in the room"),
+    ("  sofa: {shape: sphere, colour: red, size: [0.1]}", "sofa", r"'sofa' already names"),
+    ("  red-cup: {shape: cylinder, colour: red, size: [0.07, 2.5]}",
+     "2.5", r"the height must be from 0.02 to 0.6 m, not 2.5"),
+    ("  red-cup: {shape: cylinder, colour: red, size: [.nan, 0.1]}",
+     ".nan", r"the diameter must be a finite number, not nan"),
+    ("  red-cup: {shape: cylinder, colour: red, size: [0.07, 0.1, 0.2]}",
+     "[0.07", r"a cylinder's size is \[diameter, height\] in metres: 2 numbers, not 3"),
+    ("  red-cup: {shape: cylinder, colour: mauve, size: [0.07, 0.1]}",
+     "mauve", r"unknown colour 'mauve'"),
+    ("  red-cup: {shape: cylinder, colour: [1, 0, 3], size: [0.07, 0.1]}",
+     "3]", r"the colour component must be from 0 to 1, not 3"),
+    ("  red-cup: {shape: cylinder, colour: red, size: [0.07, 0.1], mass: -1}",
+     "-1", r"the mass must be from 0.01 to 5 kg, not -1"),
+    ("  red-cup: {shape: pyramid, colour: red, size: [0.07, 0.1]}",
+     "pyramid", r"'pyramid' is not one of: box, cylinder, sphere"),
+    ("  red-cup: {colour: red, size: [0.07, 0.1]}", "red-cup",
+     r"'red-cup' is not one of the room's bottles, so it is a new object: it needs a shape"),
+    ("  red-cup: {shape: box, colour: red, on: store-table, at: [9, 9]}", "red-cup",
+     r"it needs a size"),
+])
+def test_bad_new_objects_are_refused_where_they_are(tmp_path, entry, at, message):
+    from hostile import assert_refused, run_inprocess
+
+    path = tmp_path / "objects.yaml"
+    path.write_text(OBJECTS_HEAD + entry + "\n")
+    outcome = run_inprocess("run", path, "--out", tmp_path / "out")
+    assert_refused(outcome, path, message=message)
+    line = OBJECTS_HEAD.count("\n") + 1
+    assert f"{path}:{line}:{entry.index(at) + 1}: error:" in outcome.err, outcome.err
+
+
+def test_a_new_object_is_built_seen_and_handed_over(runs):
+    result, out = runs["give-red-cup"]
+    assert result.passed, result.differences
+    said = _told("give-red-cup", "speech", "jido")
+    assert "Here is the red cup." in said
+    failed = _told("give-red-cup", "failed", "jido")
+    assert any("wooden-box is too big to grasp: 15 cm wide, the gripper opens to 8 cm" in f
+               for f in failed)
