@@ -12,8 +12,8 @@ its own, each with a shape, a colour, a size in metres and a place::
 cylinder, ``[diameter]`` for a sphere; ``mass`` (kg) is optional; ``kind`` is
 the word the fact base types it with (``Cup``; by default the shape's).  The
 JSON Schema checks the form; :func:`check_new_objects` checks the meaning
-(sizes the room and the gripper can deal with, finite numbers, names that are
-not already taken), with each problem at its place in the file.
+(sizes the room can hold, within bounds, names that are not already taken;
+the reader refuses numbers that are not finite before), with each problem at its place in the file.
 """
 
 from __future__ import annotations
@@ -151,8 +151,6 @@ def _bounded(problem: Callable[..., Any], where: tuple, value: Any,
     low, high = bounds
     if isinstance(value, bool) or not isinstance(value, int | float):
         problem(where, f"the {what} must be a number")
-    elif not math.isfinite(value):
-        problem(where, f"the {what} must be a finite number, not {value}")
     elif not low <= value <= high:
         problem(where, f"the {what} must be from {low:g} to {high:g}{' ' + unit if unit else ''}"
                 f", not {value:g}")

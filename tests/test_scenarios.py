@@ -376,7 +376,7 @@ objects:
     ("  red-cup: {shape: cylinder, colour: red, size: [0.07, 2.5]}",
      "2.5", r"the height must be from 0.02 to 0.6 m, not 2.5"),
     ("  red-cup: {shape: cylinder, colour: red, size: [.nan, 0.1]}",
-     ".nan", r"the diameter must be a finite number, not nan"),
+     ".nan", r"'\.nan' is not a finite number"),
     ("  red-cup: {shape: cylinder, colour: red, size: [0.07, 0.1, 0.2]}",
      "[0.07", r"a cylinder's size is \[diameter, height\] in metres: 2 numbers, not 3"),
     ("  red-cup: {shape: cylinder, colour: mauve, size: [0.07, 0.1]}",
