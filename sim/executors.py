@@ -446,7 +446,7 @@ class RobotExecutors:
             if failure:  # the hand was out of reach: nothing changes hands
                 self.say(self.robot, f"(cannot reach {person}'s hand)")
                 return
-            set_gripper(self.world, self.robot, 0.0)
+            set_gripper(self.world, self.robot, self.world.sizes[obj][1] / 2)
             self.sim.attach(obj, self.robot)
             self.sim.observe()
             done()

@@ -57,8 +57,9 @@ CHUNK = 0.1
 reported end is at most this much after the last thing that happened)."""
 ROBOT_ATTRIBUTES = {"kind": "robot", "move_cost": 2, "pick_cost": 1, "speed": 1}
 SNAPSHOT_SIZE = (800, 600)
-"""Snapshots' size in pixels, caption included: about 0.8 s each with the software
-renderer (0.3 s at the former 480 x 360), large enough to see a face turn away."""
+"""Snapshots' size in pixels, caption included: large enough to see a head turn
+away.  The software renderer takes about 0.75 s for one, 3.3 times the former
+480 x 360 (1.16 s at 960 x 720), measured in one run."""
 PERSON_ATTRIBUTES = {"kind": "human", "move_cost": 4, "pick_cost": 2, "speed": 1}
 
 
