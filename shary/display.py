@@ -50,10 +50,12 @@ STATE_COLOURS = {
     "failed": "#fc9272", "suspended": "#fdd0a2", "cancelled": "#d9d9d9",
 }
 _FONT = "DejaVu Sans"
-"""The font dot measures labels with.  DejaVu Sans is what a Linux viewer falls
-back to for "Helvetica", and wider than Helvetica or Arial: boxes sized for it
-hold their text in any viewer (sized for Helvetica, labels overflowed)."""
+"""The font dot measures SVG labels with.  DejaVu Sans is what a Linux viewer
+falls back to for "Helvetica", and wider than Helvetica or Arial: boxes sized
+for it hold their text in any viewer (sized for Helvetica, labels overflowed)."""
 FONT_FALLBACKS = "DejaVu Sans,Verdana,Helvetica,Arial,sans-serif"
+PNG_FONT = "Helvetica"
+"""The font of PNG output, which dot both measures and draws (no viewer's fallback)."""
 """The SVG font-family written for ``_FONT``: viewers without DejaVu use a font no wider."""
 
 
@@ -90,6 +92,10 @@ def render_dot(source: str, out: Path) -> None:
     if suffix not in DOT_FORMATS:
         raise ValueError(f"cannot draw to {out.name!r}: use one of {', '.join(SUFFIXES)}")
     dot = find_dot()
+    if suffix == ".png":
+        # dot draws the picture itself: graphviz-pure has glyphs for Helvetica (and
+        # draws other names in a serif), and measures with the same font it draws
+        source = source.replace(f'fontname="{_FONT}"', f'fontname="{PNG_FONT}"')
     done = subprocess.run([dot, f"-T{DOT_FORMATS[suffix]}"], input=source.encode("utf-8"),
                           capture_output=True, check=False)
     if done.returncode != 0:
