@@ -74,6 +74,8 @@ def test_end_task_says_what_happened(runs):
     assert said("give-bottle-refused")[-1] == "All right, I won't give you the yellow bottle."
     assert "I have finished." not in said("give-bottle-refused")
     assert said("give-bottle-abandoned")[-1].startswith("You are busy, so I will not give you")
+    assert said("give-bottle-unanswered")[-1] == ("You did not answer, so I will not give you "
+                                                  "the yellow bottle.")
     assert "Thank you for the yellow bottle." in said("clean-up-unreachable")
     assert said("explore-new-objects")[-1] == "I have looked at the coffee area."
 
