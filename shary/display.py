@@ -30,6 +30,7 @@ import graphviz
 
 from shary.model import COMPOUND, FINAL, HISTORY, PARALLEL, Scheme, State, Transition
 from shary.tasktree import ACT, TASK, TaskTree
+from userfiles.outputs import write_output
 
 DOT_FORMATS = {".svg": "svg", ".png": "png"}
 TEXT_SUFFIXES = (".dot", ".gv")
@@ -79,7 +80,7 @@ def render_dot(source: str, out: Path) -> None:
     """
     suffix = out.suffix.lower()
     if suffix in TEXT_SUFFIXES:
-        out.write_text(source, encoding="utf-8")
+        write_output(out, source)
         return
     if suffix not in DOT_FORMATS:
         raise ValueError(f"cannot draw to {out.name!r}: use one of {', '.join(SUFFIXES)}")
@@ -89,7 +90,7 @@ def render_dot(source: str, out: Path) -> None:
     if done.returncode != 0:
         raise RuntimeError(f"{dot} failed ({done.returncode}): "
                            f"{done.stderr.decode('utf-8', 'replace').strip()}")
-    out.write_bytes(done.stdout)
+    write_output(out, done.stdout)
 
 
 # -- schemes ---------------------------------------------------------------------
@@ -110,10 +111,9 @@ def render_scheme(scheme: Scheme, out: Path, active: Iterable[str] = ()) -> None
     (.mmd, .mermaid) or a Markdown page holding a Mermaid block (.md)."""
     suffix = out.suffix.lower()
     if suffix in MERMAID_SUFFIXES:
-        out.write_text(scheme_mermaid(scheme, active), encoding="utf-8")
+        write_output(out, scheme_mermaid(scheme, active))
     elif suffix == MARKDOWN_SUFFIX:
-        out.write_text(f"# {scheme.name}\n\n```mermaid\n{scheme_mermaid(scheme, active)}```\n",
-                       encoding="utf-8")
+        write_output(out, f"# {scheme.name}\n\n```mermaid\n{scheme_mermaid(scheme, active)}```\n")
     else:
         render_dot(scheme_dot(scheme, active), out)
 

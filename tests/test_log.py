@@ -199,12 +199,12 @@ META = ("CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)",
 @pytest.mark.parametrize(("statements", "reason"), [
     (["CREATE TABLE things (name TEXT)"], "no events table"),
     (["CREATE TABLE events (seq, kind)"], "events table has columns seq, kind"),
-    ([EVENTS], "no such table: meta"),
+    ([EVENTS], "no meta table"),
     ([EVENTS, META[0], "INSERT INTO meta VALUES ('format', '2')"], "log format 2"),
     ([EVENTS, *META, "INSERT INTO events (time, kind, data) VALUES (1, 'act', 'nope')"],
-     "event 1 is malformed"),
+     r"event #1 \(kind act\): data is not JSON"),
     ([EVENTS, *META, "INSERT INTO events (time, kind, data) VALUES ('soon', 'act', '{}')"],
-     "event 1 is malformed"),
+     r'event #1 \(kind act\): time is "soon", not a finite number'),
 ])
 def test_a_sqlite_file_of_something_else_is_a_file_error(tmp_path: Path, statements: list[str],
                                                           reason: str):
@@ -217,8 +217,7 @@ def test_a_sqlite_file_of_something_else_is_a_file_error(tmp_path: Path, stateme
     out.write_text("keep", encoding="utf-8")
     with pytest.raises(FileError, match=reason):
         export_jsonl(path, out)
-    if "malformed" not in reason:  # a bad table is found before the export is opened
-        assert out.read_text(encoding="utf-8") == "keep"
+    assert out.read_text(encoding="utf-8") == "keep"  # replaced only by a whole export
 
 
 def test_a_missing_log_is_a_file_error(tmp_path: Path):
