@@ -79,7 +79,7 @@ def output_folder(path: str | Path) -> Path:
         return folder
     blocking = _file_on_the_way(folder)
     if blocking is not None:
-        raise OutputError(path, f"{blocking} is a file, so nothing can be made under it",
+        raise OutputError(path, f"{blocking} is not a folder, so nothing can be made under it",
                           "choose a path whose parents are folders")
     try:
         folder.mkdir(parents=True, exist_ok=True)
@@ -93,12 +93,11 @@ def output_file(path: str | Path) -> Path:
     and return it; otherwise raise :class:`OutputError`.  Nothing is written yet."""
     target = Path(path)
     if target.is_dir():
-        raise OutputError(path, "this is a folder, not a file",
-                          f"name a file inside it, e.g. {target / ('out' + target.suffix)}")
+        raise OutputError(path, "this is a folder, not a file", "name a file inside it")
     parent = target.parent
     blocking = _file_on_the_way(parent)
     if blocking is not None:
-        raise OutputError(path, f"{blocking} is a file, so nothing can be written under it",
+        raise OutputError(path, f"{blocking} is not a folder, so nothing can be written under it",
                           "choose a path whose parents are folders")
     if not parent.is_dir():
         try:
