@@ -409,6 +409,9 @@ def _open(path: str | Path) -> sqlite3.Connection:
     try:
         problem = _problem_with(conn)
     except sqlite3.DatabaseError as err:
+        if getattr(err, "sqlite_errorname", "").startswith("SQLITE_CORRUPT"):
+            conn.close()
+            raise _damaged(path, err, None) from None
         problem = str(err)
     if problem is not None:
         conn.close()
@@ -443,9 +446,10 @@ def _not_a_log(path: str | Path, reason: str) -> FileError:
 
 
 def _damaged(path: str | Path, err: sqlite3.Error, last: int | None) -> FileError:
-    where = f" after event #{last}" if last is not None else ""
-    return FileError([Problem(str(path), 1, 1, f"the log is damaged{where}: {err} "
-                              "(the events before it can be read with --until or --limit)")])
+    if last is None:
+        return FileError([Problem(str(path), 1, 1, f"the log is damaged: {err}")])
+    return FileError([Problem(str(path), 1, 1, f"the log is damaged after event #{last}: {err} "
+                              f"(read the events before it with --limit {last})")])
 
 
 def _bad_event(path: str | Path, bad: BadEvent) -> FileError:

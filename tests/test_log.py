@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import io
 import json
+import re
 import signal
 import sqlite3
 import subprocess
@@ -14,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from shary.log import ContextLog, LogEvent, add_log_command, export_jsonl, read_events
+from shary.log import ContextLog, LogEvent, add_log_command, end_time, export_jsonl, read_events
 from userfiles.errors import FileError
 
 # (time, kind, task, agent, data): a short run of give-object.
@@ -272,3 +273,90 @@ def test_cli_on_a_bad_file_raises_file_error_for_the_main_command(shary_log, tmp
     path.write_text("not a database, just some notes\n" * 20, encoding="utf-8")
     with pytest.raises(FileError):
         shary_log(path)
+
+
+def damaged(tmp_path: Path, how: str) -> Path:
+    """A log of 5,000 events with garbage over 8 KiB in its middle, or cut in half."""
+    path = tmp_path / "run.sqlite"
+    with ContextLog(path) as log:
+        for i in range(5000):
+            log.record(i / 10, "tick", task=f"t{i % 7}", n=i, pad="x" * 50)
+    data = bytearray(path.read_bytes())
+    middle = len(data) // 2
+    if how == "overwritten":
+        data[middle:middle + 8192] = b"\xa5" * 8192
+    else:
+        del data[middle:]
+    path.write_bytes(bytes(data))
+    return path
+
+
+def test_a_damaged_log_says_so_and_where_and_the_events_before_stay_readable(tmp_path: Path):
+    path = damaged(tmp_path, "overwritten")
+    with pytest.raises(FileError, match=r"the log is damaged after event #(\d+): database "
+                       r"disk image is malformed \(read the events before it with --limit \1\)"
+                       ) as caught:
+        read_events(path)
+    last = int(re.search(r"#(\d+)", str(caught.value))[1])
+    assert 1000 < last < 5000
+    assert [e.data["n"] for e in read_events(path, limit=3)] == [0, 1, 2]
+    assert [e.seq for e in read_events(path, limit=last)] == list(range(1, last + 1))
+
+
+def test_a_truncated_log_is_damaged_not_foreign(tmp_path: Path):
+    with pytest.raises(FileError, match=r":1:1: error: the log is damaged: "):
+        read_events(damaged(tmp_path, "truncated"))
+
+
+def test_reading_a_finished_log_leaves_nothing_beside_it(run_log: Path, shary_log):
+    """Issue 17: no -wal/-shm files after `shary log` (the log is opened immutable)."""
+    assert sorted(p.name for p in run_log.parent.iterdir()) == ["run.sqlite"]
+    before = run_log.read_bytes()
+    assert shary_log(run_log)[0] == 0 and len(read_events(run_log, kind="act")) == 1
+    assert sorted(p.name for p in run_log.parent.iterdir()) == ["run.sqlite"]
+    assert run_log.read_bytes() == before
+
+
+def test_pages_kinds_and_the_end_time(run_log: Path):
+    everything = read_events(run_log)
+    assert read_events(run_log, offset=2, limit=3) == everything[2:5]
+    assert read_events(run_log, offset=7) == everything[7:]
+    assert kinds(read_events(run_log, kinds=("act", "goal"))) == ["goal", "act"]
+    assert end_time(run_log) == 4.0
+    with ContextLog(run_log.parent / "empty.sqlite"):
+        pass
+    assert end_time(run_log.parent / "empty.sqlite") == 0.0
+
+
+def test_streamed_events_are_checked_as_they_come(tmp_path: Path):
+    path = tmp_path / "odd.sqlite"
+    with ContextLog(path) as log:
+        log.record(0.0, "tick")
+    with closing(sqlite3.connect(path)) as conn:
+        conn.execute("INSERT INTO events (time, kind, data) VALUES (1, 'node', '{}')")
+        conn.execute("INSERT INTO events (time, kind, data) VALUES (9e999, 'tick', '{}')")
+        conn.commit()
+    with pytest.raises(FileError, match=r"event #2 \(kind node\): task is null, not text"):
+        read_events(path)
+    with pytest.raises(FileError, match=r"event #3 \(kind tick\): time is inf, not a finite"):
+        read_events(path, kind="tick")
+
+
+def test_the_writer_refuses_what_it_could_not_read_back(tmp_path: Path):
+    with ContextLog(tmp_path / "deep.sqlite") as log:
+        deep: list = []
+        for _ in range(70):
+            deep = [deep]
+        with pytest.raises(ValueError, match="deeper than 64 levels"):
+            log.record(0.0, "plan", steps=deep)
+        with pytest.raises(ValueError, match="larger than 4 MiB"):
+            log.record(0.0, "plan", text="x" * (4 * 2**20 + 1))
+
+
+def test_nesting_is_measured_without_recursion():
+    from shary.logrows import nesting
+
+    assert nesting("[" * 100 + "]" * 100) == 100
+    assert nesting("[" * 200_000) == 200_000  # unclosed: as deep as it goes
+    assert nesting('{"a":"' + "[" * 100 + '"}') == 1  # brackets in a string do not nest
+    assert nesting('{"a":"\\"' + "[" * 100 + '"}') == 1  # nor after an escaped quote
