@@ -78,15 +78,22 @@ def test_a_data_key_named_like_a_node_attribute_does_not_break_the_replay(tmp_pa
     assert "odd" in (tmp_path / "tree.dot").read_text()
 
 
+HUGE = """
+import sqlite3, sys
+conn = sqlite3.connect(sys.argv[1])
+conn.execute('''INSERT INTO events (time, kind, data) VALUES (9, 'plan',
+             '{"steps":[' || replace(printf('%.*c', 50000000, 'x'), 'x', '1,') || '1]}')''')
+conn.commit()
+"""
+
+
 def test_a_value_too_big_to_load_is_refused_without_loading_it(tmp_path: Path):
-    """100 MB of ``[1,1,…]`` took over 500 MB to parse; now SQLite refuses to load it."""
+    """100 MB of ``[1,1,…]`` took 830 MB to parse; now SQLite refuses to load it.  The row
+    is written by a child process: a child's peak memory (``ru_maxrss``) starts from its
+    parent's size at the fork, so this process must not grow by 100 MB first."""
     path = tmp_path / "huge.sqlite"
     good_log(path)
-    with closing(sqlite3.connect(path)) as conn:
-        conn.execute("""INSERT INTO events (time, kind, data) VALUES (9, 'plan',
-                     '{"steps":[' || replace(printf('%.*c', 50000000, 'x'), 'x', '1,')
-                     || '1]}')""")
-        conn.commit()
+    subprocess.run([sys.executable, "-c", HUGE, path], check=True)
     for argv in (("log", path, "--json"), ("render", "tree", path, "-o", tmp_path / "t.svg")):
         outcome = run_subprocess(*argv)
         if argv[0] == "log":
