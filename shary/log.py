@@ -29,6 +29,14 @@ Why the file looks the way it does:
   Commits do not wait for the disk (``synchronous=NORMAL``): a commit
   survives the death of the process, and only a power loss or an
   operating-system crash can roll back the last commits.
+* **Reading streams and checks**: a log is read as a cursor, never whole
+  (:func:`stream_events`; filters and pages are SQL), opened read-only and,
+  once its writer is gone, immutable, so a reader leaves no ``-wal``/``-shm``
+  file behind.  A log is a file a user hands over, so every row is checked
+  before it is used (:mod:`shary.logrows`) and a bad one is refused as
+  ``LOG:1:1: error: event #SEQ (kind K): …`` (a database has no lines).
+* **Writing failures** (a full disk, a file-size limit, a folder that cannot
+  be written) raise an :class:`~userfiles.outputs.OutputError` naming the log.
 """
 
 from __future__ import annotations
