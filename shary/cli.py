@@ -454,7 +454,7 @@ def _print_plan(problem, result, errors) -> None:  # type: ignore[no-untyped-def
 def cmd_import_scxml(args: argparse.Namespace) -> int:
     from shary.io.scxml import import_scxml
 
-    output_file(args.output)
+    output_file(args.output, inputs=[args.source])
     write_output(args.output, import_scxml(args.source))
     _out.print(f"wrote {_escape(str(args.output))}")
     return 0

@@ -29,14 +29,11 @@ Why the file looks the way it does:
   Commits do not wait for the disk (``synchronous=NORMAL``): a commit
   survives the death of the process, and only a power loss or an
   operating-system crash can roll back the last commits.
-* **Reading streams and checks**: a log is read as a cursor, never whole
-  (:func:`stream_events`; filters and pages are SQL), opened read-only and,
-  once its writer is gone, immutable, so a reader leaves no ``-wal``/``-shm``
-  file behind.  A log is a file a user hands over, so every row is checked
-  before it is used (:mod:`shary.logrows`) and a bad one is refused as
-  ``LOG:1:1: error: event #SEQ (kind K): …`` (a database has no lines).
-* **Writing failures** (a full disk, a file-size limit, a folder that cannot
-  be written) raise an :class:`~userfiles.outputs.OutputError` naming the log.
+* **Reading streams and checks** (:func:`stream_events`): a cursor, never the
+  whole log; read-only, and immutable once the writer is gone (no ``-wal`` or
+  ``-shm`` left behind); every row checked (:mod:`shary.logrows`), a bad one
+  refused as ``LOG:1:1: error: event #SEQ (kind K): …``.  Failures to write
+  raise an :class:`~userfiles.outputs.OutputError` naming the log.
 """
 
 from __future__ import annotations
@@ -63,7 +60,7 @@ from rich.text import Span, Text
 
 from shary.logrows import MAX_DATA_BYTES, check_row, decode_bounds, decode_data
 from userfiles.errors import FileError, Problem
-from userfiles.outputs import OutputError, open_output, refused
+from userfiles.outputs import OutputError, open_output, output_file, refused
 
 FORMAT_VERSION = 1
 COMMIT_EVERY = 256
@@ -521,6 +518,7 @@ def cmd_log(args: argparse.Namespace) -> int:
                                "since": args.since, "until": args.until,
                                "limit": args.limit, "offset": args.offset}
     if args.jsonl is not None:
+        output_file(args.jsonl, inputs=[args.file])
         count = export_jsonl(args.file, args.jsonl, **filters)
         _out.print(f"wrote {count} event(s) to {escape(str(args.jsonl))}")
         return 0

@@ -249,3 +249,16 @@ def test_a_replaced_file_keeps_its_mode_and_a_link_its_target(tmp_path: Path):
 def test_output_file_creates_the_missing_folders_and_nothing_else(tmp_path: Path):
     out = output_file(tmp_path / "a" / "b" / "c.svg")
     assert out.parent.is_dir() and not out.exists()
+
+
+@pytest.mark.parametrize("name", ["import-scxml", "log --jsonl"])
+def test_writing_over_the_file_being_read_is_refused(name: str, tmp_path: Path):
+    log, chart = tmp_path / "run.sqlite", tmp_path / "chart.scxml"
+    good_log(log)
+    chart.write_text(CHART, encoding="utf-8")
+    source = chart if name == "import-scxml" else log
+    before = source.read_bytes()
+    outcome = run_command(name, {"log": log, "chart": chart}, source)
+    assert_output_refused(outcome, source, f"^this is {re.escape(str(source))}, which the "
+                          "command reads$")
+    assert source.read_bytes() == before

@@ -27,7 +27,7 @@ from __future__ import annotations
 import errno
 import os
 import stat
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import IO
@@ -88,12 +88,20 @@ def output_folder(path: str | Path) -> Path:
     return folder
 
 
-def output_file(path: str | Path) -> Path:
+def output_file(path: str | Path, *, inputs: Iterable[str | Path] = ()) -> Path:
     """Make sure a file can be written at ``path`` (its folder is created if needed)
-    and return it; otherwise raise :class:`OutputError`.  Nothing is written yet."""
+    and return it; otherwise raise :class:`OutputError`.  Nothing is written yet.
+
+    ``inputs`` are the files the command reads: writing over one of them would
+    destroy what is being read, so that is refused too.
+    """
     target = Path(path)
     if target.is_dir():
         raise OutputError(path, "this is a folder, not a file", "name a file inside it")
+    for source in inputs:
+        if target.exists() and Path(source).exists() and os.path.samefile(target, source):
+            raise OutputError(path, f"this is {source}, which the command reads",
+                              "write to another file")
     parent = target.parent
     blocking = _file_on_the_way(parent)
     if blocking is not None:
