@@ -360,3 +360,47 @@ def test_nesting_is_measured_without_recursion():
     assert nesting("[" * 200_000) == 200_000  # unclosed: as deep as it goes
     assert nesting('{"a":"' + "[" * 100 + '"}') == 1  # brackets in a string do not nest
     assert nesting('{"a":"\\"' + "[" * 100 + '"}') == 1  # nor after an escaped quote
+
+
+INTERRUPTED = """
+import sys
+from shary.log import ContextLog
+with ContextLog(sys.argv[1]) as log:
+    i = 0
+    while True:
+        log.record(i / 100, "tick", n=i)
+        i += 1
+        if i == 300:
+            log.flush()
+            print("ready", flush=True)
+"""
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child is POSIX")
+def test_ctrl_c_while_writing_keeps_every_recorded_event(tmp_path: Path):
+    """Ctrl-C unwinds through the log's `with`: what was recorded, even unflushed, is kept."""
+    path = tmp_path / "interrupted.sqlite"
+    child = subprocess.Popen([sys.executable, "-c", INTERRUPTED, str(path)],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert child.stdout is not None and child.stdout.readline() == "ready\n"
+    child.send_signal(signal.SIGINT)
+    _, err = child.communicate(timeout=30)
+    assert "KeyboardInterrupt" in err
+    events = read_events(path)
+    assert len(events) >= 300 and [e.data["n"] for e in events] == list(range(len(events)))
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child is POSIX")
+def test_ctrl_c_while_shary_log_prints_exits_130_without_a_traceback(tmp_path: Path):
+    path = tmp_path / "long.sqlite"
+    with ContextLog(path) as log:
+        for i in range(20_000):  # far more than a pipe holds: the child waits to write
+            log.record(i / 100, "tick", n=i)
+    child = subprocess.Popen([sys.executable, "-m", "shary", "log", str(path), "--json"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert child.stdout is not None and child.stdout.readline().startswith(b'{"seq": 1,')
+    child.send_signal(signal.SIGINT)
+    child.stdout.close()  # as a terminal would: nothing more is read
+    assert child.wait(timeout=30) == 130
+    assert child.stderr is not None and b"Traceback" not in child.stderr.read()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["long.sqlite"]
