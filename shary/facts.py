@@ -37,6 +37,17 @@ turns a term back into what :meth:`FactDatabase.term` accepts, so that
 is an ``xsd:decimal`` while Python's ``0.5`` is an ``xsd:double``: write
 ``5.0e-1`` in files whose numbers the engine compares with Python floats.
 
+**Where facts live.**  rdflib's store costs about 12 µs per change (a named
+graph's contexts and indexes), a third of the whole path from a perception
+change to the arm stopping.  So each perspective keeps its own index in front
+of its rdflib graph (:class:`_Perspective`: the set of its triples and the
+objects of each (subject, predicate)), which answers :meth:`holds`,
+:meth:`objects`, :meth:`triples` and tells whether a change changes anything;
+the rdflib graph stays the store for Turtle, SPARQL and export, and receives
+the net changes made since it was last read just before it is read
+(:meth:`select`, :attr:`dataset`).  ``docs/architecture.md`` has the figures
+of the alternatives measured (oxrdflib, pyoxigraph).
+
 **Events.**  Every addition and deletion made through :meth:`add`,
 :meth:`remove` and :meth:`set` is delivered as a :class:`FactEvent` to the
 subscribers whose pattern matches.  Monitors react to those events; they never
@@ -160,6 +171,76 @@ def _prepare_select(text: str, namespace: str) -> Query:
     return query
 
 
+class _Perspective:
+    """One perspective's facts: an index in front of its rdflib graph (see the module's
+    documentation).
+
+    ``triples`` and ``objects`` are always current; ``graph`` lags behind by
+    the changes in ``pending`` (each triple's last word: True added, False
+    removed), applied by :meth:`sync` before anyone reads the graph.
+    """
+
+    __slots__ = ("graph", "triples", "objects", "pending")
+
+    def __init__(self, graph: Graph, source: _Perspective | None = None):
+        self.graph = graph
+        self.pending: dict[_Triple, bool] = {}
+        if source is None:
+            self.triples: set[_Triple] = set()
+            self.objects: dict[tuple[Node, Node], set[Node]] = {}
+        else:
+            self.triples = set(source.triples)
+            self.objects = {key: set(objects) for key, objects in source.objects.items()}
+
+    def add(self, triple: _Triple) -> bool:
+        """Add a triple; False when it was already there."""
+        if triple in self.triples:
+            return False
+        self.triples.add(triple)
+        key = (triple[0], triple[1])
+        objects = self.objects.get(key)
+        if objects is None:
+            self.objects[key] = {triple[2]}
+        else:
+            objects.add(triple[2])
+        self.pending[triple] = True
+        return True
+
+    def remove(self, triple: _Triple) -> bool:
+        """Remove a triple; False when it was not there."""
+        if triple not in self.triples:
+            return False
+        self.triples.discard(triple)
+        key = (triple[0], triple[1])
+        objects = self.objects[key]
+        objects.discard(triple[2])
+        if not objects:
+            del self.objects[key]
+        self.pending[triple] = False
+        return True
+
+    def load(self, graph: Graph) -> None:
+        """Take in parsed triples (index and graph at once: loading is not a change)."""
+        self.sync()
+        self.graph += graph
+        for triple in graph:
+            if triple not in self.triples:
+                self.triples.add(triple)
+                self.objects.setdefault((triple[0], triple[1]), set()).add(triple[2])
+
+    def sync(self) -> Graph:
+        """Bring the rdflib graph up to date and return it."""
+        if self.pending:
+            graph = self.graph
+            for triple, present in self.pending.items():
+                if present:
+                    graph.add(triple)
+                else:
+                    graph.remove(triple)
+            self.pending.clear()
+        return self.graph
+
+
 def _order(term: Node) -> str:
     """A total, stable order on terms, so that lists and events never depend on hashing."""
     return term.n3()
@@ -176,8 +257,8 @@ class FactDatabase:
         self._namespace = namespace
         self._prefixes = {"w": namespace, **_PREFIXES}
         self._dataset = Dataset()
-        self._apriori = self._dataset.default_graph
-        self._graphs: dict[str, Graph] = {}
+        self._apriori = _Perspective(self._dataset.default_graph)
+        self._perspectives: dict[str, _Perspective] = {}
         # Caches both ways between names and IRIs: a world's vocabulary is small
         # and the same names come back with every perception update.
         self._terms: dict[str, Node] = {}
@@ -191,7 +272,10 @@ class FactDatabase:
     def dataset(self) -> Dataset:
         """The underlying dataset (a-priori default graph, one named graph per
         perspective), for exporting it, e.g. as TriG; change facts through the
-        database's methods, or subscribers will not hear of it."""
+        database's methods, or subscribers (and the database's own index) will
+        not hear of it."""
+        for perspective in self._perspectives.values():
+            perspective.sync()
         return self._dataset
 
     # -- terms -----------------------------------------------------------------------------------
@@ -256,22 +340,22 @@ class FactDatabase:
 
     def perspectives(self) -> list[str]:
         """The perspectives written to so far, in the order they were created."""
-        return list(self._graphs)
+        return list(self._perspectives)
 
-    def _view(self, perspective: str) -> Graph:
-        """The graph to read a perspective from (the a-priori graph until it diverges)."""
-        return self._graphs.get(perspective, self._apriori)
+    def _view(self, perspective: str) -> _Perspective:
+        """The perspective to read from (the a-priori graph's until it diverges)."""
+        return self._perspectives.get(perspective, self._apriori)
 
-    def _graph(self, perspective: str) -> Graph:
-        """The graph to write a perspective to, created as a copy of the a-priori graph."""
-        graph = self._graphs.get(perspective)
-        if graph is None:
+    def _writable(self, perspective: str) -> _Perspective:
+        """The perspective to write to, created as a copy of the a-priori graph."""
+        found = self._perspectives.get(perspective)
+        if found is None:
             if not isinstance(perspective, str) or not perspective:
                 raise ValueError(f"a perspective is an agent's name, not {perspective!r}")
             graph = self._dataset.graph(URIRef(_PERSPECTIVE_GRAPH + quote(perspective, safe="")))
-            graph += self._apriori
-            self._graphs[perspective] = graph
-        return graph
+            graph += self._apriori.graph
+            found = self._perspectives[perspective] = _Perspective(graph, self._apriori)
+        return found
 
     # -- loading ---------------------------------------------------------------------------------
 
@@ -285,29 +369,30 @@ class FactDatabase:
         file = os.fspath(path)
         parsed = _parse_turtle(read_text(file, max_bytes=MAX_TURTLE_BYTES), file)
         if perspective is None:
-            self._apriori += parsed
-            for graph in self._graphs.values():
-                graph += parsed
+            self._apriori.load(parsed)
+            for view in self._perspectives.values():
+                view.load(parsed)
         else:
-            graph = self._graph(perspective)
-            graph += parsed
+            self._writable(perspective).load(parsed)
         return len(parsed)
 
     # -- reading ---------------------------------------------------------------------------------
 
     def holds(self, s: Value, p: Value, o: Value, perspective: str = "robot") -> bool:
         """Whether the agent of ``perspective`` believes the fact."""
-        return self._triple(s, p, o) in self._view(perspective)
+        return self._triple(s, p, o) in self._view(perspective).triples
 
     def objects(self, s: Value, p: Value, perspective: str = "robot") -> list[Value]:
         """Every object of (s, p) in a perspective, as names, in a stable order."""
-        view = self._view(perspective)
-        return [self.name(o) for o in sorted(view.objects(self.term(s), self.term(p)), key=_order)]
+        objects = self._view(perspective).objects.get((self.term(s), self.term(p)))
+        if not objects:
+            return []
+        return [self.name(o) for o in sorted(objects, key=_order)]
 
     def triples(self, perspective: str = "robot") -> list[tuple[Value, Value, Value]]:
         """Every fact of a perspective, in short names (a run's final state, a dump)."""
         return sorted(((self.name(s), self.name(p), self.name(o))
-                       for s, p, o in self._view(perspective)), key=str)
+                       for s, p, o in self._view(perspective).triples), key=str)
 
     def select(self, sparql: str, perspective: str = "robot",
                **bindings: Value) -> list[dict[str, Value | None]]:
@@ -322,7 +407,7 @@ class FactDatabase:
         """
         query = _prepare_select(sparql, self._namespace)
         init = {variable: self.term(value) for variable, value in bindings.items()}
-        result = self._view(perspective).query(query, initBindings=init)
+        result = self._view(perspective).sync().query(query, initBindings=init)
         names = [str(variable) for variable in result.vars or ()]
         return [{name: None if value is None else self.name(value)
                  for name, value in zip(names, row, strict=True)}
@@ -333,10 +418,7 @@ class FactDatabase:
     def add(self, s: Value, p: Value, o: Value, perspective: str = "robot") -> bool:
         """Add a fact to a perspective; True (and an "added" event) when it is new."""
         triple = self._triple(s, p, o)
-        graph = self._graph(perspective)
-        size = len(graph)
-        graph.add(triple)
-        if len(graph) == size:
+        if not self._writable(perspective).add(triple):
             return False
         self._deliver(("added", *triple, perspective))
         return True
@@ -344,10 +426,7 @@ class FactDatabase:
     def remove(self, s: Value, p: Value, o: Value, perspective: str = "robot") -> bool:
         """Remove a fact from a perspective; True (and a "removed" event) when it was there."""
         triple = self._triple(s, p, o)
-        graph = self._graph(perspective)
-        size = len(graph)  # cheaper than a membership test in rdflib's memory store
-        graph.remove(triple)
-        if len(graph) == size:
+        if not self._writable(perspective).remove(triple):
             return False
         self._deliver(("removed", *triple, perspective))
         return True
@@ -362,15 +441,14 @@ class FactDatabase:
         the fact (s, p, o) was new.
         """
         s_term, p_term, o_term = self._triple(s, p, o)
-        graph = self._graph(perspective)
+        view = self._writable(perspective)
         changes: list[tuple[EventKind, Node, Node, Node, str]] = []
-        for old in sorted(graph.objects(s_term, p_term), key=_order):
+        for old in sorted(view.objects.get((s_term, p_term), ()), key=_order):
             if old != o_term:
-                graph.remove((s_term, p_term, old))
+                view.remove((s_term, p_term, old))
                 changes.append(("removed", s_term, p_term, old, perspective))
-        new = (s_term, p_term, o_term) not in graph
+        new = view.add((s_term, p_term, o_term))
         if new:
-            graph.add((s_term, p_term, o_term))
             changes.append(("added", s_term, p_term, o_term, perspective))
         self._deliver(*changes)
         return new
