@@ -152,11 +152,6 @@ class Subscription:
         self._object = obj
         self._order = order
 
-    def _matches(self, obj: Node, perspective: str) -> bool:
-        return (self.active
-                and (self._object is None or self._object == obj)
-                and (self.perspective is None or self.perspective == perspective))
-
 
 @functools.lru_cache(maxsize=256)
 def _prepare_select(text: str, namespace: str) -> Query:
@@ -282,6 +277,11 @@ class FactDatabase:
 
     def term(self, value: Value) -> Node:
         """The rdflib term for a short name, prefixed name, full IRI, number or boolean."""
+        if type(value) is str:  # the common case first: isinstance(…, Node) is an ABC check
+            term = self._terms.get(value)
+            if term is None:
+                term = self._terms[value] = self._parse_name(value)
+            return term
         if isinstance(value, Node):
             return value
         if isinstance(value, str):
@@ -493,7 +493,10 @@ class FactDatabase:
                 kind, s, p, o, perspective = self._queue.popleft()
                 event = None
                 for subscription in self._candidates(s, p):
-                    if not subscription._matches(o, perspective):
+                    if not (subscription.active
+                            and (subscription._object is None or subscription._object == o)
+                            and (subscription.perspective is None
+                                 or subscription.perspective == perspective)):
                         continue
                     if event is None:
                         event = FactEvent(kind, self.name(s), self.name(p), self.name(o),

@@ -87,7 +87,7 @@ class Pattern:
         return (self.subject, self.predicate, self.object)
 
     def resolve(self, env: dict[str, Any]) -> tuple[Any, Any, Any]:
-        return tuple(t.resolve(env) for t in self.terms())  # type: ignore[return-value]
+        return self.subject.resolve(env), self.predicate.resolve(env), self.object.resolve(env)
 
     def __str__(self) -> str:
         return "[" + ", ".join(str(t) for t in self.terms()) + "]"
