@@ -81,7 +81,6 @@ import typing
 import warnings
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass
 from itertools import count
 from pathlib import Path
 from urllib.parse import quote
@@ -121,9 +120,12 @@ _PERSPECTIVE_GRAPH = "urn:shary:perspective:"
 _Triple = tuple[Node, Node, Node]
 
 
-@dataclass(frozen=True)
-class FactEvent:
-    """One fact added to or removed from one perspective, in short names."""
+class FactEvent(typing.NamedTuple):
+    """One fact added to or removed from one perspective, in short names.
+
+    A named tuple rather than a frozen dataclass: one is made per change that
+    some subscriber hears, and a tuple is built three times faster.
+    """
 
     kind: EventKind
     subject: Value
