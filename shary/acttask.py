@@ -28,7 +28,7 @@ if TYPE_CHECKING:
     from shary.supervisor import TaskRun
 
 
-@dataclass(eq=False)
+@dataclass(eq=False, slots=True)
 class StepRun:
     """A step of a running recipe: its tree node, its state, what performs it now."""
 
@@ -42,6 +42,9 @@ class StepRun:
 
 class ActTask:
     """One act of one task, carried out by a recipe (see the module's docstring)."""
+
+    __slots__ = ("run", "sup", "state", "act", "agent", "node", "recipe", "steps",
+                 "subscriptions", "started", "replans", "completes", "suspended", "over")
 
     def __init__(self, run: TaskRun, state: State, agent: str):
         self.run = run

@@ -495,8 +495,9 @@ class FactDatabase:
                 kind, s, p, o, perspective = self._queue.popleft()
                 event = None
                 for subscription in self._candidates(s, p):
+                    wanted = subscription._object
                     if not (subscription.active
-                            and (subscription._object is None or subscription._object == o)
+                            and (wanted is None or wanted is o or wanted == o)
                             and (subscription.perspective is None
                                  or subscription.perspective == perspective)):
                         continue
