@@ -74,6 +74,7 @@ The database is single-threaded, like the rest of the engine's core.
 from __future__ import annotations
 
 import functools
+import itertools
 import logging
 import os
 import re
@@ -85,9 +86,9 @@ from itertools import count
 from pathlib import Path
 from urllib.parse import quote
 
+import pyoxigraph
 from pyparsing import ParseException
-from rdflib import OWL, RDF, RDFS, XSD, Dataset, Graph, Literal, URIRef
-from rdflib.plugins.parsers.notation3 import BadSyntax
+from rdflib import OWL, RDF, RDFS, XSD, BNode, Dataset, Graph, Literal, URIRef
 from rdflib.plugins.sparql import prepareQuery
 from rdflib.plugins.sparql.sparql import Query
 from rdflib.term import Node
@@ -95,13 +96,18 @@ from rdflib.term import Node
 from userfiles.errors import FileError, Problem
 from userfiles.yamlsafe import read_text
 
-__all__ = ["FactDatabase", "FactEvent", "Subscription", "Value", "MAX_TURTLE_BYTES"]
+__all__ = ["FactDatabase", "FactEvent", "Subscription", "Value", "MAX_TURTLE_BYTES",
+           "MAX_TURTLE_TRIPLES"]
 
 log = logging.getLogger(__name__)
 
 MAX_TURTLE_BYTES = 8 * 1024 * 1024
-"""Largest Turtle file accepted (8 MiB, about 100,000 triples): a-priori
-knowledge of a home is far smaller, and rdflib needs seconds per megabyte."""
+"""Largest Turtle file accepted (8 MiB): a-priori knowledge of a home is far smaller."""
+
+MAX_TURTLE_TRIPLES = 50_000
+"""Most triples one Turtle file may hold: a home's a-priori knowledge is a few
+thousand; fifty thousand load in about half a second (rdflib's literals are
+most of it), and a larger file is refused before any is converted."""
 
 Value = str | int | float | bool | Node
 """What the engine speaks: short or prefixed names, full IRIs, Python numbers
@@ -172,15 +178,18 @@ class _Perspective:
     """One perspective's facts: an index in front of its rdflib graph (see the module's
     documentation).
 
-    ``triples`` and ``objects`` are always current; ``graph`` lags behind by
-    the changes in ``pending`` (each triple's last word: True added, False
-    removed), applied by :meth:`sync` before anyone reads the graph.
+    ``triples`` and ``objects`` are always current.  The rdflib graph is
+    filled from them the first time someone reads it (:meth:`sync`: a file
+    loaded only to be checked, or a world nobody queries with SPARQL, never
+    pays for rdflib's store); from then on it lags behind by the changes in
+    ``pending`` (each triple's last word: True added, False removed).
     """
 
-    __slots__ = ("graph", "triples", "objects", "pending")
+    __slots__ = ("graph", "built", "triples", "objects", "pending")
 
     def __init__(self, graph: Graph, source: _Perspective | None = None):
         self.graph = graph
+        self.built = False
         self.pending: dict[_Triple, bool] = {}
         if source is None:
             self.triples: set[_Triple] = set()
@@ -200,7 +209,8 @@ class _Perspective:
             self.objects[key] = {triple[2]}
         else:
             objects.add(triple[2])
-        self.pending[triple] = True
+        if self.built:
+            self.pending[triple] = True
         return True
 
     def remove(self, triple: _Triple) -> bool:
@@ -213,29 +223,38 @@ class _Perspective:
         objects.discard(triple[2])
         if not objects:
             del self.objects[key]
-        self.pending[triple] = False
+        if self.built:
+            self.pending[triple] = False
         return True
 
-    def load(self, graph: Graph) -> None:
-        """Take in parsed triples (index and graph at once: loading is not a change)."""
-        self.sync()
-        self.graph += graph
-        for triple in graph:
-            if triple not in self.triples:
-                self.triples.add(triple)
-                self.objects.setdefault((triple[0], triple[1]), set()).add(triple[2])
+    def load(self, triples: set[_Triple]) -> None:
+        """Take in parsed triples (loading is setting up knowledge, not a change)."""
+        new = triples - self.triples
+        self.triples |= new
+        objects = self.objects
+        for s, p, o in new:
+            found = objects.get((s, p))
+            if found is None:
+                objects[(s, p)] = {o}
+            else:
+                found.add(o)
+        if self.built:
+            self.pending.update(dict.fromkeys(new, True))
 
     def sync(self) -> Graph:
         """Bring the rdflib graph up to date and return it."""
-        if self.pending:
-            graph = self.graph
+        graph = self.graph
+        if not self.built:
+            graph.addN((s, p, o, graph) for s, p, o in self.triples)
+            self.built = True
+        elif self.pending:
             for triple, present in self.pending.items():
                 if present:
                     graph.add(triple)
                 else:
                     graph.remove(triple)
-            self.pending.clear()
-        return self.graph
+        self.pending.clear()
+        return graph
 
 
 def _order(term: Node) -> str:
@@ -271,6 +290,7 @@ class FactDatabase:
         perspective), for exporting it, e.g. as TriG; change facts through the
         database's methods, or subscribers (and the database's own index) will
         not hear of it."""
+        self._apriori.sync()
         for perspective in self._perspectives.values():
             perspective.sync()
         return self._dataset
@@ -355,7 +375,6 @@ class FactDatabase:
             if not isinstance(perspective, str) or not perspective:
                 raise ValueError(f"a perspective is an agent's name, not {perspective!r}")
             graph = self._dataset.graph(URIRef(_PERSPECTIVE_GRAPH + quote(perspective, safe="")))
-            graph += self._apriori.graph
             found = self._perspectives[perspective] = _Perspective(graph, self._apriori)
         return found
 
@@ -538,34 +557,112 @@ class FactDatabase:
         return sorted((sub for bucket in buckets for sub in bucket), key=lambda sub: sub._order)
 
 
-def _parse_turtle(text: str, file: str) -> Graph:
-    """Parse Turtle text into a new graph, or raise FileError with positions.
+def _parse_turtle(text: str, file: str) -> set[_Triple]:
+    """Parse Turtle text into rdflib triples, or raise FileError with positions.
 
-    rdflib accepts literals whose text does not fit their datatype
-    (``"abc"^^xsd:integer``), printing a traceback through its logger and
-    warnings; here they are mistakes in the file like any other, refused with
-    a position, and rdflib's output is kept off the user's terminal.
+    Oxigraph's parser (:mod:`pyoxigraph`) reads the file: it follows the
+    Turtle grammar strictly (rdflib's, an N3 parser in a Turtle mode, takes
+    literal subjects and bad escapes, and reports lines past the end of the
+    file), positions every error, parses a million triples in about two
+    seconds where rdflib needs minutes, and never fetches anything (a
+    ``@prefix``, ``@base`` or ``owl:imports`` IRI is only a name).  A file
+    that holds more than :data:`MAX_TURTLE_TRIPLES` triples is refused as
+    soon as the parser passes the limit.  Literals whose text does not fit
+    their datatype (``"abc"^^xsd:integer``) are mistakes in the file like
+    any other, refused with a position.
     """
-    parsed = Graph()
-    rdflib_terms = logging.getLogger("rdflib.term")
-    rdflib_terms.addFilter(_drop)
+    base = Path(file).resolve().as_uri()
+    try:  # Oxigraph's own terms first, up to the limit: cheap, and a huge file stops early
+        parsed = list(itertools.islice(
+            pyoxigraph.parse(text, pyoxigraph.RdfFormat.TURTLE, base_iri=base,
+                             rename_blank_nodes=True), MAX_TURTLE_TRIPLES + 1))
+    except SyntaxError as err:
+        line, col = _inside(text, err.lineno or 1, err.offset or 1)
+        raise FileError([Problem(file, line, col, f"invalid Turtle: {_why(err)}")]) from None
+    if len(parsed) > MAX_TURTLE_TRIPLES:
+        raise FileError([Problem(file, 1, 1, f"more than {MAX_TURTLE_TRIPLES} triples; "
+                                 f"the limit is {MAX_TURTLE_TRIPLES}")])
+    terms = _TermConverter()
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            parsed.parse(data=text, format="turtle", publicID=Path(file).resolve().as_uri())
-    except BadSyntax as err:
-        line, col = _syntax_position(err)
-        raise FileError([Problem(file, line, col, f"invalid Turtle: {err._why}")]) from None
-    except Exception as err:  # rdflib raises ValueError & co. for bad terms, without position
-        raise FileError([Problem(file, 1, 1, f"invalid Turtle: {err}")]) from None
-    finally:
-        rdflib_terms.removeFilter(_drop)
-    ill_typed = {o for o in parsed.objects() if isinstance(o, Literal) and o.ill_typed}
-    if ill_typed:
-        raise FileError([Problem(file, *_find_literal(text, literal),
-                                 f"ill-typed literal: {literal.n3()}")
-                         for literal in ill_typed])
-    return parsed
+        triples = {(terms(t.subject), terms(t.predicate), terms(t.object)) for t in parsed}
+    except _Unsupported as err:
+        at = min((i for i in (text.find("<<"), text.find("{|")) if i >= 0), default=0)
+        line, col = text.count("\n", 0, at) + 1, at - (text.rfind("\n", 0, at) + 1) + 1
+        raise FileError([Problem(file, line, col, f"invalid Turtle: {err}")]) from None
+    if terms.ill_typed:
+        raise FileError([Problem(file, *_find_literal(text, lexical),
+                                 f'ill-typed literal: "{lexical}"^^<{datatype}>')
+                         for lexical, datatype in terms.ill_typed])
+    return triples
+
+
+class _Unsupported(ValueError):
+    """A term Turtle 1.2 allows and the fact database does not hold (a triple term)."""
+
+
+class _TermConverter:
+    """Oxigraph terms to rdflib terms, each distinct term converted (and kept) once."""
+
+    def __init__(self) -> None:
+        self._seen: dict[object, Node] = {}
+        self.ill_typed: list[tuple[str, str]] = []
+        """(text, datatype) of each literal whose text does not fit its datatype, in order."""
+
+    def __call__(self, term: object) -> Node:
+        found = self._seen.get(term)
+        if found is None:
+            found = self._seen[term] = self._convert(term)
+        return found
+
+    def _convert(self, term: object) -> Node:
+        if isinstance(term, pyoxigraph.NamedNode):
+            return URIRef(term.value)
+        if isinstance(term, pyoxigraph.BlankNode):
+            return BNode(term.value)
+        if isinstance(term, pyoxigraph.Literal):
+            if term.language:
+                return Literal(term.value, lang=term.language)
+            if term.datatype.value == _XSD_STRING:
+                return Literal(term.value)  # a simple literal, as rdflib writes it
+            # rdflib prints a traceback through its logger and warns of ill-typed
+            # literals: here they are refused with a position, off the user's terminal
+            rdflib_terms = logging.getLogger("rdflib.term")
+            rdflib_terms.addFilter(_drop)
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    literal = Literal(term.value, datatype=URIRef(term.datatype.value))
+            finally:
+                rdflib_terms.removeFilter(_drop)
+            if literal.ill_typed:
+                self.ill_typed.append((term.value, term.datatype.value))
+            return literal
+        raise _Unsupported(f"triple terms (RDF 1.2 '<<( … )>>', '{{| … |}}') are not facts: "
+                           f"{term} (facts are made of IRIs, blank nodes and literals)")
+
+
+_XSD_STRING = str(XSD.string)
+
+_LOCATION = re.compile(r"^Parser error (?:at line \d+ (?:between columns \d+ and \d+|column \d+)"
+                       r"|between line \d+ column \d+ and line \d+ column \d+): ")
+
+
+def _why(err: SyntaxError) -> str:
+    """Oxigraph's message without the position it starts with (the problem line has it)."""
+    return _LOCATION.sub("", err.msg or str(err))
+
+
+def _inside(text: str, line: int, col: int) -> tuple[int, int]:
+    """A position the file has: an error found at the end of the text (a missing
+    final dot, an unclosed string) is put just after the last character."""
+    lines = text.split("\n")
+    if lines and lines[-1] == "":  # the text ends with a newline: no line after it
+        lines.pop()
+    if not lines:
+        return 1, 1
+    if line > len(lines):
+        return len(lines), len(lines[-1].rstrip("\r")) + 1
+    return max(line, 1), max(col, 1)
 
 
 def _drop(record: logging.LogRecord) -> bool:
@@ -573,22 +670,11 @@ def _drop(record: logging.LogRecord) -> bool:
     return False
 
 
-def _find_literal(text: str, literal: Literal) -> tuple[int, int]:
-    """Where a literal's text first appears quoted; the file's start when rdflib
-    rewrote it (it turns an ill-typed boolean into "false")."""
-    lexical = str(literal)
+def _find_literal(text: str, lexical: str) -> tuple[int, int]:
+    """Where a literal's text first appears quoted (the file's start if written with
+    escapes, which the parser has resolved)."""
     found = [at for mark in "\"'" if (at := text.find(f"{mark}{lexical}{mark}")) >= 0]
     if not found:
         return 1, 1
     at = min(found)
     return text.count("\n", 0, at) + 1, at - (text.rfind("\n", 0, at) + 1) + 1
-
-
-def _syntax_position(err: BadSyntax) -> tuple[int, int]:
-    """Line and column of a Turtle syntax error.
-
-    The line is the one rdflib's message gives ("at line N"); rdflib exposes
-    no column, so it is counted from the offset the error keeps of the text.
-    """
-    text = err._str.decode("utf-8")
-    return err.lines + 1, err._i - (text.rfind("\n", 0, err._i) + 1) + 1
