@@ -104,20 +104,18 @@ class SchemeEvent(Event):
     """
 
     def trigger(self, model: Any, event: Any) -> bool:  # type: ignore[override]
-        state = self.machine.states[model.state]
-        if not self._is_valid_source(state):
+        name = model.state
+        state = self.machine.states[name]
+        if state.finished:
             return False
-        for transition in self.transitions[state.name]:
+        transitions = self.transitions.get(name)
+        if transitions is None:
+            self.machine.compiled.compile_transition(self, state)
+            transitions = self.transitions[name]
+        for transition in transitions:
             if transition.fire(model, event):
                 return True
         return False
-
-    def _is_valid_source(self, state: ConfigurationState) -> bool:
-        if state.finished:
-            return False
-        if state.name not in self.transitions:
-            self.machine.compiled.compile_transition(self, state)
-        return bool(self.transitions[state.name])
 
 
 class SchemeMachine(Machine):
