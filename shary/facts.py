@@ -583,12 +583,20 @@ def _parse_turtle(text: str, file: str) -> set[_Triple]:
         raise FileError([Problem(file, 1, 1, f"more than {MAX_TURTLE_TRIPLES} triples; "
                                  f"the limit is {MAX_TURTLE_TRIPLES}")])
     terms = _TermConverter()
+    # rdflib prints a traceback through its logger and warns of ill-typed literals:
+    # here they are refused with a position (below), off the user's terminal
+    rdflib_terms = logging.getLogger("rdflib.term")
+    rdflib_terms.addFilter(_drop)
     try:
-        triples = {(terms(t.subject), terms(t.predicate), terms(t.object)) for t in parsed}
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            triples = {(terms(t.subject), terms(t.predicate), terms(t.object)) for t in parsed}
     except _Unsupported as err:
         at = min((i for i in (text.find("<<"), text.find("{|")) if i >= 0), default=0)
         line, col = text.count("\n", 0, at) + 1, at - (text.rfind("\n", 0, at) + 1) + 1
         raise FileError([Problem(file, line, col, f"invalid Turtle: {err}")]) from None
+    finally:
+        rdflib_terms.removeFilter(_drop)
     if terms.ill_typed:
         raise FileError([Problem(file, *_find_literal(text, lexical),
                                  f'ill-typed literal: "{lexical}"^^<{datatype}>')
@@ -624,16 +632,7 @@ class _TermConverter:
                 return Literal(term.value, lang=term.language)
             if term.datatype.value == _XSD_STRING:
                 return Literal(term.value)  # a simple literal, as rdflib writes it
-            # rdflib prints a traceback through its logger and warns of ill-typed
-            # literals: here they are refused with a position, off the user's terminal
-            rdflib_terms = logging.getLogger("rdflib.term")
-            rdflib_terms.addFilter(_drop)
-            try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
-                    literal = Literal(term.value, datatype=URIRef(term.datatype.value))
-            finally:
-                rdflib_terms.removeFilter(_drop)
+            literal = Literal(term.value, datatype=URIRef(term.datatype.value))
             if literal.ill_typed:
                 self.ill_typed.append((term.value, term.datatype.value))
             return literal
