@@ -265,7 +265,7 @@ class ActTask:
         perspective = monitor.perspective.resolve(env) if monitor.perspective else None
 
         def react(event: Any) -> None:
-            if event.kind == monitor.change and not self.over:
+            if not self.over:
                 fact = (event.subject, event.predicate, event.object)
                 self.sup.record("monitor", task=self.node, monitor=monitor.name,
                                 emit=monitor.emit, fact=list(fact))
@@ -277,7 +277,8 @@ class ActTask:
                     self.run.deliver_soon(monitor.emit, {"fact": fact})
 
         self.subscriptions.append(self.sup.facts.subscribe(
-            react, subject=s, predicate=p, object=o, perspective=perspective))
+            react, subject=s, predicate=p, object=o, perspective=perspective,
+            kind=monitor.change))
 
     def _detach(self) -> None:
         for subscription in self.subscriptions:

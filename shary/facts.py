@@ -147,13 +147,14 @@ class Subscription:
     change never converts names.
     """
 
-    __slots__ = ("callback", "perspective", "active", "_key", "_object", "_order")
+    __slots__ = ("callback", "perspective", "kind", "active", "_key", "_object", "_order")
 
     def __init__(self, callback: Callable[[FactEvent], object],
                  key: tuple[Node | None, Node | None], obj: Node | None,
-                 perspective: str | None, order: int):
+                 perspective: str | None, kind: EventKind | None, order: int):
         self.callback = callback
         self.perspective = perspective
+        self.kind = kind
         self.active = True
         """False once unsubscribed: a cancelled subscription receives nothing more."""
         self._key = key
@@ -478,12 +479,16 @@ class FactDatabase:
 
     def subscribe(self, callback: Callable[[FactEvent], object], subject: Value | None = None,
                   predicate: Value | None = None, object: Value | None = None,
-                  perspective: str | None = None) -> Subscription:
-        """Call ``callback(event)`` for every change matching the pattern (None: anything)."""
+                  perspective: str | None = None,
+                  kind: EventKind | None = None) -> Subscription:
+        """Call ``callback(event)`` for every change matching the pattern (None: anything);
+        ``kind`` ("added" or "removed") keeps only that kind of change."""
+        if kind not in (None, "added", "removed"):
+            raise ValueError(f"a change is 'added' or 'removed', not {kind!r}")
         key = (None if subject is None else self.term(subject),
                None if predicate is None else self.term(predicate))
         subscription = Subscription(callback, key, None if object is None else self.term(object),
-                                    perspective, next(self._orders))
+                                    perspective, kind, next(self._orders))
         self._index.setdefault(key, []).append(subscription)
         return subscription
 
@@ -516,6 +521,7 @@ class FactDatabase:
                 for subscription in self._candidates(s, p):
                     wanted = subscription._object
                     if not (subscription.active
+                            and (subscription.kind is None or subscription.kind == kind)
                             and (wanted is None or wanted is o or wanted == o)
                             and (subscription.perspective is None
                                  or subscription.perspective == perspective)):

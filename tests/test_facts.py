@@ -353,3 +353,12 @@ def test_ill_typed_literals_are_refused_quietly(write, caplog):
     assert (problem.line, problem.col) == (4, 26)
     assert "ill-typed literal" in problem.message
     assert not [record for record in caplog.records if record.name.startswith("rdflib")]
+
+
+def test_subscription_to_one_kind_of_change(db):
+    removed = recorder(db, subject="human-1", predicate="looksAt", kind="removed")
+    db.add("human-1", "looksAt", "jido")
+    db.remove("human-1", "looksAt", "jido")
+    assert removed == [FactEvent("removed", "human-1", "looksAt", "jido", "robot")]
+    with pytest.raises(ValueError, match="'added' or 'removed'"):
+        db.subscribe(removed.append, kind="changed")
