@@ -37,15 +37,17 @@ turns a term back into what :meth:`FactDatabase.term` accepts, so that
 is an ``xsd:decimal`` while Python's ``0.5`` is an ``xsd:double``: write
 ``5.0e-1`` in files whose numbers the engine compares with Python floats.
 
-**Where facts live.**  rdflib's store costs about 12 µs per change (a named
-graph's contexts and indexes), a third of the whole path from a perception
-change to the arm stopping.  So each perspective keeps its own index in front
-of its rdflib graph (:class:`_Perspective`: the set of its triples and the
-objects of each (subject, predicate)), which answers :meth:`holds`,
-:meth:`objects`, :meth:`triples` and tells whether a change changes anything;
-the rdflib graph stays the store for Turtle, SPARQL and export, and receives
-the net changes made since it was last read just before it is read
-(:meth:`select`, :attr:`dataset`).  ``docs/architecture.md`` has the figures
+**Where facts live.**  rdflib's store costs about 10 µs per change (a named
+graph's contexts and indexes, ``len`` before and after), a good part of the
+whole path from a perception change to the arm stopping.  So each
+perspective keeps its own index in front of its rdflib graph
+(:class:`_Perspective`: the set of its triples and the objects of each
+(subject, predicate)), which answers :meth:`holds`, :meth:`objects`,
+:meth:`triples` and tells whether a change changes anything; the rdflib graph
+stays the store for SPARQL and export, filled when first read and then
+receiving the net changes made since its last read just before it is read
+(:meth:`select`, :attr:`dataset`).  Turtle files are read by
+:mod:`shary.turtle`.  ``docs/architecture.md`` has the figures
 of the alternatives measured (oxrdflib, pyoxigraph).
 
 **Events.**  Every addition and deletion made through :meth:`add`,
@@ -74,40 +76,26 @@ The database is single-threaded, like the rest of the engine's core.
 from __future__ import annotations
 
 import functools
-import itertools
 import logging
 import os
 import re
 import typing
-import warnings
 from collections import deque
 from collections.abc import Callable
 from itertools import count
-from pathlib import Path
 from urllib.parse import quote
 
-import pyoxigraph
 from pyparsing import ParseException
-from rdflib import OWL, RDF, RDFS, XSD, BNode, Dataset, Graph, Literal, URIRef
+from rdflib import OWL, RDF, RDFS, XSD, Dataset, Graph, Literal, URIRef
 from rdflib.plugins.sparql import prepareQuery
 from rdflib.plugins.sparql.sparql import Query
 from rdflib.term import Node
 
-from userfiles.errors import FileError, Problem
-from userfiles.yamlsafe import read_text
+from shary.turtle import Triple, read_turtle
 
-__all__ = ["FactDatabase", "FactEvent", "Subscription", "Value", "MAX_TURTLE_BYTES",
-           "MAX_TURTLE_TRIPLES"]
+__all__ = ["FactDatabase", "FactEvent", "Subscription", "Value"]
 
 log = logging.getLogger(__name__)
-
-MAX_TURTLE_BYTES = 8 * 1024 * 1024
-"""Largest Turtle file accepted (8 MiB): a-priori knowledge of a home is far smaller."""
-
-MAX_TURTLE_TRIPLES = 50_000
-"""Most triples one Turtle file may hold: a home's a-priori knowledge is a few
-thousand; fifty thousand load in about half a second (rdflib's literals are
-most of it), and a larger file is refused before any is converted."""
 
 Value = str | int | float | bool | Node
 """What the engine speaks: short or prefixed names, full IRIs, Python numbers
@@ -123,7 +111,6 @@ _NAME = re.compile(r"\w(?:[\w.-]*[\w-])?")
 
 _PERSPECTIVE_GRAPH = "urn:shary:perspective:"
 
-_Triple = tuple[Node, Node, Node]
 
 
 class FactEvent(typing.NamedTuple):
@@ -191,15 +178,15 @@ class _Perspective:
     def __init__(self, graph: Graph, source: _Perspective | None = None):
         self.graph = graph
         self.built = False
-        self.pending: dict[_Triple, bool] = {}
+        self.pending: dict[Triple, bool] = {}
         if source is None:
-            self.triples: set[_Triple] = set()
+            self.triples: set[Triple] = set()
             self.objects: dict[tuple[Node, Node], set[Node]] = {}
         else:
             self.triples = set(source.triples)
             self.objects = {key: set(objects) for key, objects in source.objects.items()}
 
-    def add(self, triple: _Triple) -> bool:
+    def add(self, triple: Triple) -> bool:
         """Add a triple; False when it was already there."""
         if triple in self.triples:
             return False
@@ -214,7 +201,7 @@ class _Perspective:
             self.pending[triple] = True
         return True
 
-    def remove(self, triple: _Triple) -> bool:
+    def remove(self, triple: Triple) -> bool:
         """Remove a triple; False when it was not there."""
         if triple not in self.triples:
             return False
@@ -228,7 +215,7 @@ class _Perspective:
             self.pending[triple] = False
         return True
 
-    def load(self, triples: set[_Triple]) -> None:
+    def load(self, triples: set[Triple]) -> None:
         """Take in parsed triples (loading is setting up knowledge, not a change)."""
         new = triples - self.triples
         self.triples |= new
@@ -356,7 +343,7 @@ class FactDatabase:
                 return f"{prefix}:{iri[len(namespace):]}"
         return str(iri)
 
-    def _triple(self, s: Value, p: Value, o: Value) -> _Triple:
+    def _triple(self, s: Value, p: Value, o: Value) -> Triple:
         return self.term(s), self.term(p), self.term(o)
 
     # -- perspectives ----------------------------------------------------------------------------
@@ -389,7 +376,7 @@ class FactDatabase:
         as it was.  Delivers no events (see the module's documentation).
         """
         file = os.fspath(path)
-        parsed = _parse_turtle(read_text(file, max_bytes=MAX_TURTLE_BYTES), file)
+        parsed = read_turtle(file)
         if perspective is None:
             self._apriori.load(parsed)
             for view in self._perspectives.values():
@@ -561,125 +548,3 @@ class FactDatabase:
         if len(buckets) == 1:
             return list(buckets[0])
         return sorted((sub for bucket in buckets for sub in bucket), key=lambda sub: sub._order)
-
-
-def _parse_turtle(text: str, file: str) -> set[_Triple]:
-    """Parse Turtle text into rdflib triples, or raise FileError with positions.
-
-    Oxigraph's parser (:mod:`pyoxigraph`) reads the file: it follows the
-    Turtle grammar strictly (rdflib's, an N3 parser in a Turtle mode, takes
-    literal subjects and bad escapes, and reports lines past the end of the
-    file), positions every error, parses a million triples in about two
-    seconds where rdflib needs minutes, and never fetches anything (a
-    ``@prefix``, ``@base`` or ``owl:imports`` IRI is only a name).  A file
-    that holds more than :data:`MAX_TURTLE_TRIPLES` triples is refused as
-    soon as the parser passes the limit.  Literals whose text does not fit
-    their datatype (``"abc"^^xsd:integer``) are mistakes in the file like
-    any other, refused with a position.
-    """
-    base = Path(file).resolve().as_uri()
-    try:  # Oxigraph's own terms first, up to the limit: cheap, and a huge file stops early
-        parsed = list(itertools.islice(
-            pyoxigraph.parse(text, pyoxigraph.RdfFormat.TURTLE, base_iri=base,
-                             rename_blank_nodes=True), MAX_TURTLE_TRIPLES + 1))
-    except SyntaxError as err:
-        line, col = _inside(text, err.lineno or 1, err.offset or 1)
-        raise FileError([Problem(file, line, col, f"invalid Turtle: {_why(err)}")]) from None
-    if len(parsed) > MAX_TURTLE_TRIPLES:
-        raise FileError([Problem(file, 1, 1, f"more than {MAX_TURTLE_TRIPLES} triples; "
-                                 f"the limit is {MAX_TURTLE_TRIPLES}")])
-    terms = _TermConverter()
-    # rdflib prints a traceback through its logger and warns of ill-typed literals:
-    # here they are refused with a position (below), off the user's terminal
-    rdflib_terms = logging.getLogger("rdflib.term")
-    rdflib_terms.addFilter(_drop)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            triples = {(terms(t.subject), terms(t.predicate), terms(t.object)) for t in parsed}
-    except _Unsupported as err:
-        at = min((i for i in (text.find("<<"), text.find("{|")) if i >= 0), default=0)
-        line, col = text.count("\n", 0, at) + 1, at - (text.rfind("\n", 0, at) + 1) + 1
-        raise FileError([Problem(file, line, col, f"invalid Turtle: {err}")]) from None
-    finally:
-        rdflib_terms.removeFilter(_drop)
-    if terms.ill_typed:
-        raise FileError([Problem(file, *_find_literal(text, lexical),
-                                 f'ill-typed literal: "{lexical}"^^<{datatype}>')
-                         for lexical, datatype in terms.ill_typed])
-    return triples
-
-
-class _Unsupported(ValueError):
-    """A term Turtle 1.2 allows and the fact database does not hold (a triple term)."""
-
-
-class _TermConverter:
-    """Oxigraph terms to rdflib terms, each distinct term converted (and kept) once."""
-
-    def __init__(self) -> None:
-        self._seen: dict[object, Node] = {}
-        self.ill_typed: list[tuple[str, str]] = []
-        """(text, datatype) of each literal whose text does not fit its datatype, in order."""
-
-    def __call__(self, term: object) -> Node:
-        found = self._seen.get(term)
-        if found is None:
-            found = self._seen[term] = self._convert(term)
-        return found
-
-    def _convert(self, term: object) -> Node:
-        if isinstance(term, pyoxigraph.NamedNode):
-            return URIRef(term.value)
-        if isinstance(term, pyoxigraph.BlankNode):
-            return BNode(term.value)
-        if isinstance(term, pyoxigraph.Literal):
-            if term.language:
-                return Literal(term.value, lang=term.language)
-            if term.datatype.value == _XSD_STRING:
-                return Literal(term.value)  # a simple literal, as rdflib writes it
-            literal = Literal(term.value, datatype=URIRef(term.datatype.value))
-            if literal.ill_typed:
-                self.ill_typed.append((term.value, term.datatype.value))
-            return literal
-        raise _Unsupported(f"triple terms (RDF 1.2 '<<( … )>>', '{{| … |}}') are not facts: "
-                           f"{term} (facts are made of IRIs, blank nodes and literals)")
-
-
-_XSD_STRING = str(XSD.string)
-
-_LOCATION = re.compile(r"^Parser error (?:at line \d+ (?:between columns \d+ and \d+|column \d+)"
-                       r"|between line \d+ column \d+ and line \d+ column \d+): ")
-
-
-def _why(err: SyntaxError) -> str:
-    """Oxigraph's message without the position it starts with (the problem line has it)."""
-    return _LOCATION.sub("", err.msg or str(err))
-
-
-def _inside(text: str, line: int, col: int) -> tuple[int, int]:
-    """A position the file has: an error found at the end of the text (a missing
-    final dot, an unclosed string) is put just after the last character."""
-    lines = text.split("\n")
-    if lines and lines[-1] == "":  # the text ends with a newline: no line after it
-        lines.pop()
-    if not lines:
-        return 1, 1
-    if line > len(lines):
-        return len(lines), len(lines[-1].rstrip("\r")) + 1
-    return max(line, 1), max(col, 1)
-
-
-def _drop(record: logging.LogRecord) -> bool:
-    """A logging filter that lets nothing through."""
-    return False
-
-
-def _find_literal(text: str, lexical: str) -> tuple[int, int]:
-    """Where a literal's text first appears quoted (the file's start if written with
-    escapes, which the parser has resolved)."""
-    found = [at for mark in "\"'" if (at := text.find(f"{mark}{lexical}{mark}")) >= 0]
-    if not found:
-        return 1, 1
-    at = min(found)
-    return text.count("\n", 0, at) + 1, at - (text.rfind("\n", 0, at) + 1) + 1
