@@ -19,6 +19,7 @@ from rich.console import Console
 from shary import builtin
 from userfiles import yamlsafe
 from userfiles.errors import FileError, Problem
+from userfiles.outputs import OutputError, output_file, write_output
 from userfiles.reader import allow_paths
 
 EXIT_BAD_FILE = 2
@@ -35,6 +36,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(args.func(args) or 0)
     except FileError as err:
         _print_problems(err.problems)
+        return EXIT_BAD_FILE
+    except OutputError as err:  # PATH: error: … (no line: an output has none)
+        _err.print(f"[bold]{_escape(err.path)}:[/bold] [bold red]error:[/bold red] "
+                   f"{_escape(err.message)} ({_escape(err.hint)})")
         return EXIT_BAD_FILE
     except KeyboardInterrupt:
         return 130
@@ -213,18 +218,12 @@ def cmd_run(args: argparse.Namespace) -> int:
     except KeyError as err:
         _err.print(f"[bold red]error:[/bold red] {_escape(err.args[0])}")
         return EXIT_BAD_FILE
+    from sim.narration import ConsoleReport
+
     out = args.out or Path("runs") / path.stem
-    colours = {}
-
-    def report(t: float, who: str, text: str) -> None:
-        if args.quiet:
-            return
-        colour = colours.setdefault(who, ["cyan", "magenta", "green", "yellow"][len(colours) % 4])
-        _out.print(f"[dim]{t:7.1f}s[/dim]  [{colour}]{_escape(who):<8}[/{colour}] {_escape(text)}")
-
     try:
         result = run_scenario(path, seed=args.seed, out=out, snapshots=args.snapshots,
-                              gui=args.gui, report=report)
+                              gui=args.gui, report=None if args.quiet else ConsoleReport(_out))
     except RuntimeError as err:
         _err.print(f"[bold red]error:[/bold red] {_escape(str(err))}")
         return 1
@@ -308,6 +307,7 @@ def cmd_render_scheme(args: argparse.Namespace) -> int:
     from shary.display import render_scheme
     from shary.io.schemes import load_scheme
 
+    output_file(args.output)
     scheme = load_scheme(args.scheme)
     active = [s for s in args.active.split(",") if s]
     unknown = [s for s in active if s not in scheme.states]
@@ -331,14 +331,18 @@ def _draw(draw: Any, out: Path, detail: str = "", quiet: bool = False) -> int:
 
 
 def cmd_render_tree(args: argparse.Namespace) -> int:
-    from shary.display import render_tree
-    from shary.log import read_events
-    from shary.tasktree import TaskTree
+    from shary.display import TEXT_SUFFIXES, render_tree
+    from shary.log import end_time
+    from shary.tasktree import MAX_DRAWN_NODES, replay_log
 
-    events = read_events(args.log)
-    tree = TaskTree.replay(events, args.at)
-    end = events[-1].time if events else 0.0
-    when = f"t = {args.at:g} s" if args.at is not None else f"end (t = {end:g} s)"
+    output_file(args.output)
+    tree = replay_log(args.log, args.at)
+    when = f"t = {args.at:g} s" if args.at is not None else f"end (t = {end_time(args.log):g} s)"
+    if len(tree) > MAX_DRAWN_NODES and args.output.suffix.lower() not in TEXT_SUFFIXES:
+        raise FileError([Problem(str(args.log), 1, 1, (
+            f"the task tree at {when} has {len(tree)} nodes; shary lays out at most "
+            f"{MAX_DRAWN_NODES} (draw an earlier time with --at, or write DOT text with "
+            "-o tree.dot)"))])
     return _draw(lambda: render_tree(tree, args.output, title=f"{args.log.name} at {when}"),
                  args.output, f" ({len(tree)} nodes)")
 
@@ -354,6 +358,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
     if args.render and args.output is None:
         _err.print("[bold red]error:[/bold red] --render needs -o OUT")
         return EXIT_BAD_FILE
+    if args.output is not None:
+        output_file(args.output)
     if args.hddl:
         problem = planner.load_hddl(args.domain, args.problem)
         domain = problem.domain
@@ -460,12 +466,8 @@ def _print_plan(problem, result, errors) -> None:  # type: ignore[no-untyped-def
 def cmd_import_scxml(args: argparse.Namespace) -> int:
     from shary.io.scxml import import_scxml
 
-    text = import_scxml(args.source)
-    try:
-        args.output.write_text(text, encoding="utf-8")
-    except OSError as err:
-        _err.print(f"[bold red]error:[/bold red] cannot write {args.output}: {err.strerror}")
-        return 1
+    output_file(args.output, inputs=[args.source])
+    write_output(args.output, import_scxml(args.source))
     _out.print(f"wrote {_escape(str(args.output))}")
     return 0
 
