@@ -246,38 +246,56 @@ _WAIT = re.compile(r"^[0-9]+(\.[0-9]+)?(ms|s|min|h)$")
 def cmd_simulate(args: argparse.Namespace) -> int:
     from shary.clock import SimulatedClock
     from shary.compiler import compile_scheme
-    from shary.instance import SchemeListener
+    from shary.instance import LivelockError, SchemeListener
     from shary.io.schemes import load_scheme
     from shary.model import parse_duration
+    from userfiles.schema import did_you_mean
 
     scheme = load_scheme(args.scheme)
+    compiled = compile_scheme(scheme)
+    unknown = [w for w in args.script if not _WAIT.match(w) and not compiled.can_take(w)]
+    for word in unknown:
+        _err.print(f"[bold red]error:[/bold red] no state of {scheme.name} takes the event "
+                   f"{_escape(word)!r}{_escape(did_you_mean(word, compiled.descriptors()))}")
+    if unknown:
+        return EXIT_BAD_FILE
     clock = SimulatedClock()
 
+    def who(instance) -> str:  # an invoked child's states read "helper/ask"
+        return f"{instance.invoke_path}/" if instance.parent is not None else ""
+
     class Trace(SchemeListener):
+        def invoking(self, instance, state, invoke):  # type: ignore[override]
+            return self  # trace the invoked children too
+
         def entered(self, instance, state, event):  # type: ignore[override]
             act = f"  [cyan]{state.act} ({state.act_type.name})[/cyan]" if state.act_type else ""
-            _out.print(f"{clock.now():8.2f}s  enter  {state.name}{act}")
+            _out.print(f"{clock.now():8.2f}s  enter  {who(instance)}{state.name}{act}")
 
         def exited(self, instance, state, event):  # type: ignore[override]
-            _out.print(f"{clock.now():8.2f}s  exit   {state.name}")
+            _out.print(f"{clock.now():8.2f}s  exit   {who(instance)}{state.name}")
 
         def logged(self, instance, text):  # type: ignore[override]
-            _out.print(f"{clock.now():8.2f}s  log    {_escape(text)}")
+            _out.print(f"{clock.now():8.2f}s  log    {who(instance)}{_escape(text)}")
 
         def finished(self, instance, state):  # type: ignore[override]
-            _out.print(f"{clock.now():8.2f}s  [bold]finished in {state.name}[/bold]")
+            _out.print(f"{clock.now():8.2f}s  [bold]{who(instance)}finished in "
+                       f"{state.name}[/bold]")
 
     _out.print(f"[bold]{scheme.name}[/bold]: {_escape(scheme.doc.strip())}")
-    instance = compile_scheme(scheme).start(clock=clock, listener=Trace())
-    for word in args.script:
-        if _WAIT.match(word):
-            _out.print(f"{clock.now():8.2f}s  [dim]wait {word}[/dim]")
-            clock.advance(parse_duration(word))
-        else:
-            _out.print(f"{clock.now():8.2f}s  [yellow]<- {_escape(word)}[/yellow]")
-            instance.send(word)
-        if instance.finished:
-            break
+    try:
+        instance = compiled.start(clock=clock, listener=Trace())
+        for word in args.script:
+            if _WAIT.match(word):
+                _out.print(f"{clock.now():8.2f}s  [dim]wait {word}[/dim]")
+                clock.advance(parse_duration(word))
+            else:
+                _out.print(f"{clock.now():8.2f}s  [yellow]<- {_escape(word)}[/yellow]")
+                instance.send(word)
+            if instance.finished:
+                break
+    except LivelockError as err:
+        raise FileError([err.problem]) from None
     _out.print(f"configuration: {', '.join(instance.configuration)}")
     return 0
 
