@@ -47,6 +47,11 @@ class Evaluator:
         self.replays = any(r.rule.kind in REPLAYED for r in problem.rules.values())
         """Whether the score needs the replay of every plan (see :meth:`evaluate`)."""
 
+    @property
+    def cost_weight(self) -> float:
+        """What one unit of cost adds to the score."""
+        return self._bound[0]
+
     def lower_bound(self, cost: float, human: float, robot: float) -> float:
         """A score no completion of a partial plan can go below."""
         wc, wh, wr = self._bound

@@ -46,6 +46,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
+from planner.bound import RemainingCost
 from planner.domain import SOLE_AGENT, Action, Method, Problem
 from planner.evaluate import Evaluator
 from planner.plan import Plan, fact_text
@@ -55,6 +56,16 @@ CHECK_EVERY = 256
 """Expansions between two looks at the clock."""
 MAX_REPEATS = 8
 """The most repetitions of a left-recursive decomposition the deepening allows."""
+MAX_DEPTH = 10_000
+"""The default decomposition-depth budget: how many tasks deep a decomposition may nest
+below a top task.  Each level keeps its choice point and state alive; 10,000 levels is
+tens of megabytes, and three times the depth of the deepest plan in the tests."""
+MAX_NODES = 500_000
+"""The default node budget: search nodes expanded plus variable bindings tried, over the
+whole search.  Every node leaves a hundred-odd bytes behind (what explains a failure);
+half a million stay well within 500 MB and take a few seconds."""
+SHOWN = 4
+"""A failure's path longer than twice this shows its first and last tasks only."""
 PAUSE_GC = True
 """The cyclic garbage collector is paused during a search: the search allocates
 millions of small tuples, none of them in a cycle (reference counting frees them
@@ -71,7 +82,19 @@ class Failure:
     reason: str
 
     def __str__(self) -> str:
-        return " > ".join(self.path) + f": {self.reason}"
+        path = self.path
+        if len(path) > 2 * SHOWN + 1:  # a runaway recursion: its ends tell the story
+            path = (*path[:SHOWN], f"... ({len(path) - 2 * SHOWN} more) ...",
+                    *path[-SHOWN:])
+        return " > ".join(path) + f": {self.reason}"
+
+
+class BudgetExhausted(Exception):
+    """A search budget ran out (raised inside the search, reported in :class:`Result`)."""
+
+    def __init__(self, budget: str):
+        super().__init__(budget)
+        self.budget = budget
 
 
 @dataclass
@@ -87,15 +110,21 @@ class Result:
     improvements: list[tuple[float, float]] = field(default_factory=list)
     first: bool = False
     """The search stopped at its first plan (satisficing) rather than looking for better."""
+    exhausted: str | None = None
+    """The search budget that ran out, in words (None: none did): the node budget
+    stops the search; the depth budget cuts the branches that reach it."""
 
     def explain(self) -> str:
-        """Why there is no plan: for each top task, the deepest point reached and what
-        blocked it."""
+        """Why there is no plan: a budget that ran out, then, for each top task, the
+        deepest point reached and what blocked it."""
         if self.plan is not None:
             return "a plan was found"
-        if not self.failures:
-            return "no plan: the search ran out of time before any task failed"
-        return "\n".join(str(f) for f in self.failures)
+        lines = [] if self.exhausted is None else [
+            f"search budget exhausted: {self.exhausted}"]
+        if not self.failures and self.exhausted is None:
+            lines.append("no plan: the search ran out of time before any task failed")
+        lines.extend(str(f) for f in self.failures)
+        return "\n".join(lines)
 
 
 def _label(name: str, args: tuple[Any, ...]) -> str:
@@ -106,18 +135,32 @@ class Search:
     """One search for one problem (see the module's docstring)."""
 
     def __init__(self, problem: Problem,
-                 on_improvement: Callable[[Plan], None] | None = None):
+                 on_improvement: Callable[[Plan], None] | None = None, *,
+                 lookahead: bool = True, max_depth: int | None = None,
+                 max_nodes: int | None = None):
         self.problem = problem
+        self.max_depth = MAX_DEPTH if max_depth is None else max_depth
+        self.max_nodes = MAX_NODES if max_nodes is None else max_nodes
+        self.nodes = 0
+        """Nodes expanded and bindings tried so far, over every restart (the node budget)."""
+        self.too_deep: str | None = None
+        """The first task cut by the depth budget, if any."""
         self.domain = problem.domain
         self.evaluator = Evaluator(problem)
+        remaining = RemainingCost(problem) if lookahead else None
+        self.remaining = remaining if remaining is not None and remaining.enabled else None
+        """The lower bound on what the agenda's tasks will cost (None: cost so far only)."""
         self.on_improvement = on_improvement
         self.ids = itertools.count(1)
         self.parents: dict[int, tuple[int | None, Any, int]] = {}
         """Each node's parent, label (a text, or a decomposition's task, arguments and
         decomposition name: formatted only when a failure is explained) and top task."""
         self.heads: dict[int, tuple[str, tuple, int]] = {}
-        """Decomposition nodes: the task, its arguments, and the actions done before it."""
-        self.failures: dict[int, Failure] = {}
+        """Decomposition nodes: the task, its arguments, the actions done before it, and
+        its depth (top tasks are at depth 0, their subtasks at 1 ...)."""
+        self.failures: dict[int, Any] = {}
+        """The deepest failure under each top task: (depth, parent, label, reason), or a
+        :class:`Failure` (the goals)."""
         self.kinds = {e: problem.kind(e) for e in problem.entities}
         self.typed: dict[str, list[str]] = {}
         self.repeats = 0
@@ -131,18 +174,30 @@ class Search:
         return node
 
     def _fail(self, parent: int, label: str, reason: str) -> None:
+        """Remember the failure if it is the deepest under its top task; its path is
+        spelled out only at the end (:meth:`_failure`): a search that dives ten thousand
+        tasks deep meets a deeper failure at every level."""
+        head = self.heads.get(parent)
+        depth = 2 if head is None else head[3] + 2
+        root = self.parents[parent][2]
+        known = self.failures.get(root)
+        if known is None or depth > known[0]:
+            self.failures[root] = (depth, parent, label, reason)
+
+    def _failure(self, pending: tuple) -> Failure:
+        """A remembered failure with its path, from the top task down."""
+        if isinstance(pending, Failure):
+            return pending
+        depth, parent, label, reason = pending
         path = [label]
         node: int | None = parent
-        root = 0
         while node is not None:
-            up, text, root = self.parents[node]
+            up, text, _ = self.parents[node]
             path.append(text if isinstance(text, str) else
                         f"{_label(text[0], text[1])}[{text[2]}]")
             node = up
         path.reverse()
-        known = self.failures.get(root)
-        if known is None or len(path) > known.depth:
-            self.failures[root] = Failure(len(path), tuple(path), reason)
+        return Failure(len(path), tuple(path), reason)
 
     def _of_type(self, kind: str) -> list[str]:
         found = self.typed.get(kind)
@@ -191,24 +246,43 @@ class Search:
         stack: list[Iterator[tuple]] = []
         node: tuple | None = (state, agenda, None, 0.0, 0.0, 0.0, 0)
         complete = True
+        exhausted: str | None = None
+        max_nodes = self.max_nodes
         bound = self.evaluator.lower_bound
+        per_cost = self.evaluator.cost_weight
+        remaining = self.remaining if per_cost > 0 else None
         actions, methods = self.domain.actions, self.domain.methods
         while True:
             if node is None:  # back to the latest choice point
                 if not stack:
                     break
-                node = next(stack[-1], None)
+                try:
+                    node = next(stack[-1], None)
+                except BudgetExhausted as out:
+                    complete, exhausted = False, out.budget
+                    break
                 if node is None:
                     stack.pop()
                     continue
             expansions += 1
-            if expansions % CHECK_EVERY == 0 and time.perf_counter() > deadline:
-                complete = False
-                break
+            self.nodes += 1
+            if expansions % CHECK_EVERY == 0:
+                if time.perf_counter() > deadline:
+                    complete = False
+                    break
+                if self.nodes > max_nodes:
+                    complete, exhausted = False, self._nodes_out()
+                    break
             state, agenda, trail, cost, human, robot, steps = node
             node = None
-            if best is not None and bound(cost, human, robot) >= best_score:
-                continue
+            if best is not None:
+                below = bound(cost, human, robot)
+                if below >= best_score:
+                    continue
+                if (remaining is not None and agenda is not None
+                        and agenda[0][0] in methods and below + per_cost * remaining.bound(
+                            agenda, state, (best_score - below) / per_cost) >= best_score):
+                    continue
             if agenda is None:
                 missed = [f"{fact_text(e, a)} == {v!r}"
                           for (e, a), v in self.problem.goals.items() if state.get(e, a) != v]
@@ -236,10 +310,25 @@ class Search:
                 stack.append(self._decompose(methods[name], args, parent, state, rest, trail,
                                              cost, human, robot, steps))
         elapsed = (time.perf_counter() - start) * 1000
-        failures = [self.failures[k] for k in sorted(self.failures, key=lambda k: (k < 0, k))
+        failures = [self._failure(self.failures[k])
+                    for k in sorted(self.failures, key=lambda k: (k < 0, k))
                     ] if best is None else []
+        if self.too_deep is not None:
+            complete = False
+            cut = self._depth_out()
+            exhausted = cut if exhausted is None else f"{exhausted}; and {cut}"
+        stack.clear()  # the choice points hold states: let them go before the result
         return Result(best, found, expansions, complete, elapsed, failures, improvements,
-                      first and best is not None)
+                      first and best is not None, exhausted)
+
+    def _nodes_out(self) -> str:
+        return (f"the node budget ({self.max_nodes:,} nodes expanded and bindings tried) "
+                "ran out; raise it with max_nodes= (shary plan --max-nodes N)")
+
+    def _depth_out(self) -> str:
+        return (f"the decomposition depth budget ({self.max_depth:,} nested tasks) cut the "
+                f"search at {self.too_deep}; is a method recursive without end? Raise it "
+                "with max_depth= (shary plan --max-depth N)")
 
     def _apply(self, action: Action, args: tuple, parent: int, state: State, rest: Any,
                trail: Any, cost: float, human: float, robot: float,
@@ -308,10 +397,18 @@ class Search:
             self._fail(parent, label, f"left recursion: {label} again before any action "
                        f"(more than {self.repeats} time(s))")
             return
+        heads = self.heads
+        above = heads.get(parent)
+        depth = 1 if above is None else above[3] + 1
+        if depth > self.max_depth:
+            if self.too_deep is None:
+                self.too_deep = _label(method.name, args)
+            return
         env = {p: a for (p, _), a in zip(method.params, args, strict=True)}
         get = state.get
-        ids, parents, heads = self.ids, self.parents, self.heads
+        ids, parents = self.ids, self.parents
         root = parents[parent][2]
+        max_nodes = self.max_nodes
         tried = []
         applied = False
         for dec in method.decompositions:
@@ -324,13 +421,16 @@ class Search:
                               for values in itertools.product(*choices))
             matched = False
             for binding in candidates:
+                self.nodes += 1
+                if self.nodes > max_nodes:
+                    raise BudgetExhausted(self._nodes_out())
                 local = {**env, **binding}
                 if dec.bind is None and dec.pre is not None and not dec.pre(local, get):
                     continue
                 matched = applied = True
                 node = next(ids)
                 parents[node] = (parent, (method.name, args, dec.name), root)
-                heads[node] = (method.name, args, steps)
+                heads[node] = (method.name, args, steps, depth)
                 agenda = rest
                 for sub in reversed(dec.subtasks):
                     values = (sub.values(local) if sub.values is not None
@@ -351,8 +451,11 @@ class Search:
 
 
 def plan(problem: Problem, budget_ms: float | None = None,
-         on_improvement: Callable[[Plan], None] | None = None, *, first: bool = False) -> Result:
-    """Plan ``problem`` within ``budget_ms`` (default: the problem's own budget); with
-    ``first``, stop at the first plan found."""
+         on_improvement: Callable[[Plan], None] | None = None, *, first: bool = False,
+         max_depth: int | None = None, max_nodes: int | None = None) -> Result:
+    """Plan ``problem`` within ``budget_ms`` (default: the problem's own budget), the
+    depth budget ``max_depth`` and the node budget ``max_nodes`` (defaults:
+    :data:`MAX_DEPTH`, :data:`MAX_NODES`); with ``first``, stop at the first plan."""
     budget = problem.budget_ms if budget_ms is None else budget_ms
-    return Search(problem, on_improvement).run(budget, first)
+    return Search(problem, on_improvement, max_depth=max_depth,
+                  max_nodes=max_nodes).run(budget, first)
