@@ -48,7 +48,7 @@ MAX_DEPTH = 64
 """Deeper than this in one relaxed decomposition, a task counts 0."""
 MAX_OUTCOMES = 16
 """Beyond this many outcomes of one step of a relaxed decomposition, they are merged."""
-MAX_VARIANTS = 8
+MAX_VARIANTS = 256
 """How many (values read, bound) variants are kept per task and arguments."""
 INF = float("inf")
 

@@ -60,10 +60,13 @@ MAX_DEPTH = 10_000
 """The default decomposition-depth budget: how many tasks deep a decomposition may nest
 below a top task.  Each level keeps its choice point and state alive; 10,000 levels is
 tens of megabytes, and three times the depth of the deepest plan in the tests."""
-MAX_NODES = 500_000
+MAX_NODES = 1_000_000
 """The default node budget: search nodes expanded plus variable bindings tried, over the
 whole search.  Every node leaves a hundred-odd bytes behind (what explains a failure);
-half a million stay well within 500 MB and take a few seconds."""
+a million stay well within 500 MB and take a few seconds (the proven best clean-up of six
+bottles with two agents takes some 600,000 without a lower bound on the remaining tasks)."""
+WRITER, READ, FREE, END = "writer", "read", "free", "end"
+"""Tag the state entries that time a plan as it grows (:meth:`Search._relations`)."""
 SHOWN = 4
 """A failure's path longer than twice this shows its first and last tasks only."""
 PAUSE_GC = True
@@ -147,6 +150,15 @@ class Search:
         """The first task cut by the depth budget, if any."""
         self.domain = problem.domain
         self.evaluator = Evaluator(problem)
+        self.links = self.evaluator.link_rates()
+        """Crossed-links rules: their penalties are added to a partial plan's floor as
+        its links appear (the writer of each value is kept in the state)."""
+        self.waits = self.evaluator.wait_rates()
+        """Timeout rules: their penalties are added as the waits appear."""
+        self.duration_rate = self.evaluator.duration_rate
+        self.timed = bool(self.links or self.waits or self.duration_rate)
+        """Whether each action is timed as the plan grows (see :meth:`_relations`)."""
+        self.decomposition_floor = self.evaluator.decomposition_floor()
         remaining = RemainingCost(problem) if lookahead else None
         self.remaining = remaining if remaining is not None and remaining.enabled else None
         """The lower bound on what the agenda's tasks will cost (None: cost so far only)."""
@@ -244,13 +256,13 @@ class Search:
         expansions = 0
         improvements: list[tuple[float, float]] = []
         stack: list[Iterator[tuple]] = []
-        node: tuple | None = (state, agenda, None, 0.0, 0.0, 0.0, 0)
+        node: tuple | None = (state, agenda, None, 0.0, 0)
         complete = True
         exhausted: str | None = None
         max_nodes = self.max_nodes
-        bound = self.evaluator.lower_bound
         per_cost = self.evaluator.cost_weight
         remaining = self.remaining if per_cost > 0 else None
+        tops = set(roots)
         actions, methods = self.domain.actions, self.domain.methods
         while True:
             if node is None:  # back to the latest choice point
@@ -273,15 +285,14 @@ class Search:
                 if self.nodes > max_nodes:
                     complete, exhausted = False, self._nodes_out()
                     break
-            state, agenda, trail, cost, human, robot, steps = node
+            state, agenda, trail, floor, steps = node
             node = None
             if best is not None:
-                below = bound(cost, human, robot)
-                if below >= best_score:
+                if floor >= best_score:
                     continue
                 if (remaining is not None and agenda is not None
-                        and agenda[0][0] in methods and below + per_cost * remaining.bound(
-                            agenda, state, (best_score - below) / per_cost) >= best_score):
+                        and agenda[0][2] in tops and floor + per_cost * remaining.bound(
+                            agenda, state, (best_score - floor) / per_cost) >= best_score):
                     continue
             if agenda is None:
                 missed = [f"{fact_text(e, a)} == {v!r}"
@@ -304,11 +315,10 @@ class Search:
             (name, args, parent), rest = agenda
             action = actions.get(name)
             if action is not None:  # one successor at most: no choice point
-                node = self._apply(action, args, parent, state, rest, trail, cost, human,
-                                   robot, steps)
+                node = self._apply(action, args, parent, state, rest, trail, floor, steps)
             else:
                 stack.append(self._decompose(methods[name], args, parent, state, rest, trail,
-                                             cost, human, robot, steps))
+                                             floor, steps))
         elapsed = (time.perf_counter() - start) * 1000
         failures = [self._failure(self.failures[k])
                     for k in sorted(self.failures, key=lambda k: (k < 0, k))
@@ -331,20 +341,37 @@ class Search:
                 "with max_depth= (shary plan --max-depth N)")
 
     def _apply(self, action: Action, args: tuple, parent: int, state: State, rest: Any,
-               trail: Any, cost: float, human: float, robot: float,
-               steps: int) -> tuple | None:
+               trail: Any, floor: float, steps: int) -> tuple | None:
         """The search node after ``action``, or None when it cannot be done (or dooms
-        the plan: goal protection)."""
+        the plan: goal protection).  ``floor`` is the partial plan's score so far: what
+        no completion of it can go below."""
         env = dict(zip(action.names, args, strict=True))
         get = state.get
+        if self.timed:  # links and times need what the action reads and writes
+            read: set[tuple[str, Any]] = set()
+
+            def get(entity: str, attribute: Any, _get: Any = state.get) -> Any:
+                read.add((entity, attribute))
+                return _get(entity, attribute)
+
         if action.pre is not None and not action.pre.fn(env, get):
             self._fail(parent, _label(action.name, args),
                        f"precondition false: {action.pre.text}")
             return None
+        child = state.child()
+        if self.timed:
+            written: list[tuple[str, Any]] = []
+
+            def put(entity: str, attribute: Any, value: Any, _set: Any = child.set) -> None:
+                written.append((entity, attribute))
+                _set(entity, attribute, value)
+
+            action.apply(env, get, put)
+        else:
+            action.apply(env, get, child.set)
+        get = state.get
         price = action.cost(env, get) if callable(action.cost) else action.cost
         length = action.duration(env, get) if callable(action.duration) else action.duration
-        child = state.child()
-        action.apply(env, get, child.set)
         for pred, key in action.deletes:
             fact = key(env)
             if (self.problem.goals.get((pred, fact)) is True and get(pred, fact) is True
@@ -355,11 +382,59 @@ class Search:
                 return None
         agent = SOLE_AGENT if action.agent is None else env[action.agent]
         kind = self.kinds.get(agent)
+        floor += price * self.evaluator.step_rate(kind)
+        if self.timed:
+            floor += self._relations(read, written, agent, kind, length, state, child)
         node = next(self.ids)
         record = ("act", node, parent, action.name, args, agent, price, length)
-        return (child, rest, (record, trail), cost + price,
-                human + (price if kind == "human" else 0.0),
-                robot + (price if kind == "robot" else 0.0), steps + 1)
+        return (child, rest, (record, trail), floor, steps + 1)
+
+    def _relations(self, read: set, written: list, agent: str, kind: str | None,
+                   length: float, state: State, child: State) -> float:
+        """What this action's causal links from other agents, its agent's wait before it
+        and the makespan's growth add to the score.  The evaluator's relations, kept as
+        the plan grows, in ``child`` under attributes no domain has: who wrote each
+        value last and when that action ends ``(WRITER, attribute)``, when the last
+        reader of each value since then ends ``(READ, attribute)``, when each agent is
+        free ``(FREE,)`` and the makespan ``(None, (END,))``.  An action starts when the
+        writers of what it reads, the readers and the writer of what it writes, and its
+        agent's previous action are over."""
+        get = state.get
+        added = 0.0
+        start = 0.0
+        for entity, attribute in read:
+            last = get(entity, (WRITER, attribute))
+            if last is not None:
+                if last[0] != agent:
+                    for selected, rate in self.links:
+                        added += selected.penalty(agent, kind) * rate
+                start = max(start, last[1])
+        for entity, attribute in written:
+            last = get(entity, (WRITER, attribute))
+            if last is not None:
+                start = max(start, last[1])
+            start = max(start, get(entity, (READ, attribute)) or 0.0)
+        free = get(agent, (FREE,))
+        if free is not None:
+            start = max(start, free)
+            for selected, rate in self.waits:
+                gap = start - free
+                if gap > selected.rule.max_wait:
+                    added += selected.penalty(agent, kind) * (gap - selected.rule.max_wait) * rate
+        end = start + length
+        for entity, attribute in read:
+            key = (READ, attribute)
+            if (get(entity, key) or 0.0) < end:
+                child.set(entity, key, end)
+        for entity, attribute in written:
+            child.set(entity, (WRITER, attribute), (agent, end))
+            child.set(entity, (READ, attribute), None)
+        child.set(agent, (FREE,), end)
+        makespan = get(None, (END,)) or 0.0
+        if end > makespan:
+            child.set(None, (END,), end)
+            added += (end - makespan) * self.duration_rate
+        return added
 
     def _may_add(self, agenda: Any, pred: str, fact: tuple) -> bool:
         """Whether a task of ``agenda`` may make the fact true again (goal protection: a
@@ -389,8 +464,7 @@ class Search:
         return False
 
     def _decompose(self, method: Method, args: tuple, parent: int, state: State, rest: Any,
-                   trail: Any, cost: float, human: float, robot: float,
-                   steps: int) -> Iterator[tuple]:
+                   trail: Any, floor: float, steps: int) -> Iterator[tuple]:
         if self._repeated(method.name, args, parent, steps):
             self.pruned = True
             label = _label(method.name, args)
@@ -412,6 +486,7 @@ class Search:
         tried = []
         applied = False
         for dec in method.decompositions:
+            penalty = self.decomposition_floor.get((method.name, dec.name), 0.0)
             if dec.bind is not None:
                 candidates: Any = dec.bind(env, state)
             else:
@@ -437,7 +512,7 @@ class Search:
                               else tuple([a.fn(local, get) for a in sub.args]))
                     agenda = ((sub.task, values, node), agenda)
                 record = ("method", node, parent, method.name, args, dec.name, binding)
-                yield (state, agenda, (record, trail), cost, human, robot, steps)
+                yield (state, agenda, (record, trail), floor + penalty, steps)
             if not matched:
                 if dec.bind is None and dec.vars and not all(
                         self._of_type(t) for _, t in dec.vars):
