@@ -113,6 +113,8 @@ class Result:
     improvements: list[tuple[float, float]] = field(default_factory=list)
     first: bool = False
     """The search stopped at its first plan (satisficing) rather than looking for better."""
+    applied: int = 0
+    """Actions applied (precondition checked and true, effects applied), over the search."""
     exhausted: str | None = None
     """The search budget that ran out, in words (None: none did): the node budget
     stops the search; the depth budget cuts the branches that reach it."""
@@ -145,6 +147,7 @@ class Search:
         self.max_depth = MAX_DEPTH if max_depth is None else max_depth
         self.max_nodes = MAX_NODES if max_nodes is None else max_nodes
         self.nodes = 0
+        self.applied = 0
         """Nodes expanded and bindings tried so far, over every restart (the node budget)."""
         self.too_deep: str | None = None
         """The first task cut by the depth budget, if any."""
@@ -329,7 +332,7 @@ class Search:
             exhausted = cut if exhausted is None else f"{exhausted}; and {cut}"
         stack.clear()  # the choice points hold states: let them go before the result
         return Result(best, found, expansions, complete, elapsed, failures, improvements,
-                      first and best is not None, exhausted)
+                      first and best is not None, self.applied, exhausted)
 
     def _nodes_out(self) -> str:
         return (f"the node budget ({self.max_nodes:,} nodes expanded and bindings tried) "
@@ -385,6 +388,7 @@ class Search:
         floor += price * self.evaluator.step_rate(kind)
         if self.timed:
             floor += self._relations(read, written, agent, kind, length, state, child)
+        self.applied += 1
         node = next(self.ids)
         record = ("act", node, parent, action.name, args, agent, price, length)
         return (child, rest, (record, trail), floor, steps + 1)

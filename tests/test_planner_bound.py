@@ -14,7 +14,7 @@ from planner.search import Search
 from planner.state import State
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "benchmarks"))
+sys.path.append(str(ROOT / "benchmarks"))
 
 from livingroom import clean_up  # noqa: E402
 
