@@ -23,7 +23,9 @@ times (``time.process_time``: the machines here are shared), medians of
 ``--runs`` runs for the first plans, one run for the proven best.  Action
 applications per second: ``actions_per_s`` is the raw rate of the search's own
 step (precondition, copy-on-write state, effects, the rules' floor), replaying
-the six-bottle two-agent best plan; ``search_actions_per_s`` the actions the
+the six-bottle two-agent best plan (``actions_per_s_without_rules``: the same
+with no rule selected, so without the floor's links and times);
+``search_actions_per_s`` the actions the
 proven-best searches applied per second of search (all their other work
 included).
 
@@ -54,10 +56,9 @@ from planner.state import State  # noqa: E402
 sys.path.append(str(HERE))
 from livingroom import clean_up  # noqa: E402
 
-HEADLINE_FIRST = (6, 2)
-"""The instance of ``first_plan_ms``: two agents, six bottles (a 26-action plan)."""
-HEADLINE_BEST = (6, 2)
-"""The instance of ``proven_best_ms``: two agents, six bottles, every rule."""
+HEADLINE = (6, 2)
+"""The size of ``first_plan_ms`` (a 26-action plan) and ``proven_best_ms``: six bottles,
+two agents, every rule."""
 GOALS = {"first_plan_ms": 50.0, "proven_best_ms": 1000.0, "actions_per_s": 200_000.0}
 
 
@@ -150,6 +151,7 @@ def main() -> int:
           f"{'ratio':>6} | {'best ms':>9} {'proven':>6} {'score':>6} {'len':>4} "
           f"{'expanded':>9} {'no-lookahead ms':>15}", file=table)
     rows = []
+    headline = _headline(args)
     for agents in range(1, args.agents + 1):
         for bottles in range(1, args.bottles + 1):
             problem = clean_up(bottles, agents)
@@ -167,8 +169,10 @@ def main() -> int:
                 if plain["proven"] and row["proven"]:
                     assert plain["score"] == row["score"], "the lookahead changed the best"
             best = row.pop("plan")
-            if (bottles, agents) == HEADLINE_BEST and best is not None:
+            if (bottles, agents) == headline and best is not None:
                 row["apply_per_s"] = apply_rate(problem, best)
+                row["apply_per_s_no_rules"] = apply_rate(
+                    clean_up(bottles, agents, rules=False), best)
             rows.append(row)
             print(f"{agents:>6} {bottles:>7} | {row['first_ms']:>8.2f} "
                   f"{row['first_length'] or '-':>4} {row['gtpyhop_ms']:>10.2f} "
@@ -180,7 +184,7 @@ def main() -> int:
     if invalid:
         print(f"INVALID plans: {invalid}", file=sys.stderr)
         return 1
-    figures = _figures(rows, args)
+    figures = _figures(rows, args, headline)
     for name, goal in GOALS.items():
         value = figures.get(name)
         if value is not None:
@@ -196,31 +200,35 @@ def _ms(value: float | None) -> str:
     return "-" if value is None else f"{value:.1f}"
 
 
-def _figures(rows: list[dict[str, Any]], args: argparse.Namespace) -> dict[str, Any]:
-    def find(size: tuple[int, int]) -> dict[str, Any] | None:
-        bottles, agents = size
-        return next((r for r in rows if (r["bottles"], r["agents"]) == (bottles, agents)),
-                    None)
+def _headline(args: argparse.Namespace) -> tuple[int, int]:
+    """(bottles, agents) of the headline figures: six bottles and two agents, or the
+    largest two-agent size asked for (``--bottles 2`` for a quick run)."""
+    bottles, agents = HEADLINE
+    return min(bottles, args.bottles), min(agents, args.agents)
 
-    first, best = find(HEADLINE_FIRST) or rows[-1], find(HEADLINE_BEST)
+
+def _figures(rows: list[dict[str, Any]], args: argparse.Namespace,
+             headline: tuple[int, int]) -> dict[str, Any]:
+    first = best = next(r for r in rows if (r["bottles"], r["agents"]) == headline)
     applied = sum(r["applied"] for r in rows)
     searching = sum(r["best_ms"] for r in rows) / 1000
     ratios = [r["ratio"] for r in rows if r["ratio"]]
     figures: dict[str, Any] = {
         "first_plan_ms": round(first["first_ms"], 3),
         "first_plan_actions": first["first_length"],
-        "first_plan_size": [first["bottles"], first["agents"]],
+        "size": list(headline),
         "gtpyhop_first_plan_ms": round(first["gtpyhop_ms"], 3),
         "first_plan_ratio_vs_gtpyhop": round(first["ratio"], 2),
         "median_first_ratio_vs_gtpyhop": round(statistics.median(ratios), 2),
         "same_first_plans": sum(r["same_first_plan"] for r in rows),
-        "proven_best_ms": round(best["best_ms"], 1) if best and best["proven"] else None,
-        "proven_best_score": best["score"] if best else None,
-        "proven_best_actions": best["best_length"] if best else None,
+        "proven_best_ms": round(best["best_ms"], 1) if best["proven"] else None,
+        "proven_best_score": best["score"],
+        "proven_best_actions": best["best_length"],
         "proven_best_no_lookahead_ms": (round(best["no_lookahead_ms"], 1)
-                                        if best and best["no_lookahead_ms"] else None),
-        "actions_per_s": round(best["apply_per_s"]) if best and "apply_per_s" in best
-        else None,
+                                        if best["no_lookahead_ms"] else None),
+        "actions_per_s": round(best["apply_per_s"]) if "apply_per_s" in best else None,
+        "actions_per_s_without_rules": (round(best["apply_per_s_no_rules"])
+                                        if "apply_per_s" in best else None),
         "search_actions_per_s": round(applied / searching) if searching else None,
         "sizes": len(rows),
         "proven": sum(r["proven"] for r in rows),

@@ -59,7 +59,7 @@ MAX_REPEATS = 8
 MAX_DEPTH = 10_000
 """The default decomposition-depth budget: how many tasks deep a decomposition may nest
 below a top task.  Each level keeps its choice point and state alive; 10,000 levels is
-tens of megabytes, and three times the depth of the deepest plan in the tests."""
+tens of megabytes, where Blocksworld-GTOHP p30's plan of 6,660 actions nests 82 deep."""
 MAX_NODES = 1_000_000
 """The default node budget: search nodes expanded plus variable bindings tried, over the
 whole search.  Every node leaves a hundred-odd bytes behind (what explains a failure);

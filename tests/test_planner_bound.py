@@ -90,3 +90,19 @@ def test_conditions_split_at_their_top_level_and() -> None:
     assert conjuncts('a.x == b and (c or d) and e.k == "and"') == [
         "a.x == b", "(c or d)", 'e.k == "and"']
     assert conjuncts("a and b or c") == ["a and b or c"]
+
+
+def test_the_benchmark_reports_its_figures_on_a_tiny_size() -> None:
+    pytest.importorskip("gtpyhop", reason="GTPyhop comes with the bench extra")
+    import json
+    import subprocess
+
+    run = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "planner.py"), "--json",
+                          "--bottles", "2", "--agents", "2", "--runs", "1", "--limit", "20"],
+                         capture_output=True, text=True, timeout=300, check=True)
+    figures = json.loads(run.stdout.strip().splitlines()[-1])
+    assert figures["size"] == [2, 2] and figures["sizes"] == 4 and figures["proven"] == 4
+    assert figures["first_plan_actions"] == 8 and figures["same_first_plans"] == 4
+    assert figures["proven_best_score"] == 21.5
+    for name in ("first_plan_ms", "proven_best_ms", "actions_per_s", "gtpyhop_first_plan_ms"):
+        assert figures[name] > 0
