@@ -65,7 +65,7 @@ MAX_NODES = 1_000_000
 whole search.  Every node leaves a hundred-odd bytes behind (what explains a failure);
 a million stay well within 500 MB and take a few seconds (the proven best clean-up of six
 bottles with two agents takes some 600,000 without a lower bound on the remaining tasks)."""
-WRITER, READ, FREE, END = "writer", "read", "free", "end"
+WRITER, FREE, END = "writer", "free", "end"
 """Tag the state entries that time a plan as it grows (:meth:`Search._relations`)."""
 SHOWN = 4
 """A failure's path longer than twice this shows its first and last tasks only."""
@@ -397,46 +397,53 @@ class Search:
                    length: float, state: State, child: State) -> float:
         """What this action's causal links from other agents, its agent's wait before it
         and the makespan's growth add to the score.  The evaluator's relations, kept as
-        the plan grows, in ``child`` under attributes no domain has: who wrote each
-        value last and when that action ends ``(WRITER, attribute)``, when the last
-        reader of each value since then ends ``(READ, attribute)``, when each agent is
-        free ``(FREE,)`` and the makespan ``(None, (END,))``.  An action starts when the
-        writers of what it reads, the readers and the writer of what it writes, and its
-        agent's previous action are over."""
+        the plan grows, in ``child`` under attributes no domain has: for each value, who
+        wrote it last (None: nobody yet), when that action ends and when the last action
+        that read it since ends ``(WRITER, attribute)``; when each agent is free
+        ``(FREE,)``; the makespan ``(None, (END,))``.  An action starts when the writers
+        of what it reads, the readers and the writer of what it writes, and its agent's
+        previous action are over."""
         get = state.get
         added = 0.0
         start = 0.0
+        marks = {}
         for entity, attribute in read:
-            last = get(entity, (WRITER, attribute))
-            if last is not None:
-                if last[0] != agent:
+            mark = marks[(entity, attribute)] = get(entity, (WRITER, attribute))
+            if mark is not None:
+                writer = mark[0]
+                if writer is not None and writer != agent:
                     for selected, rate in self.links:
                         added += selected.penalty(agent, kind) * rate
-                start = max(start, last[1])
-        for entity, attribute in written:
-            last = get(entity, (WRITER, attribute))
-            if last is not None:
-                start = max(start, last[1])
-            start = max(start, get(entity, (READ, attribute)) or 0.0)
+                if mark[1] > start:
+                    start = mark[1]
+        for key in written:
+            mark = marks[key] if key in marks else get(key[0], (WRITER, key[1]))
+            if mark is not None:
+                if mark[1] > start:
+                    start = mark[1]
+                if mark[2] > start:
+                    start = mark[2]
         free = get(agent, (FREE,))
         if free is not None:
-            start = max(start, free)
+            if free > start:
+                start = free
             for selected, rate in self.waits:
                 gap = start - free
                 if gap > selected.rule.max_wait:
                     added += selected.penalty(agent, kind) * (gap - selected.rule.max_wait) * rate
         end = start + length
-        for entity, attribute in read:
-            key = (READ, attribute)
-            if (get(entity, key) or 0.0) < end:
-                child.set(entity, key, end)
-        for entity, attribute in written:
-            child.set(entity, (WRITER, attribute), (agent, end))
-            child.set(entity, (READ, attribute), None)
-        child.set(agent, (FREE,), end)
+        put = child.set
+        for key, mark in marks.items():
+            if mark is None:
+                put(key[0], (WRITER, key[1]), (None, 0.0, end))
+            elif mark[2] < end:
+                put(key[0], (WRITER, key[1]), (mark[0], mark[1], end))
+        for entity, attribute in written:  # after the reads: a write clears the readers
+            put(entity, (WRITER, attribute), (agent, end, 0.0))
+        put(agent, (FREE,), end)
         makespan = get(None, (END,)) or 0.0
         if end > makespan:
-            child.set(None, (END,), end)
+            put(None, (END,), end)
             added += (end - makespan) * self.duration_rate
         return added
 
