@@ -17,10 +17,9 @@ from typing import Any
 from rich.console import Console
 
 from shary import builtin
-from shary.acts import ActRegistry, builtin_acts, load_acts
-from shary.conditions import ConditionRegistry
 from userfiles import yamlsafe
 from userfiles.errors import FileError, Problem
+from userfiles.reader import allow_paths
 
 EXIT_BAD_FILE = 2
 
@@ -31,6 +30,7 @@ _err = Console(stderr=True, highlight=False, soft_wrap=True)
 def main(argv: Sequence[str] | None = None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
+    allow_paths(args.allow_path)
     try:
         return int(args.func(args) or 0)
     except FileError as err:
@@ -44,6 +44,9 @@ def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="shary", description="A SHARY-style supervision engine for robots that work "
         "with people.")
+    parser.add_argument("--allow-path", action="append", default=[], type=Path,
+                        metavar="FOLDER", help="a folder that user files may name files in, "
+                        "besides their own folder (repeatable)")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     p = sub.add_parser("validate", help="check schemes, acts, recipe libraries and Turtle files "
@@ -149,136 +152,31 @@ def _escape(text: str) -> str:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
+    """Check files (by default the built-in ones): one report per file, each problem once,
+    never ``ok`` for a file whose dependencies fail (see :mod:`shary.filekinds`)."""
     import planner
-    from shary.facts import FactDatabase
-    from shary.io.recipes import builtin_library_files, load_library
-    from shary.io.schemes import parse_scheme
-    from sim.scenario import builtin_profiles, builtin_scenarios
+    from shary.filekinds import validate
+    from shary.io.recipes import builtin_library_files
 
-    paths = list(args.paths) or (builtin.files("schemes") + builtin_library_files()
-                                 + planner.builtin_domains() + planner.builtin_problems()
-                                 + builtin_profiles() + list(builtin_scenarios().values()))
-    problems: list[Problem] = []
-    schemes: list[yamlsafe.Located] = []
-    libraries: list[Path] = []
-    planning: list[tuple[Path, yamlsafe.Located]] = []
-    simulated: list[tuple[str, Path]] = []
-    acts: ActRegistry = builtin_acts()
-    for path in paths:
-        if path.suffix == ".ttl":
-            try:
-                FactDatabase().load_turtle(path)
-            except FileError as err:
-                problems.extend(err.problems)
-            continue
-        try:
-            located = yamlsafe.load_file(path)
-        except FileError as err:
-            problems.extend(err.problems)
-            continue
-        kind = _kind_of(located)
-        if kind == "acts":
-            try:
-                acts = acts.extended(load_acts(path))
-            except FileError as err:
-                problems.extend(err.problems)
-        elif kind == "scheme":
-            schemes.append(located)
-        elif kind == "recipes":
-            libraries.append(path)
-        elif kind in ("domain", "problem"):
-            planning.append((path, located))
-        elif kind in ("scenario", "profile"):
-            simulated.append((kind, path))
-        else:
-            problems.extend(located.problems)
-            what = "a mapping" if isinstance(located.data, dict) else "expected a mapping"
-            problems.append(located.problem((), f"not a scheme, acts, recipe, domain, "
-                                            f"problem, scenario or profile file: {what} with "
-                                            "'scheme:', 'acts:', 'domain:', 'problem:', "
-                                            "'scenario:', 'profile:', or some of "
-                                            "'predicates:', 'atomic:', 'tasks:', 'recipes:', "
-                                            "'chronicles:'"))
-    conditions = ConditionRegistry.installed()
-    for located in schemes:
-        try:
-            parse_scheme(located, acts=acts, conditions=conditions)
-        except FileError as err:
-            problems.extend(err.problems)
-    if libraries:
-        try:
-            load_library(libraries, acts=acts)
-        except FileError as err:
-            problems.extend(err.problems)
-    for path, located in planning:
-        problems.extend(_check_planning(path, located))
-    for kind, path in simulated:
-        problems.extend(_check_simulated(kind, path, acts))
-    _print_problems(sorted(problems))
-    bad = {p.file for p in problems}
-    for path in paths:
-        if str(path) not in bad:
-            _out.print(f"[green]ok[/green]    {_escape(str(path))}")
-    if problems:
-        _err.print(f"{len(problems)} problem(s) in {len(bad)} file(s) of {len(paths)} checked")
+    paths = list(args.paths)
+    if not paths:
+        from sim.scenario import builtin_profiles, builtin_scenarios
+
+        paths = (builtin.files("schemes") + builtin_library_files()
+                 + planner.builtin_domains() + planner.builtin_problems()
+                 + builtin_profiles() + list(builtin_scenarios().values()))
+    reports = validate(paths)
+    for report in reports:
+        _print_problems(report.problems)
+    bad = [r for r in reports if not r.ok]
+    for report in reports:
+        if report.ok and report.kind is not None:
+            _out.print(f"[green]ok[/green]    {_escape(report.file)}")
+    if bad:
+        count = sum(len(r.problems) for r in bad)
+        _err.print(f"{count} problem(s) in {len(bad)} file(s) of {len(reports)} checked")
         return EXIT_BAD_FILE
     return 0
-
-
-def _check_simulated(kind: str, path: Path, acts: ActRegistry) -> list[Problem]:
-    """Problems of a scenario (with the recipes it names) or of a people's profile."""
-    from sim.run import load
-    from sim.scenario import load_profile
-
-    try:
-        if kind == "scenario":
-            load(path)
-        else:
-            load_profile(path, acts=set(acts.vocabulary()))
-    except FileError as err:
-        return list(err.problems)
-    return []
-
-
-def _check_planning(path: Path, located: yamlsafe.Located) -> list[Problem]:
-    """Problems of a planning domain, or of a problem with the domain it names."""
-    import planner
-
-    try:
-        if _kind_of(located) == "domain":
-            planner.load_domain(path)
-            return []
-        name = located.data.get("domain")
-        if not isinstance(name, str):
-            return [located.problem((), "a problem file names its domain ('domain:') for "
-                                    "shary validate to check it")]
-        local = path.parent / name
-        domain = planner.load_domain(local if local.suffix in (".yaml", ".yml") else name)
-        planner.load_problem(path, domain)
-    except FileError as err:
-        return list(err.problems)
-    return []
-
-
-def _kind_of(located: yamlsafe.Located) -> str | None:
-    data = located.data
-    if not isinstance(data, dict):
-        return None
-    if "domain" in data and "types" in data:
-        return "domain"
-    if "problem" in data:
-        return "problem"
-    if "scenario" in data:
-        return "scenario"
-    if "profile" in data:
-        return "profile"
-    if "scheme" in data or "states" in data:
-        return "scheme"
-    if set(data) == {"acts"}:
-        return "acts"
-    if set(data) & {"predicates", "atomic", "tasks", "recipes", "chronicles"}:
-        return "recipes"
-    return None
 
 
 # -- schemes, simulate ---------------------------------------------------
