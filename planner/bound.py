@@ -7,11 +7,17 @@ is nearly finished; this module bounds the rest: each task on the agenda
 costs at least its *cheapest decomposition*, computed over a relaxation of
 the problem:
 
-- Every task reads the state as it is now, except what the tasks before it
-  (on the agenda, or its own earlier siblings) may have written: those
-  values are *unknown*.  What a task may write is a lifted analysis of the
-  domain (:meth:`RemainingCost.writes`): ``obj.on`` of its own parameter
-  ``obj``, ``at`` of any agent.
+- Each task on the agenda reads the state as it is now, except what the
+  tasks before it may have written: those values are *unknown*.  What a task
+  may write is a lifted analysis of the domain (:meth:`RemainingCost.writes`):
+  ``obj.on`` of its own parameter ``obj``, ``at`` of any agent.
+- Inside one task, each way of carrying it out (an *outcome*: a choice of
+  decompositions and bindings) is followed with what it writes
+  (:class:`Overlay`): after ``Move(jido, coffee-area)``, Jido is known to be
+  in the coffee area; a value computed from an unknown one is unknown.
+  Outcomes that write the same keep the cheapest; beyond
+  :data:`MAX_OUTCOMES` they are merged into one that keeps only what they
+  all agree on.
 - A precondition is split into its top-level conjuncts; a conjunct that reads
   nothing unknown is decided exactly, and one false conjunct rules the
   decomposition (or action) out.  Anything else may hold.
