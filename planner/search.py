@@ -60,11 +60,12 @@ MAX_DEPTH = 10_000
 """The default decomposition-depth budget: how many tasks deep a decomposition may nest
 below a top task.  Each level keeps its choice point and state alive; 10,000 levels is
 tens of megabytes, where Blocksworld-GTOHP p30's plan of 6,660 actions nests 82 deep."""
-MAX_NODES = 1_000_000
+MAX_NODES = 500_000
 """The default node budget: search nodes expanded plus variable bindings tried, over the
 whole search.  Every node leaves a hundred-odd bytes behind (what explains a failure);
-a million stay well within 500 MB and take a few seconds (the proven best clean-up of six
-bottles with two agents takes some 600,000 without a lower bound on the remaining tasks)."""
+half a million answer within about 5 s and 200 MB even on a loaded machine, where the
+proven best clean-up of six bottles with two agents takes some 120,000 (with three
+agents, about 610,000: raise it)."""
 WRITER, FREE, END = "writer", "free", "end"
 """Tag the state entries that time a plan as it grows (:meth:`Search._relations`)."""
 SHOWN = 4

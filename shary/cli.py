@@ -94,7 +94,7 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--max-depth", type=int, default=None, metavar="N",
                    help="decomposition depth budget (default 10,000 nested tasks)")
     p.add_argument("--max-nodes", type=int, default=None, metavar="N",
-                   help="node budget (default 1,000,000 nodes expanded and bindings tried)")
+                   help="node budget (default 500,000 nodes expanded and bindings tried)")
     p.add_argument("--rules", default=None, metavar="RULE,…",
                    help="the social rules to apply (default: the problem's selection; "
                    "'none' for none)")
