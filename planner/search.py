@@ -161,6 +161,8 @@ class Search:
         """Timeout rules: their penalties are added as the waits appear."""
         self.duration_rate = self.evaluator.duration_rate
         self.timed = bool(self.links or self.waits or self.duration_rate)
+        self.dynamic = frozenset(a for t in self.domain.types.values() for a in t.dynamic)
+        """The attributes actions may change (the others need no timing entries)."""
         """Whether each action is timed as the plan grows (see :meth:`_relations`)."""
         self.decomposition_floor = self.evaluator.decomposition_floor()
         remaining = RemainingCost(problem) if lookahead else None
@@ -354,8 +356,10 @@ class Search:
         if self.timed:  # links and times need what the action reads and writes
             read: set[tuple[str, Any]] = set()
 
-            def get(entity: str, attribute: Any, _get: Any = state.get) -> Any:
-                read.add((entity, attribute))
+            def get(entity: str, attribute: Any, _get: Any = state.get,
+                    _dynamic: frozenset = self.dynamic) -> Any:
+                if attribute in _dynamic:  # a static value has no writer to wait for
+                    read.add((entity, attribute))
                 return _get(entity, attribute)
 
         if action.pre is not None and not action.pre.fn(env, get):
@@ -433,18 +437,18 @@ class Search:
                 if gap > selected.rule.max_wait:
                     added += selected.penalty(agent, kind) * (gap - selected.rule.max_wait) * rate
         end = start + length
-        put = child.set
-        for key, mark in marks.items():
+        delta = child.delta  # State.set without the call, for a hot loop
+        for (entity, attribute), mark in marks.items():
             if mark is None:
-                put(key[0], (WRITER, key[1]), (None, 0.0, end))
+                delta[(entity, (WRITER, attribute))] = (None, 0.0, end)
             elif mark[2] < end:
-                put(key[0], (WRITER, key[1]), (mark[0], mark[1], end))
+                delta[(entity, (WRITER, attribute))] = (mark[0], mark[1], end)
         for entity, attribute in written:  # after the reads: a write clears the readers
-            put(entity, (WRITER, attribute), (agent, end, 0.0))
-        put(agent, (FREE,), end)
+            delta[(entity, (WRITER, attribute))] = (agent, end, 0.0)
+        delta[(agent, (FREE,))] = end
         makespan = get(None, (END,)) or 0.0
         if end > makespan:
-            put(None, (END,), end)
+            delta[(None, (END,))] = end
             added += (end - makespan) * self.duration_rate
         return added
 
