@@ -10,11 +10,12 @@ closure or a constant, the agent's rates by agent.  The state is read through
 its two dicts directly (one call per read, not two), and the values the action
 reads are recorded only when a rule needs them.
 
-The relations are kept as the plan grows, in the child state under keys no
-domain has: for each value read or written, ``(entity, attribute, WRITER)``
-maps to who wrote it last (None: nobody yet), when that action ends and when
-the last action that read it since ends; ``(agent, (FREE,))`` to when the
-agent is free; :data:`END_KEY` to the makespan.  An action starts when the
+The relations are kept as the plan grows, in one small dict per state (under
+:data:`TIMES_KEY`, copied from its parent's: one lookup a read, where entries
+of the state itself would take two): for each value read or written,
+``(entity, attribute)`` maps to who wrote it last (None: nobody yet), when
+that action ends and when the last action that read it since ends; each
+agent's name to when it is free; None to the makespan.  An action starts when the
 writers of what it reads, the readers and the writer of what it writes, and
 its agent's previous action are over.
 """
@@ -28,11 +29,9 @@ from planner.domain import SOLE_AGENT, Action, ConditionalEffect, Problem
 from planner.evaluate import Evaluator
 from planner.state import State
 
-WRITER, FREE, END = "writer", "free", "end"
-"""Tag the state entries that time a plan as it grows."""
-_WRITER = (WRITER,)
-_FREE = (FREE,)
-END_KEY = (None, (END,))
+TIMES_KEY = (None, ("times",))
+"""The state entry that times the plan so far (an attribute no domain has)."""
+_NO_TIMES: dict = {}
 _MISSING = object()
 
 Step = Callable[[tuple, State, float], tuple | None]
@@ -147,15 +146,16 @@ class Stepper:
             floor += price * rate
             if not timed:
                 return child, env, price, length, agent, floor
+            times = delta.get(TIMES_KEY, missing)
+            if times is missing:
+                times = base.get(TIMES_KEY, _NO_TIMES)
+            new = dict(times)
+            child.delta[TIMES_KEY] = new  # State.set without the call: no domain has it
             added = 0.0
             start = 0.0
             marks = {}
             for key in read:
-                key += _WRITER
-                mark = delta.get(key, missing)
-                if mark is missing:
-                    mark = base.get(key)
-                marks[key] = mark
+                mark = marks[key] = times.get(key)
                 if mark is not None:
                     writer = mark[0]
                     if writer is not None and writer != agent:
@@ -164,21 +164,13 @@ class Stepper:
                     if mark[1] > start:
                         start = mark[1]
             for key in written:
-                key += _WRITER
-                mark = marks.get(key, missing)
-                if mark is missing:
-                    mark = delta.get(key, missing)
-                    if mark is missing:
-                        mark = base.get(key)
+                mark = marks[key] if key in marks else times.get(key)
                 if mark is not None:
                     if mark[1] > start:
                         start = mark[1]
                     if mark[2] > start:
                         start = mark[2]
-            free_key = (agent, _FREE)
-            free = delta.get(free_key, missing)
-            if free is missing:
-                free = base.get(free_key)
+            free = times.get(agent)
             if free is not None:
                 if free > start:
                     start = free
@@ -187,21 +179,17 @@ class Stepper:
                     if gap > longest:
                         added += penalty * (gap - longest) * wait_rate
             end = start + length
-            cdelta = child.delta  # State.set without the call: no domain has these keys
             for key, mark in marks.items():
                 if mark is None:
-                    cdelta[key] = (None, 0.0, end)
+                    new[key] = (None, 0.0, end)
                 elif mark[2] < end:
-                    cdelta[key] = (mark[0], mark[1], end)
+                    new[key] = (mark[0], mark[1], end)
             for key in written:  # after the reads: a write clears the readers
-                cdelta[key + _WRITER] = (agent, end, 0.0)
-            cdelta[free_key] = end
-            makespan = delta.get(END_KEY, missing)
-            if makespan is missing:
-                makespan = base.get(END_KEY)
-            makespan = makespan or 0.0
+                new[key] = (agent, end, 0.0)
+            new[agent] = end
+            makespan = times.get(None) or 0.0
             if end > makespan:
-                cdelta[END_KEY] = end
+                new[None] = end
                 added += (end - makespan) * duration_rate
             return child, env, price, length, agent, floor + added
 
