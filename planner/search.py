@@ -342,7 +342,8 @@ class Search:
         """The search node after ``action``, or None when it cannot be done (or dooms
         the plan: goal protection).  ``floor`` is the partial plan's score so far: what
         no completion of it can go below."""
-        done = self.stepper.step(action)(args, state, floor)
+        step = self.stepper.steps.get(action.name) or self.stepper.step(action)
+        done = step(args, state, floor)
         if done is None:
             self._fail(parent, _label(action.name, args),
                        f"precondition false: {action.pre.text}")  # type: ignore[union-attr]

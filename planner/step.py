@@ -103,7 +103,7 @@ class Stepper:
             env = dict(zip(names, args, strict=True))
             delta, base = state.delta, state.base
             if timed:  # links and times need what the action reads and writes
-                read: dict[tuple, None] = {}
+                read: dict[tuple, Any] = {}
 
                 def get(entity: str, attribute: Any) -> Any:
                     key = (entity, attribute)
@@ -153,9 +153,8 @@ class Stepper:
             child.delta[TIMES_KEY] = new  # State.set without the call: no domain has it
             added = 0.0
             start = 0.0
-            marks = {}
-            for key in read:
-                mark = marks[key] = times.get(key)
+            for key in read:  # what it read, and now when (same keys: no resizing)
+                mark = read[key] = times.get(key)
                 if mark is not None:
                     writer = mark[0]
                     if writer is not None and writer != agent:
@@ -164,7 +163,7 @@ class Stepper:
                     if mark[1] > start:
                         start = mark[1]
             for key in written:
-                mark = marks[key] if key in marks else times.get(key)
+                mark = read[key] if key in read else times.get(key)
                 if mark is not None:
                     if mark[1] > start:
                         start = mark[1]
@@ -179,7 +178,7 @@ class Stepper:
                     if gap > longest:
                         added += penalty * (gap - longest) * wait_rate
             end = start + length
-            for key, mark in marks.items():
+            for key, mark in read.items():
                 if mark is None:
                     new[key] = (None, 0.0, end)
                 elif mark[2] < end:
