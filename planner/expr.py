@@ -600,6 +600,12 @@ def _compare(op: str, left: _Node, right: _Node, src: str) -> Callable:
             return ((lambda env, get: f(env, get) == env[v]) if op == "==" else
                     (lambda env, get: f(env, get) != env[v]))
         g = right.fn
+        if left.path is not None and right.path is not None:  # var.a == var2.b: one closure
+            (var, attr), (var2, attr2) = left.path, right.path
+            test = operator.eq if op == "==" else operator.ne
+            return lambda env, get: test(
+                get(e, attr) if (e := env[var]).__class__ is str else f(env, get),
+                get(e2, attr2) if (e2 := env[var2]).__class__ is str else g(env, get))
         return ((lambda env, get: f(env, get) == g(env, get)) if op == "==" else
                 (lambda env, get: f(env, get) != g(env, get)))
     order = {"<": operator.lt, "<=": operator.le, ">": operator.gt, ">=": operator.ge}[op]
