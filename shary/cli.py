@@ -150,18 +150,9 @@ def _escape(text: str) -> str:
 def cmd_validate(args: argparse.Namespace) -> int:
     """Check files (by default the built-in ones): one report per file, each problem once,
     never ``ok`` for a file whose dependencies fail (see :mod:`shary.filekinds`)."""
-    import planner
-    from shary.filekinds import validate
-    from shary.io.recipes import builtin_library_files
+    from shary.filekinds import builtin_files, validate
 
-    paths = list(args.paths)
-    if not paths:
-        from sim.scenario import builtin_profiles, builtin_scenarios
-
-        paths = (builtin.files("schemes") + builtin_library_files()
-                 + planner.builtin_domains() + planner.builtin_problems()
-                 + builtin_profiles() + list(builtin_scenarios().values()))
-    reports = validate(paths)
+    reports = validate(list(args.paths) or builtin_files())
     for report in reports:
         _print_problems(report.problems)
     bad = [r for r in reports if not r.ok]

@@ -25,11 +25,11 @@ from shary.acts import ActRegistry, builtin_acts
 from shary.io.recipes import load_library
 from shary.recipes import RecipeLibrary
 from userfiles.errors import FileError
-from userfiles.reader import Reader, open_checked, read, spelled
+from userfiles.reader import Reader, read, spelled
 from userfiles.schema import did_you_mean, validator
 
 from .humans import HUMAN_PLACES, Profile, profile_from
-from .world import BOTTLES, FOOTPRINTS, FURNITURE, PLACES
+from .room import BOTTLES, FOOTPRINTS, FURNITURE, PLACES
 
 HERE = Path(__file__).resolve().parent
 SCENARIOS_DIR = HERE / "scenarios"
@@ -119,25 +119,17 @@ def _schema(name: str) -> Draft202012Validator:
     return validator(SCHEMAS_DIR, name)
 
 
-@cache
-def _builtin_profile(name: str) -> Reader:
-    """A built-in profile, read and shape-checked once (a scenario of fifty people
-    naming the same profile reads it once)."""
-    return open_checked(PROFILES_DIR / f"{name}.yaml", _schema("profile"))
-
-
 def load_profile(name: str | Path, things: set[str] = frozenset(),
                  acts: set[str] = frozenset(), atomic: set[str] = frozenset()) -> Profile:
     """A profile, by name (``sim/profiles/NAME.yaml``) or file, checked; the names, acts
     and atomic tasks given (when given) are what its targets and answers may name."""
-    if isinstance(name, Path):
-        reader = open_checked(name, _schema("profile"))
-    else:
-        reader = _builtin_profile(name)
-        reader = Reader(reader.located)
-    _check_profile(reader, (), reader.data, things, acts, atomic)
-    reader.done()
-    return profile_from(Path(reader.file).stem, reader.data)
+    path = name if isinstance(name, Path) else PROFILES_DIR / f"{name}.yaml"
+
+    def meaning(reader: Reader) -> Profile:
+        _check_profile(reader, (), reader.data, things, acts, atomic)
+        return profile_from(path.stem, reader.data)
+
+    return read(path, _schema("profile"), meaning)
 
 
 def load_scenario(path: str | Path, *, acts: ActRegistry | None = None) -> Scenario:
@@ -159,6 +151,8 @@ class _Reading:
         self.reader = reader
         self.problem = reader.problem
         self.extra_acts = acts
+        self.profiles: dict[str, Profile | None] = {}
+        """Named profiles read so far: fifty people naming one profile read it once."""
 
     def library(self) -> tuple[RecipeLibrary | None, list[Path]]:
         """The recipe library the scenario runs with, or None when a file of it is bad
@@ -289,10 +283,14 @@ class _Reading:
                 problem(("people", name, "profile"), f"unknown profile {raw!r}"
                         f"{did_you_mean(raw, names)}; profiles: {', '.join(names)}")
                 return None
-            try:
-                profile = load_profile(raw, things, acts, atomic)
-            except FileError as err:
-                self.reader.problems.extend(err.problems)
+            if raw not in self.profiles:
+                try:
+                    self.profiles[raw] = load_profile(raw, things, acts, atomic)
+                except FileError as err:
+                    self.reader.problems.extend(err.problems)
+                    self.profiles[raw] = None
+            profile = self.profiles[raw]
+            if profile is None:
                 return None
         else:
             _check_profile(self.reader, ("people", name, "profile"), raw, things, acts, atomic)

@@ -37,7 +37,7 @@ from jsonschema import Draft202012Validator
 from userfiles import yamlsafe
 from userfiles.errors import FileError, Problem
 from userfiles.limits import MAX_DURATION, seconds, show_seconds
-from userfiles.schema import check
+from userfiles.schema import check, size_limits
 
 T = TypeVar("T")
 
@@ -156,10 +156,17 @@ def spelled(path: str | os.PathLike[str], *, like: str | os.PathLike[str] = "") 
         return str(full)
 
 
+def checked(path: str | os.PathLike[str], schema: Draft202012Validator) -> Reader:
+    """Steps 1 and 2 of the pipeline, for a format that reads several files together
+    (a recipe library): the file loaded safely with the schema's size limits, and its
+    shape problems recorded on the reader rather than raised."""
+    located = yamlsafe.load_file(path, sizes=size_limits(schema))
+    return Reader(located, check(located, schema))
+
+
 def open_checked(path: str | os.PathLike[str], schema: Draft202012Validator) -> Reader:
     """Steps 1 and 2 of the pipeline: a :class:`Reader` over a file whose shape is right."""
-    located = yamlsafe.load_file(path)
-    reader = Reader(located, check(located, schema))
+    reader = checked(path, schema)
     reader.done()
     return reader
 
