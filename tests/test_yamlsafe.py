@@ -134,7 +134,7 @@ def _lines(text: str) -> list[str]:
     return lines[:-1] if len(lines) > 1 and lines[-1] == "" else lines
 
 
-@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.one_of(st.binary(max_size=300), _YAMLISH.map(lambda t: t.encode("utf-8"))))
 def test_any_bytes_load_or_refuse_in_place(raw: bytes) -> None:
     """Any bytes: a located value, or a FileError whose every position is in the file
