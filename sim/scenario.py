@@ -36,6 +36,8 @@ SCENARIOS_DIR = HERE / "scenarios"
 PROFILES_DIR = HERE / "profiles"
 SCHEMAS_DIR = HERE / "schemas"
 DEFAULT_TIMEOUT = 180.0
+PLANNING_DOMAIN = "living-room"
+"""The domain a run's planner-backed recipes plan in."""
 
 
 @dataclass(frozen=True)
@@ -119,6 +121,26 @@ def _schema(name: str) -> Draft202012Validator:
     return validator(SCHEMAS_DIR, name)
 
 
+_WORD_VALUED = frozenset({"type", "color"})
+"""Predicates whose object is a word (a class, a colour), not a thing of the scenario."""
+
+
+@cache
+def _simulated_atomic() -> frozenset[str]:
+    """The atomic tasks the simulated robot performs: the built-in library's (each has
+    an executor in :mod:`sim.executors`; tests/test_validation.py holds them together)."""
+    return frozenset(load_library().atomic)
+
+
+@cache
+def _domain_attributes() -> frozenset[str]:
+    """The attributes of the planning domain runs use: the run states them as facts."""
+    import planner
+
+    domain = planner.load_domain(PLANNING_DOMAIN)
+    return frozenset(a for kind in domain.types.values() for a in kind.attributes)
+
+
 def load_profile(name: str | Path, things: set[str] = frozenset(),
                  acts: set[str] = frozenset(), atomic: set[str] = frozenset()) -> Profile:
     """A profile, by name (``sim/profiles/NAME.yaml``) or file, checked; the names, acts
@@ -177,6 +199,11 @@ class _Reading:
                 where = ("recipes", index) if index is not None else ("recipes",)
                 self.problem(where, f"depends on {file}, which has errors")
             return None, files
+        performs = _simulated_atomic()
+        for name in sorted(set(library.atomic) - performs):
+            self.problem(("recipes",), f"the atomic task {name!r} that the recipe files declare "
+                         "has no executor in the simulation, so a run would fail at it (the "
+                         f"simulated robot performs: {', '.join(sorted(performs))})", key=True)
         return library, files
 
     def scenario(self) -> Scenario:
@@ -209,6 +236,11 @@ class _Reading:
         objects = {obj: self.thing(obj, spec, names) for obj, spec in objects_spec.items()}
         goals = [self.goal(i, spec, known_tasks, everyone, things)
                  for i, spec in enumerate(data.get("goals") or [])]
+        timeout = reader.duration(("timeout",), data.get("timeout", DEFAULT_TIMEOUT))
+        for i, goal in enumerate(goals):
+            if goal.at >= timeout > 0:
+                problem(("goals", i, "at"), f"the goal at {goal.at:g}s comes after the run's "
+                        f"timeout ({timeout:g}s): it would never be pursued")
         noise = data.get("noise") or {}
         lost = []
         for i, e in enumerate(noise.get("lost") or []):
@@ -226,6 +258,9 @@ class _Reading:
                 problem(("noise", "flicker", predicate), f"unknown predicate {predicate!r}"
                         f"{did_you_mean(predicate, predicates)}", key=True)
         raw_expect = data["expect"]
+        if library is not None:
+            self.facts(raw_expect, set(library.predicates), things | set(PLACES),
+                       {key for spec in people_spec.values() for key in spec.get("kind") or {}})
         for key in ("acts", "no-acts"):
             for i, act in enumerate(raw_expect.get(key) or []):
                 if acts and act not in acts:
@@ -263,8 +298,32 @@ class _Reading:
             robot.get("model", "jido"), robot_at, tuple(p for p in people if p is not None),
             objects, tuple(recipes), tuple(goals), dict(noise.get("flicker") or {}),
             tuple(lost), reader.duration(("noise", "hold"), noise.get("hold", 0.5)),
-            tuple(faults), reader.duration(("timeout",), data.get("timeout", DEFAULT_TIMEOUT)),
+            tuple(faults), timeout,
             expect, library)
+
+    def facts(self, expect: dict[str, Any], predicates: set[str], names: set[str],
+              attributes: set[str]) -> None:
+        """Expected facts name what exists: a known predicate (the library's, or an
+        attribute the run sets from the planning domain or the people's ``kind``), a
+        subject of the scenario and, for a relation, an object of the scenario."""
+        domain: set[str] | None = None
+        for key in ("facts", "no-facts"):
+            for i, (subject, predicate, value) in enumerate(expect.get(key) or []):
+                where = ("expect", key, i)
+                if predicate not in predicates | attributes:
+                    if domain is None:
+                        domain = _domain_attributes()
+                    if predicate not in domain:
+                        known = predicates | attributes | domain
+                        self.problem(where + (1,), f"unknown predicate {predicate!r}"
+                                     f"{did_you_mean(str(predicate), known)}")
+                if subject not in names:
+                    self.problem(where + (0,), f"{subject!r} names nothing in this scenario"
+                                 f"{did_you_mean(str(subject), names)}")
+                if predicate in predicates - _WORD_VALUED and isinstance(value, str) \
+                        and value not in names:
+                    self.problem(where + (2,), f"{value!r} names nothing in this scenario"
+                                 f"{did_you_mean(value, names)}")
 
     def person(self, name: str, spec: dict[str, Any], robot: str, things: set[str],
                acts: set[str], atomic: set[str]) -> Person | None:

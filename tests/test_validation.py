@@ -1,4 +1,5 @@
-"""The meaning checks of scheme files: each mistake named, placed, and all reported at once."""
+"""What ``shary validate`` checks: the meaning of scheme files (each mistake named, placed,
+and all reported at once), and which files it checks by default."""
 
 from __future__ import annotations
 
@@ -29,6 +30,28 @@ def test_builtin_files_are_valid(shary):
     status, out, err = shary("validate")
     assert status == 0, err
     assert "give-object.yaml" in out and "acts.yaml" in out
+
+
+def test_builtin_files_come_from_the_file_kinds():
+    """``shary validate`` alone checks what each registered kind lists as built-in: the
+    engine's kinds and those sim registers by entry point (scenarios, profiles)."""
+    from shary.filekinds import builtin_files, kinds
+
+    by_kind = {kind.name: kind.builtins() for kind in kinds()}
+    assert {"acts", "scheme", "recipes", "domain", "problem", "scenario", "profile"} <= {
+        name for name, files in by_kind.items() if files}
+    assert [p.stem for p in by_kind["acts"]] == ["acts"]
+    assert builtin_files()[0].stem == "acts"  # acts first: the others use them
+
+
+def test_simulated_robot_performs_the_builtin_atomic_tasks():
+    """Scenarios are refused when their recipes declare an atomic task beyond the
+    built-in ones (sim/scenario.py): that holds while each built-in one has an executor."""
+    from shary.io.recipes import load_library
+    from sim.executors import RobotExecutors
+
+    for name in load_library().atomic:
+        assert callable(getattr(RobotExecutors, "_" + name.replace("-", "_"), None)), name
 
 
 def test_a_good_file_passes(shary, write):
