@@ -196,3 +196,19 @@ def test_act_types_are_not_act_names(shary, write):
 def test_missing_file_is_a_clean_error(shary, tmp_path):
     ((_, _, msg),) = _messages(shary, tmp_path / "absent.yaml")
     assert "cannot read file" in msg
+
+
+def test_reading_a_scenario_loads_no_physics():
+    """Validating a scenario reads the room's data, not the PyBullet world (the imports
+    were most of the time of a refusal)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    scenario = Path(__file__).resolve().parents[1] / "sim" / "scenarios" / "give-bottle.yaml"
+    code = ("import sys\nfrom shary.cli import main\n"
+            f"assert main(['validate', {str(scenario)!r}]) == 0\n"
+            "print(sorted(m for m in ('pybullet', 'numpy') if m in sys.modules))\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True)
+    assert done.stdout.strip().endswith("[]"), done.stdout + done.stderr
