@@ -152,3 +152,18 @@ def test_any_bytes_load_or_refuse_in_place(raw: bytes) -> None:
                 assert problem.file == str(path)
                 assert 1 <= problem.line <= len(lines), (problem, len(lines))
                 assert 1 <= problem.col <= len(lines[problem.line - 1]) + 1, problem
+
+
+def test_positions_inside_strings():
+    """An expression's error lands on its column when the string is written as it reads;
+    at the string's start when escapes or folding would make columns lie."""
+    located = yamlsafe.load_text('a: x + y\nb: "x + y"\nc: "x \\" + y"\nd: >\n  x +\n  y\n')
+
+    def where(key: str, offset: int) -> tuple[int, int]:
+        problem = located.problem_inside((key,), offset, "m")
+        return problem.line, problem.col
+
+    assert where("a", 4) == (1, 8)
+    assert where("b", 4) == (2, 9)
+    assert where("c", 5) == (3, 4)
+    assert where("d", 2) == (4, 4)

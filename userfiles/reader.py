@@ -72,6 +72,11 @@ class Reader:
         """Record a problem at the value (or, with ``key``, the key) at path ``where``."""
         self.problems.append(self.located.problem(where, message, key=key))
 
+    def problem_inside(self, where: tuple, offset: int, message: str) -> None:
+        """Record a problem ``offset`` characters into the string at ``where`` (the
+        column of an error in an expression written as a YAML string)."""
+        self.problems.append(self.located.problem_inside(where, offset, message))
+
     def duration(self, where: tuple, value: Any, *, maximum: float = MAX_DURATION,
                  what: str = "duration") -> float:
         """Seconds in a duration (see :func:`seconds`), at most ``maximum`` (a day)."""

@@ -91,6 +91,9 @@ class Located:
     data: Any
     marks: dict[Path, Mark] = field(default_factory=dict)
     key_marks: dict[Path, Mark] = field(default_factory=dict)
+    inline: dict[Path, int] = field(default_factory=dict)
+    """For each string written on one line: how many characters (a quote) come before
+    its text, so that a position inside the text (an expression's error) is exact."""
     problems: list[Problem] = field(default_factory=list)
     """Problems that did not stop loading (a duplicate key keeps its first value):
     the file's checker reports them with its own, so that all come at once."""
@@ -109,6 +112,14 @@ class Located:
     def problem(self, path: Path, message: str, *, key: bool = False) -> Problem:
         line, col = self.key_at(path) if key else self.at(path)
         return Problem(self.file, line, col, message)
+
+    def problem_inside(self, path: Path, offset: int, message: str) -> Problem:
+        """A problem ``offset`` characters into the string at ``path`` (at the string's
+        start when it spans lines or holds escapes, where columns would not add up)."""
+        line, col = self.at(path)
+        before = self.inline.get(tuple(path))
+        return Problem(self.file, line, col + before + offset if before is not None else col,
+                       message)
 
 
 @dataclass(frozen=True)
@@ -332,6 +343,11 @@ class _Converter:
             return [self.convert(item, path + (i,), depth + 1)
                     for i, item in enumerate(node.value)]
         if node.tag in _PLAIN_SCALARS:
+            quote = 1 if node.style in ("'", '"') else 0
+            width = node.end_mark.column - node.start_mark.column
+            if node.style in (None, "", "'", '"') and node.start_mark.line == node.end_mark.line \
+                    and width == len(node.value) + 2 * quote:
+                self.located.inline[path] = quote  # as written: no escape, no folding
             return self._scalar(node)
         return node.value  # e.g. a timestamp: kept as the text the user wrote
 
