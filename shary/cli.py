@@ -204,18 +204,12 @@ def cmd_run(args: argparse.Namespace) -> int:
     except KeyError as err:
         _err.print(f"[bold red]error:[/bold red] {_escape(err.args[0])}")
         return EXIT_BAD_FILE
+    from sim.narration import ConsoleReport
+
     out = args.out or Path("runs") / path.stem
-    colours = {}
-
-    def report(t: float, who: str, text: str) -> None:
-        if args.quiet:
-            return
-        colour = colours.setdefault(who, ["cyan", "magenta", "green", "yellow"][len(colours) % 4])
-        _out.print(f"[dim]{t:7.1f}s[/dim]  [{colour}]{_escape(who):<8}[/{colour}] {_escape(text)}")
-
     try:
         result = run_scenario(path, seed=args.seed, out=out, snapshots=args.snapshots,
-                              gui=args.gui, report=report)
+                              gui=args.gui, report=None if args.quiet else ConsoleReport(_out))
     except RuntimeError as err:
         _err.print(f"[bold red]error:[/bold red] {_escape(str(err))}")
         return 1
