@@ -19,6 +19,7 @@ from rich.console import Console
 from shary import builtin
 from userfiles import yamlsafe
 from userfiles.errors import FileError, Problem
+from userfiles.outputs import OutputError, output_file, write_output
 from userfiles.reader import allow_paths
 
 EXIT_BAD_FILE = 2
@@ -35,6 +36,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(args.func(args) or 0)
     except FileError as err:
         _print_problems(err.problems)
+        return EXIT_BAD_FILE
+    except OutputError as err:  # PATH: error: … (no line: an output has none)
+        _err.print(f"[bold]{_escape(err.path)}:[/bold] [bold red]error:[/bold red] "
+                   f"{_escape(err.message)} ({_escape(err.hint)})")
         return EXIT_BAD_FILE
     except KeyboardInterrupt:
         return 130
@@ -232,38 +237,56 @@ _WAIT = re.compile(r"^[0-9]+(\.[0-9]+)?(ms|s|min|h)$")
 def cmd_simulate(args: argparse.Namespace) -> int:
     from shary.clock import SimulatedClock
     from shary.compiler import compile_scheme
-    from shary.instance import SchemeListener
+    from shary.instance import LivelockError, SchemeListener
     from shary.io.schemes import load_scheme
     from shary.model import parse_duration
+    from userfiles.schema import did_you_mean
 
     scheme = load_scheme(args.scheme)
+    compiled = compile_scheme(scheme)
+    unknown = [w for w in args.script if not _WAIT.match(w) and not compiled.can_take(w)]
+    for word in unknown:
+        _err.print(f"[bold red]error:[/bold red] no state of {scheme.name} takes the event "
+                   f"{_escape(word)!r}{_escape(did_you_mean(word, compiled.descriptors()))}")
+    if unknown:
+        return EXIT_BAD_FILE
     clock = SimulatedClock()
 
+    def who(instance) -> str:  # an invoked child's states read "helper/ask"
+        return f"{instance.invoke_path}/" if instance.parent is not None else ""
+
     class Trace(SchemeListener):
+        def invoking(self, instance, state, invoke):  # type: ignore[override]
+            return self  # trace the invoked children too
+
         def entered(self, instance, state, event):  # type: ignore[override]
             act = f"  [cyan]{state.act} ({state.act_type.name})[/cyan]" if state.act_type else ""
-            _out.print(f"{clock.now():8.2f}s  enter  {state.name}{act}")
+            _out.print(f"{clock.now():8.2f}s  enter  {who(instance)}{state.name}{act}")
 
         def exited(self, instance, state, event):  # type: ignore[override]
-            _out.print(f"{clock.now():8.2f}s  exit   {state.name}")
+            _out.print(f"{clock.now():8.2f}s  exit   {who(instance)}{state.name}")
 
         def logged(self, instance, text):  # type: ignore[override]
-            _out.print(f"{clock.now():8.2f}s  log    {_escape(text)}")
+            _out.print(f"{clock.now():8.2f}s  log    {who(instance)}{_escape(text)}")
 
         def finished(self, instance, state):  # type: ignore[override]
-            _out.print(f"{clock.now():8.2f}s  [bold]finished in {state.name}[/bold]")
+            _out.print(f"{clock.now():8.2f}s  [bold]{who(instance)}finished in "
+                       f"{state.name}[/bold]")
 
     _out.print(f"[bold]{scheme.name}[/bold]: {_escape(scheme.doc.strip())}")
-    instance = compile_scheme(scheme).start(clock=clock, listener=Trace())
-    for word in args.script:
-        if _WAIT.match(word):
-            _out.print(f"{clock.now():8.2f}s  [dim]wait {word}[/dim]")
-            clock.advance(parse_duration(word))
-        else:
-            _out.print(f"{clock.now():8.2f}s  [yellow]<- {_escape(word)}[/yellow]")
-            instance.send(word)
-        if instance.finished:
-            break
+    try:
+        instance = compiled.start(clock=clock, listener=Trace())
+        for word in args.script:
+            if _WAIT.match(word):
+                _out.print(f"{clock.now():8.2f}s  [dim]wait {word}[/dim]")
+                clock.advance(parse_duration(word))
+            else:
+                _out.print(f"{clock.now():8.2f}s  [yellow]<- {_escape(word)}[/yellow]")
+                instance.send(word)
+            if instance.finished:
+                break
+    except LivelockError as err:
+        raise FileError([err.problem]) from None
     _out.print(f"configuration: {', '.join(instance.configuration)}")
     return 0
 
@@ -275,6 +298,7 @@ def cmd_render_scheme(args: argparse.Namespace) -> int:
     from shary.display import render_scheme
     from shary.io.schemes import load_scheme
 
+    output_file(args.output)
     scheme = load_scheme(args.scheme)
     active = [s for s in args.active.split(",") if s]
     unknown = [s for s in active if s not in scheme.states]
@@ -298,14 +322,18 @@ def _draw(draw: Any, out: Path, detail: str = "", quiet: bool = False) -> int:
 
 
 def cmd_render_tree(args: argparse.Namespace) -> int:
-    from shary.display import render_tree
-    from shary.log import read_events
-    from shary.tasktree import TaskTree
+    from shary.display import TEXT_SUFFIXES, render_tree
+    from shary.log import end_time
+    from shary.tasktree import MAX_DRAWN_NODES, replay_log
 
-    events = read_events(args.log)
-    tree = TaskTree.replay(events, args.at)
-    end = events[-1].time if events else 0.0
-    when = f"t = {args.at:g} s" if args.at is not None else f"end (t = {end:g} s)"
+    output_file(args.output)
+    tree = replay_log(args.log, args.at)
+    when = f"t = {args.at:g} s" if args.at is not None else f"end (t = {end_time(args.log):g} s)"
+    if len(tree) > MAX_DRAWN_NODES and args.output.suffix.lower() not in TEXT_SUFFIXES:
+        raise FileError([Problem(str(args.log), 1, 1, (
+            f"the task tree at {when} has {len(tree)} nodes; shary lays out at most "
+            f"{MAX_DRAWN_NODES} (draw an earlier time with --at, or write DOT text with "
+            "-o tree.dot)"))])
     return _draw(lambda: render_tree(tree, args.output, title=f"{args.log.name} at {when}"),
                  args.output, f" ({len(tree)} nodes)")
 
@@ -321,6 +349,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
     if args.render and args.output is None:
         _err.print("[bold red]error:[/bold red] --render needs -o OUT")
         return EXIT_BAD_FILE
+    if args.output is not None:
+        output_file(args.output)
     if args.hddl:
         problem = planner.load_hddl(args.domain, args.problem)
         domain = problem.domain
@@ -427,12 +457,8 @@ def _print_plan(problem, result, errors) -> None:  # type: ignore[no-untyped-def
 def cmd_import_scxml(args: argparse.Namespace) -> int:
     from shary.io.scxml import import_scxml
 
-    text = import_scxml(args.source)
-    try:
-        args.output.write_text(text, encoding="utf-8")
-    except OSError as err:
-        _err.print(f"[bold red]error:[/bold red] cannot write {args.output}: {err.strerror}")
-        return 1
+    output_file(args.output, inputs=[args.source])
+    write_output(args.output, import_scxml(args.source))
     _out.print(f"wrote {_escape(str(args.output))}")
     return 0
 

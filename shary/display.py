@@ -31,6 +31,7 @@ import graphviz
 from planner.display import text_width
 from shary.model import COMPOUND, FINAL, HISTORY, PARALLEL, Scheme, State, Transition
 from shary.tasktree import ACT, TASK, TaskTree
+from userfiles.outputs import write_output
 
 DOT_FORMATS = {".svg": "svg", ".png": "png"}
 TEXT_SUFFIXES = (".dot", ".gv")
@@ -87,7 +88,7 @@ def render_dot(source: str, out: Path) -> None:
     """
     suffix = out.suffix.lower()
     if suffix in TEXT_SUFFIXES:
-        out.write_text(source, encoding="utf-8")
+        write_output(out, source)
         return
     if suffix not in DOT_FORMATS:
         raise ValueError(f"cannot draw to {out.name!r}: use one of {', '.join(SUFFIXES)}")
@@ -105,7 +106,7 @@ def render_dot(source: str, out: Path) -> None:
     if suffix == ".svg":
         image = image.replace(f'font-family="{_FONT}"'.encode(),
                               f'font-family="{FONT_FALLBACKS}"'.encode())
-    out.write_bytes(image)
+    write_output(out, image)
 
 
 def edge_label(text: str) -> str:
@@ -133,10 +134,9 @@ def render_scheme(scheme: Scheme, out: Path, active: Iterable[str] = ()) -> None
     (.mmd, .mermaid) or a Markdown page holding a Mermaid block (.md)."""
     suffix = out.suffix.lower()
     if suffix in MERMAID_SUFFIXES:
-        out.write_text(scheme_mermaid(scheme, active), encoding="utf-8")
+        write_output(out, scheme_mermaid(scheme, active))
     elif suffix == MARKDOWN_SUFFIX:
-        out.write_text(f"# {scheme.name}\n\n```mermaid\n{scheme_mermaid(scheme, active)}```\n",
-                       encoding="utf-8")
+        write_output(out, f"# {scheme.name}\n\n```mermaid\n{scheme_mermaid(scheme, active)}```\n")
     else:
         render_dot(scheme_dot(scheme, active), out)
 
@@ -176,6 +176,12 @@ def _act_line(state: State) -> str | None:
     if state.act is None:
         return None
     return f"{state.act} ({state.act_type.name})" if state.act_type else state.act
+
+
+def _invoke_lines(state: State) -> list[str]:
+    """``invokes give-object as ask (autoforward)``: the child schemes a state starts."""
+    return [f"invokes {i.scheme.name}" + (f" as {i.id}" if i.id != state.name else "")
+            + (" (autoforward)" if i.autoforward else "") for i in state.invokes]
 
 
 def _history_mark(state: State) -> str:
@@ -273,6 +279,8 @@ class _SchemeDot:
         act = _act_line(state)
         if act:
             lines.append(f'<FONT POINT-SIZE="10" COLOR="{ACT_COLOUR}">{html.escape(act)}</FONT>')
+        lines += [f'<FONT POINT-SIZE="10">{html.escape(text)}</FONT>'
+                  for text in _invoke_lines(state)]
         lines += [f'<FONT POINT-SIZE="9"><I>{html.escape(text)}</I></FONT>'
                   for text in self._listed(state)]
         if bold:
@@ -384,7 +392,8 @@ class _SchemeMermaid:
             title = f"{_history_mark(state)} {state.name}"
         act = _act_line(state)
         details = [_mermaid_text(line)
-                   for line in ([act] if act else []) + [t.label() for t in _internal(state)]]
+                   for line in ([act] if act else []) + _invoke_lines(state)
+                   + [t.label() for t in _internal(state)]]
         if _is_cluster(state):
             # Mermaid refuses descriptions on composite states: the details join the title.
             self.lines.append(f'{pad}state "{"<br/>".join([_mermaid_text(title), *details])}"'
