@@ -8,12 +8,15 @@ and never imports it.  PyBullet is imported only when a scenario runs.
 from __future__ import annotations
 
 import argparse
+import re
 from pathlib import Path
 from typing import Any
 
 from shary.commands.schemes import first_sentence
 from shary.terminal import add_json_flag, emit_json, error, escape
 from shary.terminal import out as _out
+from userfiles import yamlsafe
+from userfiles.errors import FileError
 
 
 def add_scenarios(sub: argparse._SubParsersAction) -> None:
@@ -53,15 +56,31 @@ def add_run(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=cmd_run)
 
 
+_NAME = re.compile(r"^[A-Za-z0-9_-]+$")
+
+
+def _name_of(path: Path) -> str:
+    """The scenario's name, for the default output folder (``runs/NAME``).
+
+    Only the ``scenario:`` key is read here; :func:`sim.run.run_scenario` checks
+    the whole file (and refuses it, before writing anything, if the name is bad).
+    """
+    try:
+        name = yamlsafe.load_file(path).data.get("scenario")
+    except (FileError, AttributeError):
+        name = None
+    return name if isinstance(name, str) and _NAME.match(name) else path.stem
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     from sim.run import run_scenario
-    from sim.scenario import find_scenario, load_scenario
+    from sim.scenario import find_scenario
 
     try:
         path = find_scenario(args.scenario)
     except KeyError as err:
         return error(err.args[0], json_mode=args.json)
-    out = args.out or Path("runs") / load_scenario(path).name
+    out = args.out or Path("runs") / _name_of(path)
     colours: dict[str, str] = {}
 
     def report(t: float, who: str, text: str) -> None:
@@ -91,3 +110,36 @@ def cmd_run(args: argparse.Namespace) -> int:
                + (f" and {len(result.outputs['snapshots'].split(', '))} snapshots"
                   if "snapshots" in result.outputs else "") + "[/dim]")
     return 0 if result.passed else 1
+
+
+class _Scenarios:
+    """Scenario files, for ``shary validate`` (entry point ``shary.filekinds: scenario``)."""
+
+    def builtin_files(self) -> list[Path]:
+        from sim.scenario import builtin_scenarios
+
+        return list(builtin_scenarios().values())
+
+    def check(self, path: Path, acts: set[str]) -> None:
+        """A scenario is checked with the recipes it names, as ``shary run`` reads it."""
+        from sim.run import load
+
+        load(path)
+
+
+class _Profiles:
+    """People's profiles, for ``shary validate`` (entry point ``shary.filekinds: profile``)."""
+
+    def builtin_files(self) -> list[Path]:
+        from sim.scenario import builtin_profiles
+
+        return builtin_profiles()
+
+    def check(self, path: Path, acts: set[str]) -> None:
+        from sim.scenario import load_profile
+
+        load_profile(path, acts=acts)
+
+
+SCENARIO = _Scenarios()
+PROFILE = _Profiles()

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import argparse
+from importlib import metadata
 from pathlib import Path
+from typing import Protocol
 
 from shary import builtin
 from shary.acts import ActRegistry, builtin_acts, load_acts
@@ -24,6 +26,37 @@ from userfiles.errors import FileError, Problem
 EXIT_BAD_FILE = EXIT_BAD_INPUT
 
 
+KINDS = "shary.filekinds"
+"""The entry-point group of the kinds of user files other packages check (the simulator's
+scenarios and profiles): the name is the file's top key, the value a :class:`FileKind`."""
+
+
+class FileKind(Protocol):
+    """A kind of user file that another package knows how to check."""
+
+    def builtin_files(self) -> list[Path]:
+        """The files of this kind that ship with the package (``shary validate`` alone)."""
+
+    def check(self, path: Path, acts: set[str]) -> None:
+        """Raise :class:`FileError` with every problem of the file; ``acts`` are the known acts."""
+
+
+def registered_kinds() -> dict[str, FileKind | str]:
+    """Kind name -> its checker, or why it cannot be checked (its package is absent)."""
+    kinds: dict[str, FileKind | str] = {}
+    for entry in metadata.entry_points(group=KINDS):
+        where = f"entry point '{entry.name} = {entry.value}'"
+        try:
+            kinds[entry.name] = entry.load()
+        except ModuleNotFoundError as err:
+            kinds[entry.name] = (f"the package '{err.name}' that checks it is not installed "
+                                 f"({where})")
+        except Exception as err:  # noqa: BLE001 -- reported on the files of that kind
+            kinds[entry.name] = (f"it cannot be checked: {where} failed to load "
+                                 f"({type(err).__name__}: {err})")
+    return kinds
+
+
 def add_validate(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("validate", help="check schemes, acts, recipe libraries and Turtle files "
                        "(default: the built-in ones)")
@@ -39,16 +72,17 @@ def cmd_validate(args: argparse.Namespace) -> int:
     from shary.facts import FactDatabase
     from shary.io.recipes import builtin_library_files, load_library
     from shary.io.schemes import parse_scheme
-    from sim.scenario import builtin_profiles, builtin_scenarios
 
+    kinds = registered_kinds()
     paths = list(args.paths) or (builtin.files("schemes") + builtin_library_files()
                                  + planner.builtin_domains() + planner.builtin_problems()
-                                 + builtin_profiles() + list(builtin_scenarios().values()))
+                                 + [f for k in kinds.values() if not isinstance(k, str)
+                                    for f in k.builtin_files()])
     problems: list[Problem] = []
     schemes: list[yamlsafe.Located] = []
     libraries: list[Path] = []
     planning: list[tuple[Path, yamlsafe.Located]] = []
-    simulated: list[tuple[str, Path]] = []
+    other: list[tuple[str, Path, yamlsafe.Located]] = []
     acts: ActRegistry = builtin_acts()
     for path in paths:
         if path.suffix == ".ttl":
@@ -62,7 +96,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
         except FileError as err:
             problems.extend(err.problems)
             continue
-        kind = _kind_of(located)
+        kind = _kind_of(located, kinds)
         if kind == "acts":
             try:
                 acts = acts.extended(load_acts(path))
@@ -74,17 +108,16 @@ def cmd_validate(args: argparse.Namespace) -> int:
             libraries.append(path)
         elif kind in ("domain", "problem"):
             planning.append((path, located))
-        elif kind in ("scenario", "profile"):
-            simulated.append((kind, path))
+        elif kind in kinds:
+            other.append((kind, path, located))
         else:
             problems.extend(located.problems)
             what = "a mapping" if isinstance(located.data, dict) else "expected a mapping"
-            problems.append(located.problem((), f"not a scheme, acts, recipe, domain, "
-                                            f"problem, scenario or profile file: {what} with "
-                                            "'scheme:', 'acts:', 'domain:', 'problem:', "
-                                            "'scenario:', 'profile:', or some of "
-                                            "'predicates:', 'atomic:', 'tasks:', 'recipes:', "
-                                            "'chronicles:'"))
+            names = ", ".join(["scheme", "acts", "recipe", "domain", "problem", *kinds])
+            keys = " ".join(f"'{k}:'," for k in ["scheme", "acts", "domain", "problem", *kinds])
+            problems.append(located.problem((), f"not a {names} file: {what} with {keys} or "
+                                            "some of 'predicates:', 'atomic:', 'tasks:', "
+                                            "'recipes:', 'chronicles:'"))
     conditions = ConditionRegistry.installed()
     for located in schemes:
         try:
@@ -98,8 +131,8 @@ def cmd_validate(args: argparse.Namespace) -> int:
             problems.extend(err.problems)
     for path, located in planning:
         problems.extend(_check_planning(path, located))
-    for kind, path in simulated:
-        problems.extend(_check_simulated(kind, path, acts))
+    for kind, path, located in other:
+        problems.extend(_check_other(kinds[kind], kind, path, located, acts))
     problems.sort()
     print_problems(problems)
     bad = {p.file for p in problems}
@@ -116,16 +149,13 @@ def cmd_validate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _check_simulated(kind: str, path: Path, acts: ActRegistry) -> list[Problem]:
-    """Problems of a scenario (with the recipes it names) or of a people's profile."""
-    from sim.run import load
-    from sim.scenario import load_profile
-
+def _check_other(checker: FileKind | str, kind: str, path: Path, located: yamlsafe.Located,
+                 acts: ActRegistry) -> list[Problem]:
+    """Problems of a file of a kind another package checks (a scenario, a profile)."""
+    if isinstance(checker, str):
+        return [located.problem((kind,), f"a {kind} file: {checker}", key=True)]
     try:
-        if kind == "scenario":
-            load(path)
-        else:
-            load_profile(path, acts=set(acts.vocabulary()))
+        checker.check(path, set(acts.vocabulary()))
     except FileError as err:
         return list(err.problems)
     return []
@@ -136,7 +166,7 @@ def _check_planning(path: Path, located: yamlsafe.Located) -> list[Problem]:
     import planner
 
     try:
-        if _kind_of(located) == "domain":
+        if _kind_of(located, {}) == "domain":
             planner.load_domain(path)
             return []
         name = located.data.get("domain")
@@ -151,7 +181,7 @@ def _check_planning(path: Path, located: yamlsafe.Located) -> list[Problem]:
     return []
 
 
-def _kind_of(located: yamlsafe.Located) -> str | None:
+def _kind_of(located: yamlsafe.Located, kinds: dict[str, FileKind | str]) -> str | None:
     data = located.data
     if not isinstance(data, dict):
         return None
@@ -159,10 +189,9 @@ def _kind_of(located: yamlsafe.Located) -> str | None:
         return "domain"
     if "problem" in data:
         return "problem"
-    if "scenario" in data:
-        return "scenario"
-    if "profile" in data:
-        return "profile"
+    for kind in kinds:
+        if kind in data:
+            return kind
     if "scheme" in data or "states" in data:
         return "scheme"
     if set(data) == {"acts"}:
