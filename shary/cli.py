@@ -143,8 +143,10 @@ def _forget(sub: argparse._SubParsersAction, name: str) -> None:
 
 def _add_unavailable(sub: argparse._SubParsersAction, command: Unavailable) -> None:
     """Keep an unavailable command in the list; running it says why."""
-    p = sub.add_parser(command.name, help=f"(unavailable: {command.reason})", add_help=False)
-    p.add_argument("rest", nargs=argparse.REMAINDER)
+    # no option prefix: whatever follows the name is taken as is, then refused by the call
+    p = sub.add_parser(command.name, help=f"(unavailable: {command.reason})", add_help=False,
+                       prefix_chars="\0")
+    p.add_argument("rest", nargs="*")
     p.set_defaults(func=command)
 
 

@@ -107,7 +107,7 @@ def test_malformed_turtle(shary, write):
 
 def test_unknown_file_kind(shary, write):
     ((_, _, msg),) = _problems(shary, write("what.yaml", "hello: world\n"))
-    assert "not a scheme, acts, recipe, domain, problem, scenario or profile file" in msg
+    assert "not a scheme, acts, recipe, domain, problem, profile or scenario file" in msg
 
 
 def test_chronicle_goal_needs_bound_variables(shary, write):

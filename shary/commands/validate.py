@@ -113,7 +113,8 @@ def cmd_validate(args: argparse.Namespace) -> int:
         else:
             problems.extend(located.problems)
             what = "a mapping" if isinstance(located.data, dict) else "expected a mapping"
-            names = ", ".join(["scheme", "acts", "recipe", "domain", "problem", *kinds])
+            *names, last = ["scheme", "acts", "recipe", "domain", "problem", *kinds]
+            names = f"{', '.join(names)} or {last}"
             keys = " ".join(f"'{k}:'," for k in ["scheme", "acts", "domain", "problem", *kinds])
             problems.append(located.problem((), f"not a {names} file: {what} with {keys} or "
                                             "some of 'predicates:', 'atomic:', 'tasks:', "
