@@ -245,3 +245,12 @@ def test_json_run_and_the_default_folder_is_named_after_the_scenario(shary, tmp_
     assert (tmp_path / "runs" / "my-bottle" / "log.sqlite").is_file()
     assert _json(shary, "run", "give-botle", "--json", status=2)["error"].startswith(
         "no scenario named 'give-botle'")
+
+
+def test_no_registered_command_says_to_reinstall(monkeypatch, shary):
+    from importlib import metadata
+
+    monkeypatch.setattr(metadata, "entry_points", lambda **_: [])
+    status, out, err = shary("schemes")
+    assert status == 2 and out == ""
+    assert "no shary commands are registered" in err and "pip install -e ." in err
