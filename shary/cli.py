@@ -23,8 +23,9 @@ import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from importlib import metadata
+from typing import NoReturn
 
-from shary.terminal import error, refused
+from shary.terminal import emit_json, error, refused
 from userfiles.errors import FileError
 
 GROUP = "shary.commands"
@@ -49,6 +50,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return error(f"no shary commands are registered (entry-point group {GROUP!r}); the "
                      "installed package metadata is stale or missing: reinstall shary "
                      "(pip install -e . in a checkout)")
+    argv = list(sys.argv[1:] if argv is None else argv)
+    _Parser.json_mode = "--json" in argv
     args = parser.parse_args(argv)
     json_mode = bool(getattr(args, "json", False))
     try:
@@ -59,12 +62,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
 
 
-def build_parser() -> argparse.ArgumentParser | None:
+def build_parser() -> _Parser | None:
     """The ``shary`` parser with every registered command (None when none is registered)."""
     commands = registered_commands()
     if not commands:
         return None
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="shary", description="A SHARY-style supervision engine for robots that work "
         "with people.", formatter_class=_Formatter)
     parser.add_argument("--version", action="version", version=f"shary {installed_version()}")
@@ -120,6 +123,17 @@ def _add(sub: argparse._SubParsersAction, name: str,
     if name not in sub.choices:
         return Unavailable(name, f"{where} did not add a command named {name!r}")
     return None
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser; with ``--json`` on the line, a usage error is a JSON document too."""
+
+    json_mode = False
+
+    def error(self, message: str) -> NoReturn:
+        if _Parser.json_mode:
+            emit_json({"error": message})
+        super().error(message)
 
 
 class _Formatter(argparse.HelpFormatter):

@@ -254,3 +254,12 @@ def test_no_registered_command_says_to_reinstall(monkeypatch, shary):
     status, out, err = shary("schemes")
     assert status == 2 and out == ""
     assert "no shary commands are registered" in err and "pip install -e ." in err
+
+
+def test_json_a_wrong_command_line_is_a_document_too(capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["schemes", "--json", "--bogus"])
+    assert exit_.value.code == 2
+    captured = capsys.readouterr()
+    assert json.loads(captured.out) == {"error": "unrecognized arguments: --bogus"}
+    assert "unrecognized arguments: --bogus" in captured.err
