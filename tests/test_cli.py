@@ -41,11 +41,16 @@ def test_wheel_carries_the_builtin_yaml_and_schemas(tmp_path):
     subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps",
                     "-q", "-w", str(tmp_path), str(REPO)], check=True, capture_output=True)
     (wheel,) = tmp_path.glob("shary-*.whl")
-    names = set(zipfile.ZipFile(wheel).namelist())
+    archive = zipfile.ZipFile(wheel)
+    names = set(archive.namelist())
     for expected in ("shary/builtin/schemes/give-object.yaml", "shary/builtin/schemes/acts.yaml",
                      "shary/builtin/recipes/core.yaml", "userfiles/yamlsafe.py",
-                     "shary/schemas/scheme.schema.json", "shary/schemas/acts.schema.json"):
+                     "shary/schemas/scheme.schema.json", "shary/schemas/acts.schema.json",
+                     "shary/commands/plan.py", "sim/cli.py"):
         assert expected in names
+    (entry_points,) = [n for n in names if n.endswith(".dist-info/entry_points.txt")]
+    text = archive.read(entry_points).decode()
+    assert "[shary.commands]" in text and "run = sim.cli:add_run" in text
 
 
 # -- the command registry ------------------------------------------------------
