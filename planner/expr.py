@@ -45,6 +45,15 @@ _COMPARISONS = ("==", "!=", "<", "<=", ">", ">=")
 _NUMS = frozenset((int, float))
 _NO = object()  # "not a constant"
 
+MAX_NESTING = 32
+"""Deepest nesting of parentheses, ``not``, unary minus and function calls: the parser
+descends once per level, so hostile nesting is refused before it can overflow the stack."""
+MAX_OPERATIONS = 256
+"""Most operations in one expression: each is one closure around the previous ones, so
+this bounds how deep evaluation calls go (far below Python's recursion limit)."""
+MAX_NUMBER = 1e15
+"""Largest literal number (as in YAML files): larger ones overflow costs to infinity."""
+
 # A token is a number, a name, a quoted string or an operator; anything else is an error.
 _TOKEN = (r"(?P<num>[0-9]+(?:\.[0-9]+)?(?:[eE][-+]?[0-9]+)?)|(?P<name>[A-Za-z_][A-Za-z0-9_]*)"
           r"|(?P<str>\"[^\"]*\"|'[^']*')|(?P<op>==|!=|<=|>=|&&|\|\||[-+*/<>=().,])"
@@ -190,6 +199,8 @@ class _Parser:
         self.last_end = 0
         self.used: set[str] = set()
         self.reads: set[str] = set()
+        self.depth = 0
+        self.operations = 0
 
     # -- tokens -------------------------------------------------------------------
 
@@ -243,11 +254,19 @@ class _Parser:
             return parts[0]
         return self.fold(_logic(word == "and", parts), "bool", parts, boolean=True)
 
+    def deeper(self, pos: int) -> None:
+        """One more level of nesting (see :data:`MAX_NESTING`)."""
+        self.depth += 1
+        if self.depth > MAX_NESTING:
+            self.fail(f"expression nested deeper than {MAX_NESTING} levels", pos)
+
     def not_(self) -> _Node:
         if not self.at("not"):
             return self.comparison()
         pos = self.next()[2]
+        self.deeper(pos)
         operand = self.not_()
+        self.depth -= 1
         f = operand.fn
         node = self.fold(lambda env, get: not f(env, get), "bool", [operand], boolean=True)
         node.pos = pos
@@ -292,7 +311,9 @@ class _Parser:
         if not self.at("-"):
             return self.postfix()
         pos = self.next()[2]
+        self.deeper(pos)
         inner = self.unary()
+        self.depth -= 1
         self.need_numbers("-", inner)
         fn = _arith("neg", inner.fn, None, self.text[pos:inner.end])
         node = self.fold(fn, "number", [inner])
@@ -310,6 +331,8 @@ class _Parser:
         end = self.last_end
         if kind == "num":
             value = float(word) if ("." in word or "e" in word.lower()) else int(word)
+            if not abs(value) <= MAX_NUMBER:
+                self.fail(f"number {word} is too large (the limit is {MAX_NUMBER:g})", pos)
             return _const(value, "number", pos, end)
         if kind == "str":
             return _const(word[1:-1], "name", pos, end)
@@ -326,7 +349,9 @@ class _Parser:
             before = self.tokens[self.i - 1]
             self.fail(f"the expression ends after {_show(before[1])}", before[2])
         if word == "(":
+            self.deeper(pos)
             node = self.or_()
+            self.depth -= 1
             self.close(pos, "(")
             node.pos, node.end = pos, self.last_end
             return node
@@ -361,12 +386,14 @@ class _Parser:
             self.fail(f"unknown function {name!r} (the functions are "
                       f"{', '.join(FUNCTIONS)}){maybe}", pos)
         opened = self.next()[2]
+        self.deeper(opened)
         args = []
         if not self.at(")"):
             args.append(self.or_())
             while self.at(","):
                 self.next()
                 args.append(self.or_())
+        self.depth -= 1
         self.close(opened, "(")
         if name == "abs" and len(args) != 1:
             self.fail(f"abs takes one argument, not {len(args)}", pos)
@@ -389,6 +416,9 @@ class _Parser:
         return out
 
     def attribute(self, base: _Node, attr: str, at: int) -> _Node:
+        self.operations += 1
+        if self.operations > MAX_OPERATIONS:
+            self.fail(f"expression has more than {MAX_OPERATIONS} operations; split it", at)
         type_ = self.attribute_type(base, attr, at)
         self.reads.add(attr)
         src = self.text[base.pos:base.end]
@@ -426,6 +456,9 @@ class _Parser:
         """A node over ``parts``; computed now if they are all constants (so that
         ``-1`` or ``2 * 3`` cost nothing per call, and ``1 / 0`` is a compile error)."""
         pos, end = parts[0].pos, self.last_end
+        self.operations += 1
+        if self.operations > MAX_OPERATIONS:
+            self.fail(f"expression has more than {MAX_OPERATIONS} operations; split it", pos)
         if all(p.const is not _NO for p in parts):
             try:
                 value = fn({}, None)

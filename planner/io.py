@@ -35,9 +35,9 @@ from planner.domain import (
 from planner.evaluate import BASE_CRITERIA
 from planner.expr import ExprError, compile_effect, compile_expr
 from userfiles import schema as checks
-from userfiles import yamlsafe
 from userfiles.errors import FileError
 from userfiles.errors import Problem as FileProblem
+from userfiles.reader import Reader, open_checked
 from userfiles.schema import did_you_mean
 
 SCHEMAS = Path(__file__).resolve().parent / "schemas"
@@ -75,37 +75,29 @@ def find_domain(name_or_path: str | os.PathLike[str]) -> Path:
 
 def load_domain(name_or_path: str | os.PathLike[str]) -> Domain:
     """Load and compile a domain; raise FileError with every problem of the file."""
-    located = yamlsafe.load_file(find_domain(name_or_path))
-    if not isinstance(located.data, dict):
-        raise FileError([located.problem((), "expected a mapping with 'domain' and 'types'")])
-    builder = _DomainBuilder(located)
-    domain = builder.build()
-    if builder.problems:
-        raise FileError(builder.problems)
+    reader = open_checked(find_domain(name_or_path), _validator("domain"))
+    domain = _DomainBuilder(reader).build()
+    reader.done()
     return domain
 
 
 def load_problem(path: str | os.PathLike[str], domain: Domain) -> Problem:
     """Load a problem for ``domain``; raise FileError with every problem of the file."""
-    located = yamlsafe.load_file(path)
-    if not isinstance(located.data, dict):
-        raise FileError([located.problem((), "expected a mapping with 'problem', 'entities' "
-                                         "and 'tasks'")])
-    builder = _ProblemBuilder(located, domain)
-    problem = builder.build()
-    if builder.problems:
-        raise FileError(builder.problems)
+    reader = open_checked(path, _validator("problem"))
+    problem = _ProblemBuilder(reader, domain).build()
+    reader.done()
     return problem
 
 
 class _Builder:
-    def __init__(self, located: yamlsafe.Located, schema: str):
-        self.located = located
-        self.data: dict[str, Any] = located.data
-        self.problems: list[FileProblem] = checks.check(located, _validator(schema))
+    """The meaning checks of a file whose shape is right (the reader pipeline's third
+    step); problems go to the reader, which raises them all at once."""
 
-    def problem(self, path: tuple, message: str, *, key: bool = False) -> None:
-        self.problems.append(self.located.problem(path, message, key=key))
+    def __init__(self, reader: Reader):
+        self.located = reader.located
+        self.data: dict[str, Any] = reader.data
+        self.problems: list[FileProblem] = reader.problems
+        self.problem = reader.problem
 
     def expr_problem(self, path: tuple, err: ExprError, prefix: str = "") -> None:
         line, col = self.located.at(path)
@@ -124,8 +116,8 @@ class _Builder:
 
 
 class _DomainBuilder(_Builder):
-    def __init__(self, located: yamlsafe.Located):
-        super().__init__(located, "domain")
+    def __init__(self, reader: Reader):
+        super().__init__(reader)
         self.types: dict[str, EntityType] = {}
 
     def build(self) -> Domain:
@@ -347,8 +339,8 @@ class _DomainBuilder(_Builder):
 
 
 class _ProblemBuilder(_Builder):
-    def __init__(self, located: yamlsafe.Located, domain: Domain):
-        super().__init__(located, "problem")
+    def __init__(self, reader: Reader, domain: Domain):
+        super().__init__(reader)
         self.domain = domain
 
     def build(self) -> Problem:

@@ -23,10 +23,12 @@ import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from importlib import metadata
+from pathlib import Path
 from typing import NoReturn
 
 from shary.terminal import emit_json, error, refused
 from userfiles.errors import FileError
+from userfiles.reader import allow_paths
 
 GROUP = "shary.commands"
 """The entry-point group that commands register in."""
@@ -53,6 +55,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     _Parser.json_mode = "--json" in argv
     args = parser.parse_args(argv)
+    allow_paths(args.allow_path)
     json_mode = bool(getattr(args, "json", False))
     try:
         return int(args.func(args) or 0)
@@ -71,6 +74,9 @@ def build_parser() -> _Parser | None:
         prog="shary", description="A SHARY-style supervision engine for robots that work "
         "with people.", formatter_class=_Formatter)
     parser.add_argument("--version", action="version", version=f"shary {installed_version()}")
+    parser.add_argument("--allow-path", action="append", default=[], type=Path,
+                        metavar="FOLDER", help="a folder that user files may name files in, "
+                        "besides their own folder (repeatable)")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name, entry in sorted(commands.items()):
         problem = entry if isinstance(entry, Unavailable) else _add(sub, name, entry)

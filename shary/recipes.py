@@ -27,6 +27,7 @@ import re
 from dataclasses import dataclass, field
 from typing import Any
 
+from shary.acts import ActRegistry
 from shary.model import Scheme
 
 _REFINEMENT = re.compile(r"^\s*([A-Za-z0-9_][A-Za-z0-9_.:-]*)\s*(?:\((.*)\))?\s*$")
@@ -231,6 +232,8 @@ class RecipeLibrary:
     tasks: dict[str, TaskType] = field(default_factory=dict)
     recipes: list[Recipe] = field(default_factory=list)
     chronicles: dict[str, Chronicle] = field(default_factory=dict)
+    acts: ActRegistry = field(default_factory=ActRegistry)
+    """The acts usable with this library: built-in, declared by its files and their schemes."""
     _index: dict[tuple[str, str], list[Recipe]] | None = field(default=None, repr=False)
     _indexed: int = field(default=0, repr=False)
 

@@ -111,35 +111,3 @@ def cmd_run(args: argparse.Namespace) -> int:
                   if "snapshots" in result.outputs else "") + "[/dim]")
     return 0 if result.passed else 1
 
-
-class _Scenarios:
-    """Scenario files, for ``shary validate`` (entry point ``shary.filekinds: scenario``)."""
-
-    def builtin_files(self) -> list[Path]:
-        from sim.scenario import builtin_scenarios
-
-        return list(builtin_scenarios().values())
-
-    def check(self, path: Path, acts: set[str]) -> None:
-        """A scenario is checked with the recipes it names, as ``shary run`` reads it."""
-        from sim.run import load
-
-        load(path)
-
-
-class _Profiles:
-    """People's profiles, for ``shary validate`` (entry point ``shary.filekinds: profile``)."""
-
-    def builtin_files(self) -> list[Path]:
-        from sim.scenario import builtin_profiles
-
-        return builtin_profiles()
-
-    def check(self, path: Path, acts: set[str]) -> None:
-        from sim.scenario import load_profile
-
-        load_profile(path, acts=acts)
-
-
-SCENARIO = _Scenarios()
-PROFILE = _Profiles()

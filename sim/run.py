@@ -30,7 +30,6 @@ import planner
 from shary.agenda import ChronicleRecognizer
 from shary.executors import ExecutorRegistry
 from shary.facts import FactDatabase
-from shary.io.recipes import load_library
 from shary.log import ContextLog, read_events
 from shary.loop import EventLoop
 from shary.planning import HatpPlanner
@@ -39,7 +38,7 @@ from shary.supervisor import Supervisor
 from .executors import RobotExecutors
 from .people import Person
 from .perception import Noise, Perception
-from .scenario import Happened, Scenario, judge, load_scenario, recipe_files
+from .scenario import Happened, Scenario, judge, load_scenario
 from .simulation import Simulation, standing_height
 from .world import BOTTLES, CONTAINERS, FURNITURE, MANIPULATION_PLACES, SEATS, LivingRoom, pb
 
@@ -83,20 +82,10 @@ class RunResult:
 
 
 def load(path: str | Path) -> tuple[Scenario, Any, Any]:
-    """A scenario checked against the recipe library it will run with, that library, and
+    """A scenario checked with the recipe library it will run with, that library, and
     the planning domain its planner-backed recipes use (every file is read before the run)."""
-    library = load_library(recipe_files(path))
-    scenario = load_scenario(
-        path, known_tasks={n: tuple(t.params) for n, t in library.tasks.items()},
-        known_acts=_acts(), known_atomic=library.atomic,
-        known_predicates=library.predicates)
-    return scenario, library, planner.load_domain("living-room")
-
-
-def _acts() -> set[str]:
-    from shary.acts import builtin_acts
-
-    return set(builtin_acts().vocabulary())
+    scenario = load_scenario(path)
+    return scenario, scenario.library, planner.load_domain("living-room")
 
 
 def run_scenario(path: str | Path, *, seed: int = 0, out: str | Path | None = None,

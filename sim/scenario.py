@@ -15,14 +15,20 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from functools import cache
 from pathlib import Path
 from typing import Any
 
-from userfiles import yamlsafe
-from userfiles.errors import FileError
-from userfiles.schema import check, did_you_mean, validator
+from jsonschema import Draft202012Validator
 
-from .humans import HUMAN_PLACES, Profile, profile_from, seconds
+from shary.acts import ActRegistry, builtin_acts
+from shary.io.recipes import load_library
+from shary.recipes import RecipeLibrary
+from userfiles.errors import FileError
+from userfiles.reader import Reader, open_checked, read, spelled
+from userfiles.schema import did_you_mean, validator
+
+from .humans import HUMAN_PLACES, Profile, profile_from
 from .world import BOTTLES, FOOTPRINTS, FURNITURE, PLACES
 
 HERE = Path(__file__).resolve().parent
@@ -82,6 +88,8 @@ class Scenario:
     faults: tuple[tuple[str, str, int], ...]  # action, reason, how many times
     timeout: float
     expect: Expect
+    library: RecipeLibrary | None = None
+    """The recipe library the scenario was checked against and runs with."""
 
 
 def builtin_profiles() -> list[Path]:
@@ -106,92 +114,197 @@ def find_scenario(name_or_file: str) -> Path:
     return found
 
 
-def recipe_files(path: str | Path) -> list[Path]:
-    """The extra recipe files a scenario names that exist (read before checking it whole,
-    so its goals can be checked against the tasks they define)."""
-    path = Path(path)
-    data = yamlsafe.load_file(path).data
-    files = data.get("recipes") if isinstance(data, dict) else None
-    if not isinstance(files, list):
-        return []
-    return [(path.parent / f).resolve() for f in files
-            if isinstance(f, str) and (path.parent / f).is_file()]
+@cache
+def _schema(name: str) -> Draft202012Validator:
+    return validator(SCHEMAS_DIR, name)
+
+
+@cache
+def _builtin_profile(name: str) -> Reader:
+    """A built-in profile, read and shape-checked once (a scenario of fifty people
+    naming the same profile reads it once)."""
+    return open_checked(PROFILES_DIR / f"{name}.yaml", _schema("profile"))
 
 
 def load_profile(name: str | Path, things: set[str] = frozenset(),
                  acts: set[str] = frozenset(), atomic: set[str] = frozenset()) -> Profile:
     """A profile, by name (``sim/profiles/NAME.yaml``) or file, checked; the names, acts
     and atomic tasks given (when given) are what its targets and answers may name."""
-    path = Path(name) if isinstance(name, Path) else PROFILES_DIR / f"{name}.yaml"
-    located = yamlsafe.load_file(path)
-    problems = check(located, validator(SCHEMAS_DIR, "profile"))
-    if not problems:
-        _check_profile(lambda where, message, key=False: problems.append(
-            located.problem(where, message, key=key)), (), located.data, things, acts, atomic)
-    if problems:
-        raise FileError(problems)
-    return profile_from(path.stem, located.data)
+    if isinstance(name, Path):
+        reader = open_checked(name, _schema("profile"))
+    else:
+        reader = _builtin_profile(name)
+        reader = Reader(reader.located)
+    _check_profile(reader, (), reader.data, things, acts, atomic)
+    reader.done()
+    return profile_from(Path(reader.file).stem, reader.data)
 
 
-def load_scenario(path: str | Path, *, known_tasks: dict[str, tuple[str, ...]] | None = None,
-                  known_acts: Iterable[str] = (), known_atomic: Iterable[str] = (),
-                  known_predicates: Iterable[str] = ()) -> Scenario:
-    """Load and check a scenario; raise :class:`FileError` listing every problem.
+def load_scenario(path: str | Path, *, acts: ActRegistry | None = None) -> Scenario:
+    """Load and check a scenario with the recipe library it names (built-in recipes plus
+    its ``recipes:`` files, which must stay below its folder); raise :class:`FileError`
+    listing every problem, the recipe files' own included, each once.
 
-    ``known_tasks`` (task -> parameters), ``known_acts`` and ``known_atomic``
-    come from the recipe library the run will use; when given, goals and
-    expectations are checked against them.
+    ``acts`` are the acts known besides the library's (e.g. an acts file given to
+    ``shary validate`` with the scenario).
     """
     path = Path(path)
-    located = yamlsafe.load_file(path)
-    problems = check(located, validator(SCHEMAS_DIR, "scenario"))
-    if problems:
-        raise FileError(problems)
-    data = located.data
-    problems = []
+    return read(path, _schema("scenario"), lambda reader: _Reading(reader, acts).scenario())
 
-    def problem(where: tuple, message: str, key: bool = False) -> None:
-        problems.append(located.problem(where, message, key=key))
 
-    acts = set(known_acts)
-    atomic = set(known_atomic)
-    robot = data.get("robot") or {}
-    everyone = {robot.get("name", "jido"), *(data.get("people") or {})}
-    things = everyone | set(BOTTLES) | set(FURNITURE)
-    robot_at = robot.get("at", "base")
-    if robot_at not in PLACES:
-        problem(("robot", "at"), f"unknown place {robot_at!r}{did_you_mean(robot_at, PLACES)}; "
-                f"places: {', '.join(PLACES)}")
-    people = []
-    for name, spec in (data.get("people") or {}).items():
-        if name in BOTTLES or name in FURNITURE or name == robot.get("name", "jido"):
-            problem(("people", name), f"{name!r} already names something in the room", True)
+class _Reading:
+    """The meaning checks of one scenario (the pipeline's third step)."""
+
+    def __init__(self, reader: Reader, acts: ActRegistry | None):
+        self.reader = reader
+        self.problem = reader.problem
+        self.extra_acts = acts
+
+    def library(self) -> tuple[RecipeLibrary | None, list[Path]]:
+        """The recipe library the scenario runs with, or None when a file of it is bad
+        (its problems are reported, and the scenario's line that names it)."""
+        reader = self.reader
+        files = []
+        named = {}
+        for i, name in enumerate(reader.data.get("recipes") or []):
+            full = reader.confined_path(("recipes", i), name)
+            if full is not None:
+                files.append(full)
+                named[spelled(full, like=reader.file)] = i
+        if len(files) < len(reader.data.get("recipes") or []):
+            return None, files  # a refused file: its tasks and acts are unknown, not wrong
+        try:
+            library = load_library([spelled(f, like=reader.file) for f in files],
+                                   acts=self.extra_acts)
+        except FileError as err:
+            reader.problems.extend(err.problems)
+            for file in sorted({p.file for p in err.problems}):
+                index = named.get(file)
+                where = ("recipes", index) if index is not None else ("recipes",)
+                self.problem(where, f"depends on {file}, which has errors")
+            return None, files
+        return library, files
+
+    def scenario(self) -> Scenario:
+        reader, problem = self.reader, self.problem
+        data = reader.data
+        library, recipes = self.library()
+        known_tasks = ({n: t for n, t in library.tasks.items()} if library is not None
+                       else None)
+        # Without its library (a named file is bad), the acts it declares are unknown:
+        # the checks that need them wait until it is fixed.
+        acts = (set(library.acts.vocabulary()) if library is not None
+                else set() if data.get("recipes")
+                else set((self.extra_acts or builtin_acts()).vocabulary()))
+        atomic = set(library.atomic) if library is not None else set()
+        predicates = set(library.predicates) if library is not None else set()
+        robot = data.get("robot") or {}
+        robot_name = robot.get("name", "jido")
+        people_spec = data.get("people") or {}
+        everyone = {robot_name, *people_spec}
+        objects_spec = data.get("objects") or {}
+        objects_known = set(BOTTLES) | set(objects_spec)
+        things = everyone | objects_known | set(FURNITURE)
+        robot_at = robot.get("at", "base")
+        if robot_at not in PLACES:
+            problem(("robot", "at"), f"unknown place {robot_at!r}"
+                    f"{did_you_mean(robot_at, PLACES)}; places: {', '.join(PLACES)}")
+        people = [self.person(name, spec, robot_name, things, acts, atomic)
+                  for name, spec in people_spec.items()]
+        names = {p.name for p in people if p is not None}
+        objects = {obj: self.thing(obj, spec, names) for obj, spec in objects_spec.items()}
+        goals = [self.goal(i, spec, known_tasks, everyone, things)
+                 for i, spec in enumerate(data.get("goals") or [])]
+        noise = data.get("noise") or {}
+        lost = []
+        for i, e in enumerate(noise.get("lost") or []):
+            where = ("noise", "lost", i)
+            start, end = (reader.duration(where + ("from",), e["from"]),
+                          reader.duration(where + ("to",), e["to"]))
+            if e["entity"] not in things:
+                problem(where + ("entity",), f"unknown entity {e['entity']!r}"
+                        f"{did_you_mean(e['entity'], things)}")
+            if end < start:
+                problem(where + ("to",), f"'to' ({end:g}s) comes before 'from' ({start:g}s)")
+            lost.append((e["entity"], start, end))
+        for predicate in noise.get("flicker") or {}:
+            if predicates and predicate not in predicates:
+                problem(("noise", "flicker", predicate), f"unknown predicate {predicate!r}"
+                        f"{did_you_mean(predicate, predicates)}", key=True)
+        raw_expect = data["expect"]
+        for key in ("acts", "no-acts"):
+            for i, act in enumerate(raw_expect.get(key) or []):
+                if acts and act not in acts:
+                    problem(("expect", key, i), f"unknown act {act!r}"
+                            f"{did_you_mean(act, acts)}; declare it under 'acts:' in a "
+                            "recipe file the scenario names, or in the scheme of its task")
+        faults = []
+        for i, spec in enumerate(data.get("faults") or []):
+            if atomic and spec["action"] not in atomic:
+                problem(("faults", i, "action"), f"unknown atomic task {spec['action']!r}"
+                        f"{did_you_mean(spec['action'], atomic)}")
+            faults.append((spec["action"], spec.get("reason", "an injected fault"),
+                           int(spec.get("times", 1))))
+        for key in ("actions", "no-actions", "failed-actions"):
+            for i, name in enumerate(raw_expect.get(key) or []):
+                if atomic and name not in atomic:
+                    problem(("expect", key, i), f"unknown atomic task {name!r}"
+                            f"{did_you_mean(name, atomic)}")
+        if known_tasks is not None:
+            for task in raw_expect.get("tasks") or {}:
+                if task not in known_tasks:
+                    problem(("expect", "tasks", task), f"unknown task {task!r}"
+                            f"{did_you_mean(task, known_tasks)}", key=True)
+        within = (reader.duration(("expect", "within"), raw_expect["within"])
+                  if "within" in raw_expect else None)
+        expect = Expect(
+            tuple(raw_expect.get("acts") or ()), tuple(raw_expect.get("no-acts") or ()),
+            tuple(raw_expect.get("actions") or ()), tuple(raw_expect.get("no-actions") or ()),
+            tuple(raw_expect.get("failed-actions") or ()),
+            tuple(tuple(f) for f in raw_expect.get("facts") or ()),
+            tuple(tuple(f) for f in raw_expect.get("no-facts") or ()),
+            dict(raw_expect.get("tasks") or {}), within)
+        return Scenario(
+            data["scenario"], Path(reader.file), str(data.get("doc", "")).strip(), robot_name,
+            robot.get("model", "jido"), robot_at, tuple(p for p in people if p is not None),
+            objects, tuple(recipes), tuple(goals), dict(noise.get("flicker") or {}),
+            tuple(lost), reader.duration(("noise", "hold"), noise.get("hold", 0.5)),
+            tuple(faults), reader.duration(("timeout",), data.get("timeout", DEFAULT_TIMEOUT)),
+            expect, library)
+
+    def person(self, name: str, spec: dict[str, Any], robot: str, things: set[str],
+               acts: set[str], atomic: set[str]) -> Person | None:
+        problem = self.problem
+        if name in BOTTLES or name in FURNITURE or name == robot:
+            problem(("people", name), f"{name!r} already names something in the room",
+                    key=True)
         if spec["at"] not in HUMAN_PLACES:
             problem(("people", name, "at"), f"unknown place for a person {spec['at']!r}"
-                    f"{did_you_mean(spec['at'], HUMAN_PLACES)}; places: {', '.join(HUMAN_PLACES)}")
+                    f"{did_you_mean(spec['at'], HUMAN_PLACES)}; places: "
+                    f"{', '.join(HUMAN_PLACES)}")
         raw = spec.get("profile", "cooperative")
         if isinstance(raw, str):
-            if not (PROFILES_DIR / f"{raw}.yaml").exists():
-                names = [p.stem for p in PROFILES_DIR.glob("*.yaml")]
+            names = sorted(p.stem for p in PROFILES_DIR.glob("*.yaml"))
+            if raw not in names:
                 problem(("people", name, "profile"), f"unknown profile {raw!r}"
-                        f"{did_you_mean(raw, names)}; profiles: {', '.join(sorted(names))}")
-                continue
+                        f"{did_you_mean(raw, names)}; profiles: {', '.join(names)}")
+                return None
             try:
                 profile = load_profile(raw, things, acts, atomic)
             except FileError as err:
-                problems.extend(err.problems)
-                continue
+                self.reader.problems.extend(err.problems)
+                return None
         else:
+            _check_profile(self.reader, ("people", name, "profile"), raw, things, acts, atomic)
             profile = profile_from(f"{name}'s profile", raw)
-            _check_profile(problem, ("people", name, "profile"), raw, things, acts, atomic)
         shirt = tuple(spec.get("shirt", (0.2, 0.35, 0.7)))
-        people.append(Person(name, spec["at"], profile, shirt, dict(spec.get("kind") or {})))
-    names = {p.name for p in people}
-    objects = {}
-    for obj, spec in (data.get("objects") or {}).items():
+        return Person(name, spec["at"], profile, shirt, dict(spec.get("kind") or {}))
+
+    def thing(self, obj: str, spec: dict[str, Any], names: set[str]) -> dict[str, Any]:
+        problem = self.problem
         if obj not in BOTTLES:
             problem(("objects", obj), f"unknown object {obj!r}{did_you_mean(obj, BOTTLES)}; "
-                    f"objects: {', '.join(BOTTLES)}", True)
+                    f"objects: {', '.join(BOTTLES)}", key=True)
         if "on" in spec and spec["on"] not in FURNITURE:
             problem(("objects", obj, "on"), f"unknown furniture {spec['on']!r}"
                     f"{did_you_mean(spec['on'], FURNITURE)}")
@@ -200,92 +313,51 @@ def load_scenario(path: str | Path, *, known_tasks: dict[str, tuple[str, ...]] |
                     f"this scenario")
         if "held-by" in spec and ("on" in spec or "at" in spec):
             problem(("objects", obj), "an object held by someone is not also on furniture "
-                    "(give 'held-by' or 'on'/'at')", True)
+                    "(give 'held-by' or 'on'/'at')", key=True)
         elif "at" in spec and spec.get("on", "coffee-table") in FURNITURE:
             furniture = spec.get("on", "coffee-table")
             x, y = spec["at"]
             if not FOOTPRINTS[furniture].contains(x, y, -0.03):
                 problem(("objects", obj, "at"), f"({x}, {y}) is not on the {furniture}")
-        objects[obj] = dict(spec)
-    recipes = []
-    for i, file in enumerate(data.get("recipes") or []):
-        full = (path.parent / file).resolve()
-        if not full.is_file():
-            problem(("recipes", i), f"no recipe file {file!r} next to the scenario")
-        recipes.append(full)
-    goals = []
-    for i, spec in enumerate(data.get("goals") or []):
+        return dict(spec)
+
+    def goal(self, i: int, spec: dict[str, Any], known_tasks: dict[str, Any] | None,
+             agents: set[str], things: set[str]) -> Goal:
+        """A goal; its task must exist, and its arguments name who and what exist: an
+        argument that plays a role of the task's scheme is a person or the robot."""
+        problem = self.problem
+        where = ("goals", i)
         args = dict(spec.get("with") or {})
-        if known_tasks is not None:
-            if spec["task"] not in known_tasks:
-                problem(("goals", i, "task"), f"unknown task {spec['task']!r}"
-                        f"{did_you_mean(spec['task'], known_tasks)}")
-            else:
-                params = known_tasks[spec["task"]]
-                wrong = sorted(set(args) ^ set(params))
-                if wrong:
-                    problem(("goals", i, "with"), f"task {spec['task']!r} takes "
-                            f"{', '.join(params) or 'nothing'}; wrong: {', '.join(wrong)}")
-        goals.append(Goal(spec["task"], args, seconds(spec.get("at", 0)),
-                          int(spec.get("priority", 0))))
-    noise = data.get("noise") or {}
-    lost = tuple((e["entity"], seconds(e["from"]), seconds(e["to"]))
-                 for e in noise.get("lost") or [])
-    for i, (entity, start, end) in enumerate(lost):
-        if entity not in things:
-            problem(("noise", "lost", i, "entity"), f"unknown entity {entity!r}"
-                    f"{did_you_mean(entity, things)}")
-        if end < start:
-            problem(("noise", "lost", i, "to"), f"'to' ({end:g}s) comes before 'from' "
-                    f"({start:g}s)")
-    predicates = set(known_predicates)
-    for predicate in noise.get("flicker") or {}:
-        if predicates and predicate not in predicates:
-            problem(("noise", "flicker", predicate), f"unknown predicate {predicate!r}"
-                    f"{did_you_mean(predicate, predicates)}", True)
-    raw_expect = data["expect"]
-    for key in ("acts", "no-acts"):
-        for i, act in enumerate(raw_expect.get(key) or []):
-            if acts and act not in acts:
-                problem(("expect", key, i), f"unknown act {act!r}{did_you_mean(act, acts)}")
-    faults = []
-    for i, spec in enumerate(data.get("faults") or []):
-        if atomic and spec["action"] not in atomic:
-            problem(("faults", i, "action"), f"unknown atomic task {spec['action']!r}"
-                    f"{did_you_mean(spec['action'], atomic)}")
-        faults.append((spec["action"], spec.get("reason", "an injected fault"),
-                       int(spec.get("times", 1))))
-    for key in ("actions", "no-actions", "failed-actions"):
-        for i, name in enumerate(raw_expect.get(key) or []):
-            if atomic and name not in atomic:
-                problem(("expect", key, i), f"unknown atomic task {name!r}"
-                        f"{did_you_mean(name, atomic)}")
-    if known_tasks is not None:
-        for task in raw_expect.get("tasks") or {}:
-            if task not in known_tasks:
-                problem(("expect", "tasks", task), f"unknown task {task!r}"
-                        f"{did_you_mean(task, known_tasks)}", True)
-    if problems:
-        raise FileError(problems)
-    expect = Expect(
-        tuple(raw_expect.get("acts") or ()), tuple(raw_expect.get("no-acts") or ()),
-        tuple(raw_expect.get("actions") or ()), tuple(raw_expect.get("no-actions") or ()),
-        tuple(raw_expect.get("failed-actions") or ()),
-        tuple(tuple(f) for f in raw_expect.get("facts") or ()),
-        tuple(tuple(f) for f in raw_expect.get("no-facts") or ()),
-        dict(raw_expect.get("tasks") or {}),
-        seconds(raw_expect["within"]) if "within" in raw_expect else None)
-    return Scenario(
-        data["scenario"], path, str(data.get("doc", "")).strip(), robot.get("name", "jido"),
-        robot.get("model", "jido"), robot_at, tuple(people), objects, tuple(recipes),
-        tuple(goals), dict(noise.get("flicker") or {}), lost,
-        seconds(noise.get("hold", 0.5)), tuple(faults),
-        seconds(data.get("timeout", DEFAULT_TIMEOUT)), expect)
+        task = known_tasks.get(spec["task"]) if known_tasks is not None else None
+        if known_tasks is not None and task is None:
+            problem(where + ("task",), f"unknown task {spec['task']!r}"
+                    f"{did_you_mean(spec['task'], known_tasks)}")
+        if task is not None:
+            wrong = sorted(set(args) ^ set(task.params))
+            if wrong:
+                problem(where + ("with",), f"task {spec['task']!r} takes "
+                        f"{', '.join(task.params) or 'nothing'}; wrong: {', '.join(wrong)}")
+            roles = {term.value for term in task.roles.values() if term.kind == "param"}
+            for param, value in args.items():
+                if not isinstance(value, str) or param not in task.params:
+                    continue
+                if param in roles and value not in agents:
+                    problem(where + ("with", param), f"{param} {value!r} is not a person of "
+                            f"this scenario{did_you_mean(value, agents)}; people: "
+                            f"{', '.join(sorted(agents))}")
+                elif param not in roles and value not in things | set(PLACES):
+                    problem(where + ("with", param), f"{param} {value!r} names nothing in "
+                            f"this scenario{did_you_mean(value, things | set(PLACES))}")
+        return Goal(spec["task"], args, self.reader.duration(where + ("at",), spec.get("at", 0)),
+                    int(spec.get("priority", 0)))
 
 
-def _check_profile(problem: Any, where: tuple, raw: dict[str, Any], things: set[str],
+def _check_profile(reader: Reader, where: tuple, raw: dict[str, Any], things: set[str],
                    acts: set[str], atomic: set[str]) -> None:
     """What a profile names must exist: acts it answers, targets it looks at, actions."""
+    def problem(at: tuple, message: str, key: bool = False) -> None:
+        reader.problem(at, message, key=key)
+
     looks = things | {"robot", "phone", "away"}
     attention = raw.get("attention", "robot")
     if things and attention not in looks:

@@ -119,7 +119,8 @@ def test_the_engine_works_without_the_simulator(tmp_path):
     status, out, err = scenario
     assert status == 2
     (problem_line,) = problems(err)
-    assert problem_line["line"] == "2" and "'sim' that checks it is not installed" in err
+    assert problem_line["line"] == "2"
+    assert "the kinds of files of 'sim' are unavailable (package 'sim' is not installed)" in err
 
 
 def _plugin(tmp_path, monkeypatch, entries: str) -> None:
@@ -208,11 +209,12 @@ def test_json_validate_names_every_problem(shary, write):
     good = REPO / "docs" / "tutorial" / "ask-then-do.yaml"
     bad = write("bad.yaml", "scheme: bad\ninitial: nowhere\nstates:\n  a: {act: ASK-TASK}\n")
     doc = _json(shary, "validate", str(good), str(bad), "--json", status=2)
-    assert doc["files"] == [{"path": str(good), "ok": True}, {"path": str(bad), "ok": False}]
-    assert doc["problems"] and all(p["file"] == str(bad) for p in doc["problems"])
-    assert set(doc["problems"][0]) == {"file", "line", "col", "message"}
-    assert _json(shary, "validate", str(good), "--json") == {
-        "files": [{"path": str(good), "ok": True}], "problems": []}
+    first, second = doc["files"]
+    assert first == {"file": str(good), "kind": "scheme", "ok": True, "depends_on": [],
+                     "problems": []}
+    assert second["file"] == str(bad) and not second["ok"] and second["problems"]
+    assert all(set(p) == {"file", "line", "col", "message"} and p["file"] == str(bad)
+               for p in second["problems"])
 
 
 def test_json_a_refused_file_still_exits_2_with_its_problems(shary, write):

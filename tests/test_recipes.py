@@ -107,7 +107,8 @@ def test_malformed_turtle(shary, write):
 
 def test_unknown_file_kind(shary, write):
     ((_, _, msg),) = _problems(shary, write("what.yaml", "hello: world\n"))
-    assert "not a scheme, acts, recipe, domain, problem, profile or scenario file" in msg
+    assert "not a known kind of file (acts, scheme, recipes, domain, problem, profile or " \
+           "scenario)" in msg
 
 
 def test_chronicle_goal_needs_bound_variables(shary, write):
@@ -195,3 +196,16 @@ recipes:
     assert (13, 59, "unknown predicate 'isOnn' (did you mean 'isOn'?)") in found
     assert any(line == 13 and "expected a string here, got a number (3)" in msg
                for line, _, msg in found), found
+
+
+def test_custom_act_of_a_scheme_runs_end_to_end(tmp_path):
+    """OFFER-AGAIN, declared in the user's scheme, is usable by their recipes and by their
+    scenario's expectations (issue 17): validated together, then run."""
+    from conftest import REPO
+
+    from shary.cli import main
+
+    folder = REPO / "docs" / "tutorial" / "offer-again"
+    files = sorted(folder.glob("*.yaml"))
+    assert main(["validate", *map(str, files)]) == 0
+    assert main(["run", str(folder / "scenario.yaml"), "--out", str(tmp_path), "--quiet"]) == 0

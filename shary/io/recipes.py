@@ -17,7 +17,7 @@ from typing import Any
 import networkx as nx
 
 from shary import builtin
-from shary.acts import ActRegistry, builtin_acts
+from shary.acts import ACT_TYPES, ActRegistry, acts_from_data, builtin_acts
 from shary.io import schema
 from shary.io.schemes import load_scheme
 from shary.model import Scheme, parse_duration
@@ -42,6 +42,7 @@ from shary.recipes import (
 )
 from userfiles import yamlsafe
 from userfiles.errors import FileError, Problem
+from userfiles.reader import confine, spelled
 from userfiles.schema import did_you_mean
 
 ANY = TaskType(ANY_TASK, (), {}, ())
@@ -73,12 +74,15 @@ def load_library(paths: list[str | os.PathLike[str]] | None = None, *,
         documents.append(located)
     builder = _Builder(acts or builtin_acts())
     for located in documents:
+        builder.declare_acts(located)
+    for located in documents:
         builder.declare(located)
     for located in documents:
         builder.define(located)
     problems.extend(builder.problems)
     if problems:
         raise FileError(problems)
+    builder.library.acts = builder.acts
     return builder.library
 
 
@@ -94,6 +98,19 @@ class _Builder:
         self.problems.append(located.problem(path, message, key=key))
 
     # -- first pass: the vocabulary ----------------------------------------
+
+    def declare_acts(self, located: yamlsafe.Located) -> None:
+        """Acts declared under ``acts:``: usable by every file of the library, and by the
+        scenarios that load it."""
+        own = located.data.get("acts")
+        if not isinstance(own, dict):
+            return
+        for name in own:
+            if name in ACT_TYPES:
+                self.problem(located, ("acts", name), f"{name!r} is an act type, not an act "
+                             "name", key=True)
+        self.acts = self.acts.extended(acts_from_data(
+            {k: v if isinstance(v, dict) else None for k, v in own.items()}, located.file))
 
     def declare(self, located: yamlsafe.Located) -> None:
         data = located.data
@@ -145,15 +162,26 @@ class _Builder:
     def _scheme(self, located: yamlsafe.Located, path: tuple, name: Any) -> Scheme | None:
         if not isinstance(name, str):
             return None
-        local = Path(located.file).parent / name
-        ref = str(local) if local.suffix in (".yaml", ".yml") and local.exists() else name
+        ref = name
+        if name.endswith((".yaml", ".yml")) or "/" in name:
+            full, refusal = confine(located.file, name, roots=[builtin.folder("schemes")])
+            if refusal is not None:
+                self.problem(located, path, refusal)
+                return None
+            ref = spelled(full, like=located.file)
         if ref not in self.schemes:
             try:
                 self.schemes[ref] = load_scheme(ref, acts=self.acts)
+                # The acts the scheme declares are usable by the recipes that follow.
+                self.acts = self.acts.extended(self.schemes[ref].acts.acts)
             except FileError as err:
                 self.schemes[ref] = None
-                messages = "; ".join(str(p) for p in err.problems[:3])
-                self.problem(located, path, f"scheme {name!r} cannot be used: {messages}")
+                if ref == name and not name.endswith((".yaml", ".yml")):  # an unknown name
+                    messages = "; ".join(p.message for p in err.problems[:3])
+                    self.problem(located, path, f"scheme {name!r} cannot be used: {messages}")
+                else:  # the scheme's own problems, reported once, under its own name
+                    self.problems.extend(err.problems)
+                    self.problem(located, path, f"depends on {ref}, which has errors")
         return self.schemes[ref]
 
     # -- second pass: recipes and chronicles ---------------------------------

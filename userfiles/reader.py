@@ -1,0 +1,174 @@
+"""The one reader pipeline every format goes through: safe load, schema, meaning, limits.
+
+A format's loader is a *meaning* function over a :class:`Reader`; :func:`read`
+does the rest, the same way for every format::
+
+    def meaning(reader: Reader) -> Scenario:
+        timeout = reader.duration(("timeout",), reader.data.get("timeout", 180))
+        ...
+    scenario = read(path, SCHEMA, meaning)
+
+1. safe load (:mod:`userfiles.yamlsafe`: size, depth, alias bombs, tags, and
+   every number finite and bounded);
+2. the format's JSON Schema (:mod:`userfiles.schema`); meaning checks only run
+   on a file whose shape is right, so they never meet a number where a list
+   was promised;
+3. meaning: the loader resolves names and reports with :meth:`Reader.problem`;
+   the shared checks (:meth:`Reader.duration`, :meth:`Reader.number`,
+   :meth:`Reader.count`, :meth:`Reader.confined_path`) put the stated limit in
+   the message;
+4. every problem found is raised at once as one :class:`FileError`.
+
+Why one pipeline: the rule of docs/architecture.md ("User files") then holds
+by construction, not by care in each loader.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable, Iterable, Sized
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, TypeVar
+
+from jsonschema import Draft202012Validator
+
+from userfiles import yamlsafe
+from userfiles.errors import FileError, Problem
+from userfiles.limits import MAX_DURATION, seconds, show_seconds
+from userfiles.schema import check
+
+T = TypeVar("T")
+
+_allowed: list[Path] = []
+
+
+def allow_paths(paths: Iterable[str | os.PathLike[str]]) -> None:
+    """Folders that user files may name besides their own folder (``--allow-path``)."""
+    _allowed[:] = [Path(p).resolve() for p in paths]
+
+
+@dataclass
+class Reader:
+    """One user file being read: its located data and the problems found so far."""
+
+    located: yamlsafe.Located
+    problems: list[Problem] = field(default_factory=list)
+
+    @property
+    def file(self) -> str:
+        return self.located.file
+
+    @property
+    def data(self) -> Any:
+        return self.located.data
+
+    @property
+    def folder(self) -> Path:
+        return Path(self.located.file).resolve().parent
+
+    def problem(self, where: tuple, message: str, *, key: bool = False) -> None:
+        """Record a problem at the value (or, with ``key``, the key) at path ``where``."""
+        self.problems.append(self.located.problem(where, message, key=key))
+
+    def number(self, where: tuple, value: Any, *, maximum: float, minimum: float = 0.0,
+               what: str = "value") -> float:
+        """``value`` as a float, checked finite and within [minimum, maximum]."""
+        number = float(value)
+        if not math.isfinite(number):
+            self.problem(where, f"{what} {value!r} is not a finite number")
+        elif number > maximum:
+            self.problem(where, f"{what} {number:g} is too large (the limit is {maximum:g})")
+        elif number < minimum:
+            self.problem(where, f"{what} {number:g} is too small (the least is {minimum:g})")
+        else:
+            return number
+        return minimum
+
+    def duration(self, where: tuple, value: Any, *, maximum: float = MAX_DURATION,
+                 what: str = "duration") -> float:
+        """Seconds in a duration (see :func:`seconds`), at most ``maximum`` (a day)."""
+        try:
+            amount = seconds(value)
+        except ValueError:
+            self.problem(where, f"{value!r} is not a duration (write 5s, 2min, 500ms or a "
+                                "number of seconds)")
+            return 0.0
+        if not math.isfinite(amount) or amount > maximum:
+            self.problem(where, f"{what} {value} is too long (the limit is "
+                                f"{show_seconds(maximum)})")
+            return 0.0
+        return amount
+
+    def count(self, where: tuple, items: Sized | int, *, maximum: int, what: str) -> bool:
+        """True when ``items`` (a collection or a number) is at most ``maximum``."""
+        size = items if isinstance(items, int) else len(items)
+        if size > maximum:
+            self.problem(where, f"{size} {what}: too many (the limit is {maximum})", key=True)
+            return False
+        return True
+
+    def confined_path(self, where: tuple, name: str, *,
+                      roots: Iterable[Path] = ()) -> Path | None:
+        """The file ``name`` (relative to this file's folder), if it stays inside
+        (see :func:`confine`); otherwise a problem at ``where`` and None."""
+        full, refusal = confine(self.file, name, roots=roots)
+        if refusal is not None:
+            self.problem(where, refusal)
+        return full
+
+    def done(self) -> None:
+        """Raise every problem found so far, at once."""
+        if self.problems:
+            raise FileError(self.problems)
+
+
+def confine(file: str | os.PathLike[str], name: str, *,
+            roots: Iterable[Path] = ()) -> tuple[Path | None, str | None]:
+    """The file that ``file`` names as ``name``, or why it may not name it.
+
+    A user file may only name files below its own folder, below ``roots``
+    (the package's data) or below an ``--allow-path`` folder; anything else is
+    refused before it is opened, so nothing of a file that is not the user's
+    can ever be read or quoted back.
+    """
+    folder = Path(file).resolve().parent
+    full = (folder / name).resolve()
+    inside = [folder, *(Path(r).resolve() for r in roots), *_allowed]
+    if not any(full.is_relative_to(root) for root in inside):
+        return None, (f"{name!r} is outside the folder of {Path(file).name} (a file may only "
+                      "name files below its own folder; --allow-path FOLDER allows another)")
+    if not full.is_file():
+        return None, f"no file {name!r} next to {Path(file).name}"
+    return full, None
+
+
+def spelled(path: str | os.PathLike[str], *, like: str | os.PathLike[str] = "") -> str:
+    """How to name a file in a message: as the file that names it is named (absolute if
+    ``like`` is), else relative to the working folder when it is below it."""
+    full = Path(path).resolve()
+    if Path(like).is_absolute():
+        return str(full)
+    try:
+        return str(full.relative_to(Path.cwd()))
+    except ValueError:
+        return str(full)
+
+
+def open_checked(path: str | os.PathLike[str], schema: Draft202012Validator) -> Reader:
+    """Steps 1 and 2 of the pipeline: a :class:`Reader` over a file whose shape is right."""
+    located = yamlsafe.load_file(path)
+    reader = Reader(located, check(located, schema))
+    reader.done()
+    return reader
+
+
+def read(path: str | os.PathLike[str], schema: Draft202012Validator,
+         meaning: Callable[[Reader], T]) -> T:
+    """The whole pipeline: load safely, check the schema, then ``meaning`` (which records
+    problems on the reader); raise one :class:`FileError` with every problem."""
+    reader = open_checked(path, schema)
+    result = meaning(reader)
+    reader.done()
+    return result
