@@ -97,8 +97,8 @@ def _without_sim(tmp_path, *commands):
 def test_the_engine_works_without_the_simulator(tmp_path):
     scheme = REPO / "docs" / "tutorial" / "ask-then-do.yaml"
     problem = REPO / "planner" / "problems" / "fig6.yaml"
-    helped, validated, listed, simulated, rendered, planned, ran, ran_json, scenario = (
-        _without_sim(tmp_path, ["--help"], ["validate", str(scheme)], ["schemes"],
+    helped, validated, shipped, listed, simulated, rendered, planned, ran, ran_json, scenario = (
+        _without_sim(tmp_path, ["--help"], ["validate", str(scheme)], ["validate"], ["schemes"],
                      ["simulate", "give-object", "H-AGREE"],
                      ["render", "scheme", "give-object", "-o", "g.dot"],
                      ["plan", "fig6", str(problem)], ["run", "give-bottle"],
@@ -106,8 +106,9 @@ def test_the_engine_works_without_the_simulator(tmp_path):
                      ["validate", str(REPO / "docs" / "tutorial" / "tidy-table.yaml")]))
     assert helped[0] == 0 and "simulate" in helped[1]
     assert "run" in helped[1] and "unavailable" in helped[1]
-    for status, _, err in (validated, listed, simulated, rendered, planned):
+    for status, _, err in (validated, shipped, listed, simulated, rendered, planned):
         assert status == 0, err
+    assert "give-object.yaml" in shipped[1] and "scenarios" not in shipped[1]
     assert (tmp_path / "g.dot").is_file()
     status, out, err = ran
     assert status == 2 and out == ""
