@@ -23,7 +23,10 @@ import graphviz
 
 from planner.plan import Plan, PlanAction, TreeNode
 
-FONT = "Helvetica"
+FONT = "DejaVu Sans"
+"""The font dot measures labels with: wider than Helvetica or Arial, so a box sized
+for it holds its label in any viewer (an SVG viewer on Linux draws Helvetica as
+DejaVu Sans; boxes measured for Helvetica overflowed)."""
 
 PALETTE: tuple[tuple[str, str], ...] = (
     ("#c6dbef", "#2171b5"),  # blue
@@ -37,9 +40,25 @@ PALETTE: tuple[tuple[str, str], ...] = (
 )
 """(fill, line) colour pairs, given to the agents in order of first appearance."""
 
+MAIN_SIZE = 11
+SMALL_SIZE = 8
+NODE_MARGIN = (0.12, 0.05)
+"""A box's margin around its label, in inches (dot's ``margin``)."""
+_NARROW = set("fijlrtIJ' .,:;!|-·/()[]")
+_WIDE = set("mwMW=<>&…%@")
+
 TASK_FILL = "#f7f7f7"
 TASK_LINE = "#636363"
 SMALL = "#555555"
+
+
+def text_width(text: str, size: float) -> float:
+    """An estimate of ``text``'s rendered width in points (pixels at 72 dpi), from
+    DejaVu Sans (wider than Helvetica or Arial) plus a few per cent, so that a box
+    sized by it holds its text in any viewer.  The timeline sizes its labels by it too."""
+    return 1.04 * size * sum(
+        0.36 if c in _NARROW else 0.96 if c in _WIDE else 0.72 if c.isupper()
+        else 0.62 if c.isascii() else 1.0 for c in text)
 
 
 def _text(value: Any) -> str:
@@ -54,7 +73,7 @@ def _call(name: str, args: tuple[Any, ...]) -> str:
     return f"{name}({', '.join(str(a) for a in args)})"
 
 
-def _label(main: str, *small: str, size: int = 8) -> str:
+def _label(main: str, *small: str, size: int = SMALL_SIZE) -> str:
     """An HTML-like label: ``main`` in the node's font, then lines of small grey text."""
     lines = [_text(main)]
     lines += [f'<font point-size="{size}" color="{SMALL}">{_text(s)}</font>'
@@ -146,32 +165,63 @@ def tree_dot(plan: Plan, title: str = "") -> str:
     return graph.source
 
 
-def _time_axis(graph: graphviz.Digraph, plan: Plan) -> None:
-    """A row of time ticks, one per distinct start time (and the makespan), each on
-    the rank of the actions that start then: the lanes line up by time."""
-    starts = sorted({a.start for a in plan.actions})
-    if not starts:
-        return
-    ticks = starts + ([plan.makespan] if plan.makespan > starts[-1] else [])
-    with graph.subgraph(name="time_axis") as axis:
-        for number, moment in enumerate(ticks):
-            axis.node(f"time{number}", _label(f"t = {_time(moment)}"), shape="plaintext",
-                      style="", fontsize="9", fontcolor=SMALL)
-        for number in range(len(ticks) - 1):
-            axis.edge(f"time{number}", f"time{number + 1}", color="#bbbbbb", arrowsize="0.5")
-    # Only the first of a lane's actions that start at the same moment (zero
-    # durations) is tied to the tick; the others follow it, left to right.
-    firsts: dict[float, list[int]] = {}
+def _box_width(action: PlanAction) -> float:
+    """The width, in points, of an action's box in the streams: its label and margins."""
+    return max(text_width(str(action), MAIN_SIZE),
+               text_width(_span(action), SMALL_SIZE)) + 2 * 72 * NODE_MARGIN[0]
+
+
+def _span(action: PlanAction) -> str:
+    return f"{_time(action.start)}-{_time(action.end)}"
+
+
+def _columns(plan: Plan) -> dict[float, list[PlanAction]]:
+    """The actions tied to each distinct start time: in each lane, the first of the
+    actions that start then (with zero durations, the others follow it, left to right)."""
+    firsts: dict[float, list[PlanAction]] = {}
     for actions in plan.streams.values():
         for before, action in zip([None, *actions], actions, strict=False):
             if before is None or before.start != action.start:
-                firsts.setdefault(action.start, []).append(action.index)
-    for number, moment in enumerate(starts):
+                firsts.setdefault(action.start, []).append(action)
+    return dict(sorted(firsts.items()))
+
+
+def _time_axis(graph: graphviz.Digraph, plan: Plan, columns: dict[float, list[PlanAction]],
+               widths: dict[float, float]) -> None:
+    """A ruler of time ticks, one per distinct start time, each on the rank of the
+    actions that start then, so that the lanes line up by time.
+
+    Each rank is a column as wide as its widest box; every box of the column is
+    given that width and so is the tick, whose time sits flush left: the tick
+    marks the boxes' left edges, where they start.  The last tick also shows
+    the makespan, flush right, at the boxes' right edges.
+    """
+    if not columns:
+        return
+    moments = list(columns)
+    with graph.subgraph(name="time_axis") as axis:
+        for number, moment in enumerate(moments):
+            width = widths[moment]
+            start = _text(f"t = {_time(moment)}")
+            cells = f'<td align="left" width="{width:.0f}">{start}</td>'
+            if number == len(moments) - 1 and plan.makespan > moment:
+                end = f"t = {_time(plan.makespan)}"
+                room = text_width(end, 9) + 2
+                cells = (f'<td align="left" width="{width - room:.0f}">{start}</td>'
+                         f'<td align="right" width="{room:.0f}">{_text(end)}</td>')
+            axis.node(f"time{number}",
+                      f'<<table border="0" cellborder="0" cellspacing="0" cellpadding="0" '
+                      f'width="{width:.0f}" fixedsize="true"><tr>{cells}</tr></table>>',
+                      shape="plaintext", style="", fontsize="9", fontcolor=SMALL, margin="0",
+                      width=f"{width / 72:.3f}", height="0.2")
+        for number in range(len(moments) - 1):
+            axis.edge(f"time{number}", f"time{number + 1}", color="#bbbbbb", arrowhead="none")
+    for number, moment in enumerate(moments):
         with graph.subgraph() as rank:
             rank.attr(rank="same")
             rank.node(f"time{number}")
-            for index in sorted(firsts[moment]):
-                rank.node(f"a{index}")
+            for action in sorted(columns[moment], key=lambda a: a.index):
+                rank.node(f"a{action.index}")
 
 
 def streams_dot(plan: Plan, title: str = "") -> str:
@@ -188,14 +238,17 @@ def streams_dot(plan: Plan, title: str = "") -> str:
     graph = graphviz.Digraph("plan_streams", graph_attr={
         "rankdir": "LR", "fontname": FONT, "labelloc": "t", "nodesep": "0.6",
         "ranksep": "0.35", "newrank": "true"},
-        node_attr={"fontname": FONT, "fontsize": "11", "shape": "box", "style": "filled",
-                   "margin": "0.12,0.05"},
+        node_attr={"fontname": FONT, "fontsize": str(MAIN_SIZE), "shape": "box",
+                   "style": "filled", "margin": f"{NODE_MARGIN[0]},{NODE_MARGIN[1]}"},
         edge_attr={"color": "#444444", "arrowsize": "0.6", "fontname": FONT,
                    "fontsize": "9"})
     graph.attr(label=_title(title or "plan streams",
                             f"score {plan.score:.4g}   makespan {_time(plan.makespan)}"),
                fontsize="14")
     streams = plan.streams
+    columns = _columns(plan)
+    widths = {moment: max(_box_width(a) for a in tied) for moment, tied in columns.items()}
+    box_width = {a.index: widths[moment] for moment, tied in columns.items() for a in tied}
     lanes = sorted(streams, key=lambda agent: list(colours).index(agent))
     for number, agent in enumerate(lanes):
         fill, line = colours[agent]
@@ -204,12 +257,13 @@ def streams_dot(plan: Plan, title: str = "") -> str:
                       fontname=FONT, fontsize="12", labeljust="l")
             actions = streams[agent]
             for action in actions:
-                lane.node(f"a{action.index}",
-                          _label(str(action), f"{_time(action.start)}-{_time(action.end)}"),
-                          fillcolor=fill, color=line)
+                sized = {"width": f"{box_width[action.index] / 72:.3f}"} \
+                    if action.index in box_width else {}
+                lane.node(f"a{action.index}", _label(str(action), _span(action)),
+                          fillcolor=fill, color=line, **sized)
             for before, after in zip(actions, actions[1:], strict=False):
                 lane.edge(f"a{before.index}", f"a{after.index}")
-    _time_axis(graph, plan)
+    _time_axis(graph, plan, columns, widths)
     agent_of = {a.index: a.agent for a in plan.actions}
     for link in plan.links:
         producer, consumer = agent_of.get(link.producer), agent_of.get(link.consumer)
@@ -217,6 +271,7 @@ def streams_dot(plan: Plan, title: str = "") -> str:
             continue
         line = colours[producer][1]
         graph.edge(f"a{link.producer}", f"a{link.consumer}",
-                   label=_label(link.fact), style="dashed",
+                   label=f'<<table border="0" cellborder="0" cellpadding="3" cellspacing="0">'
+                         f"<tr><td>{_text(link.fact)}</td></tr></table>>", style="dashed",
                    color=line, fontcolor=line, penwidth="1.3")
     return graph.source

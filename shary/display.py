@@ -28,6 +28,7 @@ from pathlib import Path
 
 import graphviz
 
+from planner.display import text_width
 from shary.model import COMPOUND, FINAL, HISTORY, PARALLEL, Scheme, State, Transition
 from shary.tasktree import ACT, TASK, TaskTree
 
@@ -48,7 +49,14 @@ STATE_COLOURS = {
     "planned": "#eeeeee", "todo": "#ffffff", "ongoing": "#9ecae1", "done": "#a1d99b",
     "failed": "#fc9272", "suspended": "#fdd0a2", "cancelled": "#d9d9d9",
 }
-_FONT = "Helvetica"
+_FONT = "DejaVu Sans"
+"""The font dot measures SVG labels with.  DejaVu Sans is what a Linux viewer
+falls back to for "Helvetica", and wider than Helvetica or Arial: boxes sized
+for it hold their text in any viewer (sized for Helvetica, labels overflowed)."""
+FONT_FALLBACKS = "DejaVu Sans,Verdana,Helvetica,Arial,sans-serif"
+PNG_FONT = "Helvetica"
+"""The font of PNG output, which dot both measures and draws (no viewer's fallback)."""
+"""The SVG font-family written for ``_FONT``: viewers without DejaVu use a font no wider."""
 
 
 # -- the dot executable ------------------------------------------------------
@@ -84,12 +92,27 @@ def render_dot(source: str, out: Path) -> None:
     if suffix not in DOT_FORMATS:
         raise ValueError(f"cannot draw to {out.name!r}: use one of {', '.join(SUFFIXES)}")
     dot = find_dot()
+    if suffix == ".png":
+        # dot draws the picture itself: graphviz-pure has glyphs for Helvetica (and
+        # draws other names in a serif), and measures with the same font it draws
+        source = source.replace(f'fontname="{_FONT}"', f'fontname="{PNG_FONT}"')
     done = subprocess.run([dot, f"-T{DOT_FORMATS[suffix]}"], input=source.encode("utf-8"),
                           capture_output=True, check=False)
     if done.returncode != 0:
         raise RuntimeError(f"{dot} failed ({done.returncode}): "
                            f"{done.stderr.decode('utf-8', 'replace').strip()}")
-    out.write_bytes(done.stdout)
+    image = done.stdout
+    if suffix == ".svg":
+        image = image.replace(f'font-family="{_FONT}"'.encode(),
+                              f'font-family="{FONT_FALLBACKS}"'.encode())
+    out.write_bytes(image)
+
+
+def edge_label(text: str) -> str:
+    """An edge's label as an HTML-like label padded all round, so that the text
+    keeps off its line (dot sets a plain label against the edge, touching it)."""
+    return (f'<<table border="0" cellborder="0" cellpadding="3" cellspacing="0"><tr><td>'
+            f"{html.escape(text)}</td></tr></table>>")
 
 
 # -- schemes ---------------------------------------------------------------------
@@ -193,7 +216,7 @@ class _SchemeDot:
                 for name in transition.targets:
                     if not (_is_cluster(state) and name == state.name):  # listed in its label
                         self._edge(state, self._exit(state), self.scheme.states[name],
-                                   graphviz.escape(transition.label()))
+                                   transition.label())
             for name in state.default:
                 self._edge(state, self._exit(state), self.scheme.states[name], "")
 
@@ -302,7 +325,7 @@ class _SchemeDot:
         must not rank its ends either: a transition from a child back to its
         parent would sink the parent's initial point below the child.
         """
-        attrs = {"label": label} if label else {}
+        attrs = {"label": edge_label(label)} if label else {}
         if source is not None and (source is target or source.is_descendant_of(target)
                                    or target.is_descendant_of(source)):
             attrs["constraint"] = "false"
@@ -389,12 +412,22 @@ def _mermaid_text(text: str) -> str:
 # -- task trees ------------------------------------------------------------------
 
 
+TREE_FONT_SIZE = 10
+
+
+def _box_width(label: str, size: float) -> str:
+    """A box's least width (inches) for a label: its widest line by our estimate of
+    DejaVu Sans, and dot's default margins, so no viewer's font overflows it."""
+    return f"{(max(text_width(line, size) for line in label.split(chr(10))) + 16) / 72:.3f}"
+
+
 def tree_dot(tree: TaskTree, title: str = "task tree") -> str:
     """DOT source of a task tree: tasks as boxes, act x task nodes as ellipses, atomic
     tasks as small rounded boxes, all filled by state (a legend says which colour)."""
     graph = graphviz.Digraph("tree", graph_attr={
         "rankdir": "TB", "fontname": _FONT, "label": title, "labelloc": "t", "fontsize": "14",
-        "ranksep": "0.4"}, node_attr={"fontname": _FONT, "fontsize": "10", "style": "filled"},
+        "ranksep": "0.4"},
+        node_attr={"fontname": _FONT, "fontsize": str(TREE_FONT_SIZE), "style": "filled"},
         edge_attr={"color": "#666666", "arrowsize": "0.6"})
     for node in tree.graph.nodes:
         data = tree.node(node)
@@ -403,17 +436,18 @@ def tree_dot(tree: TaskTree, title: str = "task tree") -> str:
         if data["kind"] == TASK:
             args = data.get("args") or {}
             text = ", ".join(f"{k}={v}" for k, v in args.items())
-            graph.node(node, f"{data['name']}\n{text}\n[{state}]" if text
-                       else f"{data['name']}\n[{state}]", shape="box", penwidth="2",
-                       fillcolor=fill)
+            label = f"{data['name']}\n{text}\n[{state}]" if text else f"{data['name']}\n[{state}]"
+            graph.node(node, label, shape="box", penwidth="2", fillcolor=fill,
+                       width=_box_width(label, TREE_FONT_SIZE))
         elif data["kind"] == ACT:
             who = f" by {data['agent']}" if data.get("agent") else ""
             graph.node(node, f"{data['name']}\n{data.get('act_type') or ''}{who}\n[{state}]",
                        shape="ellipse", fillcolor=fill)
         else:
-            graph.node(node, f"{data['name']}\n[{state}]", shape="box",
+            label = f"{data['name']}\n[{state}]"
+            graph.node(node, label, shape="box",
                        style="rounded,filled" + (",dashed" if state == "cancelled" else ""),
-                       fillcolor=fill)
+                       fillcolor=fill, width=_box_width(label, TREE_FONT_SIZE))
     for tail, head in tree.graph.edges:
         graph.edge(tail, head)
     cells = "".join(f'<td bgcolor="{colour}">{state}</td>'

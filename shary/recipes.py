@@ -193,6 +193,10 @@ class Recipe:
     doc: str = ""
     file: str = ""
     mark: tuple[int, int] = (1, 1)
+    on: tuple[str, ...] = ()
+    """The recipe serves its act only when the act's state was entered on one of these
+    events, as the scheme writes them (``H-DISAGREE``, ``after 15s``): what led to
+    the act is context too (GIVE-UP after silence is not GIVE-UP after a failure)."""
 
     @property
     def kind(self) -> str:

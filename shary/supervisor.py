@@ -149,8 +149,11 @@ class Supervisor:
         raise LookupError(f"no scheme of task {task_type.name!r} fits the context")
 
     def choose_recipe(self, run: TaskRun, act: str) -> Recipe | None:
-        """The first recipe of (task, act) whose conditions hold: several may serve one act."""
+        """The first recipe of (task, act) whose conditions hold, and whose events (``on``)
+        include the one that entered the act: several may serve one act."""
         for recipe in self.library.recipes_for(run.type.name, act):
+            if recipe.on and run.entered_on.get(act) not in recipe.on:
+                continue
             if self.holds(recipe.when, run.env):
                 return recipe
         return None
@@ -260,6 +263,8 @@ class TaskRun(SchemeListener):
                       for role in self.scheme.roles}
         self.compiled = sup.compiled(self.scheme)
         self.acts: dict[str, ActTask] = {}
+        self.entered_on: dict[str, str | None] = {}
+        """Act -> the event (as the scheme writes it) that last entered a state carrying it."""
         self.instance: SchemeInstance | None = None
         self.ended = False
         self.paused = False
@@ -302,6 +307,7 @@ class TaskRun(SchemeListener):
         if state.act is None:
             return
         agent = self.roles.get(state.by or "", self.robot)
+        self.entered_on[state.act] = event.name.split("@")[0] if event else None
         self.sup.record("act", task=self.node, agent=agent, act=state.act,
                         act_type=state.act_type.name if state.act_type else None)
         for listener in self.sup.act_listeners:

@@ -44,6 +44,7 @@ from pathlib import Path
 from typing import Any
 from xml.sax.saxutils import escape, quoteattr
 
+from planner.display import text_width
 from shary.log import LogEvent, read_events
 
 # -- geometry (pixels) ---------------------------------------------------------
@@ -78,8 +79,6 @@ ACTION_STYLES = {  # status: (fill, stroke, text)
 }
 LOOK_COLOUR = "#8fc7c2"
 MAIN_ARGS = ("object", "target", "place", "to", "into", "text")
-_NARROW = set("fijlrtIJ' .,:;!|-·/()[]")
-_WIDE = set("mwMW=<>&…%@")
 _NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ufffe\uffff\ud800-\udfff]")
 
 
@@ -227,7 +226,8 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
             replan = str(d.get("reason", ""))
         elif e.kind == "plan":
             steps = d.get("steps") if isinstance(d.get("steps"), list) else []
-            label = f"{'new plan' if replan is not None else 'plan'}: {len(steps)} steps"
+            label = (f"{'new plan' if replan is not None else 'plan'}: {len(steps)} "
+                     f"{'step' if len(steps) == 1 else 'steps'}")
             tooltip = (f"plan for {names.get(e.task or '', e.task)} [{e.task}] at {_t(e.time)} s"
                        + (f"\nreplanned because {replan}" if replan else "")
                        + "".join(f"\n  {step}" for step in steps))
@@ -451,7 +451,7 @@ def _pack(items: list[Item], x: Any, t_end: float,
         left = x(item.start) - (7 if item.point else 0)
         right = x(item.end if item.end is not None else t_end) + (6 if item.end is None else 0)
         item.beside = item.point or right - left < MIN_LABEL_INSIDE
-        label = (left + (16 if item.point else 4) + _width(item.label, size) + 6
+        label = (left + (16 if item.point else 4) + text_width(item.label, size) + 6
                  if item.beside else right)
         spans.append((item, left, right, max(right, label)))
     spans.sort(key=lambda s: (s[0].beside, s[1]))
@@ -534,7 +534,8 @@ def _item(item: Item, top: float, height: float, x: Any, t_end: float) -> str:
     if width >= MIN_LABEL_INSIDE:
         label = _fit(item.label, width - 8, size)
         if label:
-            body += _text(left + 4, mid + size * 0.36, label, "label", size=size, fill=ink)
+            body += _text(left + 4, mid + size * 0.36, label, "label", size=size, fill=ink,
+                          tooltip=item.label)
     elif item.beside:
         beside = left + max(width, 0) + (10 if item.end is None else 4)
         body += _text(beside, mid + size * 0.36, item.label, "label outside",
@@ -557,7 +558,7 @@ def _band(item: Item, top: float, x: Any, t_end: float) -> str:
             'stroke="#555" stroke-width="2"/>'
             + _text(left + 4, mid + 1, _fit(item.label, max(right - left - 8, 0), FONT)
                     if right - left >= MIN_LABEL_INSIDE else item.label, "label", weight="bold",
-                    fill="#333")
+                    fill="#333", tooltip=item.label)
             + "</g>")
 
 
@@ -608,7 +609,7 @@ def _legend(tl: Timeline, left: float, top: float, width: float) -> tuple[str, f
                     "task start / end"))
     parts, cx, cy = [], left, top
     for swatch, text in entries:
-        w = 24 + _width(text, FONT) + 18
+        w = 24 + text_width(text, FONT) + 18
         if cx + w > left + width and cx > left:
             cx, cy = left, cy + 18
         parts.append(f'<g class="legend-entry" transform="translate({_n(cx)},{_n(cy)})">'
@@ -624,7 +625,7 @@ def _preferred_scale(tl: Timeline) -> float:
     them keeps most labels whole; the range keeps one odd run from drawing
     a minute as a few pixels or an instant as a page.
     """
-    needs = sorted((_width(i.label, FONT) + 10) / (i.end - i.start) for i in tl.items
+    needs = sorted((text_width(i.label, FONT) + 10) / (i.end - i.start) for i in tl.items
                    if i.row == "action" and i.end is not None and i.end > i.start)
     low, high = PX_PER_SECOND
     return min(max(needs[len(needs) // 2] if needs else low, low), high)
@@ -650,21 +651,13 @@ def _text(x: float, y: float, text: str, cls: str, *, size: int = FONT, weight: 
             f'{extra}>{tip}{_esc(text)}</text>')
 
 
-def _width(text: str, size: float) -> float:
-    """An estimate of the rendered width, from DejaVu Sans (wider than Helvetica or
-    Arial) plus a few per cent, so that estimated gaps stay gaps in any renderer."""
-    return 1.04 * size * sum(
-        0.36 if c in _NARROW else 0.96 if c in _WIDE else 0.72 if c.isupper()
-        else 0.62 if c.isascii() else 1.0 for c in text)
-
-
 def _fit(text: str, room: float, size: float) -> str:
     """``text`` or its longest prefix + '…' that fits ``room`` pixels ('' when none does)."""
-    if _width(text, size) <= room:
+    if text_width(text, size) <= room:
         return text
     for cut in range(len(text) - 1, 0, -1):
         short = text[:cut].rstrip() + "…"
-        if _width(short, size) <= room:
+        if text_width(short, size) <= room:
             return short
     return ""
 

@@ -73,6 +73,7 @@ def _name_of(path: Path) -> str:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
+    from sim.narration import ConsoleReport
     from sim.run import run_scenario
     from sim.scenario import find_scenario
 
@@ -81,17 +82,10 @@ def cmd_run(args: argparse.Namespace) -> int:
     except KeyError as err:
         return error(err.args[0], json_mode=args.json)
     out = args.out or Path("runs") / _name_of(path)
-    colours: dict[str, str] = {}
-
-    def report(t: float, who: str, text: str) -> None:
-        if args.quiet or args.json:
-            return
-        colour = colours.setdefault(who, ["cyan", "magenta", "green", "yellow"][len(colours) % 4])
-        _out.print(f"[dim]{t:7.1f}s[/dim]  [{colour}]{escape(who):<8}[/{colour}] {escape(text)}")
-
     try:
         result = run_scenario(path, seed=args.seed, out=out, snapshots=args.snapshots,
-                              gui=args.gui, report=report)
+                              gui=args.gui,
+                              report=None if args.quiet or args.json else ConsoleReport(_out))
     except RuntimeError as err:
         return error(str(err), json_mode=args.json, status=1)
     if args.json:

@@ -20,6 +20,7 @@ simulated behaviour lives in :mod:`sim.people`.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -38,8 +39,9 @@ from .motion import (
     Sequence,
     Wait,
 )
+from .narration import action_text
 from .simulation import Simulation, standing_height
-from .world import BOTTLE_RADIUS, FURNITURE, MANIPULATION_PLACES
+from .world import FURNITURE, MANIPULATION_PLACES
 
 NEAR_PEOPLE_SPEED = 0.5
 """Joint speed (rad/s) when the arm moves towards a person: slower, as near people it must."""
@@ -70,18 +72,30 @@ class _Running:
         return bool(self.failure)
 
 
+_NAME = re.compile(r"\b([a-z]+(?:-[a-z]+)+)\b")
+
+
+def spoken(text: str) -> str:
+    """Text as said aloud: the names of things lose their hyphens ("the yellow bottle").
+
+    Names in the world are identifiers (``yellow-bottle``, ``coffee-table``);
+    recipes put them into sentences, where a listener expects words.
+    """
+    return _NAME.sub(lambda m: m.group(1).replace("-", " "), text)
+
+
 class RobotExecutors:
     """The robot's executors (see the module's docstring)."""
 
     def __init__(self, sim: Simulation, say: Callable[[str, str], Any],
                  learned: Callable[[str, str, Any], Any] | None = None,
-                 progress: Callable[[str, str], Any] | None = None):
+                 progress: Callable[[str, str, str], Any] | None = None):
         self.sim = sim
         self.world = sim.world
         self.robot = sim.robot
         self.say = say
         self.learned = learned or (lambda s, p, o: None)
-        self.progress = progress or (lambda who, text: None)
+        self.progress = progress or (lambda who, kind, text: None)
         self.people: dict[str, Any] = {}
         self.faults: dict[str, list[str]] = {}
         """Atomic task -> reasons of the next injected failures (a scenario's faults)."""
@@ -98,11 +112,11 @@ class RobotExecutors:
                             f"people; it asks them in a joint task (ask-help)")
             return
         if request.atomic != "speak":
-            self.progress(self.robot, " ".join([request.atomic, *map(str, request.args.values())]))
+            self.progress(self.robot, "action", action_text(request.atomic, request.args))
         running = _Running(request, reporter)
         if self.faults.get(request.atomic):
             reason = self.faults[request.atomic].pop(0)
-            self.progress(self.robot, f"{request.atomic} failed: {reason}")
+            self.progress(self.robot, "failed", f"{request.atomic} failed: {reason}")
             reporter.failed(request, reason)
             return
         method = getattr(self, "_" + request.atomic.replace("-", "_"), None)
@@ -112,7 +126,7 @@ class RobotExecutors:
         try:
             activity = method(running, **request.args)
         except ActionFailed as err:
-            self.progress(self.robot, f"{request.atomic} failed: {err}")
+            self.progress(self.robot, "failed", f"{request.atomic} failed: {err}")
             reporter.failed(request, str(err))
             return
         self._running[request.id] = running
@@ -135,7 +149,8 @@ class RobotExecutors:
         if self._running.pop(running.request.id, None) is None:
             return
         if running.failure:
-            self.progress(self.robot, f"{running.request.atomic} failed: {running.failure[0]}")
+            self.progress(self.robot, "failed",
+                          f"{running.request.atomic} failed: {running.failure[0]}")
             running.reporter.failed(running.request, running.failure[0])
         else:
             running.reporter.done(running.request)
@@ -204,8 +219,9 @@ class RobotExecutors:
     # -- the atomic tasks -------------------------------------------------------------
 
     def _speak(self, running: _Running, text: str) -> Activity:
-        seconds = 0.4 + len(str(text).split()) / WORDS_PER_SECOND
-        self.say(self.robot, str(text))
+        text = spoken(str(text))
+        seconds = 0.4 + len(text.split()) / WORDS_PER_SECOND
+        self.say(self.robot, text)
         self.speaking = True
 
         def heard() -> None:
@@ -266,6 +282,13 @@ class RobotExecutors:
             raise ActionFailed(f"{self.robot} already holds {held}")
         if object in self.sim.holder:
             raise ActionFailed(f"{self.sim.holder[object]} holds {object}")
+        if object not in self.world.sizes:
+            raise ActionFailed(f"{object!r} is not an object that can be picked up")
+        width = self.world.sizes[object][1]
+        opening = self._gripper_opening()
+        if width > opening:
+            raise ActionFailed(f"{object} is too big to grasp: {width * 100:.0f} cm wide, "
+                               f"the gripper opens to {opening * 100:.0f} cm")
         try:
             x, y, z = self._check_reach(object)
             _, error = reach(self.world, self.robot, (x, y, z))
@@ -281,7 +304,7 @@ class RobotExecutors:
                               if self.world.footprints[f].contains(x, y)), None)
             place, _ = self.world.nearest_place(*self.world.base_pose(self.robot)[:2])
             self.picked_from[object] = ((x, y, z), furniture, place)
-            set_gripper(self.world, self.robot, 0.0)
+            set_gripper(self.world, self.robot, width / 2)  # the fingers close on its sides
             self.sim.attach(object, self.robot)
 
         return Sequence([self._gripper(0.04),
@@ -291,12 +314,19 @@ class RobotExecutors:
                          self._arm_to(running, lambda: (x, y, z + LIFT), f"above {object}")],
                         f"pick {object}", running.failed)
 
-    def _free_spot(self, furniture: str, near: tuple[float, float] | None = None
+    def _gripper_opening(self) -> float:
+        """How wide the robot's gripper opens (metres, between the fingers)."""
+        r = self.world.robot(self.robot)
+        return 2 * min(r.limits[j][1] for j in r.arm().fingers)
+
+    def _free_spot(self, obj: str, furniture: str, near: tuple[float, float] | None = None
                    ) -> tuple[float, float, float]:
         f = self.world.footprints[furniture]
         mx, my, _ = self._mount()
-        z = standing_height(self.world.top(furniture))
-        others = [self.world.position(b) for b in self.world.bottles if b not in self.sim.holder]
+        height, width = self.world.sizes[obj]
+        z = standing_height(self.world.top(furniture), height)
+        others = [(*self.world.position(b)[:2], self.world.sizes[b][1])
+                  for b in self.world.movables if b not in self.sim.holder]
         candidates = []
         steps = 9
         for i in range(steps):
@@ -307,7 +337,7 @@ class RobotExecutors:
                 x, y = f.x + c * lx - s * ly, f.y + s * lx + c * ly
                 if math.hypot(x - mx, y - my) > ROBOT_REACH - 0.1:
                     continue
-                if any(math.hypot(x - o[0], y - o[1]) < 4 * BOTTLE_RADIUS for o in others):
+                if any(math.hypot(x - o[0], y - o[1]) < width + o[2] for o in others):
                     continue
                 key = math.dist((x, y), near) if near else math.hypot(x - mx, y - my)
                 candidates.append((key, x, y))
@@ -340,7 +370,7 @@ class RobotExecutors:
         self._holding(object)
         if on not in FURNITURE:
             raise ActionFailed(f"{on!r} is not a piece of furniture")
-        return self._put_down(running, object, self._free_spot(on), on)
+        return self._put_down(running, object, self._free_spot(object, on), on)
 
     def _put_back(self, running: _Running, object: str) -> Activity:
         self._holding(object)
@@ -351,7 +381,7 @@ class RobotExecutors:
 
         def put_down() -> Activity:
             try:
-                spot = self._free_spot(furniture, (x, y))
+                spot = self._free_spot(object, furniture, (x, y))
             except ActionFailed as err:
                 running.failure.append(str(err))
                 return Instant(lambda: None)
@@ -416,7 +446,7 @@ class RobotExecutors:
             if failure:  # the hand was out of reach: nothing changes hands
                 self.say(self.robot, f"(cannot reach {person}'s hand)")
                 return
-            set_gripper(self.world, self.robot, 0.0)
+            set_gripper(self.world, self.robot, self.world.sizes[obj][1] / 2)
             self.sim.attach(obj, self.robot)
             self.sim.observe()
             done()

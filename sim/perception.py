@@ -37,7 +37,7 @@ from rdflib import Literal
 from .executors import ROBOT_REACH
 from .humans import ARM_LENGTH
 from .simulation import TICK, Simulation
-from .world import BOTTLE_HEIGHT, CONTAINERS, FURNITURE, SEATS, pb
+from .world import CONTAINERS, FURNITURE, SEATS, pb
 
 Fact = tuple[str, str, Any]
 
@@ -88,7 +88,7 @@ class Perception:
 
     def start(self) -> None:
         """Publish what the robot knows at the start: it has seen every object once."""
-        for obj in self.world.bottles:
+        for obj in self.world.movables:
             self.belief[obj] = self.world.position(obj)
             self.object_facts[obj] = tuple(self._object_facts(obj, self.belief[obj]))
         self.update()
@@ -137,7 +137,7 @@ class Perception:
         for obj, holder in sim.holder.items():
             if holder == robot:
                 yield (robot, "isHolding", obj)
-        positions = {obj: world.position(obj) for obj in world.bottles}
+        positions = {obj: world.position(obj) for obj in world.movables}
         names, points = self._targets(positions)
         camera, forward = self._camera()
         looked = self._looked_at(camera, forward, robot, names, points)
@@ -192,7 +192,7 @@ class Perception:
             return
         x, y, z = where
         yield (obj, "position", Literal(f"{x:.2f} {y:.2f} {z:.2f}"))
-        bottom = z - BOTTLE_HEIGHT / 2
+        bottom = z - self.world.sizes[obj][0] / 2
         for furniture in FURNITURE:
             footprint = self.world.footprints[furniture]
             if not footprint.contains(x, y):

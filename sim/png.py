@@ -1,9 +1,10 @@
-"""PNG files with the standard library only (zlib and struct).
+"""PNG files with the standard library (zlib and struct), and snapshot captions.
 
-Snapshots must work on a pip-only install with no imaging library, so the
-world writes its camera images itself: 8-bit RGB or RGBA, one IDAT chunk, no
-row filter.  :func:`read_png` reads back what :func:`write_png` writes (and any
-8-bit, non-interlaced RGB/RGBA PNG), so tests can look inside a snapshot.
+The world writes its camera images itself: 8-bit RGB or RGBA, one IDAT chunk,
+no row filter.  :func:`read_png` reads back what :func:`write_png` writes (and
+any 8-bit, non-interlaced RGB/RGBA PNG), so tests can look inside a snapshot.
+Captions are text, which takes a font and a rasterizer: Pillow draws them
+(:func:`with_caption`), with the font it ships, so no system font is needed.
 """
 
 from __future__ import annotations
@@ -42,6 +43,38 @@ def write_png(path: str | Path, width: int, height: int, pixels: bytes,
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_bytes(encode_png(width, height, pixels, channels))
     return path
+
+
+CAPTION_BACKGROUND = (32, 36, 44)
+CAPTION_INK = (240, 240, 240)
+CAPTION_DIM = (170, 180, 190)
+
+
+def caption_height(lines: int, height: int) -> int:
+    """The height in pixels of a caption strip of ``lines`` lines under a picture
+    ``height`` pixels tall in all (the text grows with the picture)."""
+    return lines * _font_size(height) * 3 // 2 + _font_size(height)
+
+
+def _font_size(height: int) -> int:
+    return max(10, height // 40)
+
+
+def with_caption(pixels: bytes, width: int, height: int, lines: list[str],
+                 band: int) -> bytes:
+    """RGB ``pixels`` (``width`` x ``height``) with a dark strip ``band`` pixels tall
+    added below, holding ``lines`` of text: the first bright, the others dimmer."""
+    from PIL import Image, ImageDraw, ImageFont
+
+    image = Image.new("RGB", (width, height + band), CAPTION_BACKGROUND)
+    image.paste(Image.frombytes("RGB", (width, height), pixels), (0, 0))
+    draw = ImageDraw.Draw(image)
+    size = _font_size(height + band)
+    font = ImageFont.load_default(size=size)
+    for number, line in enumerate(lines):
+        draw.text((size, height + size // 2 + number * size * 3 // 2), line, font=font,
+                  fill=CAPTION_INK if number == 0 else CAPTION_DIM)
+    return image.tobytes()
 
 
 def _paeth(a: int, b: int, c: int) -> int:

@@ -21,7 +21,6 @@ from __future__ import annotations
 import json
 import math
 import time
-from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -36,16 +35,31 @@ from shary.planning import HatpPlanner
 from shary.supervisor import Supervisor
 
 from .executors import RobotExecutors
+from .narration import Narrator, Report
+from .objects import is_new, new_object
 from .people import Person
 from .perception import Noise, Perception
 from .scenario import Happened, Scenario, judge, load_scenario
 from .simulation import Simulation, standing_height
-from .world import BOTTLES, CONTAINERS, FURNITURE, MANIPULATION_PLACES, SEATS, LivingRoom, pb
+from .world import (
+    BOTTLES,
+    CONTAINERS,
+    FURNITURE,
+    MANIPULATION_PLACES,
+    SEATS,
+    LivingRoom,
+    framing,
+    pb,
+)
 
 CHUNK = 0.1
 """Simulated seconds advanced between two looks at whether the run is over (so the
 reported end is at most this much after the last thing that happened)."""
 ROBOT_ATTRIBUTES = {"kind": "robot", "move_cost": 2, "pick_cost": 1, "speed": 1}
+SNAPSHOT_SIZE = (800, 600)
+"""Snapshots' size in pixels, caption included: large enough to see a head turn
+away.  The software renderer takes about 0.75 s for one, 3.3 times the former
+480 x 360 (1.16 s at 960 x 720), measured in one run."""
 PERSON_ATTRIBUTES = {"kind": "human", "move_cost": 4, "pick_cost": 2, "speed": 1}
 
 
@@ -90,8 +104,9 @@ def load(path: str | Path) -> tuple[Scenario, Any, Any]:
 
 def run_scenario(path: str | Path, *, seed: int = 0, out: str | Path | None = None,
                  snapshots: bool = False, gui: bool = False,
-                 report: Callable[[float, str, str], Any] | None = None) -> RunResult:
-    """Run one scenario (see the module's docstring); ``report(t, who, text)`` shows progress."""
+                 report: Report | None = None) -> RunResult:
+    """Run one scenario (see the module's docstring); ``report`` is told the story as it
+    happens (see :mod:`sim.narration`; :class:`sim.narration.ConsoleReport` prints it)."""
     scenario, library, domain = load(path)
     out_dir = Path(out) if out is not None else None
     if out_dir is not None:
@@ -105,7 +120,7 @@ def run_scenario(path: str | Path, *, seed: int = 0, out: str | Path | None = No
     with LivingRoom(gui=gui, robot=None) as world, \
             _log(log_path, seed) as log:
         run = _Run(scenario, library, domain, world, log, seed,
-                   report or (lambda t, who, text: None), out_dir if snapshots else None)
+                   report or (lambda t, who, kind, text: None), out_dir if snapshots else None)
         setup = time.perf_counter() - wall
         wall = time.perf_counter()
         end = run.go()
@@ -144,6 +159,22 @@ class _MemoryLog:
         pass
 
 
+class _Told:
+    """The context log, with each event also shown to the narrator of the run's story."""
+
+    def __init__(self, log: Any, narrator: Narrator):
+        self.log = log
+        self.narrator = narrator
+
+    def record(self, t: float, kind: str, *, task: str | None = None,
+               agent: str | None = None, **data: Any) -> None:
+        self.log.record(t, kind, task=task, agent=agent, **data)
+        self.narrator.event(t, kind, agent, data)
+
+    def flush(self) -> None:
+        self.log.flush()
+
+
 def _log(path: Path | None, seed: int) -> Any:
     return ContextLog(path, seed=seed) if path is not None else _MemoryLog()
 
@@ -152,7 +183,7 @@ class _Run:
     """One run's parts, wired together."""
 
     def __init__(self, scenario: Scenario, library: Any, domain: Any, world: LivingRoom,
-                 log: Any, seed: int, report: Callable[[float, str, str], Any],
+                 log: Any, seed: int, report: Report,
                  snapshot_dir: Path | None):
         self.scenario = scenario
         self.world = world
@@ -165,12 +196,16 @@ class _Run:
         robot = scenario.robot
         world.add_robot(robot, scenario.model, scenario.robot_at)
         self.sim = Simulation(world, self.loop, robot)
-        self.executors = RobotExecutors(self.sim, self.say, self.learned,
-                                        lambda who, text: report(self.loop.now(), who, text))
+        self.executors = RobotExecutors(
+            self.sim, self.say, self.learned,
+            lambda who, kind, text: report(self.loop.now(), who, kind, text))
         registry = ExecutorRegistry({name: self.executors for name in library.atomic})
+        hatp = HatpPlanner(domain, budget_ms=300)
+        self.narrator = Narrator(report, robot, {p.name for p in scenario.people},
+                                 last_plan=lambda: hatp.last.plan if hatp.last else None)
         self.sup = Supervisor(library, self.facts, robot=robot, loop=self.loop,
-                              executors=registry, log=log,
-                              planners={"living-room": HatpPlanner(domain, budget_ms=300)})
+                              executors=registry, log=_Told(log, self.narrator),
+                              planners={"living-room": hatp})
         self.facts.subscribe(self._fact_logged)
         self.people: dict[str, Person] = {}
         for spec in scenario.people:
@@ -195,15 +230,19 @@ class _Run:
     # -- setting up ----------------------------------------------------------------
 
     def _arrange_objects(self) -> None:
+        """Add the scenario's new objects to the room, and put every object in its place."""
         for obj, spec in self.scenario.objects.items():
-            if "held-by" in spec:
-                self.sim.attach(obj, spec["held-by"])
-                continue
             furniture = spec.get("on", "coffee-table")
             f = self.world.footprints[furniture]
             x, y = spec.get("at", (f.x, f.y))
+            if is_new(spec):
+                self.world.add_object(new_object(obj, spec), x, y, self.world.top(furniture))
+            if "held-by" in spec:
+                self.sim.attach(obj, spec["held-by"])
+                continue
+            z = standing_height(self.world.top(furniture), self.world.sizes[obj][0])
             self.world.call(pb.resetBasePositionAndOrientation, self.world.body(obj),
-                            [x, y, standing_height(self.world.top(furniture))], [0, 0, 0, 1])
+                            [x, y, z], [0, 0, 0, 1])
 
     def _a_priori(self) -> None:
         """What the robot knows before it looks: kinds of things, the planner's constants."""
@@ -221,6 +260,13 @@ class _Run:
             facts.add(obj, "color", obj.split("-")[0])
             facts.add(obj, "drink", True)
             facts.add(obj, "robot_reach", True)
+        for obj in self.world.added.values():
+            facts.add(obj.name, "type", "Object")
+            facts.add(obj.name, "type", obj.kind[:1].upper() + obj.kind[1:])
+            facts.add(obj.name, "color", obj.colour)
+            facts.add(obj.name, "shape", obj.shape)
+            facts.add(obj.name, "drink", False)
+            facts.add(obj.name, "robot_reach", True)
         facts.add(robot, "type", "Agent")
         facts.add(robot, "type", "Robot")
         for attribute, value in ROBOT_ATTRIBUTES.items():
@@ -235,7 +281,7 @@ class _Run:
 
     def say(self, who: str, text: str) -> None:
         self.sup.record("speech", agent=who, text=text)
-        self.report(self.loop.now(), who, text)
+        self.report(self.loop.now(), who, "speech", text)
 
     def learned(self, s: str, p: str, o: Any) -> None:
         """An executor found something out by trying (the bottle is out of reach)."""
@@ -246,15 +292,37 @@ class _Run:
                         s=str(event.subject), p=str(event.predicate), o=str(event.object))
 
     def _act_started(self, run: Any, state: Any, agent: str) -> None:
-        self.report(self.loop.now(), agent, f"[{state.act}] {run.type.name}")
-        self.snapshot(f"{state.act.lower()}-{run.type.name}")
+        self.report(self.loop.now(), agent, "act", f"[{state.act}] {run.type.name}")
+        self.snapshot(f"{state.act.lower()}-{run.type.name}",
+                      f"{state.act} {run.type.name}"
+                      + (f" ({', '.join(str(v) for k, v in run.env.items() if k != 'robot')})"
+                         if len(run.env) > 1 else "")
+                      + (f" by {agent}" if agent != self.scenario.robot else ""))
 
-    def snapshot(self, label: str) -> None:
+    def snapshot(self, label: str, act: str = "") -> None:
+        """A picture framing the robot and the people, captioned with the time, the act
+        just entered and who looks where (as the robot believes)."""
         if self.snapshot_dir is None:
             return
         name = f"snapshot-{len(self.snapshots) + 1:02d}-{self.loop.now():06.1f}s-{label}.png"
-        self.world.snapshot(self.snapshot_dir / name, 480, 360)
+        robot = self.scenario.robot
+        x, y, _ = self.world.base_pose(robot)
+        points = [(x, y, 0.6), *(h.eyes for h in self.sim.people.values())]
+        width, height = SNAPSHOT_SIZE
+        caption = [f"{self.loop.now():.1f} s   {act or label}", self._gazes()]
+        self.world.snapshot(self.snapshot_dir / name, width, height,
+                            framing(points, width / height), caption)
         self.snapshots.append(name)
+
+    def _gazes(self) -> str:
+        """Who looks where, as the robot believes: an agent first if one is looked at."""
+        agents = [self.scenario.robot, *self.people]
+        told = []
+        for who in agents:
+            seen = sorted(map(str, self.facts.objects(who, "looksAt")),
+                          key=lambda target: (target not in agents, target))
+            told.append(f"{who} looks at {seen[0]}" if seen else f"{who}: attention unknown")
+        return "   ".join(told)
 
     def go(self) -> float:
         """Run until nothing is left to happen; return the simulated time at the end."""

@@ -29,6 +29,7 @@ from userfiles.reader import Reader, open_checked, read, spelled
 from userfiles.schema import did_you_mean, validator
 
 from .humans import HUMAN_PLACES, Profile, profile_from
+from .objects import check_new_objects, is_new
 from .world import BOTTLES, FOOTPRINTS, FURNITURE, PLACES
 
 HERE = Path(__file__).resolve().parent
@@ -212,6 +213,8 @@ class _Reading:
         people = [self.person(name, spec, robot_name, things, acts, atomic)
                   for name, spec in people_spec.items()]
         names = {p.name for p in people if p is not None}
+        check_new_objects(objects_spec, everyone | set(BOTTLES) | set(FURNITURE) | set(PLACES),
+                          problem)
         objects = {obj: self.thing(obj, spec, names) for obj, spec in objects_spec.items()}
         goals = [self.goal(i, spec, known_tasks, everyone, things)
                  for i, spec in enumerate(data.get("goals") or [])]
@@ -302,7 +305,7 @@ class _Reading:
 
     def thing(self, obj: str, spec: dict[str, Any], names: set[str]) -> dict[str, Any]:
         problem = self.problem
-        if obj not in BOTTLES:
+        if obj not in BOTTLES and not is_new(spec):
             problem(("objects", obj), f"unknown object {obj!r}{did_you_mean(obj, BOTTLES)}; "
                     f"objects: {', '.join(BOTTLES)}", key=True)
         if "on" in spec and spec["on"] not in FURNITURE:

@@ -248,6 +248,7 @@ def _segment_distance(p: tuple[float, float], a: tuple[float, float],
     return math.hypot(p[0] - (ax + t * dx), p[1] - (ay + t * dy))
 
 
-def standing_height(obj_top: float) -> float:
-    """Height of a bottle's centre standing on a surface at ``obj_top``."""
-    return obj_top + BOTTLE_HEIGHT / 2 + 1e-3
+def standing_height(obj_top: float, height: float = BOTTLE_HEIGHT) -> float:
+    """Height of the centre of an object ``height`` tall (a bottle by default) standing
+    on a surface at ``obj_top``."""
+    return obj_top + height / 2 + 1e-3

@@ -36,7 +36,8 @@ from typing import Any
 
 import numpy as np
 
-from .png import write_png
+from .objects import NewObject
+from .png import caption_height, with_caption, write_png
 from .quiet import silenced
 
 with silenced():  # the import prints a "pybullet build time" banner on stderr
@@ -246,6 +247,36 @@ CAMERAS: dict[str, Camera] = {
 LIGHT_DIRECTION = (1.0, -0.6, 2.0)
 
 
+def framing(points: list[Vec3], aspect: float, fov: float = 50.0,
+            looking_from: Camera = CAMERAS["overview"]) -> Camera:
+    """A camera that frames ``points``: the robot first, then its partners.
+
+    It looks across the line from the robot to the first partner, so that
+    neither stands in front of the other, from the side nearer the direction
+    of ``looking_from`` and as high above the floor (over the walls); it is
+    pulled back until a sphere around all the points fits the narrower field
+    of view.  The fixed overview shows the whole room, where a person on the
+    sofa is a few pixels tall and may stand behind the robot.
+    """
+    pts = np.array(points, dtype=float)
+    centre = pts.mean(axis=0)
+    centre[2] = 0.7  # about the height of hands and tables
+    radius = max(float(np.max(np.linalg.norm(pts - centre, axis=1))), 0.8) + 0.7
+    half = math.radians(fov) / 2
+    narrower = min(half, math.atan(math.tan(half) * aspect))
+    usual = np.subtract(looking_from.eye, looking_from.target)
+    flat = math.hypot(usual[0], usual[1])
+    side = usual[:2] / flat
+    if len(pts) > 1 and np.linalg.norm(pts[1, :2] - pts[0, :2]) > 1e-6:
+        line = (pts[1, :2] - pts[0, :2]) / np.linalg.norm(pts[1, :2] - pts[0, :2])
+        across = np.array([-line[1], line[0]])
+        side = across if across @ side >= 0 else -across
+    direction = np.array([side[0] * flat, side[1] * flat, usual[2]])
+    direction /= np.linalg.norm(direction)
+    eye = centre + direction * max(radius / math.sin(narrower), 2.5)
+    return Camera(tuple(eye.tolist()), tuple(centre.tolist()), fov)
+
+
 # --------------------------------------------------------------------- robots
 
 @dataclass(frozen=True)
@@ -385,6 +416,10 @@ class LivingRoom:
         self.timestep = timestep
         self.time = 0.0
         self._bodies: dict[str, int] = {}
+        self.sizes: dict[str, tuple[float, float]] = {}
+        """Each movable object's (height, width to grasp) in metres."""
+        self.added: dict[str, NewObject] = {}
+        """The objects a scenario added (:mod:`sim.objects`), beside the bottles."""
         self.robots: dict[str, Robot] = {}
         self.footprints: dict[str, Footprint] = {}
         self.places: dict[str, Place] = dict(PLACES)
@@ -482,6 +517,37 @@ class LivingRoom:
         self.call(pb.changeDynamics, body, -1, lateralFriction=0.8, rollingFriction=0.001,
                   spinningFriction=0.001)
         self._bodies[name] = body
+        self.sizes[name] = (BOTTLE_HEIGHT, 2 * BOTTLE_RADIUS)
+        return body
+
+    def add_object(self, obj: NewObject, x: float, y: float, z_bottom: float) -> int:
+        """A scenario's new object (a box, a cylinder or a sphere with mass) resting
+        at (x, y) on a surface at ``z_bottom``."""
+        rgba = [*obj.rgb, 1.0]
+        if obj.shape == "box":
+            half = [v / 2 for v in obj.size]
+            col = self.call(pb.createCollisionShape, pb.GEOM_BOX, halfExtents=half)
+            vis = self.call(pb.createVisualShape, pb.GEOM_BOX, halfExtents=half, rgbaColor=rgba)
+        elif obj.shape == "cylinder":
+            radius, height = obj.size[0] / 2, obj.size[1]
+            col = self.call(pb.createCollisionShape, pb.GEOM_CYLINDER, radius=radius,
+                            height=height)
+            vis = self.call(pb.createVisualShape, pb.GEOM_CYLINDER, radius=radius,
+                            length=height, rgbaColor=rgba)
+        else:
+            col = self.call(pb.createCollisionShape, pb.GEOM_SPHERE, radius=obj.size[0] / 2)
+            vis = self.call(pb.createVisualShape, pb.GEOM_SPHERE, radius=obj.size[0] / 2,
+                            rgbaColor=rgba)
+        body = self.call(pb.createMultiBody, baseMass=obj.mass, baseCollisionShapeIndex=col,
+                         baseVisualShapeIndex=vis,
+                         basePosition=[x, y, z_bottom + obj.height / 2 + 1e-4])
+        # a ball must not roll off the table: friction that stops rolling
+        self.call(pb.changeDynamics, body, -1, lateralFriction=0.8,
+                  rollingFriction=0.05 if obj.shape == "sphere" else 0.001,
+                  spinningFriction=0.001)
+        self._bodies[obj.name] = body
+        self.sizes[obj.name] = (obj.height, obj.grasp_width)
+        self.added[obj.name] = obj
         return body
 
     def add_robot(self, name: str, model: str | None = None,
@@ -523,6 +589,11 @@ class LivingRoom:
     @property
     def bottles(self) -> list[str]:
         return [n for n in self._bodies if n.endswith("-bottle")]
+
+    @property
+    def movables(self) -> list[str]:
+        """The objects that can be picked, carried and put down: bottles and added ones."""
+        return [n for n in self._bodies if n in self.sizes]
 
     @property
     def furniture(self) -> list[str]:
@@ -686,10 +757,11 @@ class LivingRoom:
 
     # ----------------------------------------------------------------- images
 
-    def _view(self, camera: str, width: int, height: int) -> tuple[list[float], list[float]]:
+    def _view(self, camera: str | Camera, width: int,
+              height: int) -> tuple[list[float], list[float]]:
         aspect = width / height
-        if camera in CAMERAS:
-            cam = CAMERAS[camera]
+        if isinstance(camera, Camera) or camera in CAMERAS:
+            cam = camera if isinstance(camera, Camera) else CAMERAS[camera]
             view = pb.computeViewMatrix(cam.eye, cam.target, cam.up)
             proj = pb.computeProjectionMatrixFOV(cam.fov, aspect, 0.1, 30.0)
             return view, proj
@@ -705,8 +777,8 @@ class LivingRoom:
         raise KeyError(f"unknown camera {camera!r} (cameras: {', '.join(known)})")
 
     def image(self, width: int = 320, height: int = 240,
-              camera: str = "overview") -> bytes:
-        """RGB bytes (rows top to bottom) seen by a named camera or a robot's camera.
+              camera: str | Camera = "overview") -> bytes:
+        """RGB bytes (rows top to bottom) seen by a camera, a named one or a robot's.
 
         ER_TINY_RENDERER is the software renderer: it works headless and needs
         no GPU or display.
@@ -720,6 +792,13 @@ class LivingRoom:
         return pixels[:, :, :3].tobytes()
 
     def snapshot(self, path: str | Path, width: int = 320, height: int = 240,
-                 camera: str = "overview") -> Path:
-        """Write a PNG of what ``camera`` sees (``overview``, ``top`` or a robot's name)."""
-        return write_png(path, width, height, self.image(width, height, camera))
+                 camera: str | Camera = "overview", caption: list[str] = ()) -> Path:
+        """Write a PNG of what ``camera`` sees (``overview``, ``top``, a robot's name or
+        a :class:`Camera`), ``width`` x ``height`` in all: with a ``caption``, its
+        lines are written in a strip along the bottom of the picture."""
+        if not caption:
+            return write_png(path, width, height, self.image(width, height, camera))
+        band = caption_height(len(caption), height)
+        pixels = self.image(width, height - band, camera)
+        return write_png(path, width, height, with_caption(pixels, width, height - band,
+                                                           caption, band))

@@ -12,9 +12,11 @@ from shary import load_scheme
 from shary.display import (
     ACTIVE_BACKGROUND,
     ACTIVE_FILL,
+    edge_label,
     find_dot,
     render_dot,
     render_scheme,
+    render_tree,
     scheme_dot,
     scheme_mermaid,
     tree_dot,
@@ -85,6 +87,12 @@ def clusters(source: str) -> dict[str, dict[str, str]]:
             re.findall(r"subgraph (\S+) \{\n\s*(.*)", source)}
 
 
+def _edge_text(label: str | None) -> str | None:
+    """The text of an edge label (padded in an HTML-like table by :func:`edge_label`)."""
+    found = re.search(r"<td>(.*?)</td>", label or "")
+    return found.group(1) if found else label
+
+
 @pytest.mark.parametrize("name", BUILT_IN)
 def test_dot_names_every_state_and_labels_every_transition(name):
     scheme = load_scheme(name)
@@ -95,17 +103,17 @@ def test_dot_names_every_state_and_labels_every_transition(name):
         if state.act:
             assert f"{state.act} ({state.act_type.name})" in source
         for t in state.transitions:
-            assert labels.count(t.label()) >= len(t.targets)
+            assert labels.count(edge_label(t.label())) >= len(t.targets)
     points = [n for n, attrs in nodes(source).items() if attrs.get("shape") == "point"]
     compound = [s for s in scheme.all_states() if s.kind == "compound"]
     assert len(points) == 1 + len(compound)  # the root's initial point, and one each
 
 
 def test_dot_edges_attach_to_compound_states_at_their_borders():
-    drawn = {(attrs.get("label"), head): (tail, attrs) for tail, head, attrs in
+    drawn = {(_edge_text(attrs.get("label")), head): (tail, attrs) for tail, head, attrs in
              edges(scheme_dot(load_scheme("give-object-attentive")))}
     # into realize: to its initial point, clipped at its border
-    assert drawn["H-AGREE", "init_s_realize"] == ("s_ask", {"label": "H-AGREE",
+    assert drawn["H-AGREE", "init_s_realize"] == ("s_ask", {"label": edge_label("H-AGREE"),
                                                              "lhead": "cluster_realize"})
     # out of realize and out of engaged: clipped at the border they leave
     assert drawn["done", "s_end"][1]["ltail"] == "cluster_realize"
@@ -262,3 +270,51 @@ def test_render_tree_command(shary, tmp_path):
     assert (tmp_path / "tree.png").read_bytes()[:4] == b"\x89PNG"
     status, _, err = shary("render", "tree", tmp_path / "tree.png", "-o", tmp_path / "t.svg")
     assert status == 2 and "not a shary context log" in err
+
+
+SVG_NS = "{http://www.w3.org/2000/svg}"
+
+
+def _boxes_and_texts(svg: str):
+    """Each drawn node of an SVG from dot: (box width, [(text, font size)])."""
+    import xml.etree.ElementTree as ET
+
+    out = []
+    for g in ET.fromstring(svg).iter(f"{SVG_NS}g"):
+        if g.get("class") != "node" or g.findtext(f"{SVG_NS}title") == "legend":
+            continue
+        polygon = g.find(f"{SVG_NS}polygon")
+        path = g.find(f"{SVG_NS}path")
+        shape = polygon.get("points") if polygon is not None else (
+            path.get("d") if path is not None else None)
+        if shape is None:
+            continue
+        xs = [float(v) for v in re.findall(r"(-?[\d.]+),-?[\d.]+", shape)]
+        texts = [(t.text or "", float(t.get("font-size"))) for t in g.iter(f"{SVG_NS}text")]
+        out.append((max(xs) - min(xs), texts))
+    return out
+
+
+def test_tree_boxes_hold_their_labels_in_a_wide_font(tmp_path):
+    from planner.display import text_width
+
+    tree = TaskTree()
+    root = tree.add("task", "give-object", state="done",
+                    args={"object": "a-rather-long-yellow-bottle", "partner": "alice-in-the-sofa"})
+    act = tree.add("act", "REALIZE-TASK x give-object", root, state="ongoing",
+                   act_type="R-ACT", agent="jido")
+    tree.add("atomic", "move-for-manipulate-somewhere", act, state="cancelled")
+    render_tree(tree, tmp_path / "t.svg")
+    svg = (tmp_path / "t.svg").read_text()
+    assert 'font-family="DejaVu Sans,' in svg  # measured with DejaVu, fallbacks no wider
+    boxes = [(w, texts) for w, texts in _boxes_and_texts(svg) if texts]
+    assert len(boxes) == 2  # the task and the atomic task (the act is an ellipse)
+    for width, texts in boxes:
+        for text, size in texts:
+            assert width >= text_width(text, size), (text, width)
+
+
+def test_edge_labels_are_padded_off_their_lines():
+    source = scheme_dot(load_scheme("give-object"))
+    assert 'label=<<table border="0" cellborder="0" cellpadding="3"' in source
+    assert edge_label("a<b").count("a&lt;b") == 1

@@ -109,7 +109,8 @@ def test_distracted_and_never_back_gives_up(world):
     assert run.configuration == ("suspended",)
     world.run(10)
     assert run.outcome == "failed" and run.configuration == ("abandoned",)
-    assert "I give up this task." in [a.get("text") for _, n, a in world.executor.started]
+    assert "You are busy, so I will not give you the bottle." in [
+        a.get("text") for _, n, a in world.executor.started]
 
 
 def test_executor_failure_retried_then_given_up(world):

@@ -166,7 +166,7 @@ def test_streams_draw_one_dashed_labelled_edge_per_inter_agent_link():
     for link in crossing:
         attrs = next(a for t, h, a in dashed
                      if (t, h) == (f"a{link.producer}", f"a{link.consumer}"))
-        assert f"label=<{link.entity}.{link.attribute}>" in attrs
+        assert f"<td>{link.entity}.{link.attribute}</td>" in attrs  # padded off its line
         assert f'color="{colours[plan.actions[link.producer].agent][1]}"' in attrs
     assert source.count("posTopo") == 1  # the within-lane posTopo links are not drawn
 
@@ -180,8 +180,8 @@ def test_streams_title_has_score_and_makespan():
 
 def test_streams_line_lanes_up_on_a_time_axis():
     source = streams_dot(clean_up_plan())
-    # A tick per distinct start time, and one for the makespan; 4 is only an end.
-    ticks = re.findall(r"label=<t = (\d+)>", source)
+    # A tick per distinct start time, the last one with the makespan; 4 is only an end.
+    ticks = re.findall(r"<td align=\"(?:left|right)\"[^>]*>t = (\d+)</td>", source)
     assert ticks == ["0", "3", "5", "7", "10", "11"]
     # Both moves start at 0: on the rank of the first tick.
     assert re.search(r"rank=same\s+time0\s+a0\s+a1", source)
@@ -217,3 +217,43 @@ def test_dot_renders_through_graphviz_pure(draw, tmp_path):
         assert out.stat().st_size > 0
     svg = (tmp_path / f"{draw.__name__}.svg").read_text(encoding="utf-8")
     assert "Dump(jido, yellow&#45;bottle, trash)" in svg.replace("-", "&#45;")
+
+
+def _svg_nodes(svg: str) -> dict[str, tuple[float, float, list[tuple[str, float, float]]]]:
+    """Each node of an SVG from dot: id -> (left, right, [(text, x, font size)])."""
+    import xml.etree.ElementTree as ET
+
+    ns = "{http://www.w3.org/2000/svg}"
+    out = {}
+    for g in ET.fromstring(svg).iter(f"{ns}g"):
+        if g.get("class") != "node":
+            continue
+        texts = [(t.text or "", float(t.get("x")), float(t.get("font-size")))
+                 for t in g.iter(f"{ns}text")]
+        polygon = g.find(f"{ns}polygon")
+        xs = ([float(v) for v in re.findall(r"(-?[\d.]+),-?[\d.]+", polygon.get("points"))]
+              if polygon is not None else [t[1] for t in texts])
+        out[g.findtext(f"{ns}title")] = (min(xs), max(xs), texts)
+    return out
+
+
+def test_streams_boxes_hold_their_labels_and_the_ruler_marks_their_left_edges(tmp_path):
+    from planner.display import text_width
+
+    svg = subprocess.run([_graphviz_pure(), "-Tsvg"], capture_output=True, check=True,
+                         input=streams_dot(clean_up_plan()).encode()).stdout.decode()
+    found = _svg_nodes(svg)
+    plan = clean_up_plan()
+    for action in plan.actions:
+        left, right, texts = found[f"a{action.index}"]
+        for text, _, size in texts:
+            assert right - left >= text_width(text, size), text
+    starts = sorted({a.start for a in plan.actions})
+    for number, moment in enumerate(starts):
+        _, _, texts = found[f"time{number}"]
+        tick_x = texts[0][1]  # the start time, flush left
+        lefts = [found[f"a{a.index}"][0] for a in plan.actions if a.start == moment]
+        assert any(abs(tick_x - left) < 3 for left in lefts), (moment, tick_x, lefts)
+    # the makespan, flush right on the last tick, at the right edge of the last boxes
+    _, _, texts = found[f"time{len(starts) - 1}"]
+    assert texts[-1][0] == f"t = {plan.makespan:g}"

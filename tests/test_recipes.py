@@ -71,6 +71,34 @@ def test_act_not_in_the_tasks_scheme(shary, write):
     assert "carries out 'ASK-HELP'" in msg
 
 
+def test_recipe_events_must_enter_the_act(shary, write):
+    path = write("on.yaml", BASE + """\
+recipes:
+  - {task: greet, act: GIVE-UP, on: [after 15s, H-DISAGRE]}
+  - {task: greet, act: END-TASK, on: [H-DISAGREE, done]}
+""")
+    ((line, col, msg),) = _problems(shary, path)
+    assert (line, col) == (11, 49)  # at the event
+    assert ("no transition of the scheme(s) of task 'greet' enters GIVE-UP on 'H-DISAGRE'"
+            in msg and "events: after 15s, failed" in msg)
+
+
+def test_the_event_that_entered_the_act_chooses_its_recipe():
+    speech = {}
+    for name, reply in (("yes", "H-AGREE"), ("no", "H-DISAGREE"), ("silence", None)):
+        world = World()
+        run = world.sup.start_task("give-object", {"object": "bottle", "partner": "alice"})
+        if reply:
+            world.run(0.5)
+            world.sup.receive_act("alice", reply)
+        world.run(40)
+        speech[name] = [a.get("text") for _, n, a in world.executor.started if n == "speak"]
+        assert run.ended
+    assert speech["no"][-1] == "All right, I won't give you the bottle."
+    assert speech["silence"][-1] == "You did not answer, so I will not give you the bottle."
+    assert speech["yes"][-1] == "Here is the bottle."
+
+
 def test_cyclic_ordering(shary, write):
     path = write("cycle.yaml", BASE + """\
 recipes:

@@ -9,6 +9,7 @@ import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from shary.cli import main
@@ -26,12 +27,57 @@ def test_every_scenario_of_the_issue_is_shipped():
             "serve-drink-initiative", "explore-new-objects", "give-bottle-noisy"} <= set(SCENARIOS)
 
 
+STORIES: dict[str, list[tuple[float, str, str, str]]] = {}
+"""What each run of the ``runs`` fixture told its console: (t, who, kind, text)."""
+
+
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
     """Each built-in scenario run once, with its files, shared by the tests below."""
     out = tmp_path_factory.mktemp("runs")
-    return {name: (run_scenario(builtin_scenarios()[name], out=out / name), out / name)
-            for name in SCENARIOS}
+    found = {}
+    for name in SCENARIOS:
+        story = STORIES[name] = []
+        found[name] = (run_scenario(builtin_scenarios()[name], out=out / name,
+                                    report=lambda *line, story=story: story.append(line)),
+                       out / name)
+    return found
+
+
+def _told(name, kind, who=None):
+    return [text for _, w, k, text in STORIES[name] if k == kind and who in (None, w)]
+
+
+def test_the_console_tells_the_new_plan_after_a_failure(runs):
+    plans = _told("clean-up-unreachable", "plan")
+    assert any(p.startswith("plan, 4 actions") for p in plans)
+    assert any(p.startswith("new plan, 5 actions, since 2-pick failed") for p in plans)
+    # the new plan's streams, one line per agent: Alice picks and gives, Jido dumps
+    assert any("Pick(yellow-bottle" in p and "Give(jido" in p
+               for p in _told("clean-up-unreachable", "plan", "alice"))
+
+
+def test_the_console_tells_what_people_do_and_where_they_look(runs):
+    assert "give yellow-bottle to jido" in _told("clean-up-unreachable", "person", "alice")
+    assert "place blue-bottle on coffee-table" in _told("explore-new-objects", "person", "bob")
+    attention = _told("give-bottle-distracted", "attention", "alice")
+    away = next(i for i, text in enumerate(attention) if text.startswith("looks away from jido"))
+    assert "looks back at jido" in attention[away + 1:]
+    assert not any("looks away" in text for text in _told("give-bottle", "attention"))
+
+
+def test_end_task_says_what_happened(runs):
+    def said(name):
+        return _told(name, "speech", "jido")
+
+    assert said("give-bottle")[-1] == "Here is the yellow bottle."
+    assert said("give-bottle-refused")[-1] == "All right, I won't give you the yellow bottle."
+    assert "I have finished." not in said("give-bottle-refused")
+    assert said("give-bottle-abandoned")[-1].startswith("You are busy, so I will not give you")
+    assert said("give-bottle-unanswered")[-1] == ("You did not answer, so I will not give you "
+                                                  "the yellow bottle.")
+    assert "Thank you for the yellow bottle." in said("clean-up-unreachable")
+    assert said("explore-new-objects")[-1] == "I have looked at the coffee area."
 
 
 @pytest.mark.parametrize("name", SCENARIOS)
@@ -147,12 +193,42 @@ def test_same_seed_same_run_in_another_process(tmp_path):
     assert logs[0] == logs[1]
 
 
-def test_snapshots_are_pngs(tmp_path):
+def test_snapshots_are_large_captioned_pngs_framing_robot_and_partner(tmp_path):
+    from sim.png import CAPTION_BACKGROUND, read_png
+    from sim.run import SNAPSHOT_SIZE
+
     result = run_scenario(builtin_scenarios()["give-bottle-refused"], out=tmp_path,
                           snapshots=True)
     shots = sorted(tmp_path.glob("snapshot-*.png"))
     assert len(shots) >= 3 and shots[0].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert result.outputs["snapshots"]
+    width, height, channels, pixels = read_png(shots[0])
+    assert (width, height) == SNAPSHOT_SIZE and width >= 800
+    rgb = np.frombuffer(pixels, dtype=np.uint8).reshape(height, width, channels)
+    band = rgb[-height // 12:]  # the caption strip: dark, with light text on it
+    background = (np.abs(band.astype(int) - CAPTION_BACKGROUND).max(axis=2) <= 8).mean()
+    ink = (band.min(axis=2) > 150).sum()
+    assert background > 0.6 and ink > 200
+    # Alice (her blue shirt) is large in the picture, not a few pixels far away
+    scene = rgb[:-height // 12].reshape(-1, 3).astype(int)
+    shirt = (np.abs(scene - (40, 90, 200)).max(axis=1) <= 45).sum()
+    assert shirt > 2000
+
+
+def test_the_framing_camera_keeps_everyone_in_view():
+    from sim.world import framing
+
+    camera = framing([(0.0, -1.0, 0.6), (-2.0, 1.5, 1.2)], 4 / 3)
+    eye, target = np.array(camera.eye), np.array(camera.target)
+    assert target[:2] == pytest.approx([-1.0, 0.25])
+    forward = (target - eye) / np.linalg.norm(target - eye)
+    for point in [(0.0, -1.0, 0.6), (-2.0, 1.5, 1.2)]:
+        to = np.array(point) - eye
+        angle = np.degrees(np.arccos(to @ forward / np.linalg.norm(to)))
+        assert angle < camera.fov / 2
+    # it looks across the line from the robot to the partner, not along it
+    line = np.array([-2.0, 2.5]) / np.linalg.norm([-2.0, 2.5])
+    assert abs(forward[:2] @ line) < 1e-6
 
 
 def test_a_failed_expectation_says_what_differed_and_exits_1(tmp_path, capsys):
@@ -279,3 +355,61 @@ def test_shary_validate_checks_scenarios_and_profiles(tmp_path, capsys):
     captured = capsys.readouterr()
     assert f"{profile}:2:11: error: unknown act 'ASK-TAKS'" in captured.err
     assert "ok    " in captured.out and "give-bottle.yaml" in captured.out
+
+
+OBJECTS_HEAD = """\
+scenario: objects
+robot: {name: jido, at: base}
+people:
+  alice: {at: sofa-seat}
+goals:
+  - {task: give-object, with: {object: red-cup, partner: alice}}
+expect: {tasks: {give-object: done}}
+objects:
+"""
+
+
+@pytest.mark.parametrize("entry, at, message", [
+    ("  red-cup: {shape: cylinder, colour: red, size: [0.07, 0.1], on: kitchen-table}",
+     "kitchen-table", r"unknown furniture 'kitchen-table'"),
+    ("  yellow-bottle: {shape: box, colour: red, size: [0.1, 0.1, 0.1]}",
+     "yellow-bottle", r"'yellow-bottle' already names something in the room"),
+    ("  sofa: {shape: sphere, colour: red, size: [0.1]}", "sofa", r"'sofa' already names"),
+    ("  red-cup: {shape: cylinder, colour: red, size: [0.07, 2.5]}",
+     "2.5", r"the height must be from 0.02 to 0.6 m, not 2.5"),
+    ("  red-cup: {shape: cylinder, colour: red, size: [.nan, 0.1]}",
+     ".nan", r"'\.nan' is not a finite number"),
+    ("  red-cup: {shape: cylinder, colour: red, size: [0.07, 0.1, 0.2]}",
+     "[0.07", r"a cylinder's size is \[diameter, height\] in metres: 2 numbers, not 3"),
+    ("  red-cup: {shape: cylinder, colour: mauve, size: [0.07, 0.1]}",
+     "mauve", r"unknown colour 'mauve'"),
+    ("  red-cup: {shape: cylinder, colour: [1, 0, 3], size: [0.07, 0.1]}",
+     "3]", r"the colour component must be from 0 to 1, not 3"),
+    ("  red-cup: {shape: cylinder, colour: red, size: [0.07, 0.1], mass: -1}",
+     "-1", r"the mass must be from 0.01 to 5 kg, not -1"),
+    ("  red-cup: {shape: pyramid, colour: red, size: [0.07, 0.1]}",
+     "pyramid", r"'pyramid' is not one of: box, cylinder, sphere"),
+    ("  red-cup: {colour: red, size: [0.07, 0.1]}", "red-cup",
+     r"'red-cup' is not one of the room's bottles, so it is a new object: it needs a shape"),
+    ("  red-cup: {shape: box, colour: red, on: store-table, at: [9, 9]}", "red-cup",
+     r"it needs a size"),
+])
+def test_bad_new_objects_are_refused_where_they_are(tmp_path, entry, at, message):
+    from hostile import assert_refused, run_inprocess
+
+    path = tmp_path / "objects.yaml"
+    path.write_text(OBJECTS_HEAD + entry + "\n")
+    outcome = run_inprocess("run", path, "--out", tmp_path / "out")
+    assert_refused(outcome, path, message=message)
+    line = OBJECTS_HEAD.count("\n") + 1
+    assert f"{path}:{line}:{entry.index(at) + 1}: error:" in outcome.err, outcome.err
+
+
+def test_a_new_object_is_built_seen_and_handed_over(runs):
+    result, out = runs["give-red-cup"]
+    assert result.passed, result.differences
+    said = _told("give-red-cup", "speech", "jido")
+    assert "Here is the red cup." in said
+    failed = _told("give-red-cup", "failed", "jido")
+    assert any("wooden-box is too big to grasp: 15 cm wide, the gripper opens to 8 cm" in f
+               for f in failed)

@@ -242,7 +242,9 @@ def test_narrow_bars_truncate_labels_and_keep_the_full_text_in_the_tooltip():
     root = parse(render_timeline(events, px_per_second=100))
     navigate = next(g for g in groups(root, "action") if g.get("data-atomic") == "navigate")
     label = next(t for t in navigate.iter(f"{SVG}text") if "label" in t.get("class"))
-    assert label.text.endswith("…") and len(label.text) < len("navigate the-far-end")
+    shown = label.find(f"{SVG}title").tail  # the label's own tooltip comes first
+    assert shown.endswith("…") and len(shown) < len("navigate the-far-end")
+    assert label.find(f"{SVG}title").text == "navigate the-far-end-of-the-living-room"
     assert "navigate(place=the-far-end-of-the-living-room)" in tooltip(navigate)
     assert float(root.get("width")) > 60 * 100  # the width grows with the duration
 
@@ -261,3 +263,15 @@ def test_write_timeline_names_the_picture_after_the_log(distracted: Path, tmp_pa
     assert parse(out.read_text(encoding="utf-8")).find(f"{SVG}title").text == "distracted"
     titled = write_timeline(distracted, tmp_path / "t2.svg", title="Fig. 11")
     assert parse(titled.read_text(encoding="utf-8")).find(f"{SVG}title").text == "Fig. 11"
+
+
+def test_plan_marks_count_their_steps_in_words():
+    events = [event(1, 0.0, "task-start", "n1", name="fetch", args={}),
+              event(2, 0.0, "plan", "n1", recipe="fetch/REALIZE-TASK#1", steps=["1-move"]),
+              event(3, 1.0, "replan", "n1", reason="1-move failed: blocked", attempt=1),
+              event(4, 1.0, "plan", "n1", recipe="fetch/REALIZE-TASK#1",
+                    steps=["1-move", "2-pick"]),
+              event(5, 2.0, "task-end", "n1", name="fetch", outcome="done")]
+    root = parse(render_timeline(events))
+    labels = ["".join(g.find(f"{SVG}text").itertext()) for g in groups(root, "plan")]
+    assert labels == ["plan: 1 step", "new plan: 2 steps"]

@@ -253,13 +253,22 @@ class _Builder:
             self.problem(located, path + (given[1],), f"a recipe has steps, a plan or a "
                          f"function, not {' and '.join(given)}", key=True)
         when = self._conditions(located, path + ("when",), spec.get("when"), env)
+        on = tuple(str(e) for e in spec.get("on") or ())
+        if on and task.schemes:
+            entering = {e for c in task.schemes for e in _events_into(c.scheme, act)}
+            for i, event in enumerate(on):
+                if event not in entering:
+                    self.problem(located, path + ("on", i), f"no transition of the scheme(s) "
+                                 f"of task {task_name!r} enters {act} on {event!r}"
+                                 f"{did_you_mean(event, entering)}; events: "
+                                 f"{', '.join(sorted(entering)) or 'none'}")
         rank = len(self.library.recipes_for(task_name, act)) + 1
         name = spec.get("name") or f"{task_name}/{act}#{rank}"
         self.library.recipes.append(Recipe(
             name, task_name, act, when, steps, plan,
             spec.get("function") if isinstance(spec.get("function"), str) else None,
             monitors, retry, spec.get("doc", "") or "", located.file,
-            located.key_at(path)))
+            located.key_at(path), on))
 
     def _steps(self, located: yamlsafe.Located, path: tuple, raw: Any,
                env: set[str]) -> tuple[Step, ...]:
@@ -457,3 +466,19 @@ def _is_duration(text: str) -> bool:
     except ValueError:
         return False
     return True
+
+
+def _events_into(scheme: Any, act: str) -> set[str]:
+    """The events (as written: ``H-DISAGREE``, ``after 15s``) of the transitions that
+    enter a state carrying ``act`` in ``scheme``."""
+    found: set[str] = set()
+    for state in scheme.states.values():
+        for transition in state.transitions:
+            if not any(scheme.states[t].act == act for t in transition.targets
+                       if t in scheme.states):
+                continue
+            if transition.after is not None:
+                found.add(transition.label().split(" [")[0])
+            else:
+                found.update(transition.events or ())
+    return found
