@@ -26,8 +26,9 @@ from importlib import metadata
 from pathlib import Path
 from typing import NoReturn
 
-from shary.terminal import emit_json, error, refused
+from shary.terminal import emit_json, error, output_refused, refused
 from userfiles.errors import FileError
+from userfiles.outputs import OutputError
 from userfiles.reader import allow_paths
 
 GROUP = "shary.commands"
@@ -61,6 +62,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(args.func(args) or 0)
     except FileError as err:
         return refused(err.problems, json_mode=json_mode)
+    except OutputError as err:  # PATH: error: … (no line: an output has none)
+        return output_refused(err, json_mode=json_mode)
     except KeyboardInterrupt:
         return 130
 

@@ -31,6 +31,7 @@ import graphviz
 from planner.display import text_width
 from shary.model import COMPOUND, FINAL, HISTORY, PARALLEL, Scheme, State, Transition
 from shary.tasktree import ACT, TASK, TaskTree
+from userfiles.outputs import write_output
 
 DOT_FORMATS = {".svg": "svg", ".png": "png"}
 TEXT_SUFFIXES = (".dot", ".gv")
@@ -87,7 +88,7 @@ def render_dot(source: str, out: Path) -> None:
     """
     suffix = out.suffix.lower()
     if suffix in TEXT_SUFFIXES:
-        out.write_text(source, encoding="utf-8")
+        write_output(out, source)
         return
     if suffix not in DOT_FORMATS:
         raise ValueError(f"cannot draw to {out.name!r}: use one of {', '.join(SUFFIXES)}")
@@ -105,7 +106,7 @@ def render_dot(source: str, out: Path) -> None:
     if suffix == ".svg":
         image = image.replace(f'font-family="{_FONT}"'.encode(),
                               f'font-family="{FONT_FALLBACKS}"'.encode())
-    out.write_bytes(image)
+    write_output(out, image)
 
 
 def edge_label(text: str) -> str:
@@ -133,10 +134,9 @@ def render_scheme(scheme: Scheme, out: Path, active: Iterable[str] = ()) -> None
     (.mmd, .mermaid) or a Markdown page holding a Mermaid block (.md)."""
     suffix = out.suffix.lower()
     if suffix in MERMAID_SUFFIXES:
-        out.write_text(scheme_mermaid(scheme, active), encoding="utf-8")
+        write_output(out, scheme_mermaid(scheme, active))
     elif suffix == MARKDOWN_SUFFIX:
-        out.write_text(f"# {scheme.name}\n\n```mermaid\n{scheme_mermaid(scheme, active)}```\n",
-                       encoding="utf-8")
+        write_output(out, f"# {scheme.name}\n\n```mermaid\n{scheme_mermaid(scheme, active)}```\n")
     else:
         render_dot(scheme_dot(scheme, active), out)
 

@@ -21,6 +21,7 @@ from typing import Any
 from rich.console import Console
 
 from userfiles.errors import Problem
+from userfiles.outputs import OutputError
 
 EXIT_FAILED = 1
 """It ran, and the expectation failed (a scenario not met, no plan, a test failed)."""
@@ -73,6 +74,15 @@ def refused(problems: Sequence[Problem], *, json_mode: bool = False) -> int:
     print_problems(problems)
     if json_mode:
         emit_json({"problems": problems_json(problems)})
+    return EXIT_BAD_INPUT
+
+
+def output_refused(refusal: OutputError, *, json_mode: bool = False) -> int:
+    """An output that cannot be written: ``PATH: error: … (hint)``; returns 2."""
+    err.print(f"[bold]{escape(refusal.path)}:[/bold] [bold red]error:[/bold red] "
+              f"{escape(refusal.message)} ({escape(refusal.hint)})")
+    if json_mode:
+        emit_json({"error": f"{refusal.path}: {refusal.message} ({refusal.hint})"})
     return EXIT_BAD_INPUT
 
 

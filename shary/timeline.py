@@ -45,7 +45,8 @@ from typing import Any
 from xml.sax.saxutils import escape, quoteattr
 
 from planner.display import text_width
-from shary.log import LogEvent, read_events
+from shary.log import LogEvent, stream_events
+from userfiles.outputs import write_output
 
 # -- geometry (pixels) ---------------------------------------------------------
 
@@ -428,8 +429,9 @@ def _task_item(s: TaskSpan, t_end: float) -> Item:
 def write_timeline(log_path: str | Path, out_path: str | Path, title: str = "") -> Path:
     """Render the log at ``log_path`` into ``out_path`` (titled by the log's name if no title)."""
     out = Path(out_path)
-    svg = render_timeline(read_events(log_path), title or Path(log_path).stem)
-    out.write_text(svg, encoding="utf-8")
+    with stream_events(log_path) as events:  # streamed: a long log is never held whole
+        svg = render_timeline(events, title or Path(log_path).stem)
+    write_output(out, svg)
     return out
 
 

@@ -13,6 +13,8 @@ import struct
 import zlib
 from pathlib import Path
 
+from userfiles.outputs import write_output
+
 SIGNATURE = b"\x89PNG\r\n\x1a\n"
 _CHANNELS = {2: 3, 6: 4}  # PNG colour type -> channels
 
@@ -40,8 +42,7 @@ def write_png(path: str | Path, width: int, height: int, pixels: bytes,
               channels: int = 3) -> Path:
     """Write ``pixels`` as a PNG file at ``path`` (parents created) and return the path."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_bytes(encode_png(width, height, pixels, channels))
+    write_output(path, encode_png(width, height, pixels, channels))
     return path
 
 

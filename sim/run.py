@@ -33,6 +33,7 @@ from shary.log import ContextLog, read_events
 from shary.loop import EventLoop
 from shary.planning import HatpPlanner
 from shary.supervisor import Supervisor
+from userfiles.outputs import output_folder, write_output
 
 from .executors import RobotExecutors
 from .narration import Narrator, Report
@@ -110,7 +111,7 @@ def run_scenario(path: str | Path, *, seed: int = 0, out: str | Path | None = No
     scenario, library, domain = load(path)
     out_dir = Path(out) if out is not None else None
     if out_dir is not None:
-        out_dir.mkdir(parents=True, exist_ok=True)
+        output_folder(out_dir)
         for stale in out_dir.glob("snapshot-*.png"):
             stale.unlink()
     wall = time.perf_counter()
@@ -134,7 +135,7 @@ def run_scenario(path: str | Path, *, seed: int = 0, out: str | Path | None = No
         if out_dir is not None:
             log.flush()
             result.outputs = run.write(out_dir, log_path)
-            (out_dir / "summary.json").write_text(json.dumps(result.summary(), indent=2) + "\n")
+            write_output(out_dir / "summary.json", json.dumps(result.summary(), indent=2) + "\n")
             result.outputs["summary"] = str(out_dir / "summary.json")
     return result
 

@@ -11,7 +11,7 @@ Two ways to run a command, both measured:
 * :func:`run_inprocess` calls :func:`shary.cli.main` in this process and traces
   Python allocations with :mod:`tracemalloc` (fast: for the many small files);
 * :func:`run_subprocess` runs ``python -m shary`` in a child and reads its peak
-  resident memory from ``wait4`` (exact: for the few large or deep inputs, and
+  resident memory from the child's own ``VmHWM`` (exact: for the few large or deep inputs, and
   for anything that could hurt the test process itself).
 """
 
@@ -23,7 +23,7 @@ import os
 import re
 import subprocess
 import sys
-import threading
+import tempfile
 import time
 import tracemalloc
 from dataclasses import dataclass
@@ -71,33 +71,44 @@ def run_inprocess(*argv: object) -> Outcome:
     return Outcome(int(status), out.getvalue(), err.getvalue(), seconds, peak / 2**20)
 
 
+_CHILD = """\
+import os, runpy, sys
+sys.argv[0] = "shary"
+try:
+    runpy.run_module("shary", run_name="__main__", alter_sys=True)
+finally:
+    with open(os.environ["SHARY_TEST_HWM"], "w") as out:
+        out.write(open("/proc/self/status").read())
+"""
+"""The child's body: ``python -m shary`` that writes its own status on the way out.
+
+Its peak resident size is read from ``VmHWM`` in ``/proc/self/status``, which
+belongs to the child's own address space.  ``wait4``'s ``ru_maxrss`` would not
+do: Linux carries the parent's high-water mark across fork and exec, so a test
+process that had grown made a 46 MB child look like 475 MB.
+"""
+
+
 def run_subprocess(*argv: object, cwd: Path | None = None,
                    timeout: float = 3 * MAX_SECONDS) -> Outcome:
     """Run ``python -m shary ARGV`` in a child; memory is its own peak resident size."""
-    env = dict(os.environ, COLUMNS="200")
-    start = time.perf_counter()
-    proc = subprocess.Popen([sys.executable, "-m", "shary", *map(str, argv)], cwd=cwd,
-                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    streams: dict[str, bytes] = {}
-    readers = [threading.Thread(target=lambda n=name, f=f: streams.__setitem__(n, f.read()))
-               for name, f in (("out", proc.stdout), ("err", proc.stderr))]
-    for reader in readers:
-        reader.start()
-    killer = threading.Timer(timeout, proc.kill)
-    killer.start()
-    try:
-        _, status, usage = os.wait4(proc.pid, 0)  # reaps the child: its own rusage
-    finally:
-        killer.cancel()
-    proc.returncode = os.waitstatus_to_exitcode(status)
-    for reader in readers:
-        reader.join()
-    seconds = time.perf_counter() - start
-    if seconds >= timeout:
-        raise AssertionError(f"shary {' '.join(map(str, argv))} killed after {timeout:.0f} s")
+    with tempfile.TemporaryDirectory() as scratch:
+        status_file = Path(scratch) / "status"
+        env = dict(os.environ, COLUMNS="200", SHARY_TEST_HWM=str(status_file))
+        start = time.perf_counter()
+        try:
+            done = subprocess.run([sys.executable, "-c", _CHILD, *map(str, argv)], cwd=cwd,
+                                  env=env, capture_output=True, timeout=timeout)
+        except subprocess.TimeoutExpired:
+            raise AssertionError(f"shary {' '.join(map(str, argv))} killed after "
+                                 f"{timeout:.0f} s") from None
+        seconds = time.perf_counter() - start
+        status = status_file.read_text() if status_file.exists() else ""
+    peak = re.search(r"^VmHWM:\s+(\d+) kB", status, re.MULTILINE)
+    assert peak, f"the child left no status (exit {done.returncode}):\n{done.stderr[-2000:]!r}"
     decode = lambda b: b.decode("utf-8", "replace")  # noqa: E731
-    return Outcome(proc.returncode, decode(streams["out"]), decode(streams["err"]), seconds,
-                   usage.ru_maxrss / 1024)
+    return Outcome(done.returncode, decode(done.stdout), decode(done.stderr), seconds,
+                   int(peak[1]) / 1024)
 
 
 def assert_refused(outcome: Outcome, *files: Path, message: str | None = None) -> None:

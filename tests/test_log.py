@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import io
 import json
+import re
 import signal
 import sqlite3
 import subprocess
@@ -14,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from shary.log import ContextLog, LogEvent, add_log_command, export_jsonl, read_events
+from shary.log import ContextLog, LogEvent, add_log_command, end_time, export_jsonl, read_events
 from userfiles.errors import FileError
 
 # (time, kind, task, agent, data): a short run of give-object.
@@ -199,12 +200,12 @@ META = ("CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)",
 @pytest.mark.parametrize(("statements", "reason"), [
     (["CREATE TABLE things (name TEXT)"], "no events table"),
     (["CREATE TABLE events (seq, kind)"], "events table has columns seq, kind"),
-    ([EVENTS], "no such table: meta"),
+    ([EVENTS], "no meta table"),
     ([EVENTS, META[0], "INSERT INTO meta VALUES ('format', '2')"], "log format 2"),
     ([EVENTS, *META, "INSERT INTO events (time, kind, data) VALUES (1, 'act', 'nope')"],
-     "event 1 is malformed"),
+     r"event #1 \(kind act\): data is not JSON"),
     ([EVENTS, *META, "INSERT INTO events (time, kind, data) VALUES ('soon', 'act', '{}')"],
-     "event 1 is malformed"),
+     r'event #1 \(kind act\): time is "soon", not a finite number'),
 ])
 def test_a_sqlite_file_of_something_else_is_a_file_error(tmp_path: Path, statements: list[str],
                                                           reason: str):
@@ -217,8 +218,7 @@ def test_a_sqlite_file_of_something_else_is_a_file_error(tmp_path: Path, stateme
     out.write_text("keep", encoding="utf-8")
     with pytest.raises(FileError, match=reason):
         export_jsonl(path, out)
-    if "malformed" not in reason:  # a bad table is found before the export is opened
-        assert out.read_text(encoding="utf-8") == "keep"
+    assert out.read_text(encoding="utf-8") == "keep"  # replaced only by a whole export
 
 
 def test_a_missing_log_is_a_file_error(tmp_path: Path):
@@ -273,3 +273,134 @@ def test_cli_on_a_bad_file_raises_file_error_for_the_main_command(shary_log, tmp
     path.write_text("not a database, just some notes\n" * 20, encoding="utf-8")
     with pytest.raises(FileError):
         shary_log(path)
+
+
+def damaged(tmp_path: Path, how: str) -> Path:
+    """A log of 5,000 events with garbage over 8 KiB in its middle, or cut in half."""
+    path = tmp_path / "run.sqlite"
+    with ContextLog(path) as log:
+        for i in range(5000):
+            log.record(i / 10, "tick", task=f"t{i % 7}", n=i, pad="x" * 50)
+    data = bytearray(path.read_bytes())
+    middle = len(data) // 2
+    if how == "overwritten":
+        data[middle:middle + 8192] = b"\xa5" * 8192
+    else:
+        del data[middle:]
+    path.write_bytes(bytes(data))
+    return path
+
+
+def test_a_damaged_log_says_so_and_where_and_the_events_before_stay_readable(tmp_path: Path):
+    path = damaged(tmp_path, "overwritten")
+    with pytest.raises(FileError, match=r"the log is damaged after event #(\d+): database "
+                       r"disk image is malformed \(read the events before it with --limit \1\)"
+                       ) as caught:
+        read_events(path)
+    last = int(re.search(r"#(\d+)", str(caught.value))[1])
+    assert 1000 < last < 5000
+    assert [e.data["n"] for e in read_events(path, limit=3)] == [0, 1, 2]
+    assert [e.seq for e in read_events(path, limit=last)] == list(range(1, last + 1))
+
+
+def test_a_truncated_log_is_damaged_not_foreign(tmp_path: Path):
+    with pytest.raises(FileError, match=r":1:1: error: the log is damaged: "):
+        read_events(damaged(tmp_path, "truncated"))
+
+
+def test_reading_a_finished_log_leaves_nothing_beside_it(run_log: Path, shary_log):
+    """Issue 17: no -wal/-shm files after `shary log` (the log is opened immutable)."""
+    assert sorted(p.name for p in run_log.parent.iterdir()) == ["run.sqlite"]
+    before = run_log.read_bytes()
+    assert shary_log(run_log)[0] == 0 and len(read_events(run_log, kind="act")) == 1
+    assert sorted(p.name for p in run_log.parent.iterdir()) == ["run.sqlite"]
+    assert run_log.read_bytes() == before
+
+
+def test_pages_kinds_and_the_end_time(run_log: Path):
+    everything = read_events(run_log)
+    assert read_events(run_log, offset=2, limit=3) == everything[2:5]
+    assert read_events(run_log, offset=7) == everything[7:]
+    assert kinds(read_events(run_log, kinds=("act", "goal"))) == ["goal", "act"]
+    assert end_time(run_log) == 4.0
+    with ContextLog(run_log.parent / "empty.sqlite"):
+        pass
+    assert end_time(run_log.parent / "empty.sqlite") == 0.0
+
+
+def test_streamed_events_are_checked_as_they_come(tmp_path: Path):
+    path = tmp_path / "odd.sqlite"
+    with ContextLog(path) as log:
+        log.record(0.0, "tick")
+    with closing(sqlite3.connect(path)) as conn:
+        conn.execute("INSERT INTO events (time, kind, data) VALUES (1, 'node', '{}')")
+        conn.execute("INSERT INTO events (time, kind, data) VALUES (9e999, 'tick', '{}')")
+        conn.commit()
+    with pytest.raises(FileError, match=r"event #2 \(kind node\): task is null, not text"):
+        read_events(path)
+    with pytest.raises(FileError, match=r"event #3 \(kind tick\): time is inf, not a finite"):
+        read_events(path, kind="tick")
+
+
+def test_the_writer_refuses_what_it_could_not_read_back(tmp_path: Path):
+    with ContextLog(tmp_path / "deep.sqlite") as log:
+        deep: list = []
+        for _ in range(70):
+            deep = [deep]
+        with pytest.raises(ValueError, match="deeper than 64 levels"):
+            log.record(0.0, "plan", steps=deep)
+        with pytest.raises(ValueError, match="larger than 4 MiB"):
+            log.record(0.0, "plan", text="x" * (4 * 2**20 + 1))
+
+
+def test_nesting_is_measured_without_recursion():
+    from shary.logrows import nesting
+
+    assert nesting("[" * 100 + "]" * 100) == 100
+    assert nesting("[" * 200_000) == 200_000  # unclosed: as deep as it goes
+    assert nesting('{"a":"' + "[" * 100 + '"}') == 1  # brackets in a string do not nest
+    assert nesting('{"a":"\\"' + "[" * 100 + '"}') == 1  # nor after an escaped quote
+
+
+INTERRUPTED = """
+import sys
+from shary.log import ContextLog
+with ContextLog(sys.argv[1]) as log:
+    i = 0
+    while True:
+        log.record(i / 100, "tick", n=i)
+        i += 1
+        if i == 300:
+            log.flush()
+            print("ready", flush=True)
+"""
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child is POSIX")
+def test_ctrl_c_while_writing_keeps_every_recorded_event(tmp_path: Path):
+    """Ctrl-C unwinds through the log's `with`: what was recorded, even unflushed, is kept."""
+    path = tmp_path / "interrupted.sqlite"
+    child = subprocess.Popen([sys.executable, "-c", INTERRUPTED, str(path)],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert child.stdout is not None and child.stdout.readline() == "ready\n"
+    child.send_signal(signal.SIGINT)
+    _, err = child.communicate(timeout=30)
+    assert "KeyboardInterrupt" in err
+    events = read_events(path)
+    assert len(events) >= 300 and [e.data["n"] for e in events] == list(range(len(events)))
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child is POSIX")
+def test_ctrl_c_while_shary_log_prints_exits_130_without_a_traceback(tmp_path: Path):
+    path = tmp_path / "long.sqlite"
+    with ContextLog(path) as log:
+        for i in range(20_000):  # far more than a pipe holds: the child waits to write
+            log.record(i / 100, "tick", n=i)
+    child = subprocess.Popen([sys.executable, "-m", "shary", "log", str(path), "--json"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert child.stdout is not None and child.stdout.readline().startswith(b'{"seq": 1,')
+    child.send_signal(signal.SIGINT)
+    child.stdout.close()  # as a terminal would: nothing more is read
+    assert child.wait(timeout=30) == 130
+    assert child.stderr is not None and b"Traceback" not in child.stderr.read()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["long.sqlite"]

@@ -16,6 +16,7 @@ from shary.commands.schemes import draw
 from shary.terminal import add_json_flag, emit_json, error, escape
 from shary.terminal import err as _err
 from shary.terminal import out as _out
+from userfiles.outputs import output_file
 
 
 def add_plan(sub: argparse._SubParsersAction) -> None:
@@ -45,6 +46,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
 
     if args.render and args.output is None:
         return error("--render needs -o OUT", json_mode=args.json)
+    if args.output is not None:
+        output_file(args.output)
     if args.hddl:
         problem = planner.load_hddl(args.domain, args.problem)
         domain = problem.domain

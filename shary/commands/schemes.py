@@ -11,6 +11,8 @@ from shary import builtin
 from shary.terminal import add_json_flag, emit_json, error, escape
 from shary.terminal import out as _out
 from userfiles import yamlsafe
+from userfiles.errors import FileError, Problem
+from userfiles.outputs import output_file, write_output
 
 
 def first_sentence(doc: str) -> str:
@@ -136,6 +138,7 @@ def cmd_render_scheme(args: argparse.Namespace) -> int:
     from shary.display import render_scheme
     from shary.io.schemes import load_scheme
 
+    output_file(args.output)
     scheme = load_scheme(args.scheme)
     active = [s for s in args.active.split(",") if s]
     unknown = [s for s in active if s not in scheme.states]
@@ -156,14 +159,18 @@ def draw(drawing: Any, out: Path, detail: str = "", quiet: bool = False) -> int:
 
 
 def cmd_render_tree(args: argparse.Namespace) -> int:
-    from shary.display import render_tree
-    from shary.log import read_events
-    from shary.tasktree import TaskTree
+    from shary.display import TEXT_SUFFIXES, render_tree
+    from shary.log import end_time
+    from shary.tasktree import MAX_DRAWN_NODES, replay_log
 
-    events = read_events(args.log)
-    tree = TaskTree.replay(events, args.at)
-    end = events[-1].time if events else 0.0
-    when = f"t = {args.at:g} s" if args.at is not None else f"end (t = {end:g} s)"
+    output_file(args.output)
+    tree = replay_log(args.log, args.at)
+    when = f"t = {args.at:g} s" if args.at is not None else f"end (t = {end_time(args.log):g} s)"
+    if len(tree) > MAX_DRAWN_NODES and args.output.suffix.lower() not in TEXT_SUFFIXES:
+        raise FileError([Problem(str(args.log), 1, 1, (
+            f"the task tree at {when} has {len(tree)} nodes; shary lays out at most "
+            f"{MAX_DRAWN_NODES} (draw an earlier time with --at, or write DOT text with "
+            "-o tree.dot)"))])
     return draw(lambda: render_tree(tree, args.output, title=f"{args.log.name} at {when}"),
                 args.output, f" ({len(tree)} nodes)")
 
@@ -181,11 +188,8 @@ def add_import_scxml(sub: argparse._SubParsersAction) -> None:
 def cmd_import_scxml(args: argparse.Namespace) -> int:
     from shary.io.scxml import import_scxml
 
-    text = import_scxml(args.source)
-    try:
-        args.output.write_text(text, encoding="utf-8")
-    except OSError as err:
-        return error(f"cannot write {args.output}: {err.strerror}", status=1)
+    output_file(args.output, inputs=[args.source])
+    write_output(args.output, import_scxml(args.source))
     _out.print(f"wrote {escape(str(args.output))}")
     return 0
 
