@@ -271,3 +271,11 @@ def test_json_a_wrong_command_line_is_a_document_too(capsys):
     captured = capsys.readouterr()
     assert json.loads(captured.out) == {"error": "unrecognized arguments: --bogus"}
     assert "unrecognized arguments: --bogus" in captured.err
+
+
+def test_json_an_output_that_cannot_be_written_is_a_document_too(shary, tmp_path):
+    (tmp_path / "a-file").write_text("not a folder")
+    out = tmp_path / "a-file" / "plan.svg"
+    doc = _json(shary, "plan", "fig6", str(REPO / "planner" / "problems" / "fig6.yaml"),
+                "--render", "tree", "-o", str(out), "--json", status=2)
+    assert doc["error"].startswith(f"{out}: ")
