@@ -28,7 +28,7 @@ if TYPE_CHECKING:
     from shary.supervisor import TaskRun
 
 
-@dataclass(eq=False)
+@dataclass(eq=False, slots=True)
 class StepRun:
     """A step of a running recipe: its tree node, its state, what performs it now."""
 
@@ -42,6 +42,9 @@ class StepRun:
 
 class ActTask:
     """One act of one task, carried out by a recipe (see the module's docstring)."""
+
+    __slots__ = ("run", "sup", "state", "act", "agent", "node", "recipe", "steps",
+                 "subscriptions", "started", "replans", "completes", "suspended", "over")
 
     def __init__(self, run: TaskRun, state: State, agent: str):
         self.run = run
@@ -262,7 +265,7 @@ class ActTask:
         perspective = monitor.perspective.resolve(env) if monitor.perspective else None
 
         def react(event: Any) -> None:
-            if event.kind == monitor.change and not self.over:
+            if not self.over:
                 fact = (event.subject, event.predicate, event.object)
                 self.sup.record("monitor", task=self.node, monitor=monitor.name,
                                 emit=monitor.emit, fact=list(fact))
@@ -274,7 +277,8 @@ class ActTask:
                     self.run.deliver_soon(monitor.emit, {"fact": fact})
 
         self.subscriptions.append(self.sup.facts.subscribe(
-            react, subject=s, predicate=p, object=o, perspective=perspective))
+            react, subject=s, predicate=p, object=o, perspective=perspective,
+            kind=monitor.change))
 
     def _detach(self) -> None:
         for subscription in self.subscriptions:

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from transitions import Event, EventData, Machine
+from transitions import Event, Machine
 from transitions import State as FlatState
 from transitions import Transition as FlatTransition
 
@@ -70,9 +70,8 @@ class StepTransition(FlatTransition):
         self.condition_funcs = tuple(compiled.condition(n) for n in names)
         self.steps: dict[tuple[bool, ...], tuple[Step, str] | None] = {}
 
-    def execute(self, event_data: Any) -> bool:
-        instance = event_data.model
-        event = event_data.args[0]
+    def fire(self, instance: Any, event: Any) -> bool:
+        """Take the microstep the guards select, if any (called by :meth:`SchemeEvent.trigger`)."""
         funcs = self.condition_funcs
         key = tuple(bool(f(instance, event)) for f in funcs) if funcs else ()
         try:
@@ -97,21 +96,26 @@ class StepTransition(FlatTransition):
 class SchemeEvent(Event):
     """An event of the flat machine that compiles its transitions on first use.
 
-    ``trigger`` goes straight to ``Event._trigger``: schemes keep their own
-    run-to-completion queues (:mod:`shary.instance`), so the machine's
-    ``_process`` (which would only call the trigger back) is skipped.
+    ``trigger`` does what ``Event._trigger`` does for one model, without its
+    ``EventData``, model lookup and (empty) callback lists, and without the
+    machine's ``_process`` queue: schemes keep their own run-to-completion
+    queues (:mod:`shary.instance`), and this runs once per event of every
+    live task.
     """
 
-    def trigger(self, model: Any, *args: Any, **kwargs: Any) -> bool:
-        return self._trigger(EventData(None, self, self.machine, model, args=args,
-                                       kwargs=kwargs))
-
-    def _is_valid_source(self, state: ConfigurationState) -> bool:
+    def trigger(self, model: Any, event: Any) -> bool:  # type: ignore[override]
+        name = model.state
+        state = self.machine.states[name]
         if state.finished:
             return False
-        if state.name not in self.transitions:
+        transitions = self.transitions.get(name)
+        if transitions is None:
             self.machine.compiled.compile_transition(self, state)
-        return bool(self.transitions[state.name])
+            transitions = self.transitions[name]
+        for transition in transitions:
+            if transition.fire(model, event):
+                return True
+        return False
 
 
 class SchemeMachine(Machine):

@@ -37,6 +37,19 @@ turns a term back into what :meth:`FactDatabase.term` accepts, so that
 is an ``xsd:decimal`` while Python's ``0.5`` is an ``xsd:double``: write
 ``5.0e-1`` in files whose numbers the engine compares with Python floats.
 
+**Where facts live.**  rdflib's store costs about 10 µs per change (a named
+graph's contexts and indexes, ``len`` before and after), a good part of the
+whole path from a perception change to the arm stopping.  So each
+perspective keeps its own index in front of its rdflib graph
+(:class:`_Perspective`: the set of its triples and the objects of each
+(subject, predicate)), which answers :meth:`holds`, :meth:`objects`,
+:meth:`triples` and tells whether a change changes anything; the rdflib graph
+stays the store for SPARQL and export, filled when first read and then
+receiving the net changes made since its last read just before it is read
+(:meth:`select`, :attr:`dataset`).  Turtle files are read by
+:mod:`shary.turtle`.  ``docs/architecture.md`` has the figures
+of the alternatives measured (oxrdflib, pyoxigraph).
+
 **Events.**  Every addition and deletion made through :meth:`add`,
 :meth:`remove` and :meth:`set` is delivered as a :class:`FactEvent` to the
 subscribers whose pattern matches.  Monitors react to those events; they never
@@ -67,31 +80,22 @@ import logging
 import os
 import re
 import typing
-import warnings
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass
 from itertools import count
-from pathlib import Path
 from urllib.parse import quote
 
 from pyparsing import ParseException
 from rdflib import OWL, RDF, RDFS, XSD, Dataset, Graph, Literal, URIRef
-from rdflib.plugins.parsers.notation3 import BadSyntax
 from rdflib.plugins.sparql import prepareQuery
 from rdflib.plugins.sparql.sparql import Query
 from rdflib.term import Node
 
-from userfiles.errors import FileError, Problem
-from userfiles.yamlsafe import read_text
+from shary.turtle import Triple, read_turtle
 
-__all__ = ["FactDatabase", "FactEvent", "Subscription", "Value", "MAX_TURTLE_BYTES"]
+__all__ = ["FactDatabase", "FactEvent", "Subscription", "Value"]
 
 log = logging.getLogger(__name__)
-
-MAX_TURTLE_BYTES = 8 * 1024 * 1024
-"""Largest Turtle file accepted (8 MiB, about 100,000 triples): a-priori
-knowledge of a home is far smaller, and rdflib needs seconds per megabyte."""
 
 Value = str | int | float | bool | Node
 """What the engine speaks: short or prefixed names, full IRIs, Python numbers
@@ -107,12 +111,14 @@ _NAME = re.compile(r"\w(?:[\w.-]*[\w-])?")
 
 _PERSPECTIVE_GRAPH = "urn:shary:perspective:"
 
-_Triple = tuple[Node, Node, Node]
 
 
-@dataclass(frozen=True)
-class FactEvent:
-    """One fact added to or removed from one perspective, in short names."""
+class FactEvent(typing.NamedTuple):
+    """One fact added to or removed from one perspective, in short names.
+
+    A named tuple rather than a frozen dataclass: one is made per change that
+    some subscriber hears, and a tuple is built three times faster.
+    """
 
     kind: EventKind
     subject: Value
@@ -128,23 +134,19 @@ class Subscription:
     change never converts names.
     """
 
-    __slots__ = ("callback", "perspective", "active", "_key", "_object", "_order")
+    __slots__ = ("callback", "perspective", "kind", "active", "_key", "_object", "_order")
 
     def __init__(self, callback: Callable[[FactEvent], object],
                  key: tuple[Node | None, Node | None], obj: Node | None,
-                 perspective: str | None, order: int):
+                 perspective: str | None, kind: EventKind | None, order: int):
         self.callback = callback
         self.perspective = perspective
+        self.kind = kind
         self.active = True
         """False once unsubscribed: a cancelled subscription receives nothing more."""
         self._key = key
         self._object = obj
         self._order = order
-
-    def _matches(self, obj: Node, perspective: str) -> bool:
-        return (self.active
-                and (self._object is None or self._object == obj)
-                and (self.perspective is None or self.perspective == perspective))
 
 
 @functools.lru_cache(maxsize=256)
@@ -158,6 +160,89 @@ def _prepare_select(text: str, namespace: str) -> Query:
         kind = query.algebra.name.removesuffix("Query").upper()
         raise ValueError(f"only SPARQL SELECT queries are run here, not {kind}")
     return query
+
+
+class _Perspective:
+    """One perspective's facts: an index in front of its rdflib graph (see the module's
+    documentation).
+
+    ``triples`` and ``objects`` are always current.  The rdflib graph is
+    filled from them the first time someone reads it (:meth:`sync`: a file
+    loaded only to be checked, or a world nobody queries with SPARQL, never
+    pays for rdflib's store); from then on it lags behind by the changes in
+    ``pending`` (each triple's last word: True added, False removed).
+    """
+
+    __slots__ = ("graph", "built", "triples", "objects", "pending")
+
+    def __init__(self, graph: Graph, source: _Perspective | None = None):
+        self.graph = graph
+        self.built = False
+        self.pending: dict[Triple, bool] = {}
+        if source is None:
+            self.triples: set[Triple] = set()
+            self.objects: dict[tuple[Node, Node], set[Node]] = {}
+        else:
+            self.triples = set(source.triples)
+            self.objects = {key: set(objects) for key, objects in source.objects.items()}
+
+    def add(self, triple: Triple) -> bool:
+        """Add a triple; False when it was already there."""
+        if triple in self.triples:
+            return False
+        self.triples.add(triple)
+        key = (triple[0], triple[1])
+        objects = self.objects.get(key)
+        if objects is None:
+            self.objects[key] = {triple[2]}
+        else:
+            objects.add(triple[2])
+        if self.built:
+            self.pending[triple] = True
+        return True
+
+    def remove(self, triple: Triple) -> bool:
+        """Remove a triple; False when it was not there."""
+        if triple not in self.triples:
+            return False
+        self.triples.discard(triple)
+        key = (triple[0], triple[1])
+        objects = self.objects[key]
+        objects.discard(triple[2])
+        if not objects:
+            del self.objects[key]
+        if self.built:
+            self.pending[triple] = False
+        return True
+
+    def load(self, triples: set[Triple]) -> None:
+        """Take in parsed triples (loading is setting up knowledge, not a change)."""
+        new = triples - self.triples
+        self.triples |= new
+        objects = self.objects
+        for s, p, o in new:
+            found = objects.get((s, p))
+            if found is None:
+                objects[(s, p)] = {o}
+            else:
+                found.add(o)
+        if self.built:
+            self.pending.update(dict.fromkeys(new, True))
+
+    def sync(self) -> Graph:
+        """Bring the rdflib graph up to date and return it."""
+        graph = self.graph
+        if not self.built:
+            graph.addN((s, p, o, graph) for s, p, o in self.triples)
+            self.built = True
+        elif self.pending:
+            for triple, present in self.pending.items():
+                if present:
+                    graph.add(triple)
+                else:
+                    graph.remove(triple)
+        self.pending.clear()
+        return graph
 
 
 def _order(term: Node) -> str:
@@ -176,8 +261,8 @@ class FactDatabase:
         self._namespace = namespace
         self._prefixes = {"w": namespace, **_PREFIXES}
         self._dataset = Dataset()
-        self._apriori = self._dataset.default_graph
-        self._graphs: dict[str, Graph] = {}
+        self._apriori = _Perspective(self._dataset.default_graph)
+        self._perspectives: dict[str, _Perspective] = {}
         # Caches both ways between names and IRIs: a world's vocabulary is small
         # and the same names come back with every perception update.
         self._terms: dict[str, Node] = {}
@@ -191,13 +276,22 @@ class FactDatabase:
     def dataset(self) -> Dataset:
         """The underlying dataset (a-priori default graph, one named graph per
         perspective), for exporting it, e.g. as TriG; change facts through the
-        database's methods, or subscribers will not hear of it."""
+        database's methods, or subscribers (and the database's own index) will
+        not hear of it."""
+        self._apriori.sync()
+        for perspective in self._perspectives.values():
+            perspective.sync()
         return self._dataset
 
     # -- terms -----------------------------------------------------------------------------------
 
     def term(self, value: Value) -> Node:
         """The rdflib term for a short name, prefixed name, full IRI, number or boolean."""
+        if type(value) is str:  # the common case first: isinstance(…, Node) is an ABC check
+            term = self._terms.get(value)
+            if term is None:
+                term = self._terms[value] = self._parse_name(value)
+            return term
         if isinstance(value, Node):
             return value
         if isinstance(value, str):
@@ -249,29 +343,28 @@ class FactDatabase:
                 return f"{prefix}:{iri[len(namespace):]}"
         return str(iri)
 
-    def _triple(self, s: Value, p: Value, o: Value) -> _Triple:
+    def _triple(self, s: Value, p: Value, o: Value) -> Triple:
         return self.term(s), self.term(p), self.term(o)
 
     # -- perspectives ----------------------------------------------------------------------------
 
     def perspectives(self) -> list[str]:
         """The perspectives written to so far, in the order they were created."""
-        return list(self._graphs)
+        return list(self._perspectives)
 
-    def _view(self, perspective: str) -> Graph:
-        """The graph to read a perspective from (the a-priori graph until it diverges)."""
-        return self._graphs.get(perspective, self._apriori)
+    def _view(self, perspective: str) -> _Perspective:
+        """The perspective to read from (the a-priori graph's until it diverges)."""
+        return self._perspectives.get(perspective, self._apriori)
 
-    def _graph(self, perspective: str) -> Graph:
-        """The graph to write a perspective to, created as a copy of the a-priori graph."""
-        graph = self._graphs.get(perspective)
-        if graph is None:
+    def _writable(self, perspective: str) -> _Perspective:
+        """The perspective to write to, created as a copy of the a-priori graph."""
+        found = self._perspectives.get(perspective)
+        if found is None:
             if not isinstance(perspective, str) or not perspective:
                 raise ValueError(f"a perspective is an agent's name, not {perspective!r}")
             graph = self._dataset.graph(URIRef(_PERSPECTIVE_GRAPH + quote(perspective, safe="")))
-            graph += self._apriori
-            self._graphs[perspective] = graph
-        return graph
+            found = self._perspectives[perspective] = _Perspective(graph, self._apriori)
+        return found
 
     # -- loading ---------------------------------------------------------------------------------
 
@@ -283,31 +376,32 @@ class FactDatabase:
         as it was.  Delivers no events (see the module's documentation).
         """
         file = os.fspath(path)
-        parsed = _parse_turtle(read_text(file, max_bytes=MAX_TURTLE_BYTES), file)
+        parsed = read_turtle(file)
         if perspective is None:
-            self._apriori += parsed
-            for graph in self._graphs.values():
-                graph += parsed
+            self._apriori.load(parsed)
+            for view in self._perspectives.values():
+                view.load(parsed)
         else:
-            graph = self._graph(perspective)
-            graph += parsed
+            self._writable(perspective).load(parsed)
         return len(parsed)
 
     # -- reading ---------------------------------------------------------------------------------
 
     def holds(self, s: Value, p: Value, o: Value, perspective: str = "robot") -> bool:
         """Whether the agent of ``perspective`` believes the fact."""
-        return self._triple(s, p, o) in self._view(perspective)
+        return self._triple(s, p, o) in self._view(perspective).triples
 
     def objects(self, s: Value, p: Value, perspective: str = "robot") -> list[Value]:
         """Every object of (s, p) in a perspective, as names, in a stable order."""
-        view = self._view(perspective)
-        return [self.name(o) for o in sorted(view.objects(self.term(s), self.term(p)), key=_order)]
+        objects = self._view(perspective).objects.get((self.term(s), self.term(p)))
+        if not objects:
+            return []
+        return [self.name(o) for o in sorted(objects, key=_order)]
 
     def triples(self, perspective: str = "robot") -> list[tuple[Value, Value, Value]]:
         """Every fact of a perspective, in short names (a run's final state, a dump)."""
         return sorted(((self.name(s), self.name(p), self.name(o))
-                       for s, p, o in self._view(perspective)), key=str)
+                       for s, p, o in self._view(perspective).triples), key=str)
 
     def select(self, sparql: str, perspective: str = "robot",
                **bindings: Value) -> list[dict[str, Value | None]]:
@@ -322,7 +416,7 @@ class FactDatabase:
         """
         query = _prepare_select(sparql, self._namespace)
         init = {variable: self.term(value) for variable, value in bindings.items()}
-        result = self._view(perspective).query(query, initBindings=init)
+        result = self._view(perspective).sync().query(query, initBindings=init)
         names = [str(variable) for variable in result.vars or ()]
         return [{name: None if value is None else self.name(value)
                  for name, value in zip(names, row, strict=True)}
@@ -333,10 +427,7 @@ class FactDatabase:
     def add(self, s: Value, p: Value, o: Value, perspective: str = "robot") -> bool:
         """Add a fact to a perspective; True (and an "added" event) when it is new."""
         triple = self._triple(s, p, o)
-        graph = self._graph(perspective)
-        size = len(graph)
-        graph.add(triple)
-        if len(graph) == size:
+        if not self._writable(perspective).add(triple):
             return False
         self._deliver(("added", *triple, perspective))
         return True
@@ -344,10 +435,7 @@ class FactDatabase:
     def remove(self, s: Value, p: Value, o: Value, perspective: str = "robot") -> bool:
         """Remove a fact from a perspective; True (and a "removed" event) when it was there."""
         triple = self._triple(s, p, o)
-        graph = self._graph(perspective)
-        size = len(graph)  # cheaper than a membership test in rdflib's memory store
-        graph.remove(triple)
-        if len(graph) == size:
+        if not self._writable(perspective).remove(triple):
             return False
         self._deliver(("removed", *triple, perspective))
         return True
@@ -362,15 +450,14 @@ class FactDatabase:
         the fact (s, p, o) was new.
         """
         s_term, p_term, o_term = self._triple(s, p, o)
-        graph = self._graph(perspective)
+        view = self._writable(perspective)
         changes: list[tuple[EventKind, Node, Node, Node, str]] = []
-        for old in sorted(graph.objects(s_term, p_term), key=_order):
+        for old in sorted(view.objects.get((s_term, p_term), ()), key=_order):
             if old != o_term:
-                graph.remove((s_term, p_term, old))
+                view.remove((s_term, p_term, old))
                 changes.append(("removed", s_term, p_term, old, perspective))
-        new = (s_term, p_term, o_term) not in graph
+        new = view.add((s_term, p_term, o_term))
         if new:
-            graph.add((s_term, p_term, o_term))
             changes.append(("added", s_term, p_term, o_term, perspective))
         self._deliver(*changes)
         return new
@@ -379,12 +466,16 @@ class FactDatabase:
 
     def subscribe(self, callback: Callable[[FactEvent], object], subject: Value | None = None,
                   predicate: Value | None = None, object: Value | None = None,
-                  perspective: str | None = None) -> Subscription:
-        """Call ``callback(event)`` for every change matching the pattern (None: anything)."""
+                  perspective: str | None = None,
+                  kind: EventKind | None = None) -> Subscription:
+        """Call ``callback(event)`` for every change matching the pattern (None: anything);
+        ``kind`` ("added" or "removed") keeps only that kind of change."""
+        if kind not in (None, "added", "removed"):
+            raise ValueError(f"a change is 'added' or 'removed', not {kind!r}")
         key = (None if subject is None else self.term(subject),
                None if predicate is None else self.term(predicate))
         subscription = Subscription(callback, key, None if object is None else self.term(object),
-                                    perspective, next(self._orders))
+                                    perspective, kind, next(self._orders))
         self._index.setdefault(key, []).append(subscription)
         return subscription
 
@@ -415,7 +506,12 @@ class FactDatabase:
                 kind, s, p, o, perspective = self._queue.popleft()
                 event = None
                 for subscription in self._candidates(s, p):
-                    if not subscription._matches(o, perspective):
+                    wanted = subscription._object
+                    if not (subscription.active
+                            and (subscription.kind is None or subscription.kind == kind)
+                            and (wanted is None or wanted is o or wanted == o)
+                            and (subscription.perspective is None
+                                 or subscription.perspective == perspective)):
                         continue
                     if event is None:
                         event = FactEvent(kind, self.name(s), self.name(p), self.name(o),
@@ -452,59 +548,3 @@ class FactDatabase:
         if len(buckets) == 1:
             return list(buckets[0])
         return sorted((sub for bucket in buckets for sub in bucket), key=lambda sub: sub._order)
-
-
-def _parse_turtle(text: str, file: str) -> Graph:
-    """Parse Turtle text into a new graph, or raise FileError with positions.
-
-    rdflib accepts literals whose text does not fit their datatype
-    (``"abc"^^xsd:integer``), printing a traceback through its logger and
-    warnings; here they are mistakes in the file like any other, refused with
-    a position, and rdflib's output is kept off the user's terminal.
-    """
-    parsed = Graph()
-    rdflib_terms = logging.getLogger("rdflib.term")
-    rdflib_terms.addFilter(_drop)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            parsed.parse(data=text, format="turtle", publicID=Path(file).resolve().as_uri())
-    except BadSyntax as err:
-        line, col = _syntax_position(err)
-        raise FileError([Problem(file, line, col, f"invalid Turtle: {err._why}")]) from None
-    except Exception as err:  # rdflib raises ValueError & co. for bad terms, without position
-        raise FileError([Problem(file, 1, 1, f"invalid Turtle: {err}")]) from None
-    finally:
-        rdflib_terms.removeFilter(_drop)
-    ill_typed = {o for o in parsed.objects() if isinstance(o, Literal) and o.ill_typed}
-    if ill_typed:
-        raise FileError([Problem(file, *_find_literal(text, literal),
-                                 f"ill-typed literal: {literal.n3()}")
-                         for literal in ill_typed])
-    return parsed
-
-
-def _drop(record: logging.LogRecord) -> bool:
-    """A logging filter that lets nothing through."""
-    return False
-
-
-def _find_literal(text: str, literal: Literal) -> tuple[int, int]:
-    """Where a literal's text first appears quoted; the file's start when rdflib
-    rewrote it (it turns an ill-typed boolean into "false")."""
-    lexical = str(literal)
-    found = [at for mark in "\"'" if (at := text.find(f"{mark}{lexical}{mark}")) >= 0]
-    if not found:
-        return 1, 1
-    at = min(found)
-    return text.count("\n", 0, at) + 1, at - (text.rfind("\n", 0, at) + 1) + 1
-
-
-def _syntax_position(err: BadSyntax) -> tuple[int, int]:
-    """Line and column of a Turtle syntax error.
-
-    The line is the one rdflib's message gives ("at line N"); rdflib exposes
-    no column, so it is counted from the offset the error keeps of the text.
-    """
-    text = err._str.decode("utf-8")
-    return err.lines + 1, err._i - (text.rfind("\n", 0, err._i) + 1) + 1

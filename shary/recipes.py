@@ -62,14 +62,15 @@ class Term:
         A constant string may name parameters in braces (``"the {object}"``): they
         are replaced by their values; nothing else in the text is interpreted.
         """
-        if self.kind == "const":
+        kind = self.kind
+        if kind == "param":  # the common case first: run for every monitor and step
+            return env.get(self.value)
+        if kind == "const":
             if isinstance(self.value, str) and "{" in self.value:
                 return _PLACEHOLDER.sub(lambda m: str(env.get(m.group(1), m.group(0))),
                                         self.value)
             return self.value
-        if self.kind == "any":
-            return None
-        return env.get(self.value)
+        return None  # "any"
 
     def __str__(self) -> str:
         prefix = {"param": "$", "any": "_", "const": ""}[self.kind]
@@ -88,7 +89,7 @@ class Pattern:
         return (self.subject, self.predicate, self.object)
 
     def resolve(self, env: dict[str, Any]) -> tuple[Any, Any, Any]:
-        return tuple(t.resolve(env) for t in self.terms())  # type: ignore[return-value]
+        return self.subject.resolve(env), self.predicate.resolve(env), self.object.resolve(env)
 
     def __str__(self) -> str:
         return "[" + ", ".join(str(t) for t in self.terms()) + "]"

@@ -346,10 +346,12 @@ class TaskRun(SchemeListener):
             self.on_finish(self)
 
     def _enclosing_act(self, state: State) -> ActTask | None:
-        for ancestor in state.ancestors():
+        ancestor = state.parent
+        while ancestor is not None:
             act = self.acts.get(ancestor.name)
             if act is not None:
                 return act
+            ancestor = ancestor.parent
         return None
 
     def _has_inner_act(self, act: ActTask) -> bool:

@@ -35,27 +35,41 @@ Recorder = Callable[..., Any]
 
 
 class TaskTree:
-    """Tasks, act x task nodes and atomic tasks, as a networkx directed tree (forest)."""
+    """Tasks, act x task nodes and atomic tasks: a forest of nodes with attributes.
+
+    Kept in plain dictionaries (a node's attributes, its parent, its children
+    in insertion order): the tree grows and is cut on every act entered or
+    left, thousands of times a second, and a networkx graph costs several
+    times more per node added or removed.  :attr:`graph` gives the tree as a
+    networkx graph for drawing and analysis.
+    """
 
     def __init__(self, recorder: Recorder | None = None):
-        self.graph = nx.DiGraph()
         self._record = recorder
         self._next = 0
-        self._attrs: dict[str, dict[str, Any]] = {}  # the graph's own node dicts, for speed
+        self._attrs: dict[str, dict[str, Any]] = {}
+        self._parent: dict[str, str | None] = {}
+        self._children: dict[str, dict[str, None]] = {}  # an ordered set
 
     def add(self, kind: str, name: str, parent: str | None = None, *, state: str = PLANNED,
             **attrs: Any) -> str:
         """Add a node (under ``parent``) and return its id."""
         self._next += 1
         node = f"n{self._next}"
-        self.graph.add_node(node, kind=kind, name=name, state=state, **attrs)
-        self._attrs[node] = self.graph.nodes[node]
-        if parent is not None:
-            self.graph.add_edge(parent, node)
+        self._insert(node, parent, {"kind": kind, "name": name, "state": state, **attrs})
         if self._record is not None:
             self._record("node", task=node, parent=parent, node_kind=kind, name=name,
                          state=state, **{k: v for k, v in attrs.items() if v is not None})
         return node
+
+    def _insert(self, node: str, parent: str | None, attrs: dict[str, Any]) -> None:
+        self._attrs[node] = attrs
+        self._children[node] = {}
+        if parent is not None and parent in self._attrs:
+            self._parent[node] = parent
+            self._children[parent][node] = None
+        else:
+            self._parent[node] = None
 
     def state(self, node: str) -> str:
         return self._attrs[node]["state"]
@@ -74,16 +88,15 @@ class TaskTree:
         return self._attrs[node]
 
     def parent(self, node: str) -> str | None:
-        preds = list(self.graph.predecessors(node))
-        return preds[0] if preds else None
+        return self._parent[node]
 
     def children(self, node: str) -> list[str]:
-        return list(self.graph.successors(node))
+        return list(self._children[node])
 
     def subtree(self, node: str) -> Iterator[str]:
         """The node and its descendants, parents before children."""
         yield node
-        for child in self.graph.successors(node):
+        for child in self._children[node]:
             yield from self.subtree(child)
 
     def cut(self, node: str) -> None:
@@ -92,16 +105,40 @@ class TaskTree:
         for n in nodes:
             if self._attrs[n]["state"] not in FINISHED:
                 self.set_state(n, CANCELLED, "cut")
-            del self._attrs[n]
-        self.graph.remove_nodes_from(nodes)
+        self._remove(nodes)
         if self._record is not None:
             self._record("node-removed", task=node, nodes=nodes)
+
+    def _remove(self, nodes: Iterable[str]) -> None:
+        for n in nodes:
+            if n not in self._attrs:
+                continue
+            del self._attrs[n]
+            parent = self._parent.pop(n)
+            if parent is not None and parent in self._children:
+                del self._children[parent][n]
+            for child in self._children.pop(n):
+                self._parent[child] = None
+
+    @property
+    def graph(self) -> nx.DiGraph:
+        """The tree as a networkx directed graph (a copy, built when asked for)."""
+        graph = nx.DiGraph()
+        for node, attrs in self._attrs.items():
+            graph.add_node(node, **attrs)
+        graph.add_edges_from((parent, node) for node, parent in self._parent.items()
+                             if parent is not None)
+        return graph
+
+    def __iter__(self) -> Iterator[str]:
+        """Node ids, in the order they were added."""
+        return iter(self._attrs)
 
     def __contains__(self, node: object) -> bool:
         return node in self._attrs
 
     def __len__(self) -> int:
-        return self.graph.number_of_nodes()
+        return len(self._attrs)
 
     @classmethod
     def replay(cls, events: Iterable[LogEvent], until: float | None = None) -> TaskTree:
@@ -126,17 +163,12 @@ class TaskTree:
                 parent = data.pop("parent", None)
                 if event.agent:
                     data["agent"] = event.agent
-                data["kind"] = data.pop("node_kind")
-                tree.graph.add_node(node, **data)
-                attrs[node] = tree.graph.nodes[node]
-                if parent in attrs:
-                    tree.graph.add_edge(parent, node)
+                node_kind = data.pop("node_kind")
+                tree._insert(node, parent, {**data, "kind": node_kind})
             elif event.kind == "task-state" and event.task in attrs:
                 attrs[event.task]["state"] = event.data["state"]
             elif event.kind == "node-removed":
-                for node in event.data["nodes"]:
-                    if attrs.pop(node, None) is not None:
-                        tree.graph.remove_node(node)
+                tree._remove(event.data["nodes"])
         return tree
 
 

@@ -121,16 +121,18 @@ def test_malformed_turtle_gives_file_line_col(write):
         db.load_turtle(path)
     [problem] = caught.value.problems
     assert (problem.file, problem.line, problem.col) == (str(path), 5, 23)
-    assert "x:" in problem.message and "not bound" in problem.message
+    assert "x:" in problem.message and "not been declared" in problem.message
     assert str(problem).startswith(f"{path}:5:23: error: invalid Turtle")
     assert db.select("SELECT ?s WHERE { ?s ?p ?o }") == []  # nothing half-loaded
 
 
-def test_bad_term_without_position(write):
+def test_bad_term_has_a_position(write):
     path = write("lang.ttl", '@prefix w: <http://shary.dev/world#> .\nw:a w:b "x"@1 .\n')
     with pytest.raises(FileError) as caught:
         FactDatabase().load_turtle(path)
-    assert "language tag" in caught.value.problems[0].message
+    [problem] = caught.value.problems
+    assert (problem.line, problem.col) == (2, 13)
+    assert "language code" in problem.message
 
 
 def test_unreadable_and_non_utf8_files(write, tmp_path):
@@ -351,3 +353,12 @@ def test_ill_typed_literals_are_refused_quietly(write, caplog):
     assert (problem.line, problem.col) == (4, 26)
     assert "ill-typed literal" in problem.message
     assert not [record for record in caplog.records if record.name.startswith("rdflib")]
+
+
+def test_subscription_to_one_kind_of_change(db):
+    removed = recorder(db, subject="human-1", predicate="looksAt", kind="removed")
+    db.add("human-1", "looksAt", "jido")
+    db.remove("human-1", "looksAt", "jido")
+    assert removed == [FactEvent("removed", "human-1", "looksAt", "jido", "robot")]
+    with pytest.raises(ValueError, match="'added' or 'removed'"):
+        db.subscribe(removed.append, kind="changed")
