@@ -30,7 +30,7 @@ from transitions import Transition as FlatTransition
 
 from shary.clock import Clock, SimulatedClock
 from shary.conditions import ConditionRegistry
-from shary.model import Scheme, Transition
+from shary.model import Invoke, Scheme, Transition, descriptor_matches
 from shary.statechart import Semantics, Snapshot, Step
 
 EVENTLESS = "<eventless>"
@@ -154,6 +154,39 @@ class CompiledScheme:
             s.name: tuple((t.events[0], t.after) for t in s.transitions
                           if t.after is not None and t.events)
             for s in scheme.states.values()}
+        self._children: dict[int, CompiledScheme] = {}
+        self._descriptors: list[str] | None = None
+
+    def child(self, invoke: Invoke) -> CompiledScheme:
+        """The compiled child scheme of an invoke (compiled once, on first use)."""
+        found = self._children.get(id(invoke.scheme))
+        if found is None:
+            found = self._children[id(invoke.scheme)] = CompiledScheme(invoke.scheme,
+                                                                       self.conditions)
+        return found
+
+    def descriptors(self) -> list[str]:
+        """Every event descriptor a transition of the scheme names, in document order.
+
+        Timeouts are left out (they are the instance's own events).  Children
+        invoked with ``autoforward`` count: what they take reaches them through
+        this scheme.  This is what an event sent from outside is checked against.
+        """
+        if self._descriptors is None:
+            out: dict[str, None] = {}
+            for state in self.scheme.all_states():
+                for t in state.transitions:
+                    if t.after is None and t.events is not None:
+                        out.update(dict.fromkeys(t.events))
+                for invoke in state.invokes:
+                    if invoke.autoforward:
+                        out.update(dict.fromkeys(self.child(invoke).descriptors()))
+            self._descriptors = list(out)
+        return self._descriptors
+
+    def can_take(self, event: str) -> bool:
+        """Whether some state of the scheme (or an autoforwarded child) has a transition on it."""
+        return any(descriptor_matches(d, event) for d in self.descriptors())
 
     def condition(self, name: str) -> Any:
         return self.conditions[name]

@@ -178,6 +178,12 @@ def _act_line(state: State) -> str | None:
     return f"{state.act} ({state.act_type.name})" if state.act_type else state.act
 
 
+def _invoke_lines(state: State) -> list[str]:
+    """``invokes give-object as ask (autoforward)``: the child schemes a state starts."""
+    return [f"invokes {i.scheme.name}" + (f" as {i.id}" if i.id != state.name else "")
+            + (" (autoforward)" if i.autoforward else "") for i in state.invokes]
+
+
 def _history_mark(state: State) -> str:
     return "H*" if state.history == "deep" else "H"
 
@@ -273,6 +279,8 @@ class _SchemeDot:
         act = _act_line(state)
         if act:
             lines.append(f'<FONT POINT-SIZE="10" COLOR="{ACT_COLOUR}">{html.escape(act)}</FONT>')
+        lines += [f'<FONT POINT-SIZE="10">{html.escape(text)}</FONT>'
+                  for text in _invoke_lines(state)]
         lines += [f'<FONT POINT-SIZE="9"><I>{html.escape(text)}</I></FONT>'
                   for text in self._listed(state)]
         if bold:
@@ -384,7 +392,8 @@ class _SchemeMermaid:
             title = f"{_history_mark(state)} {state.name}"
         act = _act_line(state)
         details = [_mermaid_text(line)
-                   for line in ([act] if act else []) + [t.label() for t in _internal(state)]]
+                   for line in ([act] if act else []) + _invoke_lines(state)
+                   + [t.label() for t in _internal(state)]]
         if _is_cluster(state):
             # Mermaid refuses descriptions on composite states: the details join the title.
             self.lines.append(f'{pad}state "{"<br/>".join([_mermaid_text(title), *details])}"'

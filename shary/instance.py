@@ -17,14 +17,18 @@ from typing import TYPE_CHECKING, Any
 
 from shary.clock import Clock, Timer
 from shary.compiler import EVENTLESS
-from shary.model import Cancel, Log, Raise, Send, State
-from shary.statechart import ENTER, RAISE, Step
+from shary.model import Cancel, Invoke, Log, Raise, Send, State
+from shary.statechart import ACTIONS, ENTER, INVOKE, RAISE, Step
+from userfiles.errors import Problem
 
 if TYPE_CHECKING:
     from shary.compiler import CompiledScheme
 
-MAX_MICROSTEPS = 10_000
+MAX_MICROSTEPS = 1_000
 """Microsteps allowed in one macrostep before the scheme is declared to be looping."""
+MAX_ECHOES = 1_000
+"""Events an instance may send itself at one instant of its clock (zero-delay sends and
+timers) with no outside event in between, before it is declared to be looping."""
 
 _send_ids = itertools.count(1)
 
@@ -62,16 +66,38 @@ class SchemeListener:
     def finished(self, instance: SchemeInstance, state: State) -> None:
         """A final state at the top of the scheme was entered; the instance is done."""
 
+    def invoking(self, instance: SchemeInstance, state: State, invoke: Invoke) -> Any:
+        """The listener of the child scheme that ``state`` is about to invoke.
+
+        None by default: the child runs silently, and its parent hears of it
+        through ``done.invoke.ID.OUTCOME``.  Return ``self`` to hear the
+        child's states too (``instance.parent`` and ``instance.invoke_id`` tell
+        its calls from the parent's; note that ``finished`` then also comes for
+        the child), or another listener.
+        """
+        return None
+
 
 class LivelockError(RuntimeError):
-    """A scheme kept taking eventless or raised transitions without ever settling."""
+    """A scheme kept running without ever settling or letting time pass.
+
+    Either an unbounded run of internal events and eventless transitions in
+    one macrostep, or events it sends itself (zero-delay sends or timers) at
+    one instant, again and again.  ``problem`` places it at the transition
+    that kept being taken, for ``FILE:LINE:COL: error: …``.
+    """
+
+    def __init__(self, message: str, problem: Problem):
+        super().__init__(message)
+        self.problem = problem
 
 
 class SchemeInstance:
     """One running copy of a compiled scheme (start one with :meth:`CompiledScheme.start`)."""
 
-    __slots__ = ("definition", "state", "clock", "listener", "context", "finished",
-                 "_internal", "_external", "_busy", "_timers", "_frozen", "__weakref__")
+    __slots__ = ("definition", "state", "clock", "listener", "context", "finished", "parent",
+                 "invoke_id", "_internal", "_external", "_busy", "_timers", "_frozen",
+                 "_to_invoke", "_invoked", "_echoes", "_echo_at", "__weakref__")
 
     def __init__(self, definition: CompiledScheme, clock: Clock, listener: Any = None,
                  context: Any = None):
@@ -81,11 +107,18 @@ class SchemeInstance:
         self.listener = listener
         self.context = context
         self.finished = False
+        self.parent: SchemeInstance | None = None
+        """The instance that invoked this one (None at the top)."""
+        self.invoke_id: str | None = None
         self._internal: deque[Event] = deque()
         self._external: deque[Event] = deque()
         self._busy = False
         self._timers: dict[str, Timer] | None = None
         self._frozen: dict[str, tuple[float, tuple]] | None = None
+        self._to_invoke: list[State] | None = None
+        self._invoked: dict[str, list[tuple[Invoke, SchemeInstance]]] | None = None
+        self._echoes = 0
+        self._echo_at = -1.0
 
     # -- queries ---------------------------------------------------------
 
@@ -102,14 +135,27 @@ class SchemeInstance:
     def is_active(self, name: str) -> bool:
         return name in self.active
 
+    @property
+    def invoke_path(self) -> str:
+        """The invoke ids from the top instance down to this one, joined by ``/``."""
+        ids = []
+        node: SchemeInstance | None = self
+        while node is not None and node.parent is not None:
+            ids.append(node.invoke_id or "")
+            node = node.parent
+        return "/".join(reversed(ids))
+
     # -- running ---------------------------------------------------------
 
     def freeze(self) -> None:
         """Stop the instance's clock: pending timeouts keep their remaining time.
 
         Used when a whole task is suspended by a more urgent one: its scheme
-        must not give up on its partner while it is not even running.
+        must not give up on its partner while it is not even running.  The
+        children it invoked are frozen with it.
         """
+        for child in self._children():
+            child.freeze()
         if self._frozen is not None or not self._timers:
             self._frozen = self._frozen or {}
             return
@@ -124,6 +170,12 @@ class SchemeInstance:
         frozen, self._frozen = self._frozen or {}, None
         for key, (remaining, args) in frozen.items():
             self._start_timer(key, remaining, args[1])
+        for child in self._children():
+            child.thaw()
+
+    def _children(self) -> list[SchemeInstance]:
+        """The invoked children still running."""
+        return [c for kids in (self._invoked or {}).values() for _, c in kids if not c.finished]
 
     def start(self) -> None:
         """Enter the initial states and settle (called once by ``CompiledScheme.start``)."""
@@ -131,6 +183,8 @@ class SchemeInstance:
         try:
             self._play(self.definition.initial_step, self.definition.initial_name, None)
             self._settle()
+            if self._to_invoke:
+                self._start_invokes()
             self._drain()
         finally:
             self._busy = False
@@ -138,6 +192,7 @@ class SchemeInstance:
     def send(self, name: str, data: Any = None) -> None:
         """Deliver an outside event and run to completion (queued if the instance is busy)."""
         event = Event(name, data)
+        self._echoes = 0
         if self._busy:
             self._external.append(event)
             return
@@ -156,10 +211,14 @@ class SchemeInstance:
     def _macrostep(self, event: Event) -> None:
         if self.finished:
             return
+        if self._invoked:
+            self._forward(event)
         events = self.definition.machine.events
         trigger = events.get(event.name) or self.definition.event(event.name)
         trigger.trigger(self, event)
         self._settle()
+        if self._to_invoke:
+            self._start_invokes()
 
     def _settle(self) -> None:
         events = self.definition.machine.events
@@ -169,23 +228,57 @@ class SchemeInstance:
         steps = 0
         while not self.finished:
             if eventless is not None and eventless.trigger(self, None):
-                pass
+                name = None
             elif internal:
                 event = internal.popleft()
-                trigger = events.get(event.name) or self.definition.event(event.name)
+                name = event.name
+                trigger = events.get(name) or self.definition.event(name)
                 trigger.trigger(self, event)
             else:
                 return
             steps += 1
             if steps > MAX_MICROSTEPS:
-                raise LivelockError(f"scheme {self.definition.scheme.name!r} took more than "
-                                    f"{MAX_MICROSTEPS} microsteps without settling")
+                self._livelock(name, f"more than {MAX_MICROSTEPS} microsteps in one macrostep "
+                               "without settling (an endless run of raised events or eventless "
+                               "transitions)")
+
+    def _livelock(self, event: str | None, why: str) -> None:
+        """Stop the instance and raise :class:`LivelockError` at the looping transition."""
+        self._stop()
+        scheme = self.definition.scheme
+        snapshot = self.definition.machine.states[self.state].snapshot
+        chains = self.definition.semantics.candidates(snapshot, event)
+        where = chains[0][0].mark if chains else scheme.root.mark
+        trigger = "eventless transitions" if event is None else f"event {event!r}"
+        message = f"livelock in scheme {scheme.name!r}: {why}; it kept taking {trigger}, " \
+                  f"last in {', '.join(self.configuration) or 'no state'}"
+        raise LivelockError(message, Problem(scheme.file, *where, message))
+
+    def _send_self(self, name: str, data: Any = None) -> None:
+        """Send an event the instance gives itself (a timer, a child's end): counted."""
+        self._echo(name)
+        count = self._echoes
+        self.send(name, data)  # which resets the count, as an outside event does
+        self._echoes = max(self._echoes, count)
+
+    def _echo(self, event: str) -> None:
+        """Count an event the instance gives itself; too many at one instant is a loop."""
+        now = self.clock.now()
+        if now != self._echo_at:
+            self._echo_at, self._echoes = now, 0
+        self._echoes += 1
+        if self._echoes > MAX_ECHOES:
+            self._livelock(event, f"it sent itself more than {MAX_ECHOES} events at {now:g} s "
+                           "without time passing (a zero-delay loop of sends, timers or "
+                           "invokes)")
 
     def _play(self, step: Step, target: str, event: Event | None) -> None:
         """Play one microstep computed by :mod:`shary.statechart` (called by the machine)."""
         timers = self.definition.timers
         listener = self.listener
         for state in step.exits:
+            if state.invokes and self._to_invoke and state in self._to_invoke:
+                self._to_invoke.remove(state)  # left in the macrostep that entered it
             if self._timers and timers[state.name]:
                 for name, _ in timers[state.name]:
                     pending = self._timers.pop(name, None)
@@ -193,6 +286,9 @@ class SchemeInstance:
                         pending.cancel()
             if state.on_exit:
                 self._run(state.on_exit)
+            if state.invokes and self._invoked and state.name in self._invoked:
+                for _, child in self._invoked.pop(state.name):
+                    child.cancel()
             if listener is not None:
                 listener.exited(self, state, event)
         for transition in step.transitions:
@@ -208,14 +304,97 @@ class SchemeInstance:
                     self._start_timer(name, delay, name)
             elif kind is RAISE:
                 self._internal.append(Event(item))
+            elif kind is ACTIONS:
+                self._run(item)
+            elif kind is INVOKE:
+                if self._to_invoke is None:
+                    self._to_invoke = []
+                self._to_invoke.append(item)
             else:
-                self.finished = True
-                if self._timers:
-                    for pending in self._timers.values():
-                        pending.cancel()
-                    self._timers.clear()
+                self._stop()
                 if listener is not None:
                     listener.finished(self, item)
+                if self.parent is not None:
+                    self.parent._child_finished(self, item)
+
+    def _stop(self) -> None:
+        """Finish: no more events, timers cancelled, invoked children cancelled."""
+        self.finished = True
+        self._to_invoke = None
+        if self._timers:
+            for pending in self._timers.values():
+                pending.cancel()
+            self._timers.clear()
+        invoked, self._invoked = self._invoked, None
+        for children in (invoked or {}).values():
+            for _, child in children:
+                child.cancel()
+
+    # -- invoked schemes -------------------------------------------------
+
+    def _start_invokes(self) -> None:
+        """Start the invokes of the states entered and not left in this macrostep.
+
+        SCXML starts them at the end of the macrostep, in entry order, so a
+        state passed through on the way somewhere else invokes nothing.
+        """
+        pending, self._to_invoke = self._to_invoke or [], None
+        compiled = self.definition
+        for state in pending:
+            for invoke in state.invokes:
+                child_def = compiled.child(invoke)
+                hook = getattr(self.listener, "invoking", None)
+                listener = hook(self, state, invoke) if hook is not None else None
+                child = SchemeInstance(child_def, self.clock, listener, self.context)
+                child.parent = self
+                child.invoke_id = invoke.id
+                if self._invoked is None:
+                    self._invoked = {}
+                self._invoked.setdefault(state.name, []).append((invoke, child))
+                child.start()
+
+    def _forward(self, event: Event) -> None:
+        """Pass an outside event on to the children invoked with ``autoforward``."""
+        if "@" in event.name:  # the parent's own timeouts are no outside events
+            return
+        for children in list(self._invoked.values()):
+            for invoke, child in children:
+                if invoke.autoforward and not child.finished:
+                    child.send(event.name, event.data)
+
+    def _child_finished(self, child: SchemeInstance, state: State) -> None:
+        """An invoked child reached a final state at its top: ``done.invoke.ID.OUTCOME``."""
+        for name, children in list((self._invoked or {}).items()):
+            kept = [(i, c) for i, c in children if c is not child]
+            if len(kept) != len(children):
+                if kept:
+                    self._invoked[name] = kept  # type: ignore[index]
+                else:
+                    del self._invoked[name]  # type: ignore[union-attr]
+                self._send_self(f"done.invoke.{child.invoke_id}.{state.outcome}",
+                                {"invoke": child.invoke_id, "outcome": state.outcome,
+                                 "state": state.name})
+                return
+
+    def cancel(self) -> None:
+        """Stop an invoked child because its invoking state was left.
+
+        As SCXML says of a cancelled session, the on_exit actions of its
+        active states run (innermost first) and its listener hears of each
+        exit, so the acts it carried out are stopped; nothing it does from
+        then on reaches its parent.
+        """
+        if self.finished:
+            return
+        self._stop()
+        snapshot = self.definition.machine.states[self.state].snapshot
+        for state in sorted(snapshot.active, key=lambda s: s.order, reverse=True):
+            if state.on_exit:
+                self._run(state.on_exit)
+            if self.listener is not None:
+                self.listener.exited(self, state, None)
+        self._internal.clear()
+        self._external.clear()
 
     def _start_timer(self, key: str, delay: float, event: str) -> None:
         if self._timers is None:
@@ -228,7 +407,7 @@ class SchemeInstance:
     def _fire(self, key: str, event: str) -> None:
         if self._timers is not None:
             self._timers.pop(key, None)
-        self.send(event)
+        self._send_self(event)
 
     def _run(self, actions: tuple) -> None:
         for action in actions:
@@ -239,6 +418,7 @@ class SchemeInstance:
                     key = action.id or f"send-{next(_send_ids)}"
                     self._start_timer(key, action.delay, action.event)
                 else:
+                    self._echo(action.event)
                     self._external.append(Event(action.event))
             elif isinstance(action, Cancel):
                 pending = self._timers.pop(action.id, None) if self._timers else None

@@ -48,6 +48,52 @@ def covers(earlier: tuple[str, ...] | None, later: tuple[str, ...] | None) -> bo
         d1, d2[:-2] if d2.endswith(".*") else d2)) for d1 in earlier) for d2 in later)
 
 
+class Coverage:
+    """The events taken so far by earlier unguarded transitions, to find dead ones fast.
+
+    ``covers`` compares two transitions; a state with thousands of transitions
+    would need millions of those comparisons.  Here each earlier descriptor is
+    kept in a dictionary (``foo.*`` as ``foo``), and a later descriptor is
+    covered when ``*`` or one of its dotted prefixes is there: one lookup per
+    prefix.  The union of all earlier transitions counts, so a transition on
+    ``a b`` after one on ``a`` and one on ``b`` is found dead too.
+    """
+
+    def __init__(self) -> None:
+        self._taken: dict[str | None, object] = {}
+
+    def add(self, events: tuple[str, ...] | None, item: object) -> None:
+        """Record the descriptors of an unguarded transition (``None``: eventless)."""
+        for d in (None,) if events is None else events:
+            self._taken.setdefault(d[:-2] if d is not None and d.endswith(".*") else d, item)
+
+    def covering(self, events: tuple[str, ...] | None) -> object | None:
+        """The earlier item taking the first of ``events``, if every one of them is taken."""
+        first = None
+        for d in (None,) if events is None else events:
+            found = self._lookup(d)
+            if found is None:
+                return None
+            first = first or found
+        return first
+
+    def _lookup(self, descriptor: str | None) -> object | None:
+        taken = self._taken
+        if descriptor is None:
+            return taken.get(None)
+        if "*" in taken:
+            return taken["*"]
+        if descriptor == "*":
+            return None
+        name = descriptor[:-2] if descriptor.endswith(".*") else descriptor
+        parts = name.split(".")
+        for end in range(1, len(parts) + 1):
+            found = taken.get(".".join(parts[:end]))
+            if found is not None:
+                return found
+        return None
+
+
 @dataclass(frozen=True)
 class Raise:
     """Put an event on the instance's internal queue (handled before any outside event)."""
@@ -79,6 +125,24 @@ class Log:
 
 
 Action = Raise | Send | Cancel | Log
+
+
+@dataclass(frozen=True)
+class Invoke:
+    """A child scheme that a state starts (SCXML ``<invoke>``), as an act starts a sub-task.
+
+    ``scheme`` is the child's :class:`Scheme`, resolved and checked when the
+    parent is loaded.  The child starts at the end of the macrostep that
+    entered the state (if the state is still active then), runs on the
+    parent's clock, is cancelled when the state is left, and tells the parent
+    ``done.invoke.ID.OUTCOME`` when it reaches a final state at its top.  With
+    ``autoforward``, every outside event the parent takes is passed on to it.
+    """
+
+    id: str
+    scheme: Scheme
+    autoforward: bool = False
+    mark: tuple[int, int] = (1, 1)
 
 
 @dataclass(eq=False)
@@ -151,6 +215,9 @@ class State:
     transitions: list[Transition] = field(default_factory=list)
     on_entry: tuple[Action, ...] = ()
     on_exit: tuple[Action, ...] = ()
+    initial_actions: tuple[Action, ...] = ()
+    """Actions of the initial transition (or of a history's default transition)."""
+    invokes: tuple[Invoke, ...] = ()
     order: int = 0
     depth: int = 0
     mark: tuple[int, int] = (1, 1)

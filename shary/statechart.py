@@ -20,7 +20,9 @@ from dataclasses import dataclass
 
 from shary.model import COMPOUND, FINAL, HISTORY, PARALLEL, Scheme, State, Transition
 
-ENTER, EXIT, ACTIONS, RAISE, FINISH = "enter", "exit", "actions", "raise", "finish"
+ENTER, ACTIONS, INVOKE, RAISE, FINISH = "enter", "actions", "invoke", "raise", "finish"
+"""Kinds of a step's entries: a state entered, default-entry content to run, a state
+whose invokes start at the end of the macrostep, an internal event, the end of the run."""
 
 
 @dataclass(frozen=True)
@@ -161,42 +163,56 @@ class Semantics:
                     out.update(s for s in active if s.is_descendant_of(domain))
         return out
 
-    def entry_set(self, transitions: list[Transition], history: dict) -> dict[State, None]:
+    def entry_set(self, transitions: list[Transition], history: dict
+                  ) -> tuple[dict[State, None], dict[State, tuple]]:
+        """States to enter, and the default-entry content to run after each one's on_entry.
+
+        The content is SCXML's ``defaultEntryContent`` (the actions of an
+        ``initial`` transition, for a compound state entered by default) and
+        ``defaultHistoryContent`` (of a history's default transition, run
+        after its parent's on_entry when there is no history yet).
+        """
         to_enter: dict[State, None] = {}
+        content: dict[State, tuple] = {}
         for t in transitions:
             for s in self.targets(t):
-                self._add_descendants(s, to_enter, history)
+                self._add_descendants(s, to_enter, history, content)
             ancestor = self.domain(t, history)
             for s in self.effective_targets(t, history):
-                self._add_ancestors(s, ancestor, to_enter, history)
-        return to_enter
+                self._add_ancestors(s, ancestor, to_enter, history, content)
+        return to_enter, content
 
-    def _add_descendants(self, state: State, to_enter: dict, history: dict) -> None:
+    def _add_descendants(self, state: State, to_enter: dict, history: dict,
+                         content: dict) -> None:
         if state.kind == HISTORY:
             parent = state.parent
             assert parent is not None
             found = history.get(state)
+            if found is None and state.initial_actions:
+                content[parent] = state.initial_actions
             restored = sorted(found, key=_order) if found is not None \
                 else self.history_default(state)
             for s in restored:
-                self._add_descendants(s, to_enter, history)
+                self._add_descendants(s, to_enter, history, content)
             for s in restored:
-                self._add_ancestors(s, parent, to_enter, history)
+                self._add_ancestors(s, parent, to_enter, history, content)
             return
         to_enter[state] = None
         if state.kind == COMPOUND:
+            if state.initial_actions:
+                content[state] = state.initial_actions
             initial = [self.by_name[n] for n in state.initial]
             for s in initial:
-                self._add_descendants(s, to_enter, history)
+                self._add_descendants(s, to_enter, history, content)
             for s in initial:
-                self._add_ancestors(s, state, to_enter, history)
+                self._add_ancestors(s, state, to_enter, history, content)
         elif state.kind == PARALLEL:
             for child in state.proper_children():
                 if not any(s.is_descendant_of(child) for s in to_enter):
-                    self._add_descendants(child, to_enter, history)
+                    self._add_descendants(child, to_enter, history, content)
 
     def _add_ancestors(self, state: State, ancestor: State | None, to_enter: dict,
-                       history: dict) -> None:
+                       history: dict, content: dict) -> None:
         for anc in state.ancestors():
             if anc is ancestor or anc is self.root:
                 break
@@ -204,13 +220,14 @@ class Semantics:
             if anc.kind == PARALLEL:
                 for child in anc.proper_children():
                     if not any(s.is_descendant_of(child) for s in to_enter):
-                        self._add_descendants(child, to_enter, history)
+                        self._add_descendants(child, to_enter, history, content)
 
     # -- steps -----------------------------------------------------------
 
     def initial_step(self) -> Step:
         """Entering the scheme: the root's initial transition."""
-        start = Transition(self.root, None, targets=self.root.initial)
+        start = Transition(self.root, None, targets=self.root.initial,
+                           actions=self.root.initial_actions)
         return self.microstep(Snapshot(frozenset()), [start])
 
     def microstep(self, snapshot: Snapshot, enabled: list[Transition]) -> Step:
@@ -227,9 +244,14 @@ class Semantics:
                         history[h] = frozenset(x for x in active if x.parent is s)
         active.difference_update(exits)
         entries: list[tuple[str, object]] = []
-        for s in sorted(self.entry_set(enabled, history), key=_order):
+        to_enter, content = self.entry_set(enabled, history)
+        for s in sorted(to_enter, key=_order):
             active.add(s)
             entries.append((ENTER, s))
+            if s in content:
+                entries.append((ACTIONS, content[s]))
+            if s.invokes:
+                entries.append((INVOKE, s))
             if s.kind != FINAL:
                 continue
             parent = s.parent

@@ -47,7 +47,8 @@ def test_import_translates_and_prunes(write):
     ('<transition event="e" cond="x &gt; 1" target="a"/>', "cond= needs a data model"),
     ("<onentry><script>x = 1</script></onentry>", "<script> needs a data model"),
     ('<onentry><send event="e" target="#_parent"/></onentry>', "another target"),
-    ('<invoke src="x"/>', "<invoke> needs a data model"),
+    ('<invoke src="../x.scxml"/>', "is outside the folder of u.scxml"),
+    ('<invoke srcexpr="x"/>', "needs a data model"),
     ('<onentry><send event="e" delay="soon"/></onentry>', "is not a time"),
 ])
 def test_unsupported_constructs_are_refused_by_name(shary, write, tmp_path, fragment, message):
@@ -64,6 +65,11 @@ def test_unsupported_constructs_are_refused_by_name(shary, write, tmp_path, frag
 @pytest.mark.parametrize("text, message", [
     ("<scxml><state id='a'></scxml>", "XML syntax"),
     ('<!DOCTYPE x [<!ENTITY a "aaaa">]><scxml/>', "DOCTYPE"),
+    ('<!DOCTYPE s [<!ENTITY a "aaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;">'
+     '<!ENTITY c "&b;&b;&b;&b;&b;&b;&b;&b;">]><scxml><state id="&c;"/></scxml>', "DOCTYPE"),
+    ('<!DOCTYPE s [<!ENTITY x SYSTEM "file:///etc/passwd">]><scxml><log label="&x;"/></scxml>',
+     "DOCTYPE"),
+    ('<!DOCTYPE scxml SYSTEM "http://example.invalid/scxml.dtd"><scxml/>', "DOCTYPE"),
     ("<html/>", "not an SCXML document"),
 ])
 def test_broken_xml_is_refused(shary, write, tmp_path, text, message):

@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from shary import builtin
-from shary.terminal import add_json_flag, emit_json, error, escape
+from shary.terminal import EXIT_BAD_INPUT, add_json_flag, emit_json, error, escape
 from shary.terminal import out as _out
 from userfiles import yamlsafe
 from userfiles.errors import FileError, Problem
@@ -63,11 +63,22 @@ _WAIT = re.compile(r"^[0-9]+(\.[0-9]+)?(ms|s|min|h)$")
 def cmd_simulate(args: argparse.Namespace) -> int:
     from shary.clock import SimulatedClock
     from shary.compiler import compile_scheme
-    from shary.instance import SchemeListener
+    from shary.instance import LivelockError, SchemeListener
     from shary.io.schemes import load_scheme
     from shary.model import parse_duration
+    from userfiles.schema import did_you_mean
 
     scheme = load_scheme(args.scheme)
+    compiled = compile_scheme(scheme)
+    unknown = [w for w in args.script if not _WAIT.match(w) and not compiled.can_take(w)]
+    if unknown:
+        messages = [f"no state of {scheme.name} takes the event {word!r}"
+                    f"{did_you_mean(word, compiled.descriptors())}" for word in unknown]
+        for message in messages:
+            error(message)
+        if args.json:
+            emit_json({"error": "; ".join(messages)})
+        return EXIT_BAD_INPUT
     clock = SimulatedClock()
     trace: list[dict[str, Any]] = []
 
@@ -78,33 +89,46 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         else:
             _out.print(f"{clock.now():8.2f}s  {line}")
 
+    def who(instance) -> str:  # type: ignore[no-untyped-def]  # a child's states: "helper/ask"
+        return f"{instance.invoke_path}/" if instance.parent is not None else ""
+
     class Trace(SchemeListener):
+        def invoking(self, instance, state, invoke):  # type: ignore[override]
+            return self  # trace the invoked children too
+
         def entered(self, instance, state, event):  # type: ignore[override]
             act = f"  [cyan]{state.act} ({state.act_type.name})[/cyan]" if state.act_type else ""
-            note("enter", f"enter  {state.name}{act}", state=state.name, act=state.act,
+            name = f"{who(instance)}{state.name}"
+            note("enter", f"enter  {escape(name)}{act}", state=name, act=state.act,
                  act_type=state.act_type.name if state.act_type else None)
 
         def exited(self, instance, state, event):  # type: ignore[override]
-            note("exit", f"exit   {state.name}", state=state.name)
+            name = f"{who(instance)}{state.name}"
+            note("exit", f"exit   {escape(name)}", state=name)
 
         def logged(self, instance, text):  # type: ignore[override]
-            note("log", f"log    {escape(text)}", text=text)
+            note("log", f"log    {escape(who(instance) + text)}", text=who(instance) + text)
 
         def finished(self, instance, state):  # type: ignore[override]
-            note("finished", f"[bold]finished in {state.name}[/bold]", state=state.name)
+            name = f"{who(instance)}{state.name}"
+            note("finished", f"[bold]{escape(who(instance))}finished in {state.name}[/bold]",
+                 state=name)
 
     if not args.json:
         _out.print(f"[bold]{scheme.name}[/bold]: {escape(scheme.doc.strip())}")
-    instance = compile_scheme(scheme).start(clock=clock, listener=Trace())
-    for word in args.script:
-        if _WAIT.match(word):
-            note("wait", f"[dim]wait {word}[/dim]", wait=word)
-            clock.advance(parse_duration(word))
-        else:
-            note("event", f"[yellow]<- {escape(word)}[/yellow]", event=word)
-            instance.send(word)
-        if instance.finished:
-            break
+    try:
+        instance = compiled.start(clock=clock, listener=Trace())
+        for word in args.script:
+            if _WAIT.match(word):
+                note("wait", f"[dim]wait {word}[/dim]", wait=word)
+                clock.advance(parse_duration(word))
+            else:
+                note("event", f"[yellow]<- {escape(word)}[/yellow]", event=word)
+                instance.send(word)
+            if instance.finished:
+                break
+    except LivelockError as err:
+        raise FileError([err.problem]) from None
     if args.json:
         emit_json({"scheme": scheme.name, "trace": trace, "finished": instance.finished,
                    "configuration": list(instance.configuration)})

@@ -18,7 +18,7 @@ import networkx as nx
 from shary import builtin
 from shary.acts import ACT_TYPES, ActRegistry, act_type, acts_from_data, builtin_acts
 from shary.conditions import ConditionRegistry
-from shary.io import schema
+from shary.io import invokes, schema
 from shary.model import (
     ATOMIC,
     COMPOUND,
@@ -27,13 +27,14 @@ from shary.model import (
     PARALLEL,
     Action,
     Cancel,
+    Coverage,
+    Invoke,
     Log,
     Raise,
     Scheme,
     Send,
     State,
     Transition,
-    covers,
     parse_duration,
 )
 from userfiles import yamlsafe
@@ -51,10 +52,16 @@ _DESCRIPTOR = re.compile(r"^(\*|[A-Za-z0-9_][A-Za-z0-9_:-]*(\.[A-Za-z0-9_:-]+)*(
 
 
 def load_scheme(name_or_path: str | os.PathLike[str], *, acts: ActRegistry | None = None,
-                conditions: ConditionRegistry | None = None) -> Scheme:
-    """Load a scheme by built-in name (``give-object``) or by path, fully checked."""
+                conditions: ConditionRegistry | None = None,
+                chain: tuple[str, ...] = (), loaded: dict | None = None) -> Scheme:
+    """Load a scheme by built-in name (``give-object``) or by path, fully checked.
+
+    ``chain`` lists the files whose invokes led here (to find invoke cycles);
+    ``loaded`` the child schemes loaded so far (each file is read once).
+    """
     path = resolve(name_or_path)
-    return parse_scheme(yamlsafe.load_file(path), acts=acts, conditions=conditions)
+    return parse_scheme(yamlsafe.load_file(path), acts=acts, conditions=conditions,
+                        chain=chain, loaded=loaded)
 
 
 def resolve(name_or_path: str | os.PathLike[str]) -> str:
@@ -73,16 +80,20 @@ def resolve(name_or_path: str | os.PathLike[str]) -> str:
 
 def parse_scheme(located: yamlsafe.Located, *, acts: ActRegistry | None = None,
                  conditions: ConditionRegistry | None = None,
-                 check_reachable: bool = True) -> Scheme:
+                 check_reachable: bool = True, chain: tuple[str, ...] = (),
+                 loaded: dict | None = None) -> Scheme:
     """Build and check a scheme from a located document; raise :class:`FileError`.
 
     ``check_reachable=False`` is for tools that prune unreachable states
     themselves (the SCXML importer); every other check still applies.
+    Invoked child schemes are loaded and checked too (:mod:`shary.io.invokes`).
     """
     if not isinstance(located.data, dict):
         raise FileError([located.problem((), "expected a mapping with 'scheme' and 'states' "
                                          "at the top of a scheme file")])
-    builder = _Builder(located, acts or builtin_acts(), conditions, check_reachable)
+    builder = _Builder(located, acts or builtin_acts(), conditions, check_reachable,
+                       chain + (invokes.identity(located.file),),
+                       {} if loaded is None else loaded)
     scheme = builder.build()
     if builder.problems:
         raise FileError(builder.problems)
@@ -91,8 +102,13 @@ def parse_scheme(located: yamlsafe.Located, *, acts: ActRegistry | None = None,
 
 class _Builder:
     def __init__(self, located: yamlsafe.Located, acts: ActRegistry,
-                 conditions: ConditionRegistry | None, check_reachable: bool):
+                 conditions: ConditionRegistry | None, check_reachable: bool,
+                 chain: tuple[str, ...], loaded: dict):
         self.located = located
+        self.loaded = loaded
+        self.base_acts = acts
+        self.chain = chain
+        self.invoke_ids: dict[str, tuple] = {}
         self.check_reachable = check_reachable
         self.data: dict[str, Any] = located.data
         self.problems: list[Problem] = schema.check(located, "scheme")
@@ -122,7 +138,7 @@ class _Builder:
         roles = data.get("roles")
         self.roles = dict(roles) if isinstance(roles, dict) and roles else dict(DEFAULT_ROLES)
         root = State("", COMPOUND, mark=self.located.at(()))
-        root.initial = self._targets(data.get("initial"))
+        root.initial, root.initial_actions = self._initial(data.get("initial"))
         states = data.get("states")
         if isinstance(states, dict):
             self._children(root, states, ("states",))
@@ -133,8 +149,9 @@ class _Builder:
         for state in self.states.values():
             self._check_initial(state, self.paths[state.name])
             self._check_state(state)
-            for index, transition in enumerate(state.transitions):
-                self._check_transition(state, index, transition)
+            taken = Coverage()
+            for transition in state.transitions:
+                self._check_transition(transition, taken)
         if self.check_reachable:
             self._check_reachable(scheme)
         return scheme
@@ -156,8 +173,9 @@ class _Builder:
             self.states[name] = state
             self.paths[name] = spec_path
             state.doc = spec.get("doc", "") if isinstance(spec.get("doc"), str) else ""
-            state.initial = self._targets(spec.get("initial"))
-            state.default = self._targets(spec.get("default"))
+            state.initial, state.initial_actions = self._initial(spec.get("initial"))
+            state.default, default_actions = self._initial(spec.get("default"))
+            state.initial_actions = state.initial_actions or default_actions
             if spec.get("outcome") in ("done", "failed"):
                 state.outcome = spec["outcome"]
             if spec.get("history") in ("shallow", "deep"):
@@ -167,6 +185,8 @@ class _Builder:
             state.on_exit = self._actions(spec.get("on_exit"))
             if isinstance(spec.get("on"), dict):
                 self._transitions(state, spec["on"], spec_path + ("on",))
+            if "invoke" in spec:
+                self._invokes(state, spec["invoke"], spec_path + ("invoke",))
             if isinstance(spec.get("states"), dict):
                 self._children(state, spec["states"], spec_path + ("states",))
 
@@ -199,6 +219,35 @@ class _Builder:
         state.act = act
         state.by = by if isinstance(by, str) else next(iter(self.roles))
         state.act_type = act_type(self.roles[state.by])
+
+    def _initial(self, value: Any) -> tuple[tuple[str, ...], tuple[Action, ...]]:
+        """Targets and actions of an ``initial`` or ``default`` (a name, a list, a transition)."""
+        if isinstance(value, dict):
+            return self._targets(value.get("target")), self._actions(value.get("do"))
+        return self._targets(value), ()
+
+    def _invokes(self, state: State, value: Any, path: tuple) -> None:
+        items = value if isinstance(value, list) else [value]
+        out: list[Invoke] = []
+        for index, item in enumerate(items):
+            item_path = path + (index,) if isinstance(value, list) else path
+            if not isinstance(item, dict):
+                continue
+            ident = item.get("id")
+            if not isinstance(ident, str):
+                ident = state.name if len(items) == 1 else f"{state.name}.{index + 1}"
+            if ident in self.invoke_ids:
+                first = self.located.at(self.invoke_ids[ident])
+                self.problem(item_path, f"duplicate invoke id {ident!r} (first at line "
+                             f"{first[0]}, column {first[1]}); the parent tells its children "
+                             "apart by id")
+                continue
+            self.invoke_ids[ident] = item_path
+            child = invokes.child_scheme(self, item.get("scheme"), item_path + ("scheme",))
+            if child is not None:
+                out.append(Invoke(ident, child, item.get("autoforward") is True,
+                                  self.located.at(item_path)))
+        state.invokes = tuple(out)
 
     def _targets(self, value: Any) -> tuple[str, ...]:
         if isinstance(value, str):
@@ -331,11 +380,12 @@ class _Builder:
         spec = _at(self.data, path)
         spec = spec if isinstance(spec, dict) else {}
         if state.kind == FINAL:
-            for key in ("states", "on", "parallel", "history"):
+            for key in ("states", "on", "parallel", "history", "invoke"):
                 if key in spec:
                     self.problem(path + (key,), f"a final state cannot have {key!r}", key=True)
         if state.kind == HISTORY:
-            for key in ("states", "on", "act", "parallel", "final", "on_entry", "on_exit"):
+            for key in ("states", "on", "act", "parallel", "final", "on_entry", "on_exit",
+                        "invoke"):
                 if key in spec:
                     self.problem(path + (key,), f"a history state is a pseudo-state and cannot "
                                  f"have {key!r}", key=True)
@@ -359,7 +409,7 @@ class _Builder:
             self.problem(path, "a parallel state needs at least one region (child state)",
                          key=True)
 
-    def _check_transition(self, state: State, index: int, t: Transition) -> None:
+    def _check_transition(self, t: Transition, taken: Coverage) -> None:
         at = Problem(self.located.file, *t.mark, "")
         for name in t.targets:
             if name not in self.states:
@@ -383,12 +433,16 @@ class _Builder:
                         self._at(at, f"targets {a.name!r} and {b.name!r} cannot be active "
                                  "together (several targets must lie in distinct regions of a "
                                  "parallel state)")
-        for earlier in state.transitions[:index]:
-            if earlier.guard is None and _shadows(earlier, t):
-                self._at(at, f"transition on {_trigger(t)!r} is never taken: the unguarded "
-                         f"transition on {_trigger(earlier)!r} at line {earlier.mark[0]}, column "
-                         f"{earlier.mark[1]} of the same state takes the same events first")
-                break
+        if t.after is not None:
+            return
+        earlier = taken.covering(t.events)
+        if isinstance(earlier, Transition):
+            self._at(at, f"transition on {_trigger(t)!r} is never taken: the unguarded "
+                     f"transition on {_trigger(earlier)!r} at line {earlier.mark[0]}, column "
+                     f"{earlier.mark[1]} of the same state (with any other earlier unguarded "
+                     "ones) takes the same events first")
+        elif t.guard is None:
+            taken.add(t.events, t)
 
     def _at(self, where: Problem, message: str) -> None:
         self.problems.append(Problem(where.file, where.line, where.col, message))
@@ -441,9 +495,3 @@ def _trigger(t: Transition) -> str:
         return t.events[0].split("@")[0] if t.events else "after"
     return " ".join(t.events) if t.events is not None else EVENTLESS_KEY
 
-
-def _shadows(earlier: Transition, later: Transition) -> bool:
-    """True when every event ``later`` takes is taken first by ``earlier``."""
-    if later.after is not None or earlier.after is not None:
-        return False
-    return covers(earlier.events, later.events)

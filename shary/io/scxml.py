@@ -4,10 +4,19 @@ The data-model-free part of W3C SCXML maps one to one onto schemes:
 ``<state>``, ``<parallel>``, ``<final>``, ``<history>``, ``<initial>``,
 ``<transition>`` with ``event``/``target``/``type``, and the executable content
 ``<raise>``, ``<send>`` (to the chart itself, optionally delayed, with an id),
-``<cancel>``, ``<log label>``, in ``<onentry>``/``<onexit>``.  Anything that
-needs a data model or an outside processor (``cond``, ``<script>``,
-``<assign>``, ``<if>``, ``<invoke>``, ``expr`` attributes …) is refused by name
-with its position, never half-translated.
+``<cancel>``, ``<log label>``, in ``<onentry>``/``<onexit>`` and on
+``<initial>`` and history default transitions, and ``<invoke>`` of another
+SCXML chart (inline ``<content>`` or a ``src`` file below the chart's folder),
+written inline in the scheme.  Anything that needs a data model or an outside
+processor (``cond``, ``<script>``, ``<assign>``, ``<if>``, ``<param>``,
+``expr`` attributes …) is refused by name with its position, never
+half-translated.
+
+The XML is read with the standard library's expat, without DOCTYPE (so no
+entity is ever declared, expanded or fetched: no entity bombs, no external
+entities), element by element: a chart nested deeper than
+:data:`MAX_DEPTH` or larger than :data:`MAX_ELEMENTS` stops the reading at
+that element, and nothing after it is recursed into.
 
 Two differences are bridged on the way: a compound state without ``initial``
 gets SCXML's default (its first child) written out, since schemes require it,
@@ -27,16 +36,28 @@ from typing import Any
 import yaml
 
 from shary.io.schemes import parse_scheme, unreachable
-from shary.model import covers
+from shary.model import Coverage
 from userfiles.errors import FileError, Problem
+from userfiles.reader import confine, spelled
 from userfiles.yamlsafe import Located, read_text
 
+MAX_DEPTH = 28
+"""Deepest nesting of XML elements: a scheme file allows 64 levels of YAML, and each
+level of states takes two (the state and its ``states:``)."""
+MAX_ELEMENTS = 10_000
+"""Most XML elements a chart (with the charts it invokes) may have."""
+MAX_INVOKE_DEPTH = 8
+"""Most charts a chain of ``<invoke src>`` may go through."""
+
+_Dumper = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
+"""libyaml's emitter when PyYAML has it: ten times faster on a chart of thousands of states."""
 _NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.:-]*$")
 _TIME = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*(ms|s)\s*$")
 _STATES = {"state", "parallel", "final", "history"}
 _ACTIONS = {"raise", "send", "cancel", "log"}
 _NEEDS_DATAMODEL = {"script", "assign", "if", "elseif", "else", "foreach", "datamodel", "data",
-                    "donedata", "param", "content", "invoke", "finalize"}
+                    "donedata", "param", "content", "finalize"}
+_SCXML_TYPES = ("", "scxml", "http://www.w3.org/TR/scxml/", "http://www.w3.org/TR/scxml")
 
 
 @dataclass
@@ -51,20 +72,32 @@ class _Element:
 def import_scxml(path: str | os.PathLike[str]) -> str:
     """The scheme YAML equivalent to an SCXML file; :class:`FileError` for what cannot be."""
     name = os.fspath(path)
-    root = _parse(read_text(name), name)
-    return _Translator(name).document(root)
+    budget = [MAX_ELEMENTS]
+    root = _parse(read_text(name), name, budget)
+    out, pruned = _Translator(name, (os.path.realpath(name),), budget).scheme(root)
+    text = yaml.dump(out, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=100)
+    if pruned:
+        text = f"# Left out, since no run can ever enter them: {', '.join(pruned)}\n" + text
+    return text
 
 
-def _parse(text: str, file: str) -> _Element:
+def _parse(text: str, file: str, budget: list[int]) -> _Element:
+    """The element tree of an SCXML text; ``budget`` counts down the elements left."""
     parser = xml.parsers.expat.ParserCreate(namespace_separator=" ")
     stack: list[_Element] = []
     top: list[_Element] = []
 
-    def refuse(what: str) -> None:
-        raise FileError([Problem(file, parser.CurrentLineNumber, parser.CurrentColumnNumber + 1,
-                                 what)])
+    def refuse(what: str, line: int | None = None, col: int | None = None) -> None:
+        raise FileError([Problem(file, line or parser.CurrentLineNumber,
+                                 col or parser.CurrentColumnNumber + 1, what)])
 
     def start(tag: str, attrs: dict[str, str]) -> None:
+        if len(stack) >= MAX_DEPTH:
+            refuse(f"elements nested more than {MAX_DEPTH} deep: the limit of a chart")
+        budget[0] -= 1
+        if budget[0] < 0:
+            refuse(f"more than {MAX_ELEMENTS} XML elements: the limit of a chart (with the "
+                   "charts it invokes)", 1, 1)
         local = tag.split(" ")[-1]
         element = _Element(local, {k.split(" ")[-1]: v for k, v in attrs.items()},
                            parser.CurrentLineNumber, parser.CurrentColumnNumber + 1)
@@ -90,15 +123,18 @@ def _parse(text: str, file: str) -> _Element:
 
 
 class _Translator:
-    def __init__(self, file: str):
+    def __init__(self, file: str, chain: tuple[str, ...], budget: list[int]):
         self.file = file
+        self.chain = chain
+        self.budget = budget
         self.problems: list[Problem] = []
         self.generated = 0
 
     def refuse(self, element: _Element, message: str) -> None:
         self.problems.append(Problem(self.file, element.line, element.col, message))
 
-    def document(self, root: _Element) -> str:
+    def scheme(self, root: _Element) -> tuple[dict[str, Any], list[str]]:
+        """The scheme of an ``<scxml>`` element, and the unreachable states left out."""
         for attr in ("datamodel", "binding"):
             if root.attrs.get(attr, "") not in ("", "ecmascript", "null", "early"):
                 self.refuse(root, f"{attr}={root.attrs[attr]!r} is not supported")
@@ -114,12 +150,7 @@ class _Translator:
         out["states"] = states
         if self.problems:
             raise FileError(self.problems)
-        pruned = _prune_unreachable(out, self.file)
-        text = yaml.safe_dump(out, sort_keys=False, allow_unicode=True, width=100)
-        if pruned:
-            text = (f"# Left out, since no run can ever enter them: {', '.join(pruned)}\n"
-                    + text)
-        return text
+        return out, _prune_unreachable(out, self.file)
 
     def children(self, element: _Element) -> dict[str, Any]:
         states: dict[str, Any] = {}
@@ -135,7 +166,7 @@ class _Translator:
                 states[ident] = self.state(child)
             elif child.tag in _NEEDS_DATAMODEL:
                 self.refuse(child, f"<{child.tag}> needs a data model, which schemes do not have")
-            elif child.tag not in ("initial", "transition", "onentry", "onexit"):
+            elif child.tag not in ("initial", "transition", "onentry", "onexit", "invoke"):
                 self.refuse(child, f"<{child.tag}> is not supported")
         return states
 
@@ -149,29 +180,24 @@ class _Translator:
             spec["history"] = element.attrs.get("type", "shallow")
             defaults = [c for c in element.children if c.tag == "transition"]
             if defaults:
-                if [c for c in defaults[0].children]:
-                    self.refuse(defaults[0], "actions on a history's default transition are "
-                                "not supported")
-                spec["default"] = _one_or_list(defaults[0].attrs.get("target", "").split())
+                spec["default"] = self.initial(defaults[0])
             return spec
-        initial = element.attrs.get("initial", "").split()
+        initial: Any = _one_or_list(element.attrs.get("initial", "").split()) \
+            if "initial" in element.attrs else None
         for child in element.children:
             if child.tag == "initial":
                 transition = next((c for c in child.children if c.tag == "transition"), None)
                 if transition is None:
                     self.refuse(child, "<initial> without a <transition>")
                     continue
-                if transition.children:
-                    self.refuse(transition, "actions on an <initial> transition are not "
-                                "supported")
-                initial = transition.attrs.get("target", "").split()
+                initial = self.initial(transition)
         children = self.children(element)
         if element.tag == "state" and children and not initial:
             proper = [n for n, s in children.items() if "history" not in (s or {})]
             if len(proper) > 1:
-                initial = proper[:1]
+                initial = proper[0]
         if initial and element.tag == "state":
-            spec["initial"] = _one_or_list(initial)
+            spec["initial"] = initial
         for kind in ("onentry", "onexit"):
             actions = [a for c in element.children if c.tag == kind for a in self.actions(c)]
             if actions:
@@ -179,12 +205,94 @@ class _Translator:
         on = self.transitions(element)
         if on:
             spec["on"] = on
+        invokes = [self.invoke(c) for c in element.children if c.tag == "invoke"]
+        if invokes:
+            spec["invoke"] = invokes[0] if len(invokes) == 1 else invokes
         if children:
             spec["states"] = children
         return spec or None  # type: ignore[return-value]
 
+    def initial(self, transition: _Element) -> Any:
+        """The targets of an ``<initial>`` or history default transition, with its actions."""
+        targets = _one_or_list(transition.attrs.get("target", "").split())
+        actions = self.actions(transition)
+        return {"target": targets, "do": actions} if actions else targets
+
+    def invoke(self, element: _Element) -> dict[str, Any]:
+        """An ``<invoke>`` of another SCXML chart, its child written inline."""
+        out: dict[str, Any] = {}
+        for attr, value in element.attrs.items():
+            if attr in ("typeexpr", "srcexpr", "idlocation", "namelist"):
+                self.refuse(element, f"<invoke {attr}=…> needs a data model")
+            elif attr == "type" and value not in _SCXML_TYPES:
+                self.refuse(element, f"<invoke type={value!r}>: only SCXML charts can be "
+                            "invoked")
+            elif attr not in ("type", "src", "id", "autoforward"):
+                self.refuse(element, f"<invoke {attr}=…> is not supported")
+        if "id" in element.attrs:
+            if _NAME.match(element.attrs["id"]):
+                out["id"] = element.attrs["id"]
+            else:
+                self.refuse(element, f"invoke id {element.attrs['id']!r} cannot be a scheme "
+                            "name")
+        if element.attrs.get("autoforward") == "true":
+            out["autoforward"] = True
+        contents = [c for c in element.children if c.tag == "content"]
+        for c in element.children:
+            if c.tag != "content" and not (c.tag == "finalize" and not c.children):
+                self.refuse(c, f"<{c.tag}> in <invoke> needs a data model")
+        if "src" in element.attrs and contents or len(contents) > 1:
+            self.refuse(element, "<invoke> takes either src= or one <content>")
+        elif contents:
+            inner = [c for c in contents[0].children if c.tag == "scxml"]
+            if "expr" in contents[0].attrs or len(inner) != 1:
+                self.refuse(contents[0], "<content> of an <invoke> must hold one <scxml> chart "
+                            "(expr= needs a data model)")
+            else:
+                out["scheme"] = self.child(inner[0], self.file, self.chain)
+        elif "src" in element.attrs:
+            out["scheme"] = self.src(element, element.attrs["src"])
+        elif "srcexpr" not in element.attrs:
+            self.refuse(element, "<invoke> needs src= or a <content> chart")
+        return out
+
+    def src(self, element: _Element, src: str) -> dict[str, Any] | None:
+        """The chart an ``<invoke src>`` names: a file below this chart's folder."""
+        full, refusal = confine(self.file, src)
+        if refusal is not None:
+            self.refuse(element, refusal)
+            return None
+        path = str(full)
+        if path in self.chain:
+            names = [os.path.basename(f) for f in self.chain[self.chain.index(path):]]
+            self.refuse(element, f"invoke cycle: {' -> '.join([*names, os.path.basename(path)])}")
+            return None
+        if len(self.chain) >= MAX_INVOKE_DEPTH:
+            self.refuse(element, f"invokes nest more than {MAX_INVOKE_DEPTH} charts deep")
+            return None
+        shown = spelled(path, like=self.file)
+        try:
+            root = _parse(read_text(shown), shown, self.budget)
+        except FileError as err:
+            self.problems.extend(err.problems)
+            return None
+        return self.child(root, shown, self.chain + (path,))
+
+    def child(self, root: _Element, file: str, chain: tuple[str, ...]) -> dict[str, Any] | None:
+        if root.tag != "scxml":
+            self.refuse(root, f"<{root.tag}> is not an SCXML chart")
+            return None
+        translator = _Translator(file, chain, self.budget)
+        try:
+            scheme, _ = translator.scheme(root)
+        except FileError as err:
+            self.problems.extend(err.problems)
+            return None
+        return scheme
+
     def transitions(self, element: _Element) -> dict[str, Any]:
-        kept: list[tuple[str, tuple[str, ...] | None, Any]] = []
+        taken = Coverage()
+        on: dict[str, Any] = {}
         for t in (c for c in element.children if c.tag == "transition"):
             if "cond" in t.attrs:
                 self.refuse(t, "cond= needs a data model; use a scheme guard naming a "
@@ -194,8 +302,9 @@ class _Translator:
                 if attr not in ("event", "target", "type"):
                     self.refuse(t, f"transition attribute {attr!r} is not supported")
             events = tuple(t.attrs["event"].split()) if "event" in t.attrs else None
-            if any(covers(earlier, events) for _, earlier, _ in kept):
-                continue
+            if taken.covering(events) is not None:
+                continue  # an earlier transition takes all its events: it is never taken
+            taken.add(events, t)
             targets = t.attrs.get("target", "").split()
             actions = self.actions(t)
             body: dict[str, Any] = {}
@@ -208,20 +317,8 @@ class _Translator:
                 value: Any = body
             else:
                 value = _one_or_list(targets)
-            key = " ".join(events) if events is not None else "always"
-            kept.append((key, events, value))
-        grouped: dict[str, list[Any]] = {}
-        for index, (key, events, value) in enumerate(kept):
-            if key in grouped:
-                order = list(grouped)
-                moved = [k for k, e, _ in kept[:index]
-                         if k != key and order.index(k) > order.index(key) and _overlap(events, e)]
-                if moved:
-                    self.refuse(element, f"transitions on {key!r} are interleaved with others "
-                                "that take the same events; their order cannot be kept")
-                    continue
-            grouped.setdefault(key, []).append(value)
-        return {k: v[0] if len(v) == 1 else v for k, v in grouped.items()}
+            on[" ".join(events) if events is not None else "always"] = value
+        return on
 
     def actions(self, element: _Element) -> list[dict[str, Any]]:
         out: list[dict[str, Any]] = []
@@ -287,16 +384,10 @@ def _prune_unreachable(document: dict[str, Any], file: str) -> list[str]:
 
 
 def _one_or_list(items: list[str]) -> Any:
+    """A name for one target, a list for several (as schemes write them)."""
     return items[0] if len(items) == 1 else list(items)
 
 
 def _safe_name(name: str) -> str:
     safe = re.sub(r"[^A-Za-z0-9_.:-]", "-", name)
     return safe if _NAME.match(safe) else f"chart-{safe}"
-
-
-def _overlap(a: tuple[str, ...] | None, b: tuple[str, ...] | None) -> bool:
-    """True when some event could be taken by both descriptor lists."""
-    if a is None or b is None:
-        return a is None and b is None
-    return any(covers((x,), (y,)) or covers((y,), (x,)) for x in a for y in b)
