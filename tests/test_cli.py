@@ -279,3 +279,9 @@ def test_json_an_output_that_cannot_be_written_is_a_document_too(shary, tmp_path
     doc = _json(shary, "plan", "fig6", str(REPO / "planner" / "problems" / "fig6.yaml"),
                 "--render", "tree", "-o", str(out), "--json", status=2)
     assert doc["error"].startswith(f"{out}: ")
+
+
+def test_json_simulate_an_event_no_state_takes(shary):
+    doc = _json(shary, "simulate", "give-object", "H-AGRE", "--json", status=2)
+    assert doc == {"error": "no state of give-object takes the event 'H-AGRE' "
+                            "(did you mean 'H-AGREE'?)"}
