@@ -12,8 +12,10 @@ A binder is compiled once per method.  It unifies the method's task with the
 task's arguments, then takes the conjuncts of the precondition, plus those of
 the first subtask's precondition when that subtask is an action (it runs in
 the same state, so a binding that makes them false fails at once: they only
-narrow the choice).  Their *positive facts* are looked up, in a static order
-that takes the most-determined fact first, in the state's index
+narrow the choice), plus the static conjuncts of every later action's
+precondition (those that read only facts no effect changes, or equalities: they
+hold when the method is entered or never).  Their *positive facts* are looked
+up, in a static order that takes the most-determined fact first, in the state's index
 (:class:`~planner.state.FactState`), for the facts that match what is bound
 so far; every other conjunct (negations, equalities, quantifiers) is tested as
 soon as its variables are bound.  Variables that no positive fact mentions

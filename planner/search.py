@@ -355,4 +355,8 @@ def plan(problem: Problem, budget_ms: float | None = None,
     """Plan ``problem`` within ``budget_ms`` (default: the problem's own budget); with
     ``first``, stop at the first plan found."""
     budget = problem.budget_ms if budget_ms is None else budget_ms
+    if problem.domain.predicates:  # HDDL: the IPC mode's depth-first search first
+        from planner.depthfirst import first_plan, improve
+
+        return (first_plan if first else improve)(problem, budget, on_improvement)
     return Search(problem, on_improvement).run(budget, first)

@@ -113,6 +113,10 @@ class _Translator:
                 if name in hddl.supertypes(domain, kind):
                     kinds.add(kind)
             self.typed[name] = sorted(o for o, t in self.objects.items() if t in kinds)
+        self.changed = {pred for action in domain.actions.values()
+                        for adding in (True, False)
+                        for pred, _ in _effect_atoms(action.effect, adding)}
+        """The predicates some action's effect may change (the others are static)."""
 
     def problem(self) -> Problem:
         hdomain, hproblem = self.hdomain, self.hproblem
@@ -140,7 +144,8 @@ class _Translator:
         if hproblem.htn_params:  # the search binds them: one task, one method
             line, col = hproblem.htn_line, hproblem.htn_col
             network = hddl.HMethod(NETWORK, hproblem.htn_params, hddl.Call(NETWORK, (), line, col),
-                                   None, hproblem.htn_subtasks, True, line, col)
+                                   None, hproblem.htn_subtasks, True, line, col,
+                                   constraints=hproblem.htn_constraints)
             dec, needed = self.decomposition(network, (), hdomain)
             for pred, positions in needed:
                 patterns.setdefault(pred, set()).add(positions)
@@ -223,36 +228,34 @@ class _Translator:
         text = f"task {call}, {whole or '()'}"
         reads = {f.children[0] for f in whole.walk() if f.kind == "pred"} if whole else set()
         pre = Expr(text, matches, frozenset(dict(method.params)), frozenset(reads), "bool")
-        tests = [self.test(f, {}) for f in _conjuncts(whole)]
-        if method.subtasks and method.subtasks[0].name in domain.actions:
-            first = method.subtasks[0]
-            action = domain.actions[first.name]
-            rename = {p: t for (p, _), t in zip(action.params, first.args, strict=True)}
-            tests += [self.test(f, rename) for f in _conjuncts(action.precondition)]
+        tests = [self.test(f) for f in _conjuncts(whole)]
+        for position, sub in enumerate(method.subtasks):
+            action = domain.actions.get(sub.name)
+            if action is None:
+                continue
+            rename = {p: t for (p, _), t in zip(action.params, sub.args, strict=True)}
+            tests += [self.test(_rename(f, rename)) for f in _conjuncts(action.precondition)
+                      if position == 0 or self.static(f)]
         bind, patterns = compile_binder(dict(method.params), head, tests, self.typed)
         subtasks = tuple(Subtask(s.name, tuple(_term(t) for t in s.args),
                                  f"({' '.join((s.name, *s.args))})", args_of(s.args))
                          for s in method.subtasks)
         return Decomposition(method.name, method.params, pre, subtasks, bind=bind), patterns
 
-    def test(self, formula: hddl.Formula, rename: dict[str, str]) -> Test:
-        """A conjunct for a binder; ``rename`` maps an action's parameters to the terms
-        a method gives them (empty: the formula is the method's own)."""
-        variables = frozenset(t for t in (rename.get(v, v) for v in _free(formula))
-                              if is_variable(t))
+    def static(self, formula: hddl.Formula) -> bool:
+        """Whether no action can change what ``formula`` says (it reads only facts that no
+        effect adds or deletes, or only equalities): a later action's conjunct like that
+        holds when the method is entered or never."""
+        return not any(f.kind == "pred" and f.children[0] in self.changed
+                       for f in formula.walk())
+
+    def test(self, formula: hddl.Formula) -> Test:
+        """A conjunct for a binder, over the method's variables."""
+        variables = frozenset(_free(formula))
         if formula.kind == "pred":
             pred, terms = formula.children
-            atom = (pred, tuple(rename.get(t, t) for t in terms))
-            return Test(variables, _holds(*atom), atom)
-        condition = self.condition(formula)
-        if not rename:
-            return Test(variables, condition)
-        pairs = tuple(rename.items())
-
-        def holds(binding: dict, get: Any) -> bool:
-            return condition({p: binding[t] if is_variable(t) else t for p, t in pairs}, get)
-
-        return Test(variables, holds)
+            return Test(variables, _holds(pred, terms), (pred, terms))
+        return Test(variables, self.condition(formula))
 
     # -- conditions --------------------------------------------------------------------
 
@@ -427,6 +430,24 @@ def _free(formula: hddl.Formula) -> set[str]:
     if kind in ("forall", "exists"):
         return _free(children[1]) - {v for v, _ in children[0]}
     return set().union(*(_free(c) for c in children))
+
+
+def _rename(formula: hddl.Formula, rename: dict[str, str]) -> hddl.Formula:
+    """``formula`` with its free variables replaced by the terms ``rename`` gives them (an
+    action's precondition seen from the method that calls it); a quantifier's own
+    variables are left alone."""
+    kind, children = formula.kind, formula.children
+    if kind == "pred":
+        children = (children[0], tuple(rename.get(t, t) for t in children[1]))
+    elif kind == "=":
+        children = tuple(rename.get(t, t) for t in children)
+    elif kind in ("forall", "exists"):
+        params, body = children
+        inner = {v: t for v, t in rename.items() if v not in dict(params)}
+        children = (params, _rename(body, inner))
+    else:
+        children = tuple(_rename(c, rename) for c in children)
+    return hddl.Formula(kind, children, formula.line, formula.col)
 
 
 def _term(term: str) -> Expr:

@@ -107,4 +107,4 @@ def test_cli_refuses_an_unsupported_construct_with_its_position(shary, write):
     (found,) = problems(err)
     assert found["file"] == str(domain)
     assert (found["line"], found["col"]) == ("14", "22")  # a tab is one column
-    assert "'typeof' is not a supported method constraint" in found["message"]
+    assert "'typeof' is not a supported task-network constraint" in found["message"]

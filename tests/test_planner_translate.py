@@ -285,3 +285,147 @@ def test_a_sortof_that_widens_a_type_is_refused_at_the_type(write):
     line = text.splitlines().index(next(t for t in text.splitlines() if "sortof" in t)) + 1
     assert (found.line, found.col) == (line, text.splitlines()[line - 1].index("object") + 1)
     assert found.message == "'object' is not a subtype of ?x's type 'item'"
+
+
+# ---------------------------------------------------------------- the total-order fragment
+
+FRAGMENT = """\
+(define (domain yard)
+  (:requirements :typing :hierarchy :negative-preconditions :equality :conditional-effects
+                 :universal-preconditions :method-preconditions)
+  (:types place - object crate - object small - crate)
+  (:predicates (at ?c - crate ?p - place) (road ?a ?b - place) (free ?p - place)
+               (moved ?c - crate) (tidy))
+  (:task carry :parameters (?c - crate ?to - place) :precondition () :effect ())
+  (:task sweep :parameters ())
+  (:method already-there
+    :parameters (?c - crate ?to - place)
+    :task (carry ?c ?to)
+    :precondition (at ?c ?to)
+    :ordered-subtasks ())
+  (:method one-step
+    :parameters (?c - crate ?from ?to - place)
+    :task (carry ?c ?to)
+    :constraints (and (not (= ?from ?to)))
+    :ordered-subtasks (and (push ?c ?from ?to)))
+  (:method two-steps
+    :parameters (?c - crate ?from ?via ?to - place)
+    :task (carry ?c ?to)
+    :constraints (and (not (= ?via ?to)) (sortof ?c - small))
+    :ordered-subtasks (and (push ?c ?from ?via) (push ?c ?via ?to)))
+  (:method sweep-all
+    :parameters ()
+    :task (sweep)
+    :precondition (forall (?c - crate) (moved ?c))
+    :ordered-subtasks (and (clean)))
+  (:action push
+    :parameters (?c - crate ?a ?b - place)
+    :precondition (and (at ?c ?a) (road ?a ?b) (not (= ?a ?b)))
+    :effect (and (not (at ?c ?a)) (at ?c ?b) (moved ?c)))
+  (:action clean
+    :parameters ()
+    :precondition ()
+    :effect (and (forall (?p - place) (when (free ?p) (tidy)))))
+)
+"""
+
+FRAGMENT_PROBLEM = """\
+(define (problem p) (:domain yard)
+  (:objects a b c d - place box - crate pebble - small)
+  (:htn :parameters (?dest - place)
+        :ordered-subtasks (and (carry box ?dest) (carry pebble ?dest) (sweep))
+        :constraints (and (= ?dest c)))
+  (:init (at box a) (at pebble b) (road a c) (road b d) (road d c) (free d))
+  (:goal (and (at box c) (tidy))))
+"""
+
+
+def test_every_construct_of_the_fragment_plans_and_validates(write):
+    """Method variables bound only through subtasks (?from, ?via: the static roads of the
+    second push), ':constraints' in methods and in ':htn' ('=', 'not =', 'sortof'),
+    abstract tasks with empty bodies, forall/when effects, a forall precondition."""
+    problem, result = _solve(write, FRAGMENT, FRAGMENT_PROBLEM)
+    assert result.plan is not None, result.explain()
+    assert [str(a) for a in result.plan.actions] == [
+        "push(box, a, c)", "push(pebble, b, d)", "push(pebble, d, c)", "clean()"]
+    assert validate(problem, result.plan) == []
+    tree = result.plan.tree
+    assert [tree[c].decomposition for c in tree[result.plan.roots[0]].children] == [
+        "one-step", "two-steps", "sweep-all"]
+
+
+def test_sortof_in_a_method_keeps_other_kinds_out(write):
+    # box is a crate but not a small: two-steps is not for it, and one step cannot do.
+    problem, result = _solve(write, FRAGMENT, FRAGMENT_PROBLEM.replace(
+        "(at box a) (at pebble b)", "(at box b) (at pebble a)").replace(
+        "(carry box ?dest) (carry pebble ?dest)", "(carry box ?dest)"))
+    assert result.plan is None
+    assert "two-steps" in result.explain()
+
+
+def test_an_equality_constraint_in_the_initial_network_binds_its_parameter(write):
+    problem, result = _solve(write, FRAGMENT, FRAGMENT_PROBLEM.replace("(= ?dest c)",
+                                                                     "(= ?dest d)").replace(
+        "(:goal (and (at box c) (tidy)))", ""))
+    assert result.plan is None  # the box cannot reach d
+    problem, result = _solve(write, FRAGMENT, FRAGMENT_PROBLEM.replace(
+        "(carry box ?dest) (carry pebble ?dest) (sweep)", "(carry pebble ?dest)").replace(
+        "(= ?dest c)", "(= ?dest d)").replace("(:goal (and (at box c) (tidy)))", ""))
+    assert [str(a) for a in result.plan.actions] == ["push(pebble, b, d)"]
+    assert validate(problem, result.plan) == []
+    assert "?dest" not in write_ipc(result.plan)
+
+
+def test_a_negated_condition_of_the_first_action_on_parameters_left_free(write):
+    """Regression: the binder tested '(not (clear ?x))' of the first action with every
+    parameter of that action renamed, bound or not (KeyError: '?y')."""
+    domain = """\
+        (define (domain d) (:requirements :typing :hierarchy :negative-preconditions)
+          (:types block)
+          (:predicates (on ?x ?y - block) (clear ?x - block))
+          (:task t :parameters (?x - block))
+          (:method m :parameters (?x ?y ?z - block) :task (t ?x)
+            :ordered-subtasks (and (a ?x ?y ?z)))
+          (:action a :parameters (?x ?y ?z - block)
+            :precondition (and (not (clear ?x)) (on ?x ?y) (on ?y ?z)
+                               (forall (?w - block) (not (on ?w ?x))))
+            :effect (clear ?x)))
+        """
+    problem, result = _solve(write, domain, """\
+        (define (problem p) (:domain d) (:objects b1 b2 b3 - block)
+          (:htn :ordered-subtasks (and (t b1))) (:init (on b1 b2) (on b2 b3))
+          (:goal (clear b1)))
+        """)
+    assert [str(a) for a in result.plan.actions] == ["a(b1, b2, b3)"]
+    assert validate(problem, result.plan) == []
+
+
+def test_method_preconditions_read_the_state_the_method_is_entered_in(write):
+    domain = """\
+        (define (domain d) (:requirements :hierarchy :negative-preconditions)
+          (:predicates (lit) (seen))
+          (:task t :parameters ())
+          (:method when-dark :parameters () :task (t) :precondition (not (lit))
+            :ordered-subtasks (and (switch) (look)))
+          (:method when-lit :parameters () :task (t) :precondition (lit)
+            :ordered-subtasks (and (look)))
+          (:action switch :parameters () :precondition (not (lit)) :effect (lit))
+          (:action look :parameters () :precondition (lit) :effect (seen)))
+        """
+    problem, result = _solve(write, domain, """\
+        (define (problem p) (:domain d) (:htn :ordered-subtasks (and (t) (t))) (:goal (seen)))
+        """)
+    assert [str(a) for a in result.plan.actions] == ["switch()", "look()", "look()"]
+    tree = result.plan.tree
+    assert [tree[r].decomposition for r in result.plan.roots] == ["when-dark", "when-lit"]
+    assert validate(problem, result.plan) == []
+
+
+def test_an_abstract_task_with_a_real_precondition_is_refused_at_the_keyword(write):
+    with pytest.raises(FileError) as caught:
+        load_hddl(write("d.hddl", FRAGMENT.replace(
+            "(:task sweep :parameters ())", "(:task sweep :parameters () :effect (tidy))")),
+            write("p.hddl", FRAGMENT_PROBLEM))
+    (found,) = caught.value.problems
+    assert (found.line, found.col) == (8, 31)
+    assert "abstract tasks with effects" in found.message

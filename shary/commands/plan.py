@@ -35,7 +35,9 @@ def add_plan(sub: argparse._SubParsersAction) -> None:
                    help="where --render draws (.svg, .png, .dot)")
     p.add_argument("--hddl", action="store_true",
                    help="DOMAIN and PROBLEM are HDDL files (total order, as in the IPC 2020 "
-                   "HTN track); the search stops at the first plan")
+                   "HTN track); the search stops at the first plan (see --improve)")
+    p.add_argument("--improve", action="store_true",
+                   help="HDDL: after the first plan, look for better ones until --budget-ms")
     p.add_argument("--ipc", action="store_true",
                    help="print the plan in the IPC plan format (for HDDL problems)")
     p.set_defaults(func=cmd_plan)
@@ -60,7 +62,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
                                  [r for r in args.rules.split(",") if r])
         except KeyError as err:
             return error(str(err.args[0]), json_mode=args.json)
-    result = planner.plan(problem, args.budget_ms, first=args.hddl)
+    result = planner.plan(problem, args.budget_ms, first=args.hddl and not args.improve)
     best = result.plan
     errors = planner.validate(problem, best) if best is not None else []
     if args.ipc:
