@@ -25,6 +25,10 @@ def add_plan(sub: argparse._SubParsersAction) -> None:
     p.add_argument("problem", type=Path, help="a problem file")
     p.add_argument("--budget-ms", type=int, default=None, metavar="N",
                    help="time budget (default: the problem's); the best plan so far is kept")
+    p.add_argument("--max-depth", type=int, default=None, metavar="N",
+                   help="decomposition depth budget (default 10,000 nested tasks)")
+    p.add_argument("--max-nodes", type=int, default=None, metavar="N",
+                   help="node budget (default 500,000 nodes expanded and bindings tried)")
     p.add_argument("--rules", default=None, metavar="RULE,…",
                    help="the social rules to apply (default: the problem's selection; "
                    "'none' for none)")
@@ -62,7 +66,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
                                  [r for r in args.rules.split(",") if r])
         except KeyError as err:
             return error(str(err.args[0]), json_mode=args.json)
-    result = planner.plan(problem, args.budget_ms, first=args.hddl and not args.improve)
+    result = planner.plan(problem, args.budget_ms, first=args.hddl and not args.improve,
+                          max_depth=args.max_depth, max_nodes=args.max_nodes)
     best = result.plan
     errors = planner.validate(problem, best) if best is not None else []
     if args.ipc:
@@ -91,7 +96,8 @@ def _plan_json(problem, result, errors) -> dict:  # type: ignore[no-untyped-def]
     best = result.plan
     out = {"problem": problem.name, "domain": problem.domain.name, "found": best is not None,
            "plans_found": result.plans_found, "expansions": result.expansions,
-           "complete": result.complete, "elapsed_ms": round(result.elapsed_ms, 3)}
+           "complete": result.complete, "elapsed_ms": round(result.elapsed_ms, 3),
+           "exhausted": result.exhausted}
     if best is None:
         out["explanation"] = [str(f) for f in result.failures]
         return out
@@ -110,11 +116,17 @@ def _plan_json(problem, result, errors) -> dict:  # type: ignore[no-untyped-def]
 def _print_plan(problem, result, errors) -> None:  # type: ignore[no-untyped-def]
     best = result.plan
     state = ("first plan" if result.first else "search complete" if result.complete
+             else "search budget exhausted" + (": best so far" if best else "")
+             if result.exhausted
              else "time budget reached: best so far")
     _out.print(f"[bold]{problem.name}[/bold] ({problem.domain.name}): {result.plans_found} "
                f"plan(s) in {result.elapsed_ms:.1f} ms, {result.expansions} expansions, {state}")
     if best is None:
-        _out.print("[bold red]no plan[/bold red]; where each top task got stuck:")
+        if result.exhausted:
+            _out.print(f"[bold red]search budget exhausted[/bold red]: "
+                       f"{escape(result.exhausted)}")
+        if result.failures:
+            _out.print("[bold red]no plan[/bold red]; where each top task got stuck:")
         for failure in result.failures:
             _out.print(f"  {escape(str(failure))}")
         return
