@@ -21,6 +21,7 @@ from importlib.metadata import entry_points
 from pathlib import Path
 from typing import Any
 
+from shary import builtin
 from shary.acts import ActRegistry, builtin_acts, load_acts
 from shary.conditions import ConditionRegistry
 from userfiles import yamlsafe
@@ -57,9 +58,14 @@ class FileKind:
     """Whether a YAML mapping is a file of this kind."""
     keys: str = ""
     """The keys that make a file of this kind, for the message about unknown files."""
+    shipped: Callable[[], list[Path]] | None = None
+    """The files of this kind that ship with its package (``shary validate`` alone checks
+    them)."""
 
 
 _kinds: dict[str, FileKind] = {}
+_unavailable: list[str] = []
+"""Why registered kinds could not be loaded (a part that is not installed), for messages."""
 _loaded = False
 
 
@@ -74,9 +80,26 @@ def kinds() -> list[FileKind]:
     if not _loaded:
         _loaded = True
         for entry in entry_points(group=ENTRY_POINTS):
-            for kind in entry.load():
+            try:
+                loaded = entry.load()
+            except ModuleNotFoundError as err:
+                _unavailable.append(f"the kinds of files of '{entry.name}' are unavailable "
+                                    f"(package '{err.name}' is not installed)")
+                continue
+            except Exception as err:  # noqa: BLE001 -- a broken part must not stop the others
+                _unavailable.append(f"the kinds of files of '{entry.name}' are unavailable "
+                                    f"(entry point '{entry.name} = {entry.value}' failed to "
+                                    f"load: {type(err).__name__}: {err})")
+                continue
+            for kind in loaded:
                 register(kind)
     return sorted(_kinds.values(), key=lambda k: (k.rank, k.name))
+
+
+def shipped_files() -> list[Path]:
+    """Every file that ships with the installed parts, by kind: what ``shary validate``
+    checks when it is given no file."""
+    return [path for kind in kinds() if kind.shipped is not None for path in kind.shipped()]
 
 
 @dataclass
@@ -96,7 +119,8 @@ class Report:
     def as_json(self) -> dict[str, Any]:
         return {"file": self.file, "kind": self.kind, "ok": self.ok,
                 "depends_on": self.depends_on,
-                "problems": [{"line": p.line, "col": p.col, "message": p.message}
+                "problems": [{"file": p.file, "line": p.line, "col": p.col,
+                              "message": p.message}
                              for p in self.problems]}
 
 
@@ -140,6 +164,8 @@ def _unknown(path: Path, located: yamlsafe.Located | None, known: list[FileKind]
     what = ("a mapping" if located is not None and isinstance(located.data, dict)
             else "expected a mapping")
     message = f"not a known kind of file ({names}): {what} with {keys}"
+    if _unavailable:
+        message += "; " + "; ".join(_unavailable)
     if located is None:
         return Problem(os.fspath(path), 1, 1, message)
     return located.problem((), message)
@@ -263,18 +289,37 @@ def _check_turtle(files: list[tuple[Path, Any]], context: Context) -> list[Probl
     return problems
 
 
+def _shipped_recipes() -> list[Path]:
+    from shary.io.recipes import builtin_library_files
+
+    return builtin_library_files()
+
+
+def _shipped_domains() -> list[Path]:
+    import planner
+
+    return planner.builtin_domains()
+
+
+def _shipped_problems() -> list[Path]:
+    import planner
+
+    return planner.builtin_problems()
+
+
 for _kind in (
     FileKind("acts", _check_acts, 0, detect=lambda d: set(d) == {"acts"}, keys="acts:"),
     FileKind("scheme", _check_schemes, 1, detect=lambda d: "scheme" in d or "states" in d,
-             keys="scheme:"),
+             keys="scheme:", shipped=lambda: builtin.files("schemes")),
     FileKind("recipes", _check_recipes, 2, keys="tasks:/recipes:/atomic:/predicates:",
              detect=lambda d: bool(set(d) & {"predicates", "atomic", "tasks", "recipes",
                                             "chronicles"})
-             and not set(d) & {"scenario", "profile", "problem", "scheme"}),
+             and not set(d) & {"scenario", "profile", "problem", "scheme"},
+             shipped=_shipped_recipes),
     FileKind("domain", _check_domains, 3, detect=lambda d: "domain" in d and "types" in d,
-             keys="domain:"),
+             keys="domain:", shipped=_shipped_domains),
     FileKind("problem", _check_problems, 4, detect=lambda d: "problem" in d,
-             keys="problem:"),
+             keys="problem:", shipped=_shipped_problems),
     FileKind("turtle", _check_turtle, 5, suffixes=(".ttl",)),
 ):
     register(_kind)

@@ -38,8 +38,21 @@ def _check_profiles(files: list[tuple[Path, Any]], context: Context) -> list[Pro
     return problems
 
 
+def _shipped_scenarios() -> list[Path]:
+    from sim.scenario import builtin_scenarios
+
+    return list(builtin_scenarios().values())
+
+
+def _shipped_profiles() -> list[Path]:
+    from sim.scenario import builtin_profiles
+
+    return builtin_profiles()
+
+
 KINDS = (
     FileKind("scenario", _check_scenarios, 5, detect=lambda d: "scenario" in d,
-             keys="scenario:"),
-    FileKind("profile", _check_profiles, 5, detect=lambda d: "profile" in d, keys="profile:"),
+             keys="scenario:", shipped=_shipped_scenarios),
+    FileKind("profile", _check_profiles, 5, detect=lambda d: "profile" in d, keys="profile:",
+             shipped=_shipped_profiles),
 )
