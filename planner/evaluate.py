@@ -47,10 +47,62 @@ class Evaluator:
         self.replays = any(r.rule.kind in REPLAYED for r in problem.rules.values())
         """Whether the score needs the replay of every plan (see :meth:`evaluate`)."""
 
-    def lower_bound(self, cost: float, human: float, robot: float) -> float:
-        """A score no completion of a partial plan can go below."""
+    # -- what a partial plan already costs (the search's bound) --------------------------
+
+    @property
+    def cost_weight(self) -> float:
+        """What one unit of cost adds to the score."""
+        return self._bound[0]
+
+    def step_rate(self, kind: str | None) -> float:
+        """What one unit of cost of an action by an agent of this kind adds to the score
+        (cost, and human or robot effort)."""
         wc, wh, wr = self._bound
-        return wc * cost + wh * human + wr * robot
+        return wc + (wh if kind == "human" else wr if kind == "robot" else 0.0)
+
+    def _rule_rate(self, selected: SelectedRule) -> float:
+        """What one unit of a rule's penalty adds to the score (as the rule, and as part
+        of all the rules)."""
+        name = selected.rule.name
+        return selected.weight * (self.weights.get(name, 0.0) / self.scale.get(name, 1.0)
+                                  + self.weights.get("rules", 0.0)
+                                  / self.scale.get("rules", 1.0))
+
+    def link_rates(self) -> list[tuple[SelectedRule, float]]:
+        """The crossed-links rules that weigh in the score, with their rate.  Their
+        penalty can only grow as a plan grows: a causal link between two actions of a
+        plan is one in every longer plan."""
+        return [(r, self._rule_rate(r)) for r in self.problem.rules.values()
+                if r.rule.kind == "crossed-links" and self._rule_rate(r) > 0]
+
+    def wait_rates(self) -> list[tuple[SelectedRule, float]]:
+        """The timeout rules that weigh in the score, with their rate: a wait between two
+        actions of a partial plan is one in every longer plan (an action starts when
+        its predecessors, all before it, end)."""
+        return [(r, self._rule_rate(r)) for r in self.problem.rules.values()
+                if r.rule.kind == "timeout" and self._rule_rate(r) > 0]
+
+    @property
+    def duration_rate(self) -> float:
+        """What one unit of makespan adds to the score (AHP's ``duration`` criterion)."""
+        return self.weights.get("duration", 0.0) / self.scale.get("duration", 1.0)
+
+    def decomposition_floor(self) -> dict[tuple[str, str], float]:
+        """For each (method, decomposition) a decomposition rule penalizes, the least it
+        adds to the score (the cheapest penalty of any agent: the agent it is charged to
+        is known only when the subtree's first action is)."""
+        floor: dict[tuple[str, str], float] = {}
+        for selected in self.problem.rules.values():
+            rule = selected.rule
+            if rule.kind != "decomposition" or rule.method is None:
+                continue
+            table = list(selected.penalties.values())
+            if "default" not in selected.penalties:
+                table.append(1.0)
+            least = max(min(table), 0.0) * self._rule_rate(selected)
+            key = (rule.method, rule.decomposition or "")
+            floor[key] = floor.get(key, 0.0) + least
+        return {k: v for k, v in floor.items() if v > 0}
 
     # -- from the search's trail to a plan -------------------------------------------
 

@@ -46,6 +46,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
+from planner.bound import RemainingCost
 from planner.domain import SOLE_AGENT, Action, Method, Problem
 from planner.evaluate import Evaluator
 from planner.plan import Plan, fact_text
@@ -55,6 +56,20 @@ CHECK_EVERY = 256
 """Expansions between two looks at the clock."""
 MAX_REPEATS = 8
 """The most repetitions of a left-recursive decomposition the deepening allows."""
+MAX_DEPTH = 10_000
+"""The default decomposition-depth budget: how many tasks deep a decomposition may nest
+below a top task.  Each level keeps its choice point and state alive; 10,000 levels is
+tens of megabytes, where Blocksworld-GTOHP p30's plan of 6,660 actions nests 82 deep."""
+MAX_NODES = 500_000
+"""The default node budget: search nodes expanded plus variable bindings tried, over the
+whole search.  Every node leaves a hundred-odd bytes behind (what explains a failure);
+half a million answer within about 5 s and 200 MB even on a loaded machine, where the
+proven best clean-up of six bottles with two agents takes some 120,000 (with three
+agents, about 610,000: raise it)."""
+WRITER, FREE, END = "writer", "free", "end"
+"""Tag the state entries that time a plan as it grows (:meth:`Search._relations`)."""
+SHOWN = 4
+"""A failure's path longer than twice this shows its first and last tasks only."""
 PAUSE_GC = True
 """The cyclic garbage collector is paused during a search: the search allocates
 millions of small tuples, none of them in a cycle (reference counting frees them
@@ -71,7 +86,19 @@ class Failure:
     reason: str
 
     def __str__(self) -> str:
-        return " > ".join(self.path) + f": {self.reason}"
+        path = self.path
+        if len(path) > 2 * SHOWN + 1:  # a runaway recursion: its ends tell the story
+            path = (*path[:SHOWN], f"... ({len(path) - 2 * SHOWN} more) ...",
+                    *path[-SHOWN:])
+        return " > ".join(path) + f": {self.reason}"
+
+
+class BudgetExhausted(Exception):
+    """A search budget ran out (raised inside the search, reported in :class:`Result`)."""
+
+    def __init__(self, budget: str):
+        super().__init__(budget)
+        self.budget = budget
 
 
 @dataclass
@@ -87,15 +114,23 @@ class Result:
     improvements: list[tuple[float, float]] = field(default_factory=list)
     first: bool = False
     """The search stopped at its first plan (satisficing) rather than looking for better."""
+    applied: int = 0
+    """Actions applied (precondition checked and true, effects applied), over the search."""
+    exhausted: str | None = None
+    """The search budget that ran out, in words (None: none did): the node budget
+    stops the search; the depth budget cuts the branches that reach it."""
 
     def explain(self) -> str:
-        """Why there is no plan: for each top task, the deepest point reached and what
-        blocked it."""
+        """Why there is no plan: a budget that ran out, then, for each top task, the
+        deepest point reached and what blocked it."""
         if self.plan is not None:
             return "a plan was found"
-        if not self.failures:
-            return "no plan: the search ran out of time before any task failed"
-        return "\n".join(str(f) for f in self.failures)
+        lines = [] if self.exhausted is None else [
+            f"search budget exhausted: {self.exhausted}"]
+        if not self.failures and self.exhausted is None:
+            lines.append("no plan: the search ran out of time before any task failed")
+        lines.extend(str(f) for f in self.failures)
+        return "\n".join(lines)
 
 
 def _label(name: str, args: tuple[Any, ...]) -> str:
@@ -106,18 +141,44 @@ class Search:
     """One search for one problem (see the module's docstring)."""
 
     def __init__(self, problem: Problem,
-                 on_improvement: Callable[[Plan], None] | None = None):
+                 on_improvement: Callable[[Plan], None] | None = None, *,
+                 lookahead: bool = True, max_depth: int | None = None,
+                 max_nodes: int | None = None):
         self.problem = problem
+        self.max_depth = MAX_DEPTH if max_depth is None else max_depth
+        self.max_nodes = MAX_NODES if max_nodes is None else max_nodes
+        self.nodes = 0
+        self.applied = 0
+        """Nodes expanded and bindings tried so far, over every restart (the node budget)."""
+        self.too_deep: str | None = None
+        """The first task cut by the depth budget, if any."""
         self.domain = problem.domain
         self.evaluator = Evaluator(problem)
+        self.links = self.evaluator.link_rates()
+        """Crossed-links rules: their penalties are added to a partial plan's floor as
+        its links appear (the writer of each value is kept in the state)."""
+        self.waits = self.evaluator.wait_rates()
+        """Timeout rules: their penalties are added as the waits appear."""
+        self.duration_rate = self.evaluator.duration_rate
+        self.timed = bool(self.links or self.waits or self.duration_rate)
+        self.dynamic = frozenset(a for t in self.domain.types.values() for a in t.dynamic)
+        """The attributes actions may change (the others need no timing entries)."""
+        """Whether each action is timed as the plan grows (see :meth:`_relations`)."""
+        self.decomposition_floor = self.evaluator.decomposition_floor()
+        remaining = RemainingCost(problem) if lookahead else None
+        self.remaining = remaining if remaining is not None and remaining.enabled else None
+        """The lower bound on what the agenda's tasks will cost (None: cost so far only)."""
         self.on_improvement = on_improvement
         self.ids = itertools.count(1)
         self.parents: dict[int, tuple[int | None, Any, int]] = {}
         """Each node's parent, label (a text, or a decomposition's task, arguments and
         decomposition name: formatted only when a failure is explained) and top task."""
         self.heads: dict[int, tuple[str, tuple, int]] = {}
-        """Decomposition nodes: the task, its arguments, and the actions done before it."""
-        self.failures: dict[int, Failure] = {}
+        """Decomposition nodes: the task, its arguments, the actions done before it, and
+        its depth (top tasks are at depth 0, their subtasks at 1 ...)."""
+        self.failures: dict[int, Any] = {}
+        """The deepest failure under each top task: (depth, parent, label, reason), or a
+        :class:`Failure` (the goals)."""
         self.kinds = {e: problem.kind(e) for e in problem.entities}
         self.typed: dict[str, list[str]] = {}
         self.repeats = 0
@@ -131,18 +192,30 @@ class Search:
         return node
 
     def _fail(self, parent: int, label: str, reason: str) -> None:
+        """Remember the failure if it is the deepest under its top task; its path is
+        spelled out only at the end (:meth:`_failure`): a search that dives ten thousand
+        tasks deep meets a deeper failure at every level."""
+        head = self.heads.get(parent)
+        depth = 2 if head is None else head[3] + 2
+        root = self.parents[parent][2]
+        known = self.failures.get(root)
+        if known is None or depth > known[0]:
+            self.failures[root] = (depth, parent, label, reason)
+
+    def _failure(self, pending: tuple) -> Failure:
+        """A remembered failure with its path, from the top task down."""
+        if isinstance(pending, Failure):
+            return pending
+        depth, parent, label, reason = pending
         path = [label]
         node: int | None = parent
-        root = 0
         while node is not None:
-            up, text, root = self.parents[node]
+            up, text, _ = self.parents[node]
             path.append(text if isinstance(text, str) else
                         f"{_label(text[0], text[1])}[{text[2]}]")
             node = up
         path.reverse()
-        known = self.failures.get(root)
-        if known is None or len(path) > known.depth:
-            self.failures[root] = Failure(len(path), tuple(path), reason)
+        return Failure(len(path), tuple(path), reason)
 
     def _of_type(self, kind: str) -> list[str]:
         found = self.typed.get(kind)
@@ -189,26 +262,44 @@ class Search:
         expansions = 0
         improvements: list[tuple[float, float]] = []
         stack: list[Iterator[tuple]] = []
-        node: tuple | None = (state, agenda, None, 0.0, 0.0, 0.0, 0)
+        node: tuple | None = (state, agenda, None, 0.0, 0)
         complete = True
-        bound = self.evaluator.lower_bound
+        exhausted: str | None = None
+        max_nodes = self.max_nodes
+        per_cost = self.evaluator.cost_weight
+        remaining = self.remaining if per_cost > 0 else None
+        tops = set(roots)
         actions, methods = self.domain.actions, self.domain.methods
         while True:
             if node is None:  # back to the latest choice point
                 if not stack:
                     break
-                node = next(stack[-1], None)
+                try:
+                    node = next(stack[-1], None)
+                except BudgetExhausted as out:
+                    complete, exhausted = False, out.budget
+                    break
                 if node is None:
                     stack.pop()
                     continue
             expansions += 1
-            if expansions % CHECK_EVERY == 0 and time.perf_counter() > deadline:
-                complete = False
-                break
-            state, agenda, trail, cost, human, robot, steps = node
+            self.nodes += 1
+            if expansions % CHECK_EVERY == 0:
+                if time.perf_counter() > deadline:
+                    complete = False
+                    break
+                if self.nodes > max_nodes:
+                    complete, exhausted = False, self._nodes_out()
+                    break
+            state, agenda, trail, floor, steps = node
             node = None
-            if best is not None and bound(cost, human, robot) >= best_score:
-                continue
+            if best is not None:
+                if floor >= best_score:
+                    continue
+                if (remaining is not None and agenda is not None
+                        and agenda[0][2] in tops and floor + per_cost * remaining.bound(
+                            agenda, state, (best_score - floor) / per_cost) >= best_score):
+                    continue
             if agenda is None:
                 missed = [f"{fact_text(e, a)} == {v!r}"
                           for (e, a), v in self.problem.goals.items() if state.get(e, a) != v]
@@ -230,32 +321,65 @@ class Search:
             (name, args, parent), rest = agenda
             action = actions.get(name)
             if action is not None:  # one successor at most: no choice point
-                node = self._apply(action, args, parent, state, rest, trail, cost, human,
-                                   robot, steps)
+                node = self._apply(action, args, parent, state, rest, trail, floor, steps)
             else:
                 stack.append(self._decompose(methods[name], args, parent, state, rest, trail,
-                                             cost, human, robot, steps))
+                                             floor, steps))
         elapsed = (time.perf_counter() - start) * 1000
-        failures = [self.failures[k] for k in sorted(self.failures, key=lambda k: (k < 0, k))
+        failures = [self._failure(self.failures[k])
+                    for k in sorted(self.failures, key=lambda k: (k < 0, k))
                     ] if best is None else []
+        if self.too_deep is not None:
+            complete = False
+            cut = self._depth_out()
+            exhausted = cut if exhausted is None else f"{exhausted}; and {cut}"
+        stack.clear()  # the choice points hold states: let them go before the result
         return Result(best, found, expansions, complete, elapsed, failures, improvements,
-                      first and best is not None)
+                      first and best is not None, self.applied, exhausted)
+
+    def _nodes_out(self) -> str:
+        return (f"the node budget ({self.max_nodes:,} nodes expanded and bindings tried) "
+                "ran out; raise it with max_nodes= (shary plan --max-nodes N)")
+
+    def _depth_out(self) -> str:
+        return (f"the decomposition depth budget ({self.max_depth:,} nested tasks) cut the "
+                f"search at {self.too_deep}; is a method recursive without end? Raise it "
+                "with max_depth= (shary plan --max-depth N)")
 
     def _apply(self, action: Action, args: tuple, parent: int, state: State, rest: Any,
-               trail: Any, cost: float, human: float, robot: float,
-               steps: int) -> tuple | None:
+               trail: Any, floor: float, steps: int) -> tuple | None:
         """The search node after ``action``, or None when it cannot be done (or dooms
-        the plan: goal protection)."""
+        the plan: goal protection).  ``floor`` is the partial plan's score so far: what
+        no completion of it can go below."""
         env = dict(zip(action.names, args, strict=True))
         get = state.get
+        if self.timed:  # links and times need what the action reads and writes
+            read: set[tuple[str, Any]] = set()
+
+            def get(entity: str, attribute: Any, _get: Any = state.get,
+                    _dynamic: frozenset = self.dynamic) -> Any:
+                if attribute in _dynamic:  # a static value has no writer to wait for
+                    read.add((entity, attribute))
+                return _get(entity, attribute)
+
         if action.pre is not None and not action.pre.fn(env, get):
             self._fail(parent, _label(action.name, args),
                        f"precondition false: {action.pre.text}")
             return None
+        child = state.child()
+        if self.timed:
+            written: list[tuple[str, Any]] = []
+
+            def put(entity: str, attribute: Any, value: Any, _set: Any = child.set) -> None:
+                written.append((entity, attribute))
+                _set(entity, attribute, value)
+
+            action.apply(env, get, put)
+        else:
+            action.apply(env, get, child.set)
+        get = state.get
         price = action.cost(env, get) if callable(action.cost) else action.cost
         length = action.duration(env, get) if callable(action.duration) else action.duration
-        child = state.child()
-        action.apply(env, get, child.set)
         for pred, key in action.deletes:
             fact = key(env)
             if (self.problem.goals.get((pred, fact)) is True and get(pred, fact) is True
@@ -266,11 +390,67 @@ class Search:
                 return None
         agent = SOLE_AGENT if action.agent is None else env[action.agent]
         kind = self.kinds.get(agent)
+        floor += price * self.evaluator.step_rate(kind)
+        if self.timed:
+            floor += self._relations(read, written, agent, kind, length, state, child)
+        self.applied += 1
         node = next(self.ids)
         record = ("act", node, parent, action.name, args, agent, price, length)
-        return (child, rest, (record, trail), cost + price,
-                human + (price if kind == "human" else 0.0),
-                robot + (price if kind == "robot" else 0.0), steps + 1)
+        return (child, rest, (record, trail), floor, steps + 1)
+
+    def _relations(self, read: set, written: list, agent: str, kind: str | None,
+                   length: float, state: State, child: State) -> float:
+        """What this action's causal links from other agents, its agent's wait before it
+        and the makespan's growth add to the score.  The evaluator's relations, kept as
+        the plan grows, in ``child`` under attributes no domain has: for each value, who
+        wrote it last (None: nobody yet), when that action ends and when the last action
+        that read it since ends ``(WRITER, attribute)``; when each agent is free
+        ``(FREE,)``; the makespan ``(None, (END,))``.  An action starts when the writers
+        of what it reads, the readers and the writer of what it writes, and its agent's
+        previous action are over."""
+        get = state.get
+        added = 0.0
+        start = 0.0
+        marks = {}
+        for entity, attribute in read:
+            mark = marks[(entity, attribute)] = get(entity, (WRITER, attribute))
+            if mark is not None:
+                writer = mark[0]
+                if writer is not None and writer != agent:
+                    for selected, rate in self.links:
+                        added += selected.penalty(agent, kind) * rate
+                if mark[1] > start:
+                    start = mark[1]
+        for key in written:
+            mark = marks[key] if key in marks else get(key[0], (WRITER, key[1]))
+            if mark is not None:
+                if mark[1] > start:
+                    start = mark[1]
+                if mark[2] > start:
+                    start = mark[2]
+        free = get(agent, (FREE,))
+        if free is not None:
+            if free > start:
+                start = free
+            for selected, rate in self.waits:
+                gap = start - free
+                if gap > selected.rule.max_wait:
+                    added += selected.penalty(agent, kind) * (gap - selected.rule.max_wait) * rate
+        end = start + length
+        delta = child.delta  # State.set without the call, for a hot loop
+        for (entity, attribute), mark in marks.items():
+            if mark is None:
+                delta[(entity, (WRITER, attribute))] = (None, 0.0, end)
+            elif mark[2] < end:
+                delta[(entity, (WRITER, attribute))] = (mark[0], mark[1], end)
+        for entity, attribute in written:  # after the reads: a write clears the readers
+            delta[(entity, (WRITER, attribute))] = (agent, end, 0.0)
+        delta[(agent, (FREE,))] = end
+        makespan = get(None, (END,)) or 0.0
+        if end > makespan:
+            delta[(None, (END,))] = end
+            added += (end - makespan) * self.duration_rate
+        return added
 
     def _may_add(self, agenda: Any, pred: str, fact: tuple) -> bool:
         """Whether a task of ``agenda`` may make the fact true again (goal protection: a
@@ -300,21 +480,29 @@ class Search:
         return False
 
     def _decompose(self, method: Method, args: tuple, parent: int, state: State, rest: Any,
-                   trail: Any, cost: float, human: float, robot: float,
-                   steps: int) -> Iterator[tuple]:
+                   trail: Any, floor: float, steps: int) -> Iterator[tuple]:
         if self._repeated(method.name, args, parent, steps):
             self.pruned = True
             label = _label(method.name, args)
             self._fail(parent, label, f"left recursion: {label} again before any action "
                        f"(more than {self.repeats} time(s))")
             return
+        heads = self.heads
+        above = heads.get(parent)
+        depth = 1 if above is None else above[3] + 1
+        if depth > self.max_depth:
+            if self.too_deep is None:
+                self.too_deep = _label(method.name, args)
+            return
         env = {p: a for (p, _), a in zip(method.params, args, strict=True)}
         get = state.get
-        ids, parents, heads = self.ids, self.parents, self.heads
+        ids, parents = self.ids, self.parents
         root = parents[parent][2]
+        max_nodes = self.max_nodes
         tried = []
         applied = False
         for dec in method.decompositions:
+            penalty = self.decomposition_floor.get((method.name, dec.name), 0.0)
             if dec.bind is not None:
                 candidates: Any = dec.bind(env, state)
             else:
@@ -324,20 +512,23 @@ class Search:
                               for values in itertools.product(*choices))
             matched = False
             for binding in candidates:
+                self.nodes += 1
+                if self.nodes > max_nodes:
+                    raise BudgetExhausted(self._nodes_out())
                 local = {**env, **binding}
                 if dec.bind is None and dec.pre is not None and not dec.pre(local, get):
                     continue
                 matched = applied = True
                 node = next(ids)
                 parents[node] = (parent, (method.name, args, dec.name), root)
-                heads[node] = (method.name, args, steps)
+                heads[node] = (method.name, args, steps, depth)
                 agenda = rest
                 for sub in reversed(dec.subtasks):
                     values = (sub.values(local) if sub.values is not None
                               else tuple([a.fn(local, get) for a in sub.args]))
                     agenda = ((sub.task, values, node), agenda)
                 record = ("method", node, parent, method.name, args, dec.name, binding)
-                yield (state, agenda, (record, trail), cost, human, robot, steps)
+                yield (state, agenda, (record, trail), floor + penalty, steps)
             if not matched:
                 if dec.bind is None and dec.vars and not all(
                         self._of_type(t) for _, t in dec.vars):
@@ -351,12 +542,18 @@ class Search:
 
 
 def plan(problem: Problem, budget_ms: float | None = None,
-         on_improvement: Callable[[Plan], None] | None = None, *, first: bool = False) -> Result:
-    """Plan ``problem`` within ``budget_ms`` (default: the problem's own budget); with
-    ``first``, stop at the first plan found."""
+         on_improvement: Callable[[Plan], None] | None = None, *, first: bool = False,
+         max_depth: int | None = None, max_nodes: int | None = None) -> Result:
+    """Plan ``problem`` within ``budget_ms`` (default: the problem's own budget), the
+    depth budget ``max_depth`` and the node budget ``max_nodes`` (defaults:
+    :data:`MAX_DEPTH`, :data:`MAX_NODES`); with ``first``, stop at the first plan."""
     budget = problem.budget_ms if budget_ms is None else budget_ms
     if problem.domain.predicates:  # HDDL: the IPC mode's depth-first search first
-        from planner.depthfirst import first_plan, improve
+        from planner import depthfirst
 
-        return (first_plan if first else improve)(problem, budget, on_improvement)
-    return Search(problem, on_improvement).run(budget, first)
+        if first:
+            return depthfirst.first_plan(problem, budget, on_improvement,
+                                         max_nodes=max_nodes or depthfirst.MAX_NODES)
+        return depthfirst.improve(problem, budget, on_improvement)
+    return Search(problem, on_improvement, max_depth=max_depth,
+                  max_nodes=max_nodes).run(budget, first)

@@ -21,6 +21,7 @@ from importlib.metadata import entry_points
 from pathlib import Path
 from typing import Any
 
+from shary import builtin
 from shary.acts import ActRegistry, builtin_acts, load_acts
 from shary.conditions import ConditionRegistry
 from userfiles import yamlsafe
@@ -57,11 +58,14 @@ class FileKind:
     """Whether a YAML mapping is a file of this kind."""
     keys: str = ""
     """The keys that make a file of this kind, for the message about unknown files."""
-    builtins: Callable[[], list[Path]] = list
-    """The files of this kind that ship with the package (``shary validate`` alone)."""
+    shipped: Callable[[], list[Path]] | None = None
+    """The files of this kind that ship with its package (``shary validate`` alone checks
+    them)."""
 
 
 _kinds: dict[str, FileKind] = {}
+_unavailable: list[str] = []
+"""Why registered kinds could not be loaded (a part that is not installed), for messages."""
 _loaded = False
 
 
@@ -76,14 +80,26 @@ def kinds() -> list[FileKind]:
     if not _loaded:
         _loaded = True
         for entry in entry_points(group=ENTRY_POINTS):
-            for kind in entry.load():
+            try:
+                loaded = entry.load()
+            except ModuleNotFoundError as err:
+                _unavailable.append(f"the kinds of files of '{entry.name}' are unavailable "
+                                    f"(package '{err.name}' is not installed)")
+                continue
+            except Exception as err:  # noqa: BLE001 -- a broken part must not stop the others
+                _unavailable.append(f"the kinds of files of '{entry.name}' are unavailable "
+                                    f"(entry point '{entry.name} = {entry.value}' failed to "
+                                    f"load: {type(err).__name__}: {err})")
+                continue
+            for kind in loaded:
                 register(kind)
     return sorted(_kinds.values(), key=lambda k: (k.rank, k.name))
 
 
-def builtin_files() -> list[Path]:
-    """Every built-in file of every registered kind, acts first."""
-    return [path for kind in kinds() for path in kind.builtins()]
+def shipped_files() -> list[Path]:
+    """Every file that ships with the installed parts, by kind: what ``shary validate``
+    checks when it is given no file."""
+    return [path for kind in kinds() if kind.shipped is not None for path in kind.shipped()]
 
 
 @dataclass
@@ -103,7 +119,8 @@ class Report:
     def as_json(self) -> dict[str, Any]:
         return {"file": self.file, "kind": self.kind, "ok": self.ok,
                 "depends_on": self.depends_on,
-                "problems": [{"line": p.line, "col": p.col, "message": p.message}
+                "problems": [{"file": p.file, "line": p.line, "col": p.col,
+                              "message": p.message}
                              for p in self.problems]}
 
 
@@ -152,8 +169,10 @@ def _unknown(path: Path, outline: yamlsafe.Outline | None, known: list[FileKind]
     keys = ", ".join(f"'{k.keys}'" for k in yaml_kinds)
     what = ("a mapping" if outline is not None and outline.keys is not None
             else "expected a mapping")
-    return Problem(os.fspath(path), 1, 1, f"not a known kind of file ({names}): {what} "
-                                           f"with {keys}")
+    message = f"not a known kind of file ({names}): {what} with {keys}"
+    if _unavailable:
+        message += "; " + "; ".join(_unavailable)
+    return Problem(os.fspath(path), *(outline.mark if outline is not None else (1, 1)), message)
 
 
 def _reports(paths: Sequence[str | os.PathLike[str]], given: dict[Path, str],
@@ -279,50 +298,37 @@ def _check_turtle(files: list[Path], context: Context) -> list[Problem]:
     return problems
 
 
-def _builtin_acts() -> list[Path]:
-    from shary import builtin
-
-    return [p for p in builtin.files("schemes") if p.stem == "acts"]
-
-
-def _builtin_schemes() -> list[Path]:
-    from shary import builtin
-
-    return [p for p in builtin.files("schemes") if p.stem != "acts"]
-
-
-def _builtin_recipes() -> list[Path]:
+def _shipped_recipes() -> list[Path]:
     from shary.io.recipes import builtin_library_files
 
     return builtin_library_files()
 
 
-def _builtin_domains() -> list[Path]:
+def _shipped_domains() -> list[Path]:
     import planner
 
-    return list(map(Path, planner.builtin_domains()))
+    return planner.builtin_domains()
 
 
-def _builtin_problems() -> list[Path]:
+def _shipped_problems() -> list[Path]:
     import planner
 
-    return list(map(Path, planner.builtin_problems()))
+    return planner.builtin_problems()
 
 
 for _kind in (
-    FileKind("acts", _check_acts, 0, detect=lambda d: set(d) == {"acts"}, keys="acts:",
-             builtins=_builtin_acts),
+    FileKind("acts", _check_acts, 0, detect=lambda d: set(d) == {"acts"}, keys="acts:"),
     FileKind("scheme", _check_schemes, 1, detect=lambda d: "scheme" in d or "states" in d,
-             keys="scheme:", builtins=_builtin_schemes),
+             keys="scheme:", shipped=lambda: builtin.files("schemes")),
     FileKind("recipes", _check_recipes, 2, keys="tasks:/recipes:/atomic:/predicates:",
              detect=lambda d: bool(set(d) & {"predicates", "atomic", "tasks", "recipes",
                                             "chronicles"})
              and not set(d) & {"scenario", "profile", "problem", "scheme"},
-             builtins=_builtin_recipes),
+             shipped=_shipped_recipes),
     FileKind("domain", _check_domains, 3, detect=lambda d: "domain" in d and "types" in d,
-             keys="domain:", builtins=_builtin_domains),
+             keys="domain:", shipped=_shipped_domains),
     FileKind("problem", _check_problems, 4, detect=lambda d: "problem" in d,
-             keys="problem:", builtins=_builtin_problems),
+             keys="problem:", shipped=_shipped_problems),
     FileKind("turtle", _check_turtle, 5, suffixes=(".ttl",)),
 ):
     register(_kind)

@@ -37,13 +37,13 @@ def _check_profiles(files: list[Path], context: Context) -> list[Problem]:
     return problems
 
 
-def _builtin_scenarios() -> list[Path]:
+def _shipped_scenarios() -> list[Path]:
     from sim.scenario import builtin_scenarios
 
     return list(builtin_scenarios().values())
 
 
-def _builtin_profiles() -> list[Path]:
+def _shipped_profiles() -> list[Path]:
     from sim.scenario import builtin_profiles
 
     return builtin_profiles()
@@ -51,7 +51,7 @@ def _builtin_profiles() -> list[Path]:
 
 KINDS = (
     FileKind("scenario", _check_scenarios, 5, detect=lambda d: "scenario" in d,
-             keys="scenario:", builtins=_builtin_scenarios),
+             keys="scenario:", shipped=_shipped_scenarios),
     FileKind("profile", _check_profiles, 5, detect=lambda d: "profile" in d, keys="profile:",
-             builtins=_builtin_profiles),
+             shipped=_shipped_profiles),
 )

@@ -11,6 +11,7 @@ import pytest
 
 from planner import PlanAction, load_domain, load_problem, plan, validate
 from planner.domain import SelectedRule
+from planner.search import Search
 from userfiles.errors import FileError
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "planner" / "problems"
@@ -279,3 +280,74 @@ def test_a_timed_action_is_the_frozen_dataclass_the_constructor_makes():
     assert (fast.start, fast.end, str(fast)) == (4.0, 6.0, "Give(alice, jido)")
     with pytest.raises(dataclasses.FrozenInstanceError):
         fast.start = 0.0
+
+
+# -- search budgets ----------------------------------------------------------------------
+
+HOSTILE_SEARCH = Path(__file__).resolve().parent / "hostile" / "search"
+
+
+def _hostile(name: str):  # type: ignore[no-untyped-def]
+    domain = load_domain(HOSTILE_SEARCH / f"{name}.domain.yaml")
+    return load_problem(HOSTILE_SEARCH / f"{name}.problem.yaml", domain)
+
+
+def test_a_recursion_without_end_meets_the_depth_budget() -> None:
+    result = plan(_hostile("recursive"), budget_ms=60_000, max_depth=100)
+    assert result.plan is None and not result.complete
+    assert "depth budget (100 nested tasks)" in result.exhausted
+    assert "Pace(jido, hall, door)" in result.exhausted
+    assert result.explain().startswith("search budget exhausted: ")
+
+
+def test_too_many_bindings_meet_the_node_budget() -> None:
+    result = plan(_hostile("explosive"), budget_ms=60_000, max_nodes=5_000)
+    assert result.plan is None and not result.complete
+    assert "node budget (5,000 nodes" in result.exhausted
+
+
+def test_a_budget_that_runs_out_keeps_the_best_plan_so_far() -> None:
+    domain = load_domain("living-room")
+    problem = load_problem(PROBLEMS / "clean-up-unreachable.yaml", domain)
+    search = Search(problem)
+    complete = search.run(60_000)
+    assert complete.complete and complete.exhausted is None
+    cut = plan(problem, budget_ms=60_000, max_nodes=search.nodes - 1)
+    assert cut.plan is not None and not cut.complete and "node budget" in cut.exhausted
+    assert validate(problem, cut.plan) == []
+
+
+COUNTDOWN = """
+domain: countdown
+types:
+  Agent:
+    agent: true
+    static: {kind: string}
+    dynamic: {left: number}
+actions:
+  Tick:
+    params: {ag: Agent}
+    agent: ag
+    pre: ag.left > 0
+    effects: [ag.left = ag.left - 1]
+    cost: 1
+methods:
+  Count:
+    params: {ag: Agent}
+    decompositions:
+      - {name: done, pre: ag.left == 0, subtasks: []}
+      - {name: more, pre: ag.left > 0, subtasks: ["Tick(ag)", "Count(ag)"]}
+"""
+
+
+def test_a_deep_but_finite_decomposition_fits_the_default_budgets(write) -> None:
+    """Recursion that ends is fine: 3,000 nested Counts, one action each."""
+    domain = load_domain(write("countdown.yaml", COUNTDOWN))
+    problem = load_problem(write("count.yaml", "problem: count\ndomain: countdown\n"
+                                 "entities: {jido: {type: Agent, kind: robot, left: 3000}}\n"
+                                 'tasks: ["Count(jido)"]\n'), domain)
+    result = plan(problem, budget_ms=60_000)
+    assert result.complete and result.exhausted is None
+    assert len(result.plan.actions) == 3000 and validate(problem, result.plan) == []
+    shallow = plan(problem, budget_ms=60_000, max_depth=1000)
+    assert shallow.plan is None and "cut the search at Count(jido)" in shallow.exhausted

@@ -33,15 +33,13 @@ def test_builtin_files_are_valid(shary):
 
 
 def test_builtin_files_come_from_the_file_kinds():
-    """``shary validate`` alone checks what each registered kind lists as built-in: the
+    """``shary validate`` alone checks what each registered kind lists as shipped: the
     engine's kinds and those sim registers by entry point (scenarios, profiles)."""
-    from shary.filekinds import builtin_files, kinds
+    from shary.filekinds import kinds, shipped_files
 
-    by_kind = {kind.name: kind.builtins() for kind in kinds()}
-    assert {"acts", "scheme", "recipes", "domain", "problem", "scenario", "profile"} <= {
-        name for name, files in by_kind.items() if files}
-    assert [p.stem for p in by_kind["acts"]] == ["acts"]
-    assert builtin_files()[0].stem == "acts"  # acts first: the others use them
+    with_files = {kind.name for kind in kinds() if kind.shipped is not None and kind.shipped()}
+    assert {"scheme", "recipes", "domain", "problem", "scenario", "profile"} <= with_files
+    assert "acts" in {path.stem for path in shipped_files()}
 
 
 def test_simulated_robot_performs_the_builtin_atomic_tasks():

@@ -130,6 +130,8 @@ class Outline:
     """Its top-level keys (None when the document is not a mapping)."""
     empty: bool = False
     """Whether it holds no value at all (only comments or blank lines)."""
+    mark: Mark = (1, 1)
+    """Where its value starts (after leading comments)."""
 
 
 def read_text(path: str | os.PathLike[str], *, max_bytes: int = MAX_BYTES) -> str:
@@ -236,6 +238,7 @@ def _check_events(text: str, file: str, sizes: Sizes) -> Outline:
     keys: list[str] | None = None
     documents = 0
     empty = True
+    root: Mark = (1, 1)
     try:
         for event in yaml.parse(text, Loader=_Loader):
             tag = getattr(event, "tag", None)
@@ -243,6 +246,8 @@ def _check_events(text: str, file: str, sizes: Sizes) -> Outline:
                 _refuse(file, event, f"tag {tag!r} is not allowed: files are data, "
                                      "nothing is constructed from a tag")
             if isinstance(event, _NODE_EVENTS):
+                if empty:
+                    root = (event.start_mark.line + 1, event.start_mark.column + 1)
                 empty = False
                 path = _entered(frames, event, file)
                 if not frames and isinstance(event, yaml.MappingStartEvent):
@@ -265,7 +270,7 @@ def _check_events(text: str, file: str, sizes: Sizes) -> Outline:
                     _refuse(file, event, "more than one YAML document in the file")
     except yaml.YAMLError as err:
         raise FileError([_yaml_problem(err, file, text)]) from None
-    return Outline(None if keys is None else tuple(keys), empty)
+    return Outline(None if keys is None else tuple(keys), empty, root)
 
 
 _NODE_EVENTS = (yaml.ScalarEvent, yaml.AliasEvent, yaml.MappingStartEvent,

@@ -39,6 +39,7 @@ from shary.model import (
 )
 from userfiles import yamlsafe
 from userfiles.errors import FileError, Problem
+from userfiles.reader import Reader
 from userfiles.schema import did_you_mean
 
 DEFAULT_ROLES = {"robot": "robot", "partner": "human"}
@@ -111,16 +112,15 @@ class _Builder:
         self.invoke_ids: dict[str, tuple] = {}
         self.check_reachable = check_reachable
         self.data: dict[str, Any] = located.data
-        self.problems: list[Problem] = schema.check(located, "scheme")
+        self.reader = Reader(located, schema.check(located, "scheme"))
+        self.problems: list[Problem] = self.reader.problems
+        self.problem = self.reader.problem
         self.acts = acts
         self.conditions = conditions
         self.states: dict[str, State] = {}
         self.paths: dict[str, tuple] = {}
         self.order = 0
         self.transition_order = 0
-
-    def problem(self, path: tuple, message: str, *, key: bool = False) -> None:
-        self.problems.append(self.located.problem(path, message, key=key))
 
     # -- building --------------------------------------------------------
 
