@@ -40,7 +40,7 @@ class Context:
     conditions: ConditionRegistry = field(default_factory=ConditionRegistry.installed)
 
 
-Check = Callable[[list[tuple[Path, "yamlsafe.Located | None"]], Context], list[Problem]]
+Check = Callable[[list[Path], Context], list[Problem]]
 
 
 @dataclass(frozen=True)
@@ -49,7 +49,7 @@ class FileKind:
 
     name: str
     check: Check
-    """Problems of the files (each a path and its located YAML, None for non-YAML)."""
+    """Problems of the files (each read by the kind's own reader, with its limits)."""
     rank: int = 5
     """Kinds of lower rank are checked first (acts: 0, so that others know their acts)."""
     suffixes: tuple[str, ...] = ()
@@ -129,27 +129,33 @@ def validate(paths: Sequence[str | os.PathLike[str]]) -> list[Report]:
     have problems (each problem once, under the name the user gave the file)."""
     given = {Path(p).resolve(): os.fspath(p) for p in paths}
     known = kinds()
-    batches: dict[str, list[tuple[Path, yamlsafe.Located | None]]] = {}
+    batches: dict[str, list[Path]] = {}
     of_kind: dict[str, str | None] = {os.fspath(p): None for p in paths}
     problems: set[Problem] = set()
     for path in map(Path, paths):
         kind = next((k for k in known if path.suffix in k.suffixes), None)
-        located = None
+        outline = None
         if kind is None:
+            # Only the outline (top-level keys) here: the kind's reader then reads the
+            # file once, with its format's limits.
             try:
-                located = yamlsafe.load_file(path)
+                outline = yamlsafe.outline(path)
             except FileError as err:
                 problems.update(err.problems)
                 continue
-            data = located.data
-            kind = next((k for k in known if k.detect is not None and isinstance(data, dict)
-                         and k.detect(data)), None)
+            keys = dict.fromkeys(outline.keys or ())
+            kind = next((k for k in known if k.detect is not None and outline.keys is not None
+                         and k.detect(keys)), None)
         if kind is None:
-            problems.update(located.problems if located is not None else ())
-            problems.add(_unknown(path, located, known))
+            problems.add(_unknown(path, outline, known))
+            if outline is not None:  # what else is wrong with it (duplicate keys …)
+                try:
+                    problems.update(yamlsafe.load_file(path).problems)
+                except FileError as err:
+                    problems.update(err.problems)
             continue
         of_kind[os.fspath(path)] = kind.name
-        batches.setdefault(kind.name, []).append((path, located))
+        batches.setdefault(kind.name, []).append(path)
     context = Context()
     for kind in known:
         if kind.name in batches:
@@ -157,18 +163,16 @@ def validate(paths: Sequence[str | os.PathLike[str]]) -> list[Report]:
     return _reports(paths, given, of_kind, problems)
 
 
-def _unknown(path: Path, located: yamlsafe.Located | None, known: list[FileKind]) -> Problem:
+def _unknown(path: Path, outline: yamlsafe.Outline | None, known: list[FileKind]) -> Problem:
     yaml_kinds = [k for k in known if k.keys]
     names = ", ".join(k.name for k in yaml_kinds[:-1]) + f" or {yaml_kinds[-1].name}"
     keys = ", ".join(f"'{k.keys}'" for k in yaml_kinds)
-    what = ("a mapping" if located is not None and isinstance(located.data, dict)
+    what = ("a mapping" if outline is not None and outline.keys is not None
             else "expected a mapping")
     message = f"not a known kind of file ({names}): {what} with {keys}"
     if _unavailable:
         message += "; " + "; ".join(_unavailable)
-    if located is None:
-        return Problem(os.fspath(path), 1, 1, message)
-    return located.problem((), message)
+    return Problem(os.fspath(path), *(outline.mark if outline is not None else (1, 1)), message)
 
 
 def _reports(paths: Sequence[str | os.PathLike[str]], given: dict[Path, str],
@@ -200,9 +204,9 @@ def _depends(problems: list[Problem]) -> list[str]:
 # -- the engine's own kinds ----------------------------------------------------------
 
 
-def _check_acts(files: list[tuple[Path, Any]], context: Context) -> list[Problem]:
+def _check_acts(files: list[Path], context: Context) -> list[Problem]:
     problems: list[Problem] = []
-    for path, _ in files:
+    for path in files:
         try:
             context.acts = context.acts.extended(load_acts(path))
         except FileError as err:
@@ -210,33 +214,33 @@ def _check_acts(files: list[tuple[Path, Any]], context: Context) -> list[Problem
     return problems
 
 
-def _check_schemes(files: list[tuple[Path, Any]], context: Context) -> list[Problem]:
-    from shary.io.schemes import parse_scheme
+def _check_schemes(files: list[Path], context: Context) -> list[Problem]:
+    from shary.io.schemes import load_scheme
 
     problems: list[Problem] = []
-    for _, located in files:
+    for path in files:
         try:
-            parse_scheme(located, acts=context.acts, conditions=context.conditions)
+            load_scheme(path, acts=context.acts, conditions=context.conditions)
         except FileError as err:
             problems.extend(err.problems)
     return problems
 
 
-def _check_recipes(files: list[tuple[Path, Any]], context: Context) -> list[Problem]:
+def _check_recipes(files: list[Path], context: Context) -> list[Problem]:
     from shary.io.recipes import load_library
 
     try:
-        load_library([path for path, _ in files], acts=context.acts)
+        load_library(files, acts=context.acts)
     except FileError as err:
         return list(err.problems)
     return []
 
 
-def _check_domains(files: list[tuple[Path, Any]], context: Context) -> list[Problem]:
+def _check_domains(files: list[Path], context: Context) -> list[Problem]:
     import planner
 
     problems: list[Problem] = []
-    for path, _ in files:
+    for path in files:
         try:
             planner.load_domain(path)
         except FileError as err:
@@ -244,13 +248,18 @@ def _check_domains(files: list[tuple[Path, Any]], context: Context) -> list[Prob
     return problems
 
 
-def _check_problems(files: list[tuple[Path, Any]], context: Context) -> list[Problem]:
+def _check_problems(files: list[Path], context: Context) -> list[Problem]:
     """A problem file is checked with the domain it names: a built-in name, or a file
     below its own folder."""
     import planner
 
     problems: list[Problem] = []
-    for path, located in files:
+    for path in files:
+        try:
+            located = yamlsafe.load_file(path)
+        except FileError as err:
+            problems.extend(err.problems)
+            continue
         name = located.data.get("domain")
         if not isinstance(name, str):
             problems.append(located.problem((), "a problem file names its domain "
@@ -277,11 +286,11 @@ def _check_problems(files: list[tuple[Path, Any]], context: Context) -> list[Pro
     return problems
 
 
-def _check_turtle(files: list[tuple[Path, Any]], context: Context) -> list[Problem]:
+def _check_turtle(files: list[Path], context: Context) -> list[Problem]:
     from shary.facts import FactDatabase
 
     problems: list[Problem] = []
-    for path, _ in files:
+    for path in files:
         try:
             FactDatabase().load_turtle(path)
         except FileError as err:
