@@ -65,7 +65,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from shary.compiler import compile_scheme
     from shary.instance import LivelockError, SchemeListener
     from shary.io.schemes import load_scheme
-    from shary.model import parse_duration
+    from userfiles.limits import seconds
     from userfiles.schema import did_you_mean
 
     scheme = load_scheme(args.scheme)
@@ -121,7 +121,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         for word in args.script:
             if _WAIT.match(word):
                 note("wait", f"[dim]wait {word}[/dim]", wait=word)
-                clock.advance(parse_duration(word))
+                clock.advance(seconds(word))
             else:
                 note("event", f"[yellow]<- {escape(word)}[/yellow]", event=word)
                 instance.send(word)

@@ -20,7 +20,7 @@ from shary import builtin
 from shary.acts import ACT_TYPES, ActRegistry, acts_from_data, builtin_acts
 from shary.io import schema
 from shary.io.schemes import load_scheme
-from shary.model import Scheme, parse_duration
+from shary.model import Scheme
 from shary.recipes import (
     ANY_TASK,
     ROBOT_PARAM,
@@ -41,6 +41,7 @@ from shary.recipes import (
     parse_refinement,
 )
 from userfiles.errors import FileError, Problem
+from userfiles.limits import seconds
 from userfiles.reader import Reader, checked, confine, spelled
 from userfiles.schema import did_you_mean
 
@@ -420,8 +421,8 @@ class _Builder:
             change = "added" if "added" in raw else "removed"
             pattern = self._pattern(reader, path + ("events", index, change), raw.get(change),
                                     set(), variables)
-            timing = {k: parse_duration(raw[k]) for k in ("within", "after", "stays")
-                      if isinstance(raw.get(k), str) and _is_duration(raw[k])}
+            timing = {k: amount for k in ("within", "after", "stays")
+                      if (amount := _duration(raw.get(k))) is not None}
             events.append(ChronicleEvent(change, pattern, **timing))
         goal = spec.get("goal") if isinstance(spec.get("goal"), dict) else {}
         task_name = goal.get("task")
@@ -455,12 +456,12 @@ def _strings(value: Any) -> list[str]:
     return [v for v in value if isinstance(v, str)] if isinstance(value, list) else []
 
 
-def _is_duration(text: str) -> bool:
+def _duration(value: Any) -> float | None:
+    """Seconds in a duration as files write it; None when the schema check refused it."""
     try:
-        parse_duration(text)
+        return seconds(value)
     except ValueError:
-        return False
-    return True
+        return None
 
 
 def _events_into(scheme: Any, act: str) -> set[str]:
