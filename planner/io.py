@@ -94,25 +94,13 @@ class _Builder:
     step); problems go to the reader, which raises them all at once."""
 
     def __init__(self, reader: Reader):
+        self.reader = reader
         self.located = reader.located
         self.data: dict[str, Any] = reader.data
-        self.problems: list[FileProblem] = reader.problems
         self.problem = reader.problem
 
     def expr_problem(self, path: tuple, err: ExprError, prefix: str = "") -> None:
-        line, col = self.located.at(path)
-        raw = _at(self.data, path)
-        quoted = 1 if isinstance(raw, str) and self._quoted(path) else 0
-        self.problems.append(FileProblem(self.located.file, line, col + quoted + err.offset,
-                                         f"{prefix}{err.message}"))
-
-    def _quoted(self, path: tuple) -> bool:
-        line, col = self.located.at(path)
-        try:
-            text = Path(self.located.file).read_text("utf-8").splitlines()[line - 1]
-        except (OSError, IndexError):
-            return False
-        return col - 1 < len(text) and text[col - 1] in "'\""
+        self.reader.problem_inside(path, err.offset, f"{prefix}{err.message}")
 
 
 class _DomainBuilder(_Builder):
@@ -547,14 +535,3 @@ def _items(value: Any) -> list[tuple[str, Any]]:
 
 def _items_dict(value: Any) -> dict[str, Any]:
     return value if isinstance(value, dict) else {}
-
-
-def _at(data: Any, path: tuple) -> Any:
-    for key in path:
-        if isinstance(data, dict) and key in data:
-            data = data[key]
-        elif isinstance(data, list) and isinstance(key, int) and key < len(data):
-            data = data[key]
-        else:
-            return None
-    return data

@@ -14,8 +14,7 @@ import os
 from dataclasses import dataclass, field
 from functools import cache
 
-from userfiles import yamlsafe
-from userfiles.errors import FileError, Problem
+from userfiles.reader import Reader, read
 
 AGENT_KINDS = ("robot", "human")
 _PREFIX = {"robot": "R", "human": "H"}
@@ -86,21 +85,18 @@ def acts_from_data(data: dict, source: str) -> dict[str, Act]:
 
 
 def load_acts(path: str | os.PathLike[str]) -> dict[str, Act]:
-    """The acts defined in an acts file (``acts:`` at the top), checked."""
+    """The acts defined in an acts file (``acts:`` at the top), read through the one
+    pipeline (:func:`userfiles.reader.read`)."""
     from shary.io import schema
 
-    located = yamlsafe.load_file(path)
-    if not isinstance(located.data, dict):
-        raise FileError([located.problem((), "expected a mapping with an 'acts' key")])
-    problems = schema.check(located, "acts")
-    acts = located.data.get("acts")
-    if isinstance(acts, dict):
-        problems += [Problem(located.file, *located.key_at(("acts", n)),
-                             f"{n!r} is an act type, not an act name")
-                     for n in acts if n in ACT_TYPES]
-    if problems:
-        raise FileError(problems)
-    return acts_from_data(located.data["acts"], os.fspath(path))
+    def meaning(reader: Reader) -> dict[str, Act]:
+        for name in reader.data["acts"]:
+            if name in ACT_TYPES:
+                reader.problem(("acts", name), f"{name!r} is an act type, not an act name",
+                               key=True)
+        return acts_from_data(reader.data["acts"], os.fspath(path))
+
+    return read(path, schema.validator("acts"), meaning)
 
 
 @cache

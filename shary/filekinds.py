@@ -21,6 +21,7 @@ from importlib.metadata import entry_points
 from pathlib import Path
 from typing import Any
 
+from shary import builtin
 from shary.acts import ActRegistry, builtin_acts, load_acts
 from shary.conditions import ConditionRegistry
 from userfiles import yamlsafe
@@ -39,7 +40,7 @@ class Context:
     conditions: ConditionRegistry = field(default_factory=ConditionRegistry.installed)
 
 
-Check = Callable[[list[tuple[Path, "yamlsafe.Located | None"]], Context], list[Problem]]
+Check = Callable[[list[Path], Context], list[Problem]]
 
 
 @dataclass(frozen=True)
@@ -48,7 +49,7 @@ class FileKind:
 
     name: str
     check: Check
-    """Problems of the files (each a path and its located YAML, None for non-YAML)."""
+    """Problems of the files (each read by the kind's own reader, with its limits)."""
     rank: int = 5
     """Kinds of lower rank are checked first (acts: 0, so that others know their acts)."""
     suffixes: tuple[str, ...] = ()
@@ -57,9 +58,14 @@ class FileKind:
     """Whether a YAML mapping is a file of this kind."""
     keys: str = ""
     """The keys that make a file of this kind, for the message about unknown files."""
+    shipped: Callable[[], list[Path]] | None = None
+    """The files of this kind that ship with its package (``shary validate`` alone checks
+    them)."""
 
 
 _kinds: dict[str, FileKind] = {}
+_unavailable: list[str] = []
+"""Why registered kinds could not be loaded (a part that is not installed), for messages."""
 _loaded = False
 
 
@@ -74,9 +80,26 @@ def kinds() -> list[FileKind]:
     if not _loaded:
         _loaded = True
         for entry in entry_points(group=ENTRY_POINTS):
-            for kind in entry.load():
+            try:
+                loaded = entry.load()
+            except ModuleNotFoundError as err:
+                _unavailable.append(f"the kinds of files of '{entry.name}' are unavailable "
+                                    f"(package '{err.name}' is not installed)")
+                continue
+            except Exception as err:  # noqa: BLE001 -- a broken part must not stop the others
+                _unavailable.append(f"the kinds of files of '{entry.name}' are unavailable "
+                                    f"(entry point '{entry.name} = {entry.value}' failed to "
+                                    f"load: {type(err).__name__}: {err})")
+                continue
+            for kind in loaded:
                 register(kind)
     return sorted(_kinds.values(), key=lambda k: (k.rank, k.name))
+
+
+def shipped_files() -> list[Path]:
+    """Every file that ships with the installed parts, by kind: what ``shary validate``
+    checks when it is given no file."""
+    return [path for kind in kinds() if kind.shipped is not None for path in kind.shipped()]
 
 
 @dataclass
@@ -96,7 +119,8 @@ class Report:
     def as_json(self) -> dict[str, Any]:
         return {"file": self.file, "kind": self.kind, "ok": self.ok,
                 "depends_on": self.depends_on,
-                "problems": [{"line": p.line, "col": p.col, "message": p.message}
+                "problems": [{"file": p.file, "line": p.line, "col": p.col,
+                              "message": p.message}
                              for p in self.problems]}
 
 
@@ -105,27 +129,33 @@ def validate(paths: Sequence[str | os.PathLike[str]]) -> list[Report]:
     have problems (each problem once, under the name the user gave the file)."""
     given = {Path(p).resolve(): os.fspath(p) for p in paths}
     known = kinds()
-    batches: dict[str, list[tuple[Path, yamlsafe.Located | None]]] = {}
+    batches: dict[str, list[Path]] = {}
     of_kind: dict[str, str | None] = {os.fspath(p): None for p in paths}
     problems: set[Problem] = set()
     for path in map(Path, paths):
         kind = next((k for k in known if path.suffix in k.suffixes), None)
-        located = None
+        outline = None
         if kind is None:
+            # Only the outline (top-level keys) here: the kind's reader then reads the
+            # file once, with its format's limits.
             try:
-                located = yamlsafe.load_file(path)
+                outline = yamlsafe.outline(path)
             except FileError as err:
                 problems.update(err.problems)
                 continue
-            data = located.data
-            kind = next((k for k in known if k.detect is not None and isinstance(data, dict)
-                         and k.detect(data)), None)
+            keys = dict.fromkeys(outline.keys or ())
+            kind = next((k for k in known if k.detect is not None and outline.keys is not None
+                         and k.detect(keys)), None)
         if kind is None:
-            problems.update(located.problems if located is not None else ())
-            problems.add(_unknown(path, located, known))
+            problems.add(_unknown(path, outline, known))
+            if outline is not None:  # what else is wrong with it (duplicate keys …)
+                try:
+                    problems.update(yamlsafe.load_file(path).problems)
+                except FileError as err:
+                    problems.update(err.problems)
             continue
         of_kind[os.fspath(path)] = kind.name
-        batches.setdefault(kind.name, []).append((path, located))
+        batches.setdefault(kind.name, []).append(path)
     context = Context()
     for kind in known:
         if kind.name in batches:
@@ -133,16 +163,16 @@ def validate(paths: Sequence[str | os.PathLike[str]]) -> list[Report]:
     return _reports(paths, given, of_kind, problems)
 
 
-def _unknown(path: Path, located: yamlsafe.Located | None, known: list[FileKind]) -> Problem:
+def _unknown(path: Path, outline: yamlsafe.Outline | None, known: list[FileKind]) -> Problem:
     yaml_kinds = [k for k in known if k.keys]
     names = ", ".join(k.name for k in yaml_kinds[:-1]) + f" or {yaml_kinds[-1].name}"
     keys = ", ".join(f"'{k.keys}'" for k in yaml_kinds)
-    what = ("a mapping" if located is not None and isinstance(located.data, dict)
+    what = ("a mapping" if outline is not None and outline.keys is not None
             else "expected a mapping")
     message = f"not a known kind of file ({names}): {what} with {keys}"
-    if located is None:
-        return Problem(os.fspath(path), 1, 1, message)
-    return located.problem((), message)
+    if _unavailable:
+        message += "; " + "; ".join(_unavailable)
+    return Problem(os.fspath(path), *(outline.mark if outline is not None else (1, 1)), message)
 
 
 def _reports(paths: Sequence[str | os.PathLike[str]], given: dict[Path, str],
@@ -174,9 +204,9 @@ def _depends(problems: list[Problem]) -> list[str]:
 # -- the engine's own kinds ----------------------------------------------------------
 
 
-def _check_acts(files: list[tuple[Path, Any]], context: Context) -> list[Problem]:
+def _check_acts(files: list[Path], context: Context) -> list[Problem]:
     problems: list[Problem] = []
-    for path, _ in files:
+    for path in files:
         try:
             context.acts = context.acts.extended(load_acts(path))
         except FileError as err:
@@ -184,33 +214,33 @@ def _check_acts(files: list[tuple[Path, Any]], context: Context) -> list[Problem
     return problems
 
 
-def _check_schemes(files: list[tuple[Path, Any]], context: Context) -> list[Problem]:
-    from shary.io.schemes import parse_scheme
+def _check_schemes(files: list[Path], context: Context) -> list[Problem]:
+    from shary.io.schemes import load_scheme
 
     problems: list[Problem] = []
-    for _, located in files:
+    for path in files:
         try:
-            parse_scheme(located, acts=context.acts, conditions=context.conditions)
+            load_scheme(path, acts=context.acts, conditions=context.conditions)
         except FileError as err:
             problems.extend(err.problems)
     return problems
 
 
-def _check_recipes(files: list[tuple[Path, Any]], context: Context) -> list[Problem]:
+def _check_recipes(files: list[Path], context: Context) -> list[Problem]:
     from shary.io.recipes import load_library
 
     try:
-        load_library([path for path, _ in files], acts=context.acts)
+        load_library(files, acts=context.acts)
     except FileError as err:
         return list(err.problems)
     return []
 
 
-def _check_domains(files: list[tuple[Path, Any]], context: Context) -> list[Problem]:
+def _check_domains(files: list[Path], context: Context) -> list[Problem]:
     import planner
 
     problems: list[Problem] = []
-    for path, _ in files:
+    for path in files:
         try:
             planner.load_domain(path)
         except FileError as err:
@@ -218,13 +248,18 @@ def _check_domains(files: list[tuple[Path, Any]], context: Context) -> list[Prob
     return problems
 
 
-def _check_problems(files: list[tuple[Path, Any]], context: Context) -> list[Problem]:
+def _check_problems(files: list[Path], context: Context) -> list[Problem]:
     """A problem file is checked with the domain it names: a built-in name, or a file
     below its own folder."""
     import planner
 
     problems: list[Problem] = []
-    for path, located in files:
+    for path in files:
+        try:
+            located = yamlsafe.load_file(path)
+        except FileError as err:
+            problems.extend(err.problems)
+            continue
         name = located.data.get("domain")
         if not isinstance(name, str):
             problems.append(located.problem((), "a problem file names its domain "
@@ -251,11 +286,11 @@ def _check_problems(files: list[tuple[Path, Any]], context: Context) -> list[Pro
     return problems
 
 
-def _check_turtle(files: list[tuple[Path, Any]], context: Context) -> list[Problem]:
+def _check_turtle(files: list[Path], context: Context) -> list[Problem]:
     from shary.facts import FactDatabase
 
     problems: list[Problem] = []
-    for path, _ in files:
+    for path in files:
         try:
             FactDatabase().load_turtle(path)
         except FileError as err:
@@ -263,18 +298,37 @@ def _check_turtle(files: list[tuple[Path, Any]], context: Context) -> list[Probl
     return problems
 
 
+def _shipped_recipes() -> list[Path]:
+    from shary.io.recipes import builtin_library_files
+
+    return builtin_library_files()
+
+
+def _shipped_domains() -> list[Path]:
+    import planner
+
+    return planner.builtin_domains()
+
+
+def _shipped_problems() -> list[Path]:
+    import planner
+
+    return planner.builtin_problems()
+
+
 for _kind in (
     FileKind("acts", _check_acts, 0, detect=lambda d: set(d) == {"acts"}, keys="acts:"),
     FileKind("scheme", _check_schemes, 1, detect=lambda d: "scheme" in d or "states" in d,
-             keys="scheme:"),
+             keys="scheme:", shipped=lambda: builtin.files("schemes")),
     FileKind("recipes", _check_recipes, 2, keys="tasks:/recipes:/atomic:/predicates:",
              detect=lambda d: bool(set(d) & {"predicates", "atomic", "tasks", "recipes",
                                             "chronicles"})
-             and not set(d) & {"scenario", "profile", "problem", "scheme"}),
+             and not set(d) & {"scenario", "profile", "problem", "scheme"},
+             shipped=_shipped_recipes),
     FileKind("domain", _check_domains, 3, detect=lambda d: "domain" in d and "types" in d,
-             keys="domain:"),
+             keys="domain:", shipped=_shipped_domains),
     FileKind("problem", _check_problems, 4, detect=lambda d: "problem" in d,
-             keys="problem:"),
+             keys="problem:", shipped=_shipped_problems),
     FileKind("turtle", _check_turtle, 5, suffixes=(".ttl",)),
 ):
     register(_kind)

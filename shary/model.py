@@ -8,24 +8,11 @@ execution: :mod:`shary.statechart` computes steps from it and
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, field
 
 from shary.acts import ActRegistry, ActType
 
 ATOMIC, COMPOUND, PARALLEL, FINAL, HISTORY = "atomic", "compound", "parallel", "final", "history"
-
-_DURATION = re.compile(r"^([0-9]+(?:\.[0-9]+)?)(ms|s|min|h)$")
-_UNIT = {"ms": 0.001, "s": 1.0, "min": 60.0, "h": 3600.0}
-
-
-def parse_duration(text: str) -> float:
-    """Seconds in a duration such as ``250ms``, ``10s``, ``1.5min`` or ``2h``."""
-    match = _DURATION.match(text)
-    if not match:
-        raise ValueError(f"not a duration: {text!r}")
-    return float(match.group(1)) * _UNIT[match.group(2)]
-
 
 def descriptor_matches(descriptor: str, event: str) -> bool:
     """SCXML event matching: ``foo`` matches ``foo`` and ``foo.bar``; ``*`` matches all."""

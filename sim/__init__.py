@@ -14,7 +14,8 @@ The parts:
   arm placement (``set_arm``).
 - :mod:`sim.motion` -- kinematic activities (drive, joints, waits, sequences)
   advanced over simulated time, so physics runs only where contact matters.
-- :mod:`sim.humans` -- people's avatars and behaviour profiles;
+- :mod:`sim.room` -- the room's static data (furniture, bottles, places), without PyBullet;
+- :mod:`sim.humans` -- behaviour profiles and where people go; :mod:`sim.avatar` -- their bodies;
   :mod:`sim.people` plays a profile out (answers, attention, taking, helping).
 - :mod:`sim.simulation` -- ticks on the supervisor's loop, carried objects,
   letting go under physics, people's paths.

@@ -7,18 +7,17 @@ because the engine never imports ``sim``.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
 
 from shary.filekinds import Context, FileKind
 from userfiles.errors import FileError, Problem
 
 
-def _check_scenarios(files: list[tuple[Path, Any]], context: Context) -> list[Problem]:
+def _check_scenarios(files: list[Path], context: Context) -> list[Problem]:
     """Each scenario with the recipe files it names (their problems included, once)."""
     from sim.scenario import load_scenario
 
     problems: list[Problem] = []
-    for path, _ in files:
+    for path in files:
         try:
             load_scenario(path, acts=context.acts)
         except FileError as err:
@@ -26,11 +25,11 @@ def _check_scenarios(files: list[tuple[Path, Any]], context: Context) -> list[Pr
     return problems
 
 
-def _check_profiles(files: list[tuple[Path, Any]], context: Context) -> list[Problem]:
+def _check_profiles(files: list[Path], context: Context) -> list[Problem]:
     from sim.scenario import load_profile
 
     problems: list[Problem] = []
-    for path, _ in files:
+    for path in files:
         try:
             load_profile(path, acts=set(context.acts.vocabulary()))
         except FileError as err:
@@ -38,8 +37,21 @@ def _check_profiles(files: list[tuple[Path, Any]], context: Context) -> list[Pro
     return problems
 
 
+def _shipped_scenarios() -> list[Path]:
+    from sim.scenario import builtin_scenarios
+
+    return list(builtin_scenarios().values())
+
+
+def _shipped_profiles() -> list[Path]:
+    from sim.scenario import builtin_profiles
+
+    return builtin_profiles()
+
+
 KINDS = (
     FileKind("scenario", _check_scenarios, 5, detect=lambda d: "scenario" in d,
-             keys="scenario:"),
-    FileKind("profile", _check_profiles, 5, detect=lambda d: "profile" in d, keys="profile:"),
+             keys="scenario:", shipped=_shipped_scenarios),
+    FileKind("profile", _check_profiles, 5, detect=lambda d: "profile" in d, keys="profile:",
+             shipped=_shipped_profiles),
 )

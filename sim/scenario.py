@@ -25,18 +25,20 @@ from shary.acts import ActRegistry, builtin_acts
 from shary.io.recipes import load_library
 from shary.recipes import RecipeLibrary
 from userfiles.errors import FileError
-from userfiles.reader import Reader, open_checked, read, spelled
+from userfiles.reader import Reader, read, spelled
 from userfiles.schema import did_you_mean, validator
 
 from .humans import HUMAN_PLACES, Profile, profile_from
 from .objects import check_new_objects, is_new
-from .world import BOTTLES, FOOTPRINTS, FURNITURE, PLACES
+from .room import BOTTLES, FOOTPRINTS, FURNITURE, PLACES
 
 HERE = Path(__file__).resolve().parent
 SCENARIOS_DIR = HERE / "scenarios"
 PROFILES_DIR = HERE / "profiles"
 SCHEMAS_DIR = HERE / "schemas"
 DEFAULT_TIMEOUT = 180.0
+PLANNING_DOMAIN = "living-room"
+"""The domain a run's planner-backed recipes plan in."""
 
 
 @dataclass(frozen=True)
@@ -120,25 +122,37 @@ def _schema(name: str) -> Draft202012Validator:
     return validator(SCHEMAS_DIR, name)
 
 
+_WORD_VALUED = frozenset({"type", "color"})
+"""Predicates whose object is a word (a class, a colour), not a thing of the scenario."""
+
+
 @cache
-def _builtin_profile(name: str) -> Reader:
-    """A built-in profile, read and shape-checked once (a scenario of fifty people
-    naming the same profile reads it once)."""
-    return open_checked(PROFILES_DIR / f"{name}.yaml", _schema("profile"))
+def _simulated_atomic() -> frozenset[str]:
+    """The atomic tasks the simulated robot performs: the built-in library's (each has
+    an executor in :mod:`sim.executors`; tests/test_validation.py holds them together)."""
+    return frozenset(load_library().atomic)
+
+
+@cache
+def _domain_attributes() -> frozenset[str]:
+    """The attributes of the planning domain runs use: the run states them as facts."""
+    import planner
+
+    domain = planner.load_domain(PLANNING_DOMAIN)
+    return frozenset(a for kind in domain.types.values() for a in kind.attributes)
 
 
 def load_profile(name: str | Path, things: set[str] = frozenset(),
                  acts: set[str] = frozenset(), atomic: set[str] = frozenset()) -> Profile:
     """A profile, by name (``sim/profiles/NAME.yaml``) or file, checked; the names, acts
     and atomic tasks given (when given) are what its targets and answers may name."""
-    if isinstance(name, Path):
-        reader = open_checked(name, _schema("profile"))
-    else:
-        reader = _builtin_profile(name)
-        reader = Reader(reader.located)
-    _check_profile(reader, (), reader.data, things, acts, atomic)
-    reader.done()
-    return profile_from(Path(reader.file).stem, reader.data)
+    path = name if isinstance(name, Path) else PROFILES_DIR / f"{name}.yaml"
+
+    def meaning(reader: Reader) -> Profile:
+        _check_profile(reader, (), reader.data, things, acts, atomic)
+        return profile_from(path.stem, reader.data)
+
+    return read(path, _schema("profile"), meaning)
 
 
 def load_scenario(path: str | Path, *, acts: ActRegistry | None = None) -> Scenario:
@@ -160,6 +174,8 @@ class _Reading:
         self.reader = reader
         self.problem = reader.problem
         self.extra_acts = acts
+        self.profiles: dict[str, Profile | None] = {}
+        """Named profiles read so far: fifty people naming one profile read it once."""
 
     def library(self) -> tuple[RecipeLibrary | None, list[Path]]:
         """The recipe library the scenario runs with, or None when a file of it is bad
@@ -184,6 +200,11 @@ class _Reading:
                 where = ("recipes", index) if index is not None else ("recipes",)
                 self.problem(where, f"depends on {file}, which has errors")
             return None, files
+        performs = _simulated_atomic()
+        for name in sorted(set(library.atomic) - performs):
+            self.problem(("recipes",), f"the atomic task {name!r} that the recipe files declare "
+                         "has no executor in the simulation, so a run would fail at it (the "
+                         f"simulated robot performs: {', '.join(sorted(performs))})", key=True)
         return library, files
 
     def scenario(self) -> Scenario:
@@ -218,6 +239,11 @@ class _Reading:
         objects = {obj: self.thing(obj, spec, names) for obj, spec in objects_spec.items()}
         goals = [self.goal(i, spec, known_tasks, everyone, things)
                  for i, spec in enumerate(data.get("goals") or [])]
+        timeout = reader.duration(("timeout",), data.get("timeout", DEFAULT_TIMEOUT))
+        for i, goal in enumerate(goals):
+            if goal.at >= timeout > 0:
+                problem(("goals", i, "at"), f"the goal at {goal.at:g}s comes after the run's "
+                        f"timeout ({timeout:g}s): it would never be pursued")
         noise = data.get("noise") or {}
         lost = []
         for i, e in enumerate(noise.get("lost") or []):
@@ -235,6 +261,9 @@ class _Reading:
                 problem(("noise", "flicker", predicate), f"unknown predicate {predicate!r}"
                         f"{did_you_mean(predicate, predicates)}", key=True)
         raw_expect = data["expect"]
+        if library is not None:
+            self.facts(raw_expect, set(library.predicates), things | set(PLACES),
+                       {key for spec in people_spec.values() for key in spec.get("kind") or {}})
         for key in ("acts", "no-acts"):
             for i, act in enumerate(raw_expect.get(key) or []):
                 if acts and act not in acts:
@@ -272,8 +301,32 @@ class _Reading:
             robot.get("model", "jido"), robot_at, tuple(p for p in people if p is not None),
             objects, tuple(recipes), tuple(goals), dict(noise.get("flicker") or {}),
             tuple(lost), reader.duration(("noise", "hold"), noise.get("hold", 0.5)),
-            tuple(faults), reader.duration(("timeout",), data.get("timeout", DEFAULT_TIMEOUT)),
+            tuple(faults), timeout,
             expect, library)
+
+    def facts(self, expect: dict[str, Any], predicates: set[str], names: set[str],
+              attributes: set[str]) -> None:
+        """Expected facts name what exists: a known predicate (the library's, or an
+        attribute the run sets from the planning domain or the people's ``kind``), a
+        subject of the scenario and, for a relation, an object of the scenario."""
+        domain: set[str] | None = None
+        for key in ("facts", "no-facts"):
+            for i, (subject, predicate, value) in enumerate(expect.get(key) or []):
+                where = ("expect", key, i)
+                if predicate not in predicates | attributes:
+                    if domain is None:
+                        domain = _domain_attributes()
+                    if predicate not in domain:
+                        known = predicates | attributes | domain
+                        self.problem(where + (1,), f"unknown predicate {predicate!r}"
+                                     f"{did_you_mean(str(predicate), known)}")
+                if subject not in names:
+                    self.problem(where + (0,), f"{subject!r} names nothing in this scenario"
+                                 f"{did_you_mean(str(subject), names)}")
+                if predicate in predicates - _WORD_VALUED and isinstance(value, str) \
+                        and value not in names:
+                    self.problem(where + (2,), f"{value!r} names nothing in this scenario"
+                                 f"{did_you_mean(value, names)}")
 
     def person(self, name: str, spec: dict[str, Any], robot: str, things: set[str],
                acts: set[str], atomic: set[str]) -> Person | None:
@@ -292,10 +345,14 @@ class _Reading:
                 problem(("people", name, "profile"), f"unknown profile {raw!r}"
                         f"{did_you_mean(raw, names)}; profiles: {', '.join(names)}")
                 return None
-            try:
-                profile = load_profile(raw, things, acts, atomic)
-            except FileError as err:
-                self.reader.problems.extend(err.problems)
+            if raw not in self.profiles:
+                try:
+                    self.profiles[raw] = load_profile(raw, things, acts, atomic)
+                except FileError as err:
+                    self.reader.problems.extend(err.problems)
+                    self.profiles[raw] = None
+            profile = self.profiles[raw]
+            if profile is None:
                 return None
         else:
             _check_profile(self.reader, ("people", name, "profile"), raw, things, acts, atomic)

@@ -22,7 +22,8 @@ from typing import Any
 
 import networkx as nx
 
-from .humans import HUMAN_PLACES, TORSO_RADIUS, WAYPOINTS, Avatar
+from .avatar import Avatar
+from .humans import HUMAN_PLACES, TORSO_RADIUS, WAYPOINTS
 from .motion import Activity, wrap
 from .world import BOTTLE_HEIGHT, LivingRoom, pb
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import json
 import os
 import re
 import subprocess
@@ -68,7 +69,8 @@ def run_inprocess(*argv: object) -> Outcome:
         seconds = time.perf_counter() - start
         _, peak = tracemalloc.get_traced_memory()
         tracemalloc.stop()
-    return Outcome(int(status), out.getvalue(), err.getvalue(), seconds, peak / 2**20)
+    return _noted(Outcome(int(status), out.getvalue(), err.getvalue(), seconds,
+                          peak / 2**20), "in-process", argv)
 
 
 _CHILD = """\
@@ -107,8 +109,24 @@ def run_subprocess(*argv: object, cwd: Path | None = None,
     peak = re.search(r"^VmHWM:\s+(\d+) kB", status, re.MULTILINE)
     assert peak, f"the child left no status (exit {done.returncode}):\n{done.stderr[-2000:]!r}"
     decode = lambda b: b.decode("utf-8", "replace")  # noqa: E731
-    return Outcome(done.returncode, decode(done.stdout), decode(done.stderr), seconds,
-                   int(peak[1]) / 1024)
+    return _noted(Outcome(done.returncode, decode(done.stdout), decode(done.stderr), seconds,
+                          int(peak[1]) / 1024), "child", argv)
+
+
+def _noted(outcome: Outcome, mode: str, argv: tuple) -> Outcome:
+    """Append what a run cost to the file named by ``SHARY_HOSTILE_REPORT``, if set.
+
+    ``python tests/hostile_report.py`` runs the corpora that way and prints, per
+    format, the slowest and the largest run: the figures the rule is judged by.
+    """
+    report = os.environ.get("SHARY_HOSTILE_REPORT")
+    if report:
+        test = os.environ.get("PYTEST_CURRENT_TEST", "?").split(" ")[0]
+        with open(report, "a", encoding="utf-8") as out:
+            out.write(json.dumps({"test": test, "mode": mode, "argv": [str(a) for a in argv],
+                                  "status": outcome.status, "seconds": outcome.seconds,
+                                  "peak_mb": outcome.peak_mb}) + "\n")
+    return outcome
 
 
 def assert_refused(outcome: Outcome, *files: Path, message: str | None = None) -> None:

@@ -17,7 +17,9 @@ def test_validate_refuses(path: Path) -> None:
 
 
 @pytest.mark.parametrize("name", ["nan-within", "fault-times", "unknown-partner",
-                                  "goal-million-hours", "recipes-etc-passwd"])
+                                  "goal-million-hours", "recipes-etc-passwd",
+                                  "atomic-without-executor", "expect-unknown-predicate",
+                                  "expect-unknown-thing", "goal-after-timeout"])
 def test_run_refuses_before_running(name: str, tmp_path: Path) -> None:
     """These validated and then hung, failed or read a system file at run time."""
     path = next(p for p in CASES if p.stem == name)
@@ -39,7 +41,7 @@ def test_ten_thousand_people(tmp_path: Path) -> None:
     path = tmp_path / "crowd.yaml"
     path.write_text(f"scenario: crowd\npeople:\n{people}expect: {{acts: [ASK-TASK]}}\n")
     outcome = run_subprocess("validate", path)
-    assert_refused(outcome, path, message=r"10000 entries: too many \(the limit is 50\)")
+    assert_refused(outcome, path, message=r"more than 50 entries: too many \(the limit is 50\)")
     print(f"10,000 people: refused in {outcome.seconds:.2f} s, {outcome.peak_mb:.0f} MB")
 
 

@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import ast
+import operator
 import re
 from pathlib import Path
 from typing import Any
 
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 
 from planner import expr as expr_module
 from planner.expr import EvalError, ExprError, compile_effect, compile_expr
@@ -420,3 +423,89 @@ def test_python_is_not_reachable_through_the_text() -> None:
     e = compile_expr("a.__class__", {"a": None})
     assert e({"a": "jido"}, lambda *key: seen.append(key)) is None
     assert seen == [("jido", "__class__")]
+
+
+# -- properties (hypothesis) ------------------------------------------------------------
+
+_PIECES = st.sampled_from(
+    ["a", "b", ".x", ".at", "1", "2.5", "1e999", "99999999999999999999", " ", "(", ")",
+     "+", "-", "*", "/", "==", "!=", "<", ">=", "=", "and", "or", "not", "&&", "||", "abs",
+     "max", "min", ",", "'s'", '"', "true", "null", "None", "é", "$", "\n"])
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.one_of(st.text(max_size=60), st.lists(_PIECES, max_size=40).map(" ".join),
+                 st.lists(_PIECES, max_size=60).map("".join)))
+def test_any_text_compiles_or_is_refused_at_an_offset(text: str) -> None:
+    """Any string: a compiled expression, or an ExprError at an offset inside the text
+    (never another exception, however deep or long)."""
+    try:
+        compile_expr(text, {"a": None, "b": None})
+    except ExprError as err:
+        assert 0 <= err.offset <= len(text), (err, len(text))
+
+
+_LEAF = st.one_of(st.integers(0, 50), st.sampled_from("cdefg"))
+_VALUES = {"c": 3, "d": 0, "e": 7, "f": 12, "g": 1}
+
+
+def _extend(kids: st.SearchStrategy) -> st.SearchStrategy:
+    return st.one_of(st.tuples(st.sampled_from("+-*/"), kids, kids),
+                     st.tuples(st.just("neg"), kids),
+                     st.tuples(st.just("abs"), kids),
+                     st.tuples(st.sampled_from(["min", "max"]), st.lists(kids, min_size=1,
+                                                                           max_size=3)))
+
+
+def _render(tree: Any) -> str:
+    if not isinstance(tree, tuple):
+        return str(tree)
+    op, *rest = tree
+    if op == "neg":
+        return f"-({_render(rest[0])})"
+    if op == "abs":
+        return f"abs({_render(rest[0])})"
+    if op in ("min", "max"):
+        return f"{op}({', '.join(_render(t) for t in rest[0])})"
+    return f"({_render(rest[0])} {op} {_render(rest[1])})"
+
+
+def _python(tree: Any) -> Any:
+    """The same tree computed by Python's own arithmetic."""
+    if not isinstance(tree, tuple):
+        return _VALUES[tree] if isinstance(tree, str) else tree
+    op, *rest = tree
+    if op == "neg":
+        return -_python(rest[0])
+    if op == "abs":
+        return abs(_python(rest[0]))
+    if op in ("min", "max"):
+        return (min if op == "min" else max)(_python(t) for t in rest[0])
+    left, right = _python(rest[0]), _python(rest[1])
+    return {"+": operator.add, "-": operator.sub, "*": operator.mul,
+            "/": operator.truediv}[op](left, right)
+
+
+def _depth(tree: Any) -> int:
+    if not isinstance(tree, tuple):
+        return 0
+    kids = tree[1] if tree[0] in ("min", "max") else tree[1:]
+    return 1 + max(_depth(k) for k in kids)
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.recursive(_LEAF, _extend, max_leaves=30))
+def test_nested_arithmetic_is_pythons(tree: Any) -> None:
+    """Generated nested expressions within the budget compile, and evaluate exactly as
+    Python's arithmetic on the same tree (division by zero: an EvalError or, when the
+    whole expression is constant, an ExprError at compile time)."""
+    assume(_depth(tree) <= 10)  # at most two levels of nesting each: within MAX_NESTING
+    text = _render(tree)
+    try:
+        expected = _python(tree)
+    except ZeroDivisionError:
+        with pytest.raises((EvalError, ExprError), match="division by zero"):
+            compile_expr(text, dict.fromkeys(_VALUES))(_VALUES, get)
+        return
+    value = compile_expr(text, dict.fromkeys(_VALUES))(_VALUES, get)
+    assert value == expected and type(value) is type(expected), (text, value, expected)

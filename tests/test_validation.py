@@ -1,4 +1,5 @@
-"""The meaning checks of scheme files: each mistake named, placed, and all reported at once."""
+"""What ``shary validate`` checks: the meaning of scheme files (each mistake named, placed,
+and all reported at once), and which files it checks by default."""
 
 from __future__ import annotations
 
@@ -29,6 +30,26 @@ def test_builtin_files_are_valid(shary):
     status, out, err = shary("validate")
     assert status == 0, err
     assert "give-object.yaml" in out and "acts.yaml" in out
+
+
+def test_builtin_files_come_from_the_file_kinds():
+    """``shary validate`` alone checks what each registered kind lists as shipped: the
+    engine's kinds and those sim registers by entry point (scenarios, profiles)."""
+    from shary.filekinds import kinds, shipped_files
+
+    with_files = {kind.name for kind in kinds() if kind.shipped is not None and kind.shipped()}
+    assert {"scheme", "recipes", "domain", "problem", "scenario", "profile"} <= with_files
+    assert "acts" in {path.stem for path in shipped_files()}
+
+
+def test_simulated_robot_performs_the_builtin_atomic_tasks():
+    """Scenarios are refused when their recipes declare an atomic task beyond the
+    built-in ones (sim/scenario.py): that holds while each built-in one has an executor."""
+    from shary.io.recipes import load_library
+    from sim.executors import RobotExecutors
+
+    for name in load_library().atomic:
+        assert callable(getattr(RobotExecutors, "_" + name.replace("-", "_"), None)), name
 
 
 def test_a_good_file_passes(shary, write):
@@ -173,3 +194,19 @@ def test_act_types_are_not_act_names(shary, write):
 def test_missing_file_is_a_clean_error(shary, tmp_path):
     ((_, _, msg),) = _messages(shary, tmp_path / "absent.yaml")
     assert "cannot read file" in msg
+
+
+def test_reading_a_scenario_loads_no_physics():
+    """Validating a scenario reads the room's data, not the PyBullet world (the imports
+    were most of the time of a refusal)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    scenario = Path(__file__).resolve().parents[1] / "sim" / "scenarios" / "give-bottle.yaml"
+    code = ("import sys\nfrom shary.cli import main\n"
+            f"assert main(['validate', {str(scenario)!r}]) == 0\n"
+            "print(sorted(m for m in ('pybullet', 'numpy') if m in sys.modules))\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True)
+    assert done.stdout.strip().endswith("[]"), done.stdout + done.stderr

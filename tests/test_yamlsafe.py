@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
+import re
+import tempfile
 import time
+from pathlib import Path
 
 import pytest
 from conftest import problems
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from userfiles import yamlsafe
 
@@ -109,3 +114,56 @@ def test_positions_of_values_and_keys():
 def test_yaml_12_booleans_only():
     located = yamlsafe.load_text("on: {yes: a}\nlist: [on, off, yes, no, true, False]\n")
     assert located.data == {"on": {"yes": "a"}, "list": ["on", "off", "yes", "no", True, False]}
+
+
+# -- properties (hypothesis): any bytes are a value or positioned problems --------------
+
+_BREAKS = re.compile(r"\r\n|[\r\n\x85\u2028\u2029]")
+"""The line breaks YAML counts lines by."""
+
+_YAMLISH = st.lists(st.sampled_from(list("ab1.-:[]{}&*!|>'\"#%@`?,\n\t ") +
+                                    ["\r", "\x85", "\u2028", "\ufeff", "é", "\x00", "<<",
+                                     "!!python/object", "1e999", ".nan", "- ", ": ", "\n  "]),
+                    max_size=80).map("".join)
+"""Text made of YAML's significant pieces: reaches the parser's corners faster than bytes."""
+
+
+def _lines(text: str) -> list[str]:
+    """The lines an editor shows (a final line break opens none)."""
+    lines = _BREAKS.split(text)
+    return lines[:-1] if len(lines) > 1 and lines[-1] == "" else lines
+
+
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.one_of(st.binary(max_size=300), _YAMLISH.map(lambda t: t.encode("utf-8"))))
+def test_any_bytes_load_or_refuse_in_place(raw: bytes) -> None:
+    """Any bytes: a located value, or a FileError whose every position is in the file
+    (never another exception)."""
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "any.yaml"
+        path.write_bytes(raw)
+        try:
+            yamlsafe.load_file(path)
+        except yamlsafe.FileError as err:
+            assert err.problems
+            text = raw.decode("utf-8", "replace").removeprefix("\ufeff")
+            lines = _lines(text)
+            for problem in err.problems:
+                assert problem.file == str(path)
+                assert 1 <= problem.line <= len(lines), (problem, len(lines))
+                assert 1 <= problem.col <= len(lines[problem.line - 1]) + 1, problem
+
+
+def test_positions_inside_strings():
+    """An expression's error lands on its column when the string is written as it reads;
+    at the string's start when escapes or folding would make columns lie."""
+    located = yamlsafe.load_text('a: x + y\nb: "x + y"\nc: "x \\" + y"\nd: >\n  x +\n  y\n')
+
+    def where(key: str, offset: int) -> tuple[int, int]:
+        problem = located.problem_inside((key,), offset, "m")
+        return problem.line, problem.col
+
+    assert where("a", 4) == (1, 8)
+    assert where("b", 4) == (2, 9)
+    assert where("c", 5) == (3, 4)
+    assert where("d", 2) == (4, 4)

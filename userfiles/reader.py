@@ -14,9 +14,9 @@ does the rest, the same way for every format::
    on a file whose shape is right, so they never meet a number where a list
    was promised;
 3. meaning: the loader resolves names and reports with :meth:`Reader.problem`;
-   the shared checks (:meth:`Reader.duration`, :meth:`Reader.number`,
-   :meth:`Reader.count`, :meth:`Reader.confined_path`) put the stated limit in
-   the message;
+   the shared checks (:meth:`Reader.duration`, :meth:`Reader.confined_path`)
+   put the stated limit in the message (numbers are finite and bounded by the
+   safe load, sizes by the event pass and the schema);
 4. every problem found is raised at once as one :class:`FileError`.
 
 Why one pipeline: the rule of docs/architecture.md ("User files") then holds
@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Callable, Iterable, Sized
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeVar
@@ -37,7 +37,7 @@ from jsonschema import Draft202012Validator
 from userfiles import yamlsafe
 from userfiles.errors import FileError, Problem
 from userfiles.limits import MAX_DURATION, seconds, show_seconds
-from userfiles.schema import check
+from userfiles.schema import check, size_limits
 
 T = TypeVar("T")
 
@@ -72,19 +72,10 @@ class Reader:
         """Record a problem at the value (or, with ``key``, the key) at path ``where``."""
         self.problems.append(self.located.problem(where, message, key=key))
 
-    def number(self, where: tuple, value: Any, *, maximum: float, minimum: float = 0.0,
-               what: str = "value") -> float:
-        """``value`` as a float, checked finite and within [minimum, maximum]."""
-        number = float(value)
-        if not math.isfinite(number):
-            self.problem(where, f"{what} {value!r} is not a finite number")
-        elif number > maximum:
-            self.problem(where, f"{what} {number:g} is too large (the limit is {maximum:g})")
-        elif number < minimum:
-            self.problem(where, f"{what} {number:g} is too small (the least is {minimum:g})")
-        else:
-            return number
-        return minimum
+    def problem_inside(self, where: tuple, offset: int, message: str) -> None:
+        """Record a problem ``offset`` characters into the string at ``where`` (the
+        column of an error in an expression written as a YAML string)."""
+        self.problems.append(self.located.problem_inside(where, offset, message))
 
     def duration(self, where: tuple, value: Any, *, maximum: float = MAX_DURATION,
                  what: str = "duration") -> float:
@@ -100,14 +91,6 @@ class Reader:
                                 f"{show_seconds(maximum)})")
             return 0.0
         return amount
-
-    def count(self, where: tuple, items: Sized | int, *, maximum: int, what: str) -> bool:
-        """True when ``items`` (a collection or a number) is at most ``maximum``."""
-        size = items if isinstance(items, int) else len(items)
-        if size > maximum:
-            self.problem(where, f"{size} {what}: too many (the limit is {maximum})", key=True)
-            return False
-        return True
 
     def confined_path(self, where: tuple, name: str, *,
                       roots: Iterable[Path] = ()) -> Path | None:
@@ -156,10 +139,17 @@ def spelled(path: str | os.PathLike[str], *, like: str | os.PathLike[str] = "") 
         return str(full)
 
 
+def checked(path: str | os.PathLike[str], schema: Draft202012Validator) -> Reader:
+    """Steps 1 and 2 of the pipeline, for a format that reads several files together
+    (a recipe library): the file loaded safely with the schema's size limits, and its
+    shape problems recorded on the reader rather than raised."""
+    located = yamlsafe.load_file(path, sizes=size_limits(schema))
+    return Reader(located, check(located, schema))
+
+
 def open_checked(path: str | os.PathLike[str], schema: Draft202012Validator) -> Reader:
     """Steps 1 and 2 of the pipeline: a :class:`Reader` over a file whose shape is right."""
-    located = yamlsafe.load_file(path)
-    reader = Reader(located, check(located, schema))
+    reader = checked(path, schema)
     reader.done()
     return reader
 

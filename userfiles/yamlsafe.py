@@ -7,7 +7,9 @@ limit.  Here a file goes through three gates before anything else sees it:
 2. the event stream (PyYAML's parser is iterative, so hostile nesting cannot
    overflow the stack here): nesting depth at most :data:`MAX_DEPTH`, one
    document, no tag outside YAML's core schema (nothing is ever constructed
-   from a tag);
+   from a tag), and the format's size limits (a scenario's ``people:`` at
+   most 50): a mapping of ten thousand entries is refused at its key after
+   reading its 51st, before any node is built;
 3. the node graph, converted to plain ``dict``/``list``/scalars while counting
    expanded nodes, so an alias bomb stops at :data:`MAX_NODES` instead of
    eating the memory; duplicate keys, and numbers that are not finite or larger
@@ -26,8 +28,9 @@ from __future__ import annotations
 import math
 import os
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NoReturn
 
 import yaml
 from yaml.constructor import SafeConstructor
@@ -46,6 +49,8 @@ cost or coordinate that means something, and exact as a float."""
 
 Path = tuple[Any, ...]
 Mark = tuple[int, int]
+Sizes = Mapping[Path, int]
+"""Most entries of the mapping or list at a path of keys (see :func:`load_text`)."""
 
 _SafeLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 """libyaml's parser when PyYAML was built with it: about ten times faster on big files
@@ -86,6 +91,9 @@ class Located:
     data: Any
     marks: dict[Path, Mark] = field(default_factory=dict)
     key_marks: dict[Path, Mark] = field(default_factory=dict)
+    inline: dict[Path, int] = field(default_factory=dict)
+    """For each string written on one line: how many characters (a quote) come before
+    its text, so that a position inside the text (an expression's error) is exact."""
     problems: list[Problem] = field(default_factory=list)
     """Problems that did not stop loading (a duplicate key keeps its first value):
     the file's checker reports them with its own, so that all come at once."""
@@ -105,6 +113,26 @@ class Located:
         line, col = self.key_at(path) if key else self.at(path)
         return Problem(self.file, line, col, message)
 
+    def problem_inside(self, path: Path, offset: int, message: str) -> Problem:
+        """A problem ``offset`` characters into the string at ``path`` (at the string's
+        start when it spans lines or holds escapes, where columns would not add up)."""
+        line, col = self.at(path)
+        before = self.inline.get(tuple(path))
+        return Problem(self.file, line, col + before + offset if before is not None else col,
+                       message)
+
+
+@dataclass(frozen=True)
+class Outline:
+    """What the event pass learns of a document without building it."""
+
+    keys: tuple[str, ...] | None
+    """Its top-level keys (None when the document is not a mapping)."""
+    empty: bool = False
+    """Whether it holds no value at all (only comments or blank lines)."""
+    mark: Mark = (1, 1)
+    """Where its value starts (after leading comments)."""
+
 
 def read_text(path: str | os.PathLike[str], *, max_bytes: int = MAX_BYTES) -> str:
     """Read a user's file as UTF-8 text, refusing huge, binary or empty files."""
@@ -123,35 +151,57 @@ def read_text(path: str | os.PathLike[str], *, max_bytes: int = MAX_BYTES) -> st
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as err:
-        before = raw[: err.start]
-        line = before.count(b"\n") + 1
-        col = err.start - (before.rfind(b"\n") + 1) + 1
-        raise FileError([Problem(name, line, col,
+        before = raw[: err.start].decode("utf-8-sig")
+        raise FileError([Problem(name, *_mark(before, len(before)),
                                  f"not UTF-8 text (byte 0x{raw[err.start]:02x})")]) from None
     if "\x00" in text:
-        at = text.index("\x00")
-        line = text.count("\n", 0, at) + 1
-        raise FileError([Problem(name, line, at - (text.rfind("\n", 0, at) + 1) + 1,
+        raise FileError([Problem(name, *_mark(text, text.index("\x00")),
                                  "NUL character: this is not a text file")])
     return text
 
 
-def load_file(path: str | os.PathLike[str]) -> Located:
+_EMPTY = "empty file: expected a YAML mapping"
+
+_BREAKS = re.compile(r"\r\n|[\r\n\x85\u2028\u2029]")
+"""The line breaks YAML counts lines by (so do its marks, so must ours)."""
+
+
+def _mark(text: str, at: int) -> Mark:
+    """Line and column (from 1) of ``text[at]``, lines counted as YAML counts them."""
+    breaks = list(_BREAKS.finditer(text, 0, at))
+    start = breaks[-1].end() if breaks else 0
+    return len(breaks) + 1, at - start + 1
+
+
+def load_file(path: str | os.PathLike[str], *, sizes: Sizes | None = None) -> Located:
     """Load one YAML file safely, with positions (see the module's docstring)."""
-    return load_text(read_text(path), os.fspath(path))
+    return load_text(read_text(path), os.fspath(path), sizes=sizes)
 
 
-def load_text(text: str, file: str = "<string>") -> Located:
-    """Load YAML text safely, with positions; raise :class:`FileError` when refused."""
+def outline(path: str | os.PathLike[str]) -> Outline:
+    """The top-level keys of a YAML file, through the first two gates only (no node is
+    built): enough to tell what kind of file it is before reading it with its limits."""
+    text = read_text(path)
+    found = _check_events(text, os.fspath(path), {})
+    if found.empty:
+        raise FileError([Problem(os.fspath(path), 1, 1, _EMPTY)])
+    return found
+
+
+def load_text(text: str, file: str = "<string>", *, sizes: Sizes | None = None) -> Located:
+    """Load YAML text safely, with positions; raise :class:`FileError` when refused.
+
+    ``sizes`` maps paths of keys from the root (``("people",)``) to the most entries
+    the mapping or list there may have; they are enforced during the event pass."""
     if len(text.encode("utf-8", "surrogatepass")) > MAX_BYTES:
         raise FileError([Problem(file, 1, 1, f"text is larger than {MAX_BYTES} bytes")])
-    _check_events(text, file)
+    _check_events(text, file, sizes or {})
     try:
         node = yaml.compose(text, Loader=_Loader)
     except yaml.YAMLError as err:
         raise FileError([_yaml_problem(err, file, text)]) from None
     if node is None:
-        raise FileError([Problem(file, 1, 1, "empty file: expected a YAML mapping")])
+        raise FileError([Problem(file, 1, 1, _EMPTY)])
     located = Located(file, None)
     converter = _Converter(located)
     located.data = converter.convert(node, ())
@@ -172,39 +222,105 @@ def _yaml_problem(err: yaml.YAMLError, file: str, text: str) -> Problem:
 def _within(text: str, line: int, col: int) -> Mark:
     """A position the file has: PyYAML puts "end of stream" on the line after the last
     one when the file ends with a newline; an editor shows the end of the last line."""
-    lines = text.splitlines() or [""]
+    lines = _BREAKS.split(text)
+    if lines[-1] == "" and len(lines) > 1:
+        lines.pop()  # a final line break does not open a line an editor shows
     if line > len(lines):
         return len(lines), len(lines[-1]) + 1
-    return line, col
+    return line, min(col, len(lines[line - 1]) + 1)
 
 
-def _check_events(text: str, file: str) -> None:
-    depth = 0
+def _check_events(text: str, file: str, sizes: Sizes) -> Outline:
+    """The event pass: depth, documents, tags and the size limits of ``sizes``, checked
+    before any node is built, so a huge mapping is refused at its key after reading just
+    past its limit.  Returns the document's outline (its top-level keys)."""
+    frames: list[_Frame] = []
+    keys: list[str] | None = None
     documents = 0
+    empty = True
+    root: Mark = (1, 1)
     try:
         for event in yaml.parse(text, Loader=_Loader):
             tag = getattr(event, "tag", None)
             if tag is not None and tag != "!" and tag not in _CORE_TAGS:
-                mark = event.start_mark
-                raise FileError([Problem(file, mark.line + 1, mark.column + 1,
-                                         f"tag {tag!r} is not allowed: files are data, "
-                                         "nothing is constructed from a tag")])
-            if isinstance(event, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
-                depth += 1
-                if depth > MAX_DEPTH:
-                    mark = event.start_mark
-                    raise FileError([Problem(file, mark.line + 1, mark.column + 1,
-                                             f"nesting deeper than {MAX_DEPTH} levels")])
-            elif isinstance(event, (yaml.MappingEndEvent, yaml.SequenceEndEvent)):
-                depth -= 1
+                _refuse(file, event, f"tag {tag!r} is not allowed: files are data, "
+                                     "nothing is constructed from a tag")
+            if isinstance(event, _NODE_EVENTS):
+                if empty:
+                    root = (event.start_mark.line + 1, event.start_mark.column + 1)
+                empty = False
+                path = _entered(frames, event, file)
+                if not frames and isinstance(event, yaml.MappingStartEvent):
+                    keys = []
+                elif len(frames) == 1 and keys is not None and frames[0].keys_next is False \
+                        and isinstance(event, yaml.ScalarEvent):
+                    keys.append(event.value)
+                if isinstance(event, yaml.MappingStartEvent | yaml.SequenceStartEvent):
+                    if len(frames) >= MAX_DEPTH:
+                        _refuse(file, event, f"nesting deeper than {MAX_DEPTH} levels")
+                    mapping = isinstance(event, yaml.MappingStartEvent)
+                    frames.append(_Frame(path, sizes.get(path) if path is not None else None,
+                                         frames[-1].key_mark if frames else (1, 1),
+                                         True if mapping else None))
+            elif isinstance(event, yaml.MappingEndEvent | yaml.SequenceEndEvent):
+                frames.pop()
             elif isinstance(event, yaml.DocumentStartEvent):
                 documents += 1
                 if documents > 1:
-                    mark = event.start_mark
-                    raise FileError([Problem(file, mark.line + 1, mark.column + 1,
-                                             "more than one YAML document in the file")])
+                    _refuse(file, event, "more than one YAML document in the file")
     except yaml.YAMLError as err:
         raise FileError([_yaml_problem(err, file, text)]) from None
+    return Outline(None if keys is None else tuple(keys), empty, root)
+
+
+_NODE_EVENTS = (yaml.ScalarEvent, yaml.AliasEvent, yaml.MappingStartEvent,
+                yaml.SequenceStartEvent)
+
+
+@dataclass
+class _Frame:
+    """An open mapping or sequence during the event pass."""
+
+    path: Path | None
+    """Its keys from the root, while every ancestor is a mapping (None below a list)."""
+    limit: int | None
+    """Most entries it may have (from the schema's ``maxProperties``/``maxItems``)."""
+    mark: Mark
+    """Where to blame it: the key that introduces it."""
+    keys_next: bool | None
+    """For a mapping, whether the next node is a key; None for a sequence."""
+    count: int = 0
+    key: str | None = None
+    key_mark: Mark = (1, 1)
+
+
+def _entered(frames: list[_Frame], event: yaml.Event, file: str) -> Path | None:
+    """Account for one node in its parent; the path of the node when it is a value
+    reached through mapping keys only."""
+    if not frames:
+        return ()
+    frame = frames[-1]
+    if frame.keys_next is None or frame.keys_next:
+        frame.count += 1
+        if frame.limit is not None and frame.count > frame.limit:
+            raise FileError([Problem(file, *frame.mark, f"more than {frame.limit} entries: too "
+                                     f"many (the limit is {frame.limit})")])
+    if frame.keys_next is None:
+        return None
+    if frame.keys_next:
+        frame.keys_next = False
+        frame.key = event.value if isinstance(event, yaml.ScalarEvent) else None
+        frame.key_mark = (event.start_mark.line + 1, event.start_mark.column + 1)
+        return None
+    frame.keys_next = True
+    if frame.path is None or frame.key is None:
+        return None
+    return frame.path + (frame.key,)
+
+
+def _refuse(file: str, event: yaml.Event, message: str) -> NoReturn:
+    mark = event.start_mark
+    raise FileError([Problem(file, mark.line + 1, mark.column + 1, message)])
 
 
 class _Converter:
@@ -232,6 +348,11 @@ class _Converter:
             return [self.convert(item, path + (i,), depth + 1)
                     for i, item in enumerate(node.value)]
         if node.tag in _PLAIN_SCALARS:
+            quote = 1 if node.style in ("'", '"') else 0
+            width = node.end_mark.column - node.start_mark.column
+            if node.style in (None, "", "'", '"') and node.start_mark.line == node.end_mark.line \
+                    and width == len(node.value) + 2 * quote:
+                self.located.inline[path] = quote  # as written: no escape, no folding
             return self._scalar(node)
         return node.value  # e.g. a timestamp: kept as the text the user wrote
 

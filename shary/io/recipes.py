@@ -20,7 +20,7 @@ from shary import builtin
 from shary.acts import ACT_TYPES, ActRegistry, acts_from_data, builtin_acts
 from shary.io import schema
 from shary.io.schemes import load_scheme
-from shary.model import Scheme, parse_duration
+from shary.model import Scheme
 from shary.recipes import (
     ANY_TASK,
     ROBOT_PARAM,
@@ -40,9 +40,9 @@ from shary.recipes import (
     Term,
     parse_refinement,
 )
-from userfiles import yamlsafe
 from userfiles.errors import FileError, Problem
-from userfiles.reader import confine, spelled
+from userfiles.limits import seconds
+from userfiles.reader import Reader, checked, confine, spelled
 from userfiles.schema import did_you_mean
 
 ANY = TaskType(ANY_TASK, (), {}, ())
@@ -59,27 +59,28 @@ def load_library(paths: list[str | os.PathLike[str]] | None = None, *,
     files = [Path(p) for p in (builtin_library_files() if with_builtin else [])]
     files += [Path(p) for p in paths or [] if Path(p) not in files]
     problems: list[Problem] = []
-    documents: list[yamlsafe.Located] = []
+    documents: list[Reader] = []
     for path in files:
+        # Every file's shape problems are reported, and the files that are mappings
+        # are still read for meaning: a mistake in one task must not hide the others.
         try:
-            located = yamlsafe.load_file(path)
+            reader = checked(path, schema.validator("recipes"))
         except FileError as err:
             problems.extend(err.problems)
             continue
-        if not isinstance(located.data, dict):
-            problems.append(located.problem((), "expected a mapping (with tasks, recipes, "
-                                            "atomic, predicates or chronicles) at the top"))
-            continue
-        problems.extend(schema.check(located, "recipes"))
-        documents.append(located)
+        if isinstance(reader.data, dict):
+            documents.append(reader)
+        else:
+            problems.extend(reader.problems)
     builder = _Builder(acts or builtin_acts())
-    for located in documents:
-        builder.declare_acts(located)
-    for located in documents:
-        builder.declare(located)
-    for located in documents:
-        builder.define(located)
-    problems.extend(builder.problems)
+    for reader in documents:
+        builder.declare_acts(reader)
+    for reader in documents:
+        builder.declare(reader)
+    for reader in documents:
+        builder.define(reader)
+    for reader in documents:
+        problems.extend(reader.problems)
     if problems:
         raise FileError(problems)
     builder.library.acts = builder.acts
@@ -90,30 +91,25 @@ class _Builder:
     def __init__(self, acts: ActRegistry):
         self.acts = acts
         self.library = RecipeLibrary()
-        self.problems: list[Problem] = []
         self.schemes: dict[str, Scheme | None] = {}
-
-    def problem(self, located: yamlsafe.Located, path: tuple, message: str, *,
-                key: bool = False) -> None:
-        self.problems.append(located.problem(path, message, key=key))
 
     # -- first pass: the vocabulary ----------------------------------------
 
-    def declare_acts(self, located: yamlsafe.Located) -> None:
+    def declare_acts(self, reader: Reader) -> None:
         """Acts declared under ``acts:``: usable by every file of the library, and by the
         scenarios that load it."""
-        own = located.data.get("acts")
+        own = reader.data.get("acts")
         if not isinstance(own, dict):
             return
         for name in own:
             if name in ACT_TYPES:
-                self.problem(located, ("acts", name), f"{name!r} is an act type, not an act "
+                reader.problem(("acts", name), f"{name!r} is an act type, not an act "
                              "name", key=True)
         self.acts = self.acts.extended(acts_from_data(
-            {k: v if isinstance(v, dict) else None for k, v in own.items()}, located.file))
+            {k: v if isinstance(v, dict) else None for k, v in own.items()}, reader.file))
 
-    def declare(self, located: yamlsafe.Located) -> None:
-        data = located.data
+    def declare(self, reader: Reader) -> None:
+        data = reader.data
         for name, doc in _items(data.get("predicates")):
             self.library.predicates[name] = doc if isinstance(doc, str) else ""
         for name, spec in _items(data.get("atomic")):
@@ -122,16 +118,16 @@ class _Builder:
                                                    spec.get("doc", "") or "")
         for name, spec in _items(data.get("tasks")):
             if isinstance(spec, dict):
-                self._task(located, name, spec)
+                self._task(reader, name, spec)
 
-    def _task(self, located: yamlsafe.Located, name: str, spec: dict[str, Any]) -> None:
+    def _task(self, reader: Reader, name: str, spec: dict[str, Any]) -> None:
         path = ("tasks", name)
         if name in self.library.tasks:
-            self.problem(located, path, f"task {name!r} is declared twice", key=True)
+            reader.problem(path, f"task {name!r} is declared twice", key=True)
             return
         params = tuple(_strings(spec.get("params")))
         if ROBOT_PARAM in params:
-            self.problem(located, path + ("params",), f"'{ROBOT_PARAM}' is implicit: every "
+            reader.problem(path + ("params",), f"'{ROBOT_PARAM}' is implicit: every "
                          "task has it")
         env = {ROBOT_PARAM, *params}
         raw = spec.get("scheme")
@@ -143,32 +139,32 @@ class _Builder:
                        for i, c in enumerate(raw or []) if isinstance(c, dict)]
         choices = []
         for where, scheme_name, when_path, when in options:
-            scheme = self._scheme(located, where, scheme_name)
-            conditions = self._conditions(located, when_path, when, env)
+            scheme = self._scheme(reader, where, scheme_name)
+            conditions = self._conditions(reader, when_path, when, env)
             if scheme is not None:
                 choices.append(SchemeChoice(scheme, conditions))
         roles = {k: Term.parse(v) for k, v in _items(spec.get("roles"))}
         for role, term in roles.items():
-            self._check_term(located, path + ("roles", role), term, env)
+            self._check_term(reader, path + ("roles", role), term, env)
         for choice in choices:
             for role in choice.scheme.roles:
                 if role not in roles and role != ROBOT_PARAM and role not in params:
-                    self.problem(located, path, f"scheme {choice.scheme.name!r} has the role "
+                    reader.problem(path, f"scheme {choice.scheme.name!r} has the role "
                                  f"{role!r}; say who plays it under 'roles:' (e.g. "
                                  f"{role}: $someone)", key=True)
         self.library.tasks[name] = TaskType(name, params, roles, tuple(choices),
                                             spec.get("doc", "") or "")
 
-    def _scheme(self, located: yamlsafe.Located, path: tuple, name: Any) -> Scheme | None:
+    def _scheme(self, reader: Reader, path: tuple, name: Any) -> Scheme | None:
         if not isinstance(name, str):
             return None
         ref = name
         if name.endswith((".yaml", ".yml")) or "/" in name:
-            full, refusal = confine(located.file, name, roots=[builtin.folder("schemes")])
+            full, refusal = confine(reader.file, name, roots=[builtin.folder("schemes")])
             if refusal is not None:
-                self.problem(located, path, refusal)
+                reader.problem(path, refusal)
                 return None
-            ref = spelled(full, like=located.file)
+            ref = spelled(full, like=reader.file)
         if ref not in self.schemes:
             try:
                 self.schemes[ref] = load_scheme(ref, acts=self.acts)
@@ -178,45 +174,45 @@ class _Builder:
                 self.schemes[ref] = None
                 if ref == name and not name.endswith((".yaml", ".yml")):  # an unknown name
                     messages = "; ".join(p.message for p in err.problems[:3])
-                    self.problem(located, path, f"scheme {name!r} cannot be used: {messages}")
+                    reader.problem(path, f"scheme {name!r} cannot be used: {messages}")
                 else:  # the scheme's own problems, reported once, under its own name
-                    self.problems.extend(err.problems)
-                    self.problem(located, path, f"depends on {ref}, which has errors")
+                    reader.problems.extend(err.problems)
+                    reader.problem(path, f"depends on {ref}, which has errors")
         return self.schemes[ref]
 
     # -- second pass: recipes and chronicles ---------------------------------
 
-    def define(self, located: yamlsafe.Located) -> None:
-        data = located.data
+    def define(self, reader: Reader) -> None:
+        data = reader.data
         recipes = data.get("recipes")
         for index, spec in enumerate(recipes if isinstance(recipes, list) else []):
             if isinstance(spec, dict):
-                self._recipe(located, ("recipes", index), spec)
+                self._recipe(reader, ("recipes", index), spec)
         for name, spec in _items(data.get("chronicles")):
             if isinstance(spec, dict):
-                self._chronicle(located, ("chronicles", name), name, spec)
+                self._chronicle(reader, ("chronicles", name), name, spec)
 
-    def _recipe(self, located: yamlsafe.Located, path: tuple, spec: dict[str, Any]) -> None:
+    def _recipe(self, reader: Reader, path: tuple, spec: dict[str, Any]) -> None:
         task_name, act = spec.get("task"), spec.get("act")
         if not isinstance(task_name, str) or not isinstance(act, str):
             return
         task = ANY if task_name == ANY_TASK else self.library.tasks.get(task_name)
         if task is None:
-            self.problem(located, path + ("task",), f"unknown task {task_name!r}"
+            reader.problem(path + ("task",), f"unknown task {task_name!r}"
                          f"{did_you_mean(task_name, self.library.tasks)}")
             return
         if act not in self.acts:
-            self.problem(located, path + ("act",), f"unknown act {act!r}"
+            reader.problem(path + ("act",), f"unknown act {act!r}"
                          f"{did_you_mean(act, self.acts.acts)}")
             return
         if task.schemes and not any(any(s.act == act for s in c.scheme.states.values())
                                     for c in task.schemes):
             names = ", ".join(c.scheme.name for c in task.schemes)
-            self.problem(located, path + ("act",), f"no state of the scheme(s) of task "
+            reader.problem(path + ("act",), f"no state of the scheme(s) of task "
                          f"{task_name!r} ({names}) carries out {act!r}")
         env = {ROBOT_PARAM, *task.params}
-        steps = self._steps(located, path + ("steps",), spec.get("steps"), env)
-        monitors = tuple(self._monitor(located, path + ("monitors", i), m, env)
+        steps = self._steps(reader, path + ("steps",), spec.get("steps"), env)
+        monitors = tuple(self._monitor(reader, path + ("monitors", i), m, env)
                          for i, m in enumerate(spec.get("monitors") or [])
                          if isinstance(m, dict))
         plan = None
@@ -224,10 +220,10 @@ class _Builder:
             raw = spec["plan"]
             args = {k: Term.parse(v) for k, v in _items(raw.get("with"))}
             for key, term in args.items():
-                self._check_term(located, path + ("plan", "with", key), term, env)
+                self._check_term(reader, path + ("plan", "with", key), term, env)
             refine = {k: str(v) for k, v in _items(raw.get("refine"))}
             for action, text in refine.items():
-                self._check_refinement(located, path + ("plan", "refine", action), text)
+                self._check_refinement(reader, path + ("plan", "refine", action), text)
             facts = {}
             for attribute, given in _items(raw.get("facts")):
                 predicates = ((given,) if isinstance(given, str)
@@ -236,7 +232,7 @@ class _Builder:
                     name = str(predicate).removeprefix("^")
                     if name not in self.library.predicates:
                         at = path + ("plan", "facts", attribute)
-                        self.problem(located, at + ((i,) if not isinstance(given, str) else ()),
+                        reader.problem(at + ((i,) if not isinstance(given, str) else ()),
                                      f"unknown predicate {name!r}"
                                      + did_you_mean(name, self.library.predicates))
                 facts[str(attribute)] = tuple(str(p) for p in predicates)
@@ -250,27 +246,27 @@ class _Builder:
                           then.get("emit") if isinstance(then, dict) else None)
         given = [k for k in ("steps", "plan", "function") if k in spec]
         if len(given) > 1:
-            self.problem(located, path + (given[1],), f"a recipe has steps, a plan or a "
+            reader.problem(path + (given[1],), f"a recipe has steps, a plan or a "
                          f"function, not {' and '.join(given)}", key=True)
-        when = self._conditions(located, path + ("when",), spec.get("when"), env)
+        when = self._conditions(reader, path + ("when",), spec.get("when"), env)
         on = tuple(str(e) for e in spec.get("on") or ())
         if on and task.schemes:
             entering = {e for c in task.schemes for e in _events_into(c.scheme, act)}
             for i, event in enumerate(on):
                 if event not in entering:
-                    self.problem(located, path + ("on", i), f"no transition of the scheme(s) "
-                                 f"of task {task_name!r} enters {act} on {event!r}"
-                                 f"{did_you_mean(event, entering)}; events: "
-                                 f"{', '.join(sorted(entering)) or 'none'}")
+                    reader.problem(path + ("on", i), f"no transition of the scheme(s) "
+                                   f"of task {task_name!r} enters {act} on {event!r}"
+                                   f"{did_you_mean(event, entering)}; events: "
+                                   f"{', '.join(sorted(entering)) or 'none'}")
         rank = len(self.library.recipes_for(task_name, act)) + 1
         name = spec.get("name") or f"{task_name}/{act}#{rank}"
         self.library.recipes.append(Recipe(
             name, task_name, act, when, steps, plan,
             spec.get("function") if isinstance(spec.get("function"), str) else None,
-            monitors, retry, spec.get("doc", "") or "", located.file,
-            located.key_at(path), on))
+            monitors, retry, spec.get("doc", "") or "", reader.file,
+            reader.located.key_at(path), on))
 
-    def _steps(self, located: yamlsafe.Located, path: tuple, raw: Any,
+    def _steps(self, reader: Reader, path: tuple, raw: Any,
                env: set[str]) -> tuple[Step, ...]:
         if not isinstance(raw, list):
             return ()
@@ -285,24 +281,24 @@ class _Builder:
             if name in names:
                 name = f"{name}-{index + 1}" if "name" not in spec else name
                 if name in names:
-                    self.problem(located, where + ("name",), f"two steps are named {name!r}")
+                    reader.problem(where + ("name",), f"two steps are named {name!r}")
                     continue
             names[name] = index
             after = tuple(_strings(spec.get("after"))) if "after" in spec else \
                 ((steps[-1].name,) if steps else ())
             args = {k: Term.parse(v) for k, v in _items(spec.get("with"))}
             for key, term in args.items():
-                self._check_term(located, where + ("with", key), term, env)
+                self._check_term(reader, where + ("with", key), term, env)
             by = Term.parse(spec["by"]) if "by" in spec else None
             if by is not None:
-                self._check_term(located, where + ("by",), by, env)
+                self._check_term(reader, where + ("by",), by, env)
             atomic, task = spec.get("do"), spec.get("task")
             if isinstance(atomic, str):
-                self._check_call(located, where, "atomic task", atomic, self.library.atomic,
+                self._check_call(reader, where, "atomic task", atomic, self.library.atomic,
                                  self.library.atomic.get(atomic) and
                                  self.library.atomic[atomic].params, args)
             if isinstance(task, str):
-                self._check_call(located, where, "task", task, self.library.tasks,
+                self._check_call(reader, where, "task", task, self.library.tasks,
                                  self.library.tasks.get(task) and
                                  self.library.tasks[task].params, args)
             step = Step(name, atomic if isinstance(atomic, str) else None,
@@ -313,7 +309,7 @@ class _Builder:
         for step in steps:
             for before in step.after:
                 if before not in names:
-                    self.problem(located, path + (names[step.name], "after"),
+                    reader.problem(path + (names[step.name], "after"),
                                  f"step {step.name!r} comes after {before!r}, which is not a "
                                  f"step of this recipe{did_you_mean(before, names)}")
                 else:
@@ -324,59 +320,59 @@ class _Builder:
             cycle = []
         if cycle:
             loop = " -> ".join([a for a, _ in cycle] + [cycle[0][0]])
-            self.problem(located, path, f"the steps are ordered in a cycle: {loop}")
+            reader.problem(path, f"the steps are ordered in a cycle: {loop}")
         return tuple(steps)
 
-    def _check_refinement(self, located: yamlsafe.Located, path: tuple, text: str) -> None:
+    def _check_refinement(self, reader: Reader, path: tuple, text: str) -> None:
         try:
             target, mapping = parse_refinement(text)
         except ValueError as err:
-            self.problem(located, path, str(err))
+            reader.problem(path, str(err))
             return
         known = {**{n: a.params for n, a in self.library.atomic.items()},
                  **{n: t.params for n, t in self.library.tasks.items()}}
         if target not in known:
-            self.problem(located, path, f"unknown task or atomic task {target!r}"
+            reader.problem(path, f"unknown task or atomic task {target!r}"
                          f"{did_you_mean(target, known)}")
             return
         params = known[target]
         wrong = [k for k in mapping if k not in params]
         missing = [p for p in params if p not in mapping]
         if wrong or missing:
-            self.problem(located, path, f"{target} takes {', '.join(params) or 'nothing'}"
+            reader.problem(path, f"{target} takes {', '.join(params) or 'nothing'}"
                          + (f"; unknown: {', '.join(wrong)}" if wrong else "")
                          + (f"; missing: {', '.join(missing)}" if missing else ""))
 
-    def _check_call(self, located: yamlsafe.Located, where: tuple, what: str, name: str,
+    def _check_call(self, reader: Reader, where: tuple, what: str, name: str,
                     known: dict, params: Any, args: dict[str, Term]) -> None:
         key = "do" if what == "atomic task" else "task"
         if name not in known:
-            self.problem(located, where + (key,), f"unknown {what} {name!r}"
+            reader.problem(where + (key,), f"unknown {what} {name!r}"
                          f"{did_you_mean(name, known)}" + ("; declare it under 'atomic:'"
                                                           if what == "atomic task" else ""))
             return
         params = tuple(params or ())
         for arg in args:
             if arg not in params:
-                self.problem(located, where + ("with", arg), f"{what} {name!r} has no "
+                reader.problem(where + ("with", arg), f"{what} {name!r} has no "
                              f"parameter {arg!r}{did_you_mean(arg, params)}; its parameters: "
                              f"{', '.join(params) or 'none'}", key=True)
         missing = [p for p in params if p not in args]
         if missing:
-            self.problem(located, where + (key,), f"{what} {name!r} needs "
+            reader.problem(where + (key,), f"{what} {name!r} needs "
                          f"{', '.join(missing)} (under 'with:')")
 
-    def _monitor(self, located: yamlsafe.Located, path: tuple, spec: dict[str, Any],
+    def _monitor(self, reader: Reader, path: tuple, spec: dict[str, Any],
                  env: set[str]) -> Monitor:
         change = "added" if "added" in spec else "removed"
-        pattern = self._pattern(located, path + (change,), spec.get(change), env)
+        pattern = self._pattern(reader, path + (change,), spec.get(change), env)
         perspective = Term.parse(spec["perspective"]) if "perspective" in spec else None
         if perspective is not None:
-            self._check_term(located, path + ("perspective",), perspective, env)
+            self._check_term(reader, path + ("perspective",), perspective, env)
         name = spec.get("name") or f"{change}-{pattern.predicate}"
         return Monitor(name, change, pattern, str(spec.get("emit", "")), perspective)
 
-    def _pattern(self, located: yamlsafe.Located, path: tuple, raw: Any, env: set[str],
+    def _pattern(self, reader: Reader, path: tuple, raw: Any, env: set[str],
                  variables: set[str] | None = None) -> Pattern:
         items = raw if isinstance(raw, list) and len(raw) == 3 else ["_", "_", "_"]
         terms = [Term.parse(x) for x in items]
@@ -384,38 +380,38 @@ class _Builder:
             if term.kind == "param" and variables is not None:
                 variables.add(term.value)
             else:
-                self._check_term(located, path + (index,), term, env)
+                self._check_term(reader, path + (index,), term, env)
         predicate = terms[1]
         if predicate.kind != "const":
-            self.problem(located, path + (1,), "the predicate of a pattern must be a constant")
+            reader.problem(path + (1,), "the predicate of a pattern must be a constant")
         elif predicate.value not in self.library.predicates:
-            self.problem(located, path + (1,), f"unknown predicate {predicate.value!r}"
+            reader.problem(path + (1,), f"unknown predicate {predicate.value!r}"
                          f"{did_you_mean(str(predicate.value), self.library.predicates)}; "
                          "declare it under 'predicates:'")
         return Pattern(*terms)
 
-    def _conditions(self, located: yamlsafe.Located, path: tuple, raw: Any,
+    def _conditions(self, reader: Reader, path: tuple, raw: Any,
                     env: set[str]) -> tuple[Condition, ...]:
         out = []
         for index, spec in enumerate(raw if isinstance(raw, list) else []):
             if isinstance(spec, dict) and spec:
                 negated = "not" in spec
                 key = "not" if negated else "holds"
-                pattern = self._pattern(located, path + (index, key), spec.get(key), env)
+                pattern = self._pattern(reader, path + (index, key), spec.get(key), env)
                 if pattern.subject.kind == "any" or pattern.predicate.kind == "any":
-                    self.problem(located, path + (index, key), "a condition needs a subject "
+                    reader.problem(path + (index, key), "a condition needs a subject "
                                  "and a predicate (only the object may be _)")
                 out.append(Condition(pattern, negated))
         return tuple(out)
 
-    def _check_term(self, located: yamlsafe.Located, path: tuple, term: Term,
+    def _check_term(self, reader: Reader, path: tuple, term: Term,
                     env: set[str]) -> None:
         if term.kind == "param" and term.value not in env:
-            self.problem(located, path, f"unknown parameter ${term.value}"
+            reader.problem(path, f"unknown parameter ${term.value}"
                          f"{did_you_mean(term.value, sorted(env))}; parameters here: "
                          f"{', '.join('$' + p for p in sorted(env))}")
 
-    def _chronicle(self, located: yamlsafe.Located, path: tuple, name: str,
+    def _chronicle(self, reader: Reader, path: tuple, name: str,
                    spec: dict[str, Any]) -> None:
         variables: set[str] = set()
         events = []
@@ -423,29 +419,29 @@ class _Builder:
             if not isinstance(raw, dict):
                 continue
             change = "added" if "added" in raw else "removed"
-            pattern = self._pattern(located, path + ("events", index, change), raw.get(change),
+            pattern = self._pattern(reader, path + ("events", index, change), raw.get(change),
                                     set(), variables)
-            timing = {k: parse_duration(raw[k]) for k in ("within", "after", "stays")
-                      if isinstance(raw.get(k), str) and _is_duration(raw[k])}
+            timing = {k: amount for k in ("within", "after", "stays")
+                      if (amount := _duration(raw.get(k))) is not None}
             events.append(ChronicleEvent(change, pattern, **timing))
         goal = spec.get("goal") if isinstance(spec.get("goal"), dict) else {}
         task_name = goal.get("task")
         args = {k: Term.parse(v) for k, v in _items(goal.get("with"))}
         task = self.library.tasks.get(task_name) if isinstance(task_name, str) else None
         if isinstance(task_name, str) and task is None:
-            self.problem(located, path + ("goal", "task"), f"unknown task {task_name!r}"
+            reader.problem(path + ("goal", "task"), f"unknown task {task_name!r}"
                          f"{did_you_mean(task_name, self.library.tasks)}")
         for key, term in args.items():
             if term.kind == "param" and term.value not in variables:
-                self.problem(located, path + ("goal", "with", key), f"${term.value} is not "
+                reader.problem(path + ("goal", "with", key), f"${term.value} is not "
                              "bound by any event of the chronicle")
             if task is not None and key not in task.params:
-                self.problem(located, path + ("goal", "with", key), f"task {task_name!r} has "
+                reader.problem(path + ("goal", "with", key), f"task {task_name!r} has "
                              f"no parameter {key!r}", key=True)
         if task is not None:
             missing = [p for p in task.params if p not in args]
             if missing:
-                self.problem(located, path + ("goal",), f"the goal needs {', '.join(missing)} "
+                reader.problem(path + ("goal",), f"the goal needs {', '.join(missing)} "
                              "(under 'with:')")
         self.library.chronicles[name] = Chronicle(
             name, tuple(events), str(task_name), args, int(goal.get("priority", 0)),
@@ -460,12 +456,12 @@ def _strings(value: Any) -> list[str]:
     return [v for v in value if isinstance(v, str)] if isinstance(value, list) else []
 
 
-def _is_duration(text: str) -> bool:
+def _duration(value: Any) -> float | None:
+    """Seconds in a duration as files write it; None when the schema check refused it."""
     try:
-        parse_duration(text)
+        return seconds(value)
     except ValueError:
-        return False
-    return True
+        return None
 
 
 def _events_into(scheme: Any, act: str) -> set[str]:

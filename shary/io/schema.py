@@ -16,10 +16,11 @@ FOLDER = Path(__file__).resolve().parents[1] / "schemas"
 
 
 @cache
-def _validator(name: str) -> Draft202012Validator:
+def validator(name: str) -> Draft202012Validator:
+    """The validator of ``shary/schemas/NAME.schema.json``, built once."""
     return checks.validator(FOLDER, name)
 
 
 def check(located: Located, name: str) -> list[Problem]:
     """Every violation of ``shary/schemas/NAME.schema.json`` in ``located``."""
-    return checks.check(located, _validator(name))
+    return checks.check(located, validator(name))

@@ -35,10 +35,10 @@ from shary.model import (
     Send,
     State,
     Transition,
-    parse_duration,
 )
 from userfiles import yamlsafe
 from userfiles.errors import FileError, Problem
+from userfiles.limits import seconds
 from userfiles.reader import Reader
 from userfiles.schema import did_you_mean
 
@@ -268,7 +268,9 @@ class _Builder:
                                mark=self.located.key_at(key_path))
                 if after:
                     try:
-                        t.after = parse_duration(after.group(1))
+                        if not after.group(1)[-1:].isalpha():  # in an event, the unit is due
+                            raise ValueError(after.group(1))
+                        t.after = seconds(after.group(1))
                     except ValueError:
                         self.problem(key_path, f"{after.group(1)!r} is not a duration "
                                      "(write e.g. 250ms, 10s, 1.5min, 2h)", key=True)
@@ -325,11 +327,11 @@ class _Builder:
             elif isinstance(item.get("send"), str):
                 delay = item.get("delay")
                 try:
-                    seconds = parse_duration(delay) if isinstance(delay, str) else 0.0
+                    wait = seconds(delay) if isinstance(delay, str) else 0.0
                 except ValueError:
                     continue  # the schema reported it
                 ident = item.get("id") if isinstance(item.get("id"), str) else None
-                out.append(Send(item["send"], seconds, ident))
+                out.append(Send(item["send"], wait, ident))
             elif isinstance(item.get("cancel"), str):
                 out.append(Cancel(item["cancel"]))
             elif isinstance(item.get("log"), str):

@@ -1,0 +1,258 @@
+"""The scheme commands: ``schemes``, ``simulate``, ``render``, ``import-scxml``, ``conformance``."""
+
+from __future__ import annotations
+
+import argparse
+import re
+from pathlib import Path
+from typing import Any
+
+from shary import builtin
+from shary.terminal import EXIT_BAD_INPUT, add_json_flag, emit_json, error, escape
+from shary.terminal import out as _out
+from userfiles import yamlsafe
+from userfiles.errors import FileError, Problem
+from userfiles.outputs import output_file, write_output
+
+
+def first_sentence(doc: str) -> str:
+    """A doc's first sentence, for one-line listings ("Fig. 2" does not end it)."""
+    first = re.split(r"(?<!Fig)\.\s", " ".join(doc.split()), maxsplit=1)[0]
+    return first.rstrip(".") + "."
+
+
+# -- schemes, simulate ---------------------------------------------------
+
+
+def add_schemes(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("schemes", help="list the built-in communication schemes")
+    add_json_flag(p, "the list")
+    p.set_defaults(func=cmd_schemes)
+
+
+def cmd_schemes(args: argparse.Namespace) -> int:
+    from shary.io.schemes import load_scheme
+
+    listed = []
+    for path in builtin.files("schemes"):
+        if path.stem == "acts":
+            continue
+        scheme = load_scheme(path)
+        listed.append({"name": scheme.name, "summary": first_sentence(scheme.doc),
+                       "doc": " ".join(scheme.doc.split()), "file": str(path)})
+    if args.json:
+        emit_json({"schemes": listed})
+        return 0
+    for item in listed:
+        _out.print(f"[bold]{item['name']:<24}[/bold] {escape(item['summary'])}")
+    return 0
+
+
+def add_simulate(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("simulate", help="run a scheme against a script of events and waits")
+    p.add_argument("scheme", help="a built-in scheme name or a scheme file")
+    p.add_argument("script", nargs="*", metavar="EVENT|WAIT",
+                   help="events to send (H-AGREE, done …) and waits on the clock (5s, 250ms)")
+    add_json_flag(p, "the trace")
+    p.set_defaults(func=cmd_simulate)
+
+
+_WAIT = re.compile(r"^[0-9]+(\.[0-9]+)?(ms|s|min|h)$")
+
+
+def cmd_simulate(args: argparse.Namespace) -> int:
+    from shary.clock import SimulatedClock
+    from shary.compiler import compile_scheme
+    from shary.instance import LivelockError, SchemeListener
+    from shary.io.schemes import load_scheme
+    from userfiles.limits import seconds
+    from userfiles.schema import did_you_mean
+
+    scheme = load_scheme(args.scheme)
+    compiled = compile_scheme(scheme)
+    unknown = [w for w in args.script if not _WAIT.match(w) and not compiled.can_take(w)]
+    if unknown:
+        messages = [f"no state of {scheme.name} takes the event {word!r}"
+                    f"{did_you_mean(word, compiled.descriptors())}" for word in unknown]
+        for message in messages:
+            error(message)
+        if args.json:
+            emit_json({"error": "; ".join(messages)})
+        return EXIT_BAD_INPUT
+    clock = SimulatedClock()
+    trace: list[dict[str, Any]] = []
+
+    def note(kind: str, line: str, **details: Any) -> None:
+        """One step of the trace: printed as it happens, or kept for the JSON document."""
+        if args.json:
+            trace.append({"time": round(clock.now(), 6), "kind": kind, **details})
+        else:
+            _out.print(f"{clock.now():8.2f}s  {line}")
+
+    def who(instance) -> str:  # type: ignore[no-untyped-def]  # a child's states: "helper/ask"
+        return f"{instance.invoke_path}/" if instance.parent is not None else ""
+
+    class Trace(SchemeListener):
+        def invoking(self, instance, state, invoke):  # type: ignore[override]
+            return self  # trace the invoked children too
+
+        def entered(self, instance, state, event):  # type: ignore[override]
+            act = f"  [cyan]{state.act} ({state.act_type.name})[/cyan]" if state.act_type else ""
+            name = f"{who(instance)}{state.name}"
+            note("enter", f"enter  {escape(name)}{act}", state=name, act=state.act,
+                 act_type=state.act_type.name if state.act_type else None)
+
+        def exited(self, instance, state, event):  # type: ignore[override]
+            name = f"{who(instance)}{state.name}"
+            note("exit", f"exit   {escape(name)}", state=name)
+
+        def logged(self, instance, text):  # type: ignore[override]
+            note("log", f"log    {escape(who(instance) + text)}", text=who(instance) + text)
+
+        def finished(self, instance, state):  # type: ignore[override]
+            name = f"{who(instance)}{state.name}"
+            note("finished", f"[bold]{escape(who(instance))}finished in {state.name}[/bold]",
+                 state=name)
+
+    if not args.json:
+        _out.print(f"[bold]{scheme.name}[/bold]: {escape(scheme.doc.strip())}")
+    try:
+        instance = compiled.start(clock=clock, listener=Trace())
+        for word in args.script:
+            if _WAIT.match(word):
+                note("wait", f"[dim]wait {word}[/dim]", wait=word)
+                clock.advance(seconds(word))
+            else:
+                note("event", f"[yellow]<- {escape(word)}[/yellow]", event=word)
+                instance.send(word)
+            if instance.finished:
+                break
+    except LivelockError as err:
+        raise FileError([err.problem]) from None
+    if args.json:
+        emit_json({"scheme": scheme.name, "trace": trace, "finished": instance.finished,
+                   "configuration": list(instance.configuration)})
+    else:
+        _out.print(f"configuration: {', '.join(instance.configuration)}")
+    return 0
+
+
+# -- render ---------------------------------------------------------------
+
+
+def add_render(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("render", help="draw a diagram")
+    what = p.add_subparsers(dest="what", required=True, metavar="WHAT")
+    r = what.add_parser("scheme", help="draw a scheme to .svg, .png, .dot or .mmd (Mermaid)")
+    r.add_argument("scheme", help="a built-in scheme name or a scheme file")
+    r.add_argument("-o", "--output", type=Path, required=True, metavar="OUT")
+    r.add_argument("--active", default="", metavar="STATE,…",
+                   help="highlight these states (an active configuration)")
+    r.set_defaults(func=cmd_render_scheme)
+
+    r = what.add_parser("tree", help="draw the task tree of a logged run, as it stood at a time")
+    r.add_argument("log", type=Path, metavar="LOG", help="a context log (.sqlite)")
+    r.add_argument("--at", type=float, default=None, metavar="T",
+                   help="seconds of the run's clock (default: the end)")
+    r.add_argument("-o", "--output", type=Path, required=True, metavar="OUT")
+    r.set_defaults(func=cmd_render_tree)
+
+
+def cmd_render_scheme(args: argparse.Namespace) -> int:
+    from shary.display import render_scheme
+    from shary.io.schemes import load_scheme
+
+    output_file(args.output)
+    scheme = load_scheme(args.scheme)
+    active = [s for s in args.active.split(",") if s]
+    unknown = [s for s in active if s not in scheme.states]
+    if unknown:
+        return error(f"--active names unknown states: {', '.join(unknown)}")
+    return draw(lambda: render_scheme(scheme, args.output, active=active), args.output)
+
+
+def draw(drawing: Any, out: Path, detail: str = "", quiet: bool = False) -> int:
+    """Run a drawing function; a drawing that cannot be made is an error, not a traceback."""
+    try:
+        drawing()
+    except (ValueError, RuntimeError, OSError) as err:
+        return error(str(err), status=1)
+    if not quiet:
+        _out.print(f"wrote {escape(str(out))}{detail}")
+    return 0
+
+
+def cmd_render_tree(args: argparse.Namespace) -> int:
+    from shary.display import TEXT_SUFFIXES, render_tree
+    from shary.log import end_time
+    from shary.tasktree import MAX_DRAWN_NODES, replay_log
+
+    output_file(args.output)
+    tree = replay_log(args.log, args.at)
+    when = f"t = {args.at:g} s" if args.at is not None else f"end (t = {end_time(args.log):g} s)"
+    if len(tree) > MAX_DRAWN_NODES and args.output.suffix.lower() not in TEXT_SUFFIXES:
+        raise FileError([Problem(str(args.log), 1, 1, (
+            f"the task tree at {when} has {len(tree)} nodes; shary lays out at most "
+            f"{MAX_DRAWN_NODES} (draw an earlier time with --at, or write DOT text with "
+            "-o tree.dot)"))])
+    return draw(lambda: render_tree(tree, args.output, title=f"{args.log.name} at {when}"),
+                args.output, f" ({len(tree)} nodes)")
+
+
+# -- SCXML ------------------------------------------------------------------
+
+
+def add_import_scxml(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("import-scxml", help="convert a data-model-free SCXML chart to a scheme")
+    p.add_argument("source", type=Path, metavar="FILE.scxml")
+    p.add_argument("-o", "--output", type=Path, required=True, metavar="FILE.yaml")
+    p.set_defaults(func=cmd_import_scxml)
+
+
+def cmd_import_scxml(args: argparse.Namespace) -> int:
+    from shary.io.scxml import import_scxml
+
+    output_file(args.output, inputs=[args.source])
+    write_output(args.output, import_scxml(args.source))
+    _out.print(f"wrote {escape(str(args.output))}")
+    return 0
+
+
+def add_conformance(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("conformance", help="run SCION-style statechart tests found under DIR")
+    p.add_argument("folder", type=Path, metavar="DIR")
+    p.add_argument("--only", type=Path, metavar="LIST",
+                   help="run only the charts named in this file (paths relative to DIR), e.g. "
+                   "the suite's NO-DATAMODEL.txt: shary runs no scripts or data expressions")
+    add_json_flag(p, "every test's outcome")
+    p.set_defaults(func=cmd_conformance)
+
+
+def cmd_conformance(args: argparse.Namespace) -> int:
+    from shary.conformance import find_tests, run_test
+
+    folder: Path = args.folder
+    if not folder.is_dir():
+        return error(f"{folder} is not a folder", json_mode=args.json)
+    charts = find_tests(folder)
+    if args.only is not None:
+        wanted = set(yamlsafe.read_text(args.only).split())
+        charts = [c for c in charts if str(c.relative_to(folder)) in wanted]
+    outcomes = []
+    for chart in charts:
+        outcome = run_test(chart, folder)
+        outcomes.append(outcome)
+        if not outcome.passed and not args.json:
+            _out.print(f"[red]FAIL[/red] {escape(outcome.name)}: {escape(outcome.reason)}")
+    passed = sum(o.passed for o in outcomes)
+    failed = len(outcomes) - passed
+    if args.json:
+        emit_json({"folder": str(folder), "passed": passed, "failed": failed,
+                   "tests": [{"name": o.name, "passed": o.passed, "reason": o.reason}
+                             for o in outcomes]})
+    else:
+        _out.print(f"{passed} passed, {failed} failed")
+        if failed and args.only is None and (folder / "NO-DATAMODEL.txt").is_file():
+            _out.print(f"[dim]shary runs no scripts or data expressions; the charts without "
+                       f"them: --only {escape(str(folder / 'NO-DATAMODEL.txt'))}[/dim]")
+    return 0 if failed == 0 else 1

@@ -1,0 +1,107 @@
+"""The simulator's ``shary`` commands: ``run`` and ``scenarios``.
+
+They are registered as entry points of the group ``shary.commands``
+(:mod:`shary.cli`), so the engine offers them when this package is installed
+and never imports it.  PyBullet is imported only when a scenario runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+from pathlib import Path
+from typing import Any
+
+from shary.commands.schemes import first_sentence
+from shary.terminal import add_json_flag, emit_json, error, escape
+from shary.terminal import out as _out
+from userfiles import yamlsafe
+from userfiles.errors import FileError
+
+
+def add_scenarios(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("scenarios", help="list the built-in scenarios")
+    add_json_flag(p, "the list")
+    p.set_defaults(func=cmd_scenarios)
+
+
+def cmd_scenarios(args: argparse.Namespace) -> int:
+    from sim.scenario import builtin_scenarios, load_scenario
+
+    listed = []
+    for name, path in builtin_scenarios().items():
+        scenario = load_scenario(path)
+        listed.append({"name": name, "summary": first_sentence(scenario.doc),
+                       "doc": " ".join(scenario.doc.split()), "file": str(path)})
+    if args.json:
+        emit_json({"scenarios": listed})
+        return 0
+    for item in listed:
+        _out.print(f"[bold]{item['name']:<26}[/bold] {escape(item['summary'])}")
+    return 0
+
+
+def add_run(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("run", help="run a scenario on the simulated Jido (headless), judge it")
+    p.add_argument("scenario", metavar="NAME|FILE",
+                   help="a built-in scenario (see 'shary scenarios') or a scenario file")
+    p.add_argument("--seed", type=int, default=0, help="seed of the people's random choices")
+    p.add_argument("--gui", action="store_true", help="open PyBullet's window")
+    p.add_argument("--out", type=Path, metavar="DIR",
+                   help="where to write log.sqlite, tree.svg, timeline.svg, summary.json "
+                   "(default: runs/SCENARIO, after the scenario's name)")
+    p.add_argument("--snapshots", action="store_true", help="also write PNG views at each act")
+    p.add_argument("--quiet", action="store_true", help="print only the verdict")
+    add_json_flag(p, "the verdict, the figures and the files written (no progress lines)")
+    p.set_defaults(func=cmd_run)
+
+
+_NAME = re.compile(r"^[A-Za-z0-9_-]+$")
+
+
+def _name_of(path: Path) -> str:
+    """The scenario's name, for the default output folder (``runs/NAME``).
+
+    Only the ``scenario:`` key is read here; :func:`sim.run.run_scenario` checks
+    the whole file (and refuses it, before writing anything, if the name is bad).
+    """
+    try:
+        name = yamlsafe.load_file(path).data.get("scenario")
+    except (FileError, AttributeError):
+        name = None
+    return name if isinstance(name, str) and _NAME.match(name) else path.stem
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    from sim.narration import ConsoleReport
+    from sim.run import run_scenario
+    from sim.scenario import find_scenario
+
+    try:
+        path = find_scenario(args.scenario)
+    except KeyError as err:
+        return error(err.args[0], json_mode=args.json)
+    out = args.out or Path("runs") / _name_of(path)
+    try:
+        result = run_scenario(path, seed=args.seed, out=out, snapshots=args.snapshots,
+                              gui=args.gui,
+                              report=None if args.quiet or args.json else ConsoleReport(_out))
+    except RuntimeError as err:
+        return error(str(err), json_mode=args.json, status=1)
+    if args.json:
+        document: dict[str, Any] = result.summary()
+        document["out"] = str(out)
+        emit_json(document)
+        return 0 if result.passed else 1
+    verdict = "[bold green]PASSED[/bold green]" if result.passed else "[bold red]FAILED[/bold red]"
+    _out.print(f"{verdict} {result.scenario}: {result.simulated_seconds:.1f} s simulated in "
+               f"{result.wall_seconds:.2f} s (x{result.real_time_factor:.0f} real time), "
+               f"seed {result.seed}")
+    for difference in result.differences:
+        _out.print(f"  - {escape(difference)}")
+    _out.print(f"[dim]wrote {escape(str(out))}/: "
+               f"{', '.join(Path(v).name for k, v in result.outputs.items() if k != 'snapshots')}"
+               + (f" and {len(result.outputs['snapshots'].split(', '))} snapshots"
+                  if "snapshots" in result.outputs else "") + "[/dim]")
+    return 0 if result.passed else 1
+
