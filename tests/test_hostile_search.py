@@ -13,8 +13,7 @@ from __future__ import annotations
 import json
 
 import pytest
-
-from tests.hostile import HOSTILE, MAX_MB, MAX_SECONDS, Outcome, run_subprocess
+from hostile import HOSTILE, MAX_MB, MAX_SECONDS, Outcome, run_subprocess
 
 CORPUS = HOSTILE / "search"
 CASES = {
