@@ -538,13 +538,36 @@ def _logic(conjunction: bool, parts: list[_Node]) -> Callable:
         elif len(fns) == 3:
             a, b, c = fns
             fn = lambda env, get: a(env, get) and b(env, get) and c(env, get)  # noqa: E731
+        elif len(fns) == 4:
+            a, b, c, d = fns
+            fn = lambda env, get: (  # noqa: E731
+                a(env, get) and b(env, get) and c(env, get) and d(env, get))
         else:
-            fn = lambda env, get: all(f(env, get) for f in fns)  # noqa: E731
+
+            def fn(env: dict, get: Getter) -> Any:  # a loop: no generator made per call
+                value = True
+                for f in fns:
+                    value = f(env, get)
+                    if not value:
+                        return value
+                return value
+
     elif len(fns) == 2:
         a, b = fns
         fn = lambda env, get: a(env, get) or b(env, get)  # noqa: E731
+    elif len(fns) == 3:
+        a, b, c = fns
+        fn = lambda env, get: a(env, get) or b(env, get) or c(env, get)  # noqa: E731
     else:
-        fn = lambda env, get: any(f(env, get) for f in fns)  # noqa: E731
+
+        def fn(env: dict, get: Getter) -> Any:
+            value = False
+            for f in fns:
+                value = f(env, get)
+                if value:
+                    return value
+            return value
+
     if all(p.boolean for p in parts):
         return fn
     return lambda env, get: True if fn(env, get) else False
@@ -577,6 +600,12 @@ def _compare(op: str, left: _Node, right: _Node, src: str) -> Callable:
             return ((lambda env, get: f(env, get) == env[v]) if op == "==" else
                     (lambda env, get: f(env, get) != env[v]))
         g = right.fn
+        if left.path is not None and right.path is not None:  # var.a == var2.b: one closure
+            (var, attr), (var2, attr2) = left.path, right.path
+            test = operator.eq if op == "==" else operator.ne
+            return lambda env, get: test(
+                get(e, attr) if (e := env[var]).__class__ is str else f(env, get),
+                get(e2, attr2) if (e2 := env[var2]).__class__ is str else g(env, get))
         return ((lambda env, get: f(env, get) == g(env, get)) if op == "==" else
                 (lambda env, get: f(env, get) != g(env, get)))
     order = {"<": operator.lt, "<=": operator.le, ">": operator.gt, ">=": operator.ge}[op]
@@ -658,6 +687,27 @@ def _assign(owner: _Node, attr: str, value: _Node, owner_src: str, target: str) 
         return EvalError(f"cannot assign {target}: {owner_src} is {what}")
 
     find = owner.fn
+    if owner.var is not None:  # var.attr = ...: the variable itself, one closure not two
+        var = owner.var
+        if value.const is not _NO:
+            c = value.const
+
+            def assign_var_const(env: dict, get: Getter, set: Setter) -> None:
+                entity = env[var]
+                if entity.__class__ is not str:
+                    raise bad(entity)
+                set(entity, attr, c)
+
+            return assign_var_const
+        compute = value.fn
+
+        def assign_var(env: dict, get: Getter, set: Setter) -> None:
+            entity = env[var]
+            if entity.__class__ is not str:
+                raise bad(entity)
+            set(entity, attr, compute(env, get))
+
+        return assign_var
     if value.const is not _NO:
         c = value.const
 

@@ -47,10 +47,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from planner.bound import RemainingCost
-from planner.domain import SOLE_AGENT, Action, Method, Problem
+from planner.domain import Action, Method, Problem
 from planner.evaluate import Evaluator
 from planner.plan import Plan, fact_text
 from planner.state import FactState, State
+from planner.step import Stepper
 
 CHECK_EVERY = 256
 """Expansions between two looks at the clock."""
@@ -66,8 +67,6 @@ whole search.  Every node leaves a hundred-odd bytes behind (what explains a fai
 half a million answer within about 5 s and 200 MB even on a loaded machine, where the
 proven best clean-up of six bottles with two agents takes some 120,000 (with three
 agents, about 610,000: raise it)."""
-WRITER, FREE, END = "writer", "free", "end"
-"""Tag the state entries that time a plan as it grows (:meth:`Search._relations`)."""
 SHOWN = 4
 """A failure's path longer than twice this shows its first and last tasks only."""
 PAUSE_GC = True
@@ -154,16 +153,9 @@ class Search:
         """The first task cut by the depth budget, if any."""
         self.domain = problem.domain
         self.evaluator = Evaluator(problem)
-        self.links = self.evaluator.link_rates()
-        """Crossed-links rules: their penalties are added to a partial plan's floor as
-        its links appear (the writer of each value is kept in the state)."""
-        self.waits = self.evaluator.wait_rates()
-        """Timeout rules: their penalties are added as the waits appear."""
-        self.duration_rate = self.evaluator.duration_rate
-        self.timed = bool(self.links or self.waits or self.duration_rate)
-        self.dynamic = frozenset(a for t in self.domain.types.values() for a in t.dynamic)
-        """The attributes actions may change (the others need no timing entries)."""
-        """Whether each action is timed as the plan grows (see :meth:`_relations`)."""
+        self.stepper = Stepper(problem, self.evaluator)
+        """Each action's step, compiled once: precondition, effects, and the floor, which
+        grows with the rules' penalties as links and waits appear (:mod:`planner.step`)."""
         self.decomposition_floor = self.evaluator.decomposition_floor()
         remaining = RemainingCost(problem) if lookahead else None
         self.remaining = remaining if remaining is not None and remaining.enabled else None
@@ -179,7 +171,6 @@ class Search:
         self.failures: dict[int, Any] = {}
         """The deepest failure under each top task: (depth, parent, label, reason), or a
         :class:`Failure` (the goals)."""
-        self.kinds = {e: problem.kind(e) for e in problem.entities}
         self.typed: dict[str, list[str]] = {}
         self.repeats = 0
         self.pruned = False
@@ -351,106 +342,24 @@ class Search:
         """The search node after ``action``, or None when it cannot be done (or dooms
         the plan: goal protection).  ``floor`` is the partial plan's score so far: what
         no completion of it can go below."""
-        env = dict(zip(action.names, args, strict=True))
-        get = state.get
-        if self.timed:  # links and times need what the action reads and writes
-            read: set[tuple[str, Any]] = set()
-
-            def get(entity: str, attribute: Any, _get: Any = state.get,
-                    _dynamic: frozenset = self.dynamic) -> Any:
-                if attribute in _dynamic:  # a static value has no writer to wait for
-                    read.add((entity, attribute))
-                return _get(entity, attribute)
-
-        if action.pre is not None and not action.pre.fn(env, get):
+        step = self.stepper.steps.get(action.name) or self.stepper.step(action)
+        done = step(args, state, floor)
+        if done is None:
             self._fail(parent, _label(action.name, args),
-                       f"precondition false: {action.pre.text}")
+                       f"precondition false: {action.pre.text}")  # type: ignore[union-attr]
             return None
-        child = state.child()
-        if self.timed:
-            written: list[tuple[str, Any]] = []
-
-            def put(entity: str, attribute: Any, value: Any, _set: Any = child.set) -> None:
-                written.append((entity, attribute))
-                _set(entity, attribute, value)
-
-            action.apply(env, get, put)
-        else:
-            action.apply(env, get, child.set)
-        get = state.get
-        price = action.cost(env, get) if callable(action.cost) else action.cost
-        length = action.duration(env, get) if callable(action.duration) else action.duration
+        child, env, price, length, agent, floor = done
         for pred, key in action.deletes:
             fact = key(env)
-            if (self.problem.goals.get((pred, fact)) is True and get(pred, fact) is True
+            if (self.problem.goals.get((pred, fact)) is True and state.get(pred, fact) is True
                     and child.get(pred, fact) is not True and not self._may_add(rest, pred, fact)):
                 self._fail(parent, _label(action.name, args),
                            f"deletes ({' '.join((pred, *fact))}), a goal that no task left "
                            "can make true again")
                 return None
-        agent = SOLE_AGENT if action.agent is None else env[action.agent]
-        kind = self.kinds.get(agent)
-        floor += price * self.evaluator.step_rate(kind)
-        if self.timed:
-            floor += self._relations(read, written, agent, kind, length, state, child)
         self.applied += 1
-        node = next(self.ids)
-        record = ("act", node, parent, action.name, args, agent, price, length)
+        record = ("act", next(self.ids), parent, action.name, args, agent, price, length)
         return (child, rest, (record, trail), floor, steps + 1)
-
-    def _relations(self, read: set, written: list, agent: str, kind: str | None,
-                   length: float, state: State, child: State) -> float:
-        """What this action's causal links from other agents, its agent's wait before it
-        and the makespan's growth add to the score.  The evaluator's relations, kept as
-        the plan grows, in ``child`` under attributes no domain has: for each value, who
-        wrote it last (None: nobody yet), when that action ends and when the last action
-        that read it since ends ``(WRITER, attribute)``; when each agent is free
-        ``(FREE,)``; the makespan ``(None, (END,))``.  An action starts when the writers
-        of what it reads, the readers and the writer of what it writes, and its agent's
-        previous action are over."""
-        get = state.get
-        added = 0.0
-        start = 0.0
-        marks = {}
-        for entity, attribute in read:
-            mark = marks[(entity, attribute)] = get(entity, (WRITER, attribute))
-            if mark is not None:
-                writer = mark[0]
-                if writer is not None and writer != agent:
-                    for selected, rate in self.links:
-                        added += selected.penalty(agent, kind) * rate
-                if mark[1] > start:
-                    start = mark[1]
-        for key in written:
-            mark = marks[key] if key in marks else get(key[0], (WRITER, key[1]))
-            if mark is not None:
-                if mark[1] > start:
-                    start = mark[1]
-                if mark[2] > start:
-                    start = mark[2]
-        free = get(agent, (FREE,))
-        if free is not None:
-            if free > start:
-                start = free
-            for selected, rate in self.waits:
-                gap = start - free
-                if gap > selected.rule.max_wait:
-                    added += selected.penalty(agent, kind) * (gap - selected.rule.max_wait) * rate
-        end = start + length
-        delta = child.delta  # State.set without the call, for a hot loop
-        for (entity, attribute), mark in marks.items():
-            if mark is None:
-                delta[(entity, (WRITER, attribute))] = (None, 0.0, end)
-            elif mark[2] < end:
-                delta[(entity, (WRITER, attribute))] = (mark[0], mark[1], end)
-        for entity, attribute in written:  # after the reads: a write clears the readers
-            delta[(entity, (WRITER, attribute))] = (agent, end, 0.0)
-        delta[(agent, (FREE,))] = end
-        makespan = get(None, (END,)) or 0.0
-        if end > makespan:
-            delta[(None, (END,))] = end
-            added += (end - makespan) * self.duration_rate
-        return added
 
     def _may_add(self, agenda: Any, pred: str, fact: tuple) -> bool:
         """Whether a task of ``agenda`` may make the fact true again (goal protection: a

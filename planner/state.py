@@ -34,7 +34,14 @@ Bucket = dict[tuple[str, ...], None]
 BucketKey = tuple[str, tuple[int, ...], tuple[str, ...]]
 Patterns = Mapping[str, tuple[tuple[int, ...], ...]]
 
+FLAT = 128
+"""A state of at most this many values is kept whole in its own changes (``delta``; its
+base is empty): one copy a child, one dict to read (the search reads more than it
+writes)."""
+
 _EMPTY: Bucket = {}
+_FLAT: dict = {}
+"""The base of every flat state: never written (a state writes to its ``delta``)."""
 _MISSING = object()
 
 
@@ -53,9 +60,14 @@ class State:
         return self.base.get(key) if value is _MISSING else value
 
     def child(self) -> State:
-        if len(self.delta) > FOLD:
-            return State({**self.base, **self.delta})
-        return State(self.base, dict(self.delta))
+        base, delta = self.base, self.delta
+        if base:
+            if len(delta) > FOLD or len(base) <= FLAT:
+                merged = {**base, **delta}
+                return State(merged) if len(merged) > FLAT else State(_FLAT, merged)
+        elif len(delta) > FLAT:  # grown out of flat
+            return State(dict(delta))
+        return State(base, dict(delta))
 
     def set(self, entity: str, attribute: Any, value: Any) -> None:
         self.delta[(entity, attribute)] = value

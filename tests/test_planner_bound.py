@@ -23,7 +23,8 @@ def _unpruned(problem) -> Search:  # type: ignore[no-untyped-def]
     """A search whose partial plans all have a floor of 0: nothing is pruned before it
     is complete (so it evaluates every plan)."""
     search = Search(problem, lookahead=False)
-    search.links, search.waits, search.duration_rate, search.timed = [], [], 0.0, False
+    stepper = search.stepper  # its steps are compiled on first use: after these
+    stepper.links, stepper.waits, stepper.duration_rate, stepper.timed = [], [], 0.0, False
     search.decomposition_floor = {}
     search.evaluator.step_rate = lambda kind: 0.0  # type: ignore[method-assign]
     return search
