@@ -30,10 +30,12 @@ Semantics, chosen for planning:
 from __future__ import annotations
 
 import difflib
-import operator
 import re
 from collections.abc import Callable
 from typing import Any, NoReturn
+
+from planner import closures as build
+from planner.closures import EvalError, Getter, Setter
 
 __all__ = ["EvalError", "Effect", "Expr", "ExprError", "compile_effect", "compile_expr"]
 
@@ -42,8 +44,6 @@ _KEYWORDS = ("and", "or", "not", "true", "false", "null")
 _LITERALS = {"true": True, "false": False, "null": None}
 _PYTHON_NAMES = {"True": "true", "False": "false", "None": "null"}
 _COMPARISONS = ("==", "!=", "<", "<=", ">", ">=")
-_NUMS = frozenset((int, float))
-_NO = object()  # "not a constant"
 
 MAX_NESTING = 32
 """Deepest nesting of parentheses, ``not``, unary minus and function calls: the parser
@@ -76,13 +76,6 @@ class ExprError(Exception):
         return f"{self.message} (at offset {self.offset})"
 
 
-class EvalError(Exception):
-    """A problem only the state reveals: assigning through null, arithmetic on a
-    null or a string, division by zero."""
-
-
-Getter = Callable[[str, str], Any]
-Setter = Callable[[str, str, Any], None]
 
 
 class Expr:
@@ -167,25 +160,13 @@ def compile_effect(text: str, variables: dict[str, str | None],
     if not _comparable(target_type, value.type):
         p.fail(f"cannot assign {p.describe(value)} to {target} ({_a(target_type or '')})",
                value.pos)
-    return Effect(text, _assign(owner, attr, value, text[pos:owner.end], target),
+    return Effect(text, build.assign(owner, attr, value, text[pos:owner.end], target),
                   attr, frozenset(p.used), frozenset(p.reads))
-
-
-class _Node:
-    """One parsed node: its closure, static type, span, and what specialisation needs."""
-
-    __slots__ = ("fn", "type", "pos", "end", "const", "var", "path", "boolean")
-
-    def __init__(self, fn: Callable, type_: str | None, pos: int, end: int, *,
-                 const: Any = _NO, var: str | None = None,
-                 path: tuple[str, str] | None = None, boolean: bool = False):
-        self.fn, self.type, self.pos, self.end = fn, type_, pos, end
-        self.const, self.var, self.path, self.boolean = const, var, path, boolean
 
 
 class _Parser:
     """Recursive descent; each method parses one precedence level and returns a
-    :class:`_Node` whose closure is already built (parsing and compiling are one pass).
+    :class:`build.Node` whose closure is already built (parsing and compiling are one pass).
 
     Static types: None (unknown), "number", "bool", "string", "null", "name"
     (a quoted string: text or an entity of unknown type), or an entity type.
@@ -233,26 +214,26 @@ class _Parser:
             self.fail("comparisons cannot be chained; use 'and'", pos)
         self.fail(f"unexpected {_show(word)} after {self.text[:pos].strip()!r}", pos)
 
-    def describe(self, node: _Node) -> str:
+    def describe(self, node: build.Node) -> str:
         src = self.text[node.pos:node.end]
         return src if node.type in (None, "name", "null") else f"{src} ({_a(node.type)})"
 
     # -- precedence levels ----------------------------------------------------------
 
-    def or_(self) -> _Node:
+    def or_(self) -> build.Node:
         return self.logic("or", self.and_)
 
-    def and_(self) -> _Node:
+    def and_(self) -> build.Node:
         return self.logic("and", self.not_)
 
-    def logic(self, word: str, operand: Callable[[], _Node]) -> _Node:
+    def logic(self, word: str, operand: Callable[[], build.Node]) -> build.Node:
         parts = [operand()]
         while self.at(word):
             self.next()
             parts.append(operand())
         if len(parts) == 1:
             return parts[0]
-        return self.fold(_logic(word == "and", parts), "bool", parts, boolean=True)
+        return self.fold(build.logic(word == "and", parts), "bool", parts, boolean=True)
 
     def deeper(self, pos: int) -> None:
         """One more level of nesting (see :data:`MAX_NESTING`)."""
@@ -260,7 +241,7 @@ class _Parser:
         if self.depth > MAX_NESTING:
             self.fail(f"expression nested deeper than {MAX_NESTING} levels", pos)
 
-    def not_(self) -> _Node:
+    def not_(self) -> build.Node:
         if not self.at("not"):
             return self.comparison()
         pos = self.next()[2]
@@ -272,7 +253,7 @@ class _Parser:
         node.pos = pos
         return node
 
-    def comparison(self) -> _Node:
+    def comparison(self) -> build.Node:
         left = self.sum()
         if not self.at(*_COMPARISONS):
             return left
@@ -286,28 +267,29 @@ class _Parser:
             for side in (left, right):
                 if side.type not in (None, "number", "null"):
                     self.fail(f"{op!r} orders numbers, not {self.describe(side)}", side.pos)
-        fn = _compare(op, left, right, self.text[left.pos:right.end])
+        fn = build.compare(op, left, right, self.text[left.pos:right.end])
         return self.fold(fn, "bool", [left, right], boolean=True)
 
-    def sum(self) -> _Node:
+    def sum(self) -> build.Node:
         node = self.product()
         while self.at("+", "-"):
             node = self.arithmetic(node, self.next()[1], self.product)
         return node
 
-    def product(self) -> _Node:
+    def product(self) -> build.Node:
         node = self.unary()
         while self.at("*", "/"):
             node = self.arithmetic(node, self.next()[1], self.unary)
         return node
 
-    def arithmetic(self, left: _Node, op: str, operand: Callable[[], _Node]) -> _Node:
+    def arithmetic(self, left: build.Node, op: str,
+                   operand: Callable[[], build.Node]) -> build.Node:
         right = operand()
         self.need_numbers(op, left, right)
-        fn = _arith(op, left.fn, right.fn, self.text[left.pos:right.end])
+        fn = build.arith(op, left.fn, right.fn, self.text[left.pos:right.end])
         return self.fold(fn, "number", [left, right])
 
-    def unary(self) -> _Node:
+    def unary(self) -> build.Node:
         if not self.at("-"):
             return self.postfix()
         pos = self.next()[2]
@@ -315,30 +297,30 @@ class _Parser:
         inner = self.unary()
         self.depth -= 1
         self.need_numbers("-", inner)
-        fn = _arith("neg", inner.fn, None, self.text[pos:inner.end])
+        fn = build.arith("neg", inner.fn, None, self.text[pos:inner.end])
         node = self.fold(fn, "number", [inner])
         node.pos = pos
         return node
 
-    def postfix(self) -> _Node:
+    def postfix(self) -> build.Node:
         node = self.primary()
         for attr, at in self.attribute_names():
             node = self.attribute(node, attr, at)
         return node
 
-    def primary(self) -> _Node:
+    def primary(self) -> build.Node:
         kind, word, pos = self.next()
         end = self.last_end
         if kind == "num":
             value = float(word) if ("." in word or "e" in word.lower()) else int(word)
             if not abs(value) <= MAX_NUMBER:
                 self.fail(f"number {word} is too large (the limit is {MAX_NUMBER:g})", pos)
-            return _const(value, "number", pos, end)
+            return build.const(value, "number", pos, end)
         if kind == "str":
-            return _const(word[1:-1], "name", pos, end)
+            return build.const(word[1:-1], "name", pos, end)
         if kind == "name" and word in _LITERALS:
             value = _LITERALS[word]
-            return _const(value, "null" if value is None else "bool", pos, end)
+            return build.const(value, "null" if value is None else "bool", pos, end)
         if kind == "name" and word not in _KEYWORDS:
             if self.at("("):
                 return self.call(word, pos)
@@ -366,7 +348,7 @@ class _Parser:
         else:
             self.fail(f"expected ')' or an operator, found {_show(word)}", pos)
 
-    def variable(self, name: str, pos: int, end: int) -> _Node:
+    def variable(self, name: str, pos: int, end: int) -> build.Node:
         if name not in self.variables:
             hint = _PYTHON_NAMES.get(name)
             if hint:
@@ -377,9 +359,9 @@ class _Parser:
                       pos)
         self.used.add(name)
         type_ = _norm(self.variables[name]) if self.attributes is not None else None
-        return _Node(lambda env, get: env[name], type_, pos, end, var=name)
+        return build.Node(lambda env, get: env[name], type_, pos, end, var=name)
 
-    def call(self, name: str, pos: int) -> _Node:
+    def call(self, name: str, pos: int) -> build.Node:
         if name not in FUNCTIONS:
             close = difflib.get_close_matches(name, FUNCTIONS, 1)
             maybe = f"; did you mean {close[0]!r}?" if close else ""
@@ -400,7 +382,7 @@ class _Parser:
         if not args:
             self.fail(f"{name} needs at least one argument", pos)
         self.need_numbers(name, *args)
-        fn = _function(name, [a.fn for a in args], self.text[pos:self.last_end])
+        fn = build.function(name, [a.fn for a in args], self.text[pos:self.last_end])
         node = self.fold(fn, "number", args)
         node.pos = pos
         return node
@@ -415,7 +397,7 @@ class _Parser:
             out.append((word, pos))
         return out
 
-    def attribute(self, base: _Node, attr: str, at: int) -> _Node:
+    def attribute(self, base: build.Node, attr: str, at: int) -> build.Node:
         self.operations += 1
         if self.operations > MAX_OPERATIONS:
             self.fail(f"expression has more than {MAX_OPERATIONS} operations; split it", at)
@@ -423,9 +405,9 @@ class _Parser:
         self.reads.add(attr)
         src = self.text[base.pos:base.end]
         path = None if base.var is None else (base.var, attr)
-        return _Node(_read(base, attr, src), type_, base.pos, at + len(attr), path=path)
+        return build.Node(build.read(base, attr, src), type_, base.pos, at + len(attr), path=path)
 
-    def attribute_type(self, base: _Node, attr: str, at: int) -> str | None:
+    def attribute_type(self, base: build.Node, attr: str, at: int) -> str | None:
         """The type of ``base.attr``, checked against the domain's types when known."""
         t, src = base.type, self.text[base.pos:base.end]
         if t == "null":
@@ -445,32 +427,32 @@ class _Parser:
 
     # -- checks and folding -----------------------------------------------------------
 
-    def need_numbers(self, op: str, *nodes: _Node) -> None:
+    def need_numbers(self, op: str, *nodes: build.Node) -> None:
         for node in nodes:
             if node.type not in (None, "number"):
                 what = "a quoted string" if node.type == "name" else self.describe(node)
                 self.fail(f"{op!r} needs numbers, not {what}", node.pos)
 
-    def fold(self, fn: Callable, type_: str | None, parts: list[_Node], *,
-             boolean: bool = False) -> _Node:
+    def fold(self, fn: Callable, type_: str | None, parts: list[build.Node], *,
+             boolean: bool = False) -> build.Node:
         """A node over ``parts``; computed now if they are all constants (so that
         ``-1`` or ``2 * 3`` cost nothing per call, and ``1 / 0`` is a compile error)."""
         pos, end = parts[0].pos, self.last_end
         self.operations += 1
         if self.operations > MAX_OPERATIONS:
             self.fail(f"expression has more than {MAX_OPERATIONS} operations; split it", pos)
-        if all(p.const is not _NO for p in parts):
+        if all(p.const is not build.NOT_CONSTANT for p in parts):
             try:
                 value = fn({}, None)
             except EvalError as err:
                 raise ExprError(str(err), pos) from None
-            node = _const(value, type_, pos, end)
+            node = build.const(value, type_, pos, end)
         else:
-            node = _Node(fn, type_, pos, end, boolean=boolean)
+            node = build.Node(fn, type_, pos, end, boolean=boolean)
         return node
 
 
-# -- closure builders: every decision is taken here, once ---------------------------------
+# -- tokens ---------------------------------------------------------------------------------
 
 
 def _tokenize(text: str) -> list[tuple[str, str, int]]:
@@ -489,244 +471,6 @@ def _tokenize(text: str) -> list[tuple[str, str, int]]:
         out.append((kind, word, pos))
     out.append(("end", "", len(text)))
     return out
-
-
-def _const(value: Any, type_: str | None, pos: int, end: int) -> _Node:
-    return _Node(lambda env, get: value, type_, pos, end, const=value,
-                 boolean=isinstance(value, bool))
-
-
-def _read(base: _Node, attr: str, src: str) -> Callable:
-    """``base.attr``: null propagates, a non-entity is an error.  The common case,
-    an attribute of a variable, reads the variable itself (one closure, not two)."""
-
-    def bad(value: Any) -> EvalError:
-        return EvalError(f"{src} is {value!r}, not an entity: it has no attribute {attr!r}")
-
-    if base.var is not None:
-        var = base.var
-
-        def read_var(env: dict, get: Getter) -> Any:
-            entity = env[var]
-            if entity.__class__ is str:
-                return get(entity, attr)
-            if entity is None:
-                return None
-            raise bad(entity)
-
-        return read_var
-    inner = base.fn
-
-    def read(env: dict, get: Getter) -> Any:
-        entity = inner(env, get)
-        if entity.__class__ is str:
-            return get(entity, attr)
-        if entity is None:
-            return None
-        raise bad(entity)
-
-    return read
-
-
-def _logic(conjunction: bool, parts: list[_Node]) -> Callable:
-    """``a and b and ...`` / ``a or b or ...`` as one closure, always giving a bool."""
-    fns = tuple(p.fn for p in parts)
-    if conjunction:
-        if len(fns) == 2:
-            a, b = fns
-            fn = lambda env, get: a(env, get) and b(env, get)  # noqa: E731
-        elif len(fns) == 3:
-            a, b, c = fns
-            fn = lambda env, get: a(env, get) and b(env, get) and c(env, get)  # noqa: E731
-        elif len(fns) == 4:
-            a, b, c, d = fns
-            fn = lambda env, get: (  # noqa: E731
-                a(env, get) and b(env, get) and c(env, get) and d(env, get))
-        else:
-
-            def fn(env: dict, get: Getter) -> Any:  # a loop: no generator made per call
-                value = True
-                for f in fns:
-                    value = f(env, get)
-                    if not value:
-                        return value
-                return value
-
-    elif len(fns) == 2:
-        a, b = fns
-        fn = lambda env, get: a(env, get) or b(env, get)  # noqa: E731
-    elif len(fns) == 3:
-        a, b, c = fns
-        fn = lambda env, get: a(env, get) or b(env, get) or c(env, get)  # noqa: E731
-    else:
-
-        def fn(env: dict, get: Getter) -> Any:
-            value = False
-            for f in fns:
-                value = f(env, get)
-                if value:
-                    return value
-            return value
-
-    if all(p.boolean for p in parts):
-        return fn
-    return lambda env, get: True if fn(env, get) else False
-
-
-def _compare(op: str, left: _Node, right: _Node, src: str) -> Callable:
-    """A comparison.  Equality against a constant or a variable reads it directly,
-    and ``var.attr == <constant or variable>``, the bulk of preconditions, is one
-    closure (the general reader only serves when var is not an entity)."""
-    if op in ("==", "!="):
-        if left.const is not _NO or (left.var is not None and right.const is _NO):
-            left, right = right, left  # equality is symmetric: put the simple side right
-        f, c, v = left.fn, right.const, right.var
-        if left.path is not None and (c is not _NO or v is not None):
-            var, attr = left.path
-            test = ((operator.is_ if op == "==" else operator.is_not) if c is None else
-                    (operator.eq if op == "==" else operator.ne))
-            if v is None:
-                return lambda env, get: test(
-                    get(e, attr) if (e := env[var]).__class__ is str else f(env, get), c)
-            return lambda env, get: test(
-                get(e, attr) if (e := env[var]).__class__ is str else f(env, get), env[v])
-        if c is None:
-            return ((lambda env, get: f(env, get) is None) if op == "==" else
-                    (lambda env, get: f(env, get) is not None))
-        if c is not _NO:
-            return ((lambda env, get: f(env, get) == c) if op == "==" else
-                    (lambda env, get: f(env, get) != c))
-        if v is not None:
-            return ((lambda env, get: f(env, get) == env[v]) if op == "==" else
-                    (lambda env, get: f(env, get) != env[v]))
-        g = right.fn
-        if left.path is not None and right.path is not None:  # var.a == var2.b: one closure
-            (var, attr), (var2, attr2) = left.path, right.path
-            test = operator.eq if op == "==" else operator.ne
-            return lambda env, get: test(
-                get(e, attr) if (e := env[var]).__class__ is str else f(env, get),
-                get(e2, attr2) if (e2 := env[var2]).__class__ is str else g(env, get))
-        return ((lambda env, get: f(env, get) == g(env, get)) if op == "==" else
-                (lambda env, get: f(env, get) != g(env, get)))
-    order = {"<": operator.lt, "<=": operator.le, ">": operator.gt, ">=": operator.ge}[op]
-    f, g = left.fn, right.fn
-
-    def compare(env: dict, get: Getter) -> bool:
-        a, b = f(env, get), g(env, get)
-        try:
-            return order(a, b)
-        except TypeError:
-            if a is None or b is None:
-                return False
-            raise EvalError(f"cannot compute {src}: cannot order {a!r} and {b!r}") from None
-
-    return compare
-
-
-def _arith(op: str, f: Callable, g: Callable | None, src: str) -> Callable:
-    """``+ - * /`` and negation over numbers; anything else is an EvalError."""
-    nums = _NUMS
-    if g is None:
-
-        def negate(env: dict, get: Getter) -> Any:
-            a = f(env, get)
-            if a.__class__ not in nums:
-                _numbers(src, a)
-            return -a
-
-        return negate
-    apply = {"+": operator.add, "-": operator.sub, "*": operator.mul,
-             "/": operator.truediv}[op]
-
-    def arith(env: dict, get: Getter) -> Any:
-        a, b = f(env, get), g(env, get)
-        if a.__class__ not in nums or b.__class__ not in nums:
-            _numbers(src, a, b)
-        try:
-            return apply(a, b)
-        except ZeroDivisionError:
-            raise EvalError(f"division by zero in {src}") from None
-
-    return arith
-
-
-def _function(name: str, fns: list[Callable], src: str) -> Callable:
-    if name == "abs":
-        (f,) = fns
-
-        def absolute(env: dict, get: Getter) -> Any:
-            a = f(env, get)
-            if a.__class__ not in _NUMS:
-                _numbers(src, a)
-            return abs(a)
-
-        return absolute
-    pick = min if name == "min" else max
-
-    def extreme(env: dict, get: Getter) -> Any:
-        values = [f(env, get) for f in fns]
-        _numbers(src, *values)
-        return pick(values)
-
-    return extreme
-
-
-def _numbers(src: str, *values: Any) -> None:
-    """Raise unless all ``values`` are numbers (the slow path of arithmetic)."""
-    for value in values:
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            what = "null" if value is None else repr(value)
-            raise EvalError(f"cannot compute {src}: {what} is not a number")
-
-
-def _assign(owner: _Node, attr: str, value: _Node, owner_src: str, target: str) -> Callable:
-    """The closure of an effect: find the entity, then ``set`` its attribute."""
-
-    def bad(entity: Any) -> EvalError:
-        what = "null" if entity is None else f"{entity!r}, not an entity"
-        return EvalError(f"cannot assign {target}: {owner_src} is {what}")
-
-    find = owner.fn
-    if owner.var is not None:  # var.attr = ...: the variable itself, one closure not two
-        var = owner.var
-        if value.const is not _NO:
-            c = value.const
-
-            def assign_var_const(env: dict, get: Getter, set: Setter) -> None:
-                entity = env[var]
-                if entity.__class__ is not str:
-                    raise bad(entity)
-                set(entity, attr, c)
-
-            return assign_var_const
-        compute = value.fn
-
-        def assign_var(env: dict, get: Getter, set: Setter) -> None:
-            entity = env[var]
-            if entity.__class__ is not str:
-                raise bad(entity)
-            set(entity, attr, compute(env, get))
-
-        return assign_var
-    if value.const is not _NO:
-        c = value.const
-
-        def assign_const(env: dict, get: Getter, set: Setter) -> None:
-            entity = find(env, get)
-            if entity.__class__ is not str:
-                raise bad(entity)
-            set(entity, attr, c)
-
-        return assign_const
-    compute = value.fn
-
-    def assign(env: dict, get: Getter, set: Setter) -> None:
-        entity = find(env, get)
-        if entity.__class__ is not str:
-            raise bad(entity)
-        set(entity, attr, compute(env, get))
-
-    return assign
 
 
 # -- types ---------------------------------------------------------------------------------

@@ -12,6 +12,7 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
+from planner import closures as closures_module
 from planner import expr as expr_module
 from planner.expr import EvalError, ExprError, compile_effect, compile_expr
 
@@ -394,7 +395,7 @@ def test_no_attributes_means_no_type_checks() -> None:
 # -- safety and independence ---------------------------------------------------------------
 
 
-SOURCE = Path(expr_module.__file__).read_text("utf-8")
+SOURCE = "\n".join(Path(m.__file__).read_text("utf-8") for m in (expr_module, closures_module))
 
 
 def test_no_eval_exec_or_compile() -> None:
