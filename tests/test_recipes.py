@@ -214,16 +214,19 @@ def test_same_inputs_same_log(tmp_path):
 
 
 def test_plan_fact_readings_are_checked(shary, write):
-    path = write("facts.yaml", BASE + """\
+    """A shape problem first (meaning is only checked on a file of the right shape:
+    ``at: 3`` is not a predicate name), then, once it is fixed, the unknown predicate."""
+    text = BASE + """\
 recipes:
   - task: greet
     act: REALIZE-TASK
-    plan: {domain: living-room, task: Greet, facts: {on: [isOnn], at: 3}}
-""")
-    found = _problems(shary, path)
-    assert (13, 59, "unknown predicate 'isOnn' (did you mean 'isOn'?)") in found
+    plan: {domain: living-room, task: Greet, facts: {on: [isOnn], at: AT}}
+"""
+    found = _problems(shary, write("facts.yaml", text.replace("AT", "3")))
     assert any(line == 13 and "expected a string here, got a number (3)" in msg
                for line, _, msg in found), found
+    found = _problems(shary, write("facts.yaml", text.replace("AT", "isAt")))
+    assert (13, 59, "unknown predicate 'isOnn' (did you mean 'isOn'?)") in found
 
 
 def test_custom_act_of_a_scheme_runs_end_to_end(tmp_path):

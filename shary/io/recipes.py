@@ -61,8 +61,10 @@ def load_library(paths: list[str | os.PathLike[str]] | None = None, *,
     problems: list[Problem] = []
     documents: list[Reader] = []
     for path in files:
-        # Every file's shape problems are reported, and the files that are mappings
-        # are still read for meaning: a mistake in one task must not hide the others.
+        # Every file's shape problems are reported, and the names a file that is a
+        # mapping declares stay known (no cascade of "unknown task" in the others);
+        # its meaning is only checked once its shape is right, so that meaning
+        # checks never meet a number where the schema promised a list.
         try:
             reader = checked(path, schema.validator("recipes"))
         except FileError as err:
@@ -78,7 +80,8 @@ def load_library(paths: list[str | os.PathLike[str]] | None = None, *,
     for reader in documents:
         builder.declare(reader)
     for reader in documents:
-        builder.define(reader)
+        if not reader.problems:
+            builder.define(reader)
     for reader in documents:
         problems.extend(reader.problems)
     if problems:
