@@ -50,7 +50,7 @@ from typing import Any
 from planner.domain import SOLE_AGENT, Action, Method, Problem
 from planner.evaluate import Evaluator
 from planner.plan import Plan, fact_text
-from planner.search import Failure, Result
+from planner.search import Failure, Result, deleted_goal
 from planner.state import FactState, State
 
 MAX_NODES = 2_000_000
@@ -295,13 +295,10 @@ class DepthFirst:
             if bool(value) != bool(get(pred, fact)):
                 state_hash ^= hash((pred, fact))
                 child.set(pred, fact, value)
-        for pred, key in action.deletes:
-            fact = key(env)
-            if (self.problem.goals.get((pred, fact)) is True and get(pred, fact) is True
-                    and child.get(pred, fact) is not True and not self._may_add(rest, pred, fact)):
-                self._fail(parent, _label(action.name, args),
-                           f"deletes ({' '.join((pred, *fact))}), a goal that no task left "
-                           "can make true again")
+        if action.deletes:
+            why = deleted_goal(self.problem, action, env, get, child, self._may_add, rest)
+            if why is not None:
+                self._fail(parent, _label(action.name, args), why)
                 return None
         agent = SOLE_AGENT if action.agent is None else env[action.agent]
         price = action.cost(env, get) if callable(action.cost) else action.cost

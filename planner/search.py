@@ -136,6 +136,21 @@ def _label(name: str, args: tuple[Any, ...]) -> str:
     return f"{name}({', '.join(str(a) for a in args)})"
 
 
+def deleted_goal(problem: Problem, action: Action, env: dict, before: Callable,
+                 child: Any, may_add: Callable, agenda: Any) -> str | None:
+    """Why a step dooms its branch, if it does (goal protection): it deletes a goal fact
+    that held, and no task left on ``agenda`` (``may_add(agenda, pred, fact)``) can
+    make it true again, however far the branch's end.  Both searches ask this."""
+    goals = problem.goals
+    for pred, key in action.deletes:
+        fact = key(env)
+        if (goals.get((pred, fact)) is True and before(pred, fact) is True
+                and child.get(pred, fact) is not True and not may_add(agenda, pred, fact)):
+            return (f"deletes ({' '.join((pred, *fact))}), a goal that no task left "
+                    "can make true again")
+    return None
+
+
 class Search:
     """One search for one problem (see the module's docstring)."""
 
@@ -349,13 +364,10 @@ class Search:
                        f"precondition false: {action.pre.text}")  # type: ignore[union-attr]
             return None
         child, env, price, length, agent, floor = done
-        for pred, key in action.deletes:
-            fact = key(env)
-            if (self.problem.goals.get((pred, fact)) is True and state.get(pred, fact) is True
-                    and child.get(pred, fact) is not True and not self._may_add(rest, pred, fact)):
-                self._fail(parent, _label(action.name, args),
-                           f"deletes ({' '.join((pred, *fact))}), a goal that no task left "
-                           "can make true again")
+        if action.deletes:
+            why = deleted_goal(self.problem, action, env, state.get, child, self._may_add, rest)
+            if why is not None:
+                self._fail(parent, _label(action.name, args), why)
                 return None
         self.applied += 1
         record = ("act", next(self.ids), parent, action.name, args, agent, price, length)
