@@ -34,6 +34,9 @@ from shary.tasktree import replay_log
 
 
 def make_log(path: Path, events: int, nodes: int) -> None:
+    """A log file made by the real writer, then filled by SQL (a million rows in
+    seconds): a task tree of ``nodes`` nodes, each with up to three children, then
+    ``events`` fact changes.  ``tests/test_hostile_log.py`` uses it too."""
     with ContextLog(path, seed=0):
         pass
     with closing(sqlite3.connect(path)) as conn:

@@ -14,6 +14,7 @@ through these helpers so that they agree on two contracts:
 from __future__ import annotations
 
 import json
+import re
 import sys
 from collections.abc import Sequence
 from typing import Any
@@ -91,3 +92,23 @@ def add_json_flag(parser: Any, what: str = "the result") -> None:
     parser.add_argument("--json", action="store_true",
                         help=f"print {what} as one JSON document on standard output "
                         "(docs/cli.md gives its shape)")
+
+
+def listing(key: str, entries: Sequence[tuple[str, str, Any]], *, json_mode: bool,
+            width: int) -> int:
+    """A one-line-each list of named documents (``shary schemes``, ``shary scenarios``):
+    ``entries`` are (name, doc, file); with ``--json``, one document under ``key``."""
+    listed = [{"name": name, "summary": first_sentence(doc), "doc": " ".join(doc.split()),
+               "file": str(file)} for name, doc, file in entries]
+    if json_mode:
+        emit_json({key: listed})
+        return 0
+    for item in listed:
+        out.print(f"[bold]{item['name']:<{width}}[/bold] {escape(item['summary'])}")
+    return 0
+
+
+def first_sentence(doc: str) -> str:
+    """A doc's first sentence, for one-line listings ("Fig. 2" does not end it)."""
+    first = re.split(r"(?<!Fig)\.\s", " ".join(doc.split()), maxsplit=1)[0]
+    return first.rstrip(".") + "."

@@ -12,8 +12,7 @@ import re
 from pathlib import Path
 from typing import Any
 
-from shary.commands.schemes import first_sentence
-from shary.terminal import add_json_flag, emit_json, error, escape
+from shary.terminal import add_json_flag, emit_json, error, escape, listing
 from shary.terminal import out as _out
 from userfiles import yamlsafe
 from userfiles.errors import FileError
@@ -28,17 +27,9 @@ def add_scenarios(sub: argparse._SubParsersAction) -> None:
 def cmd_scenarios(args: argparse.Namespace) -> int:
     from sim.scenario import builtin_scenarios, load_scenario
 
-    listed = []
-    for name, path in builtin_scenarios().items():
-        scenario = load_scenario(path)
-        listed.append({"name": name, "summary": first_sentence(scenario.doc),
-                       "doc": " ".join(scenario.doc.split()), "file": str(path)})
-    if args.json:
-        emit_json({"scenarios": listed})
-        return 0
-    for item in listed:
-        _out.print(f"[bold]{item['name']:<26}[/bold] {escape(item['summary'])}")
-    return 0
+    return listing("scenarios", [(name, load_scenario(path).doc, path)
+                                 for name, path in builtin_scenarios().items()],
+                   json_mode=args.json, width=26)
 
 
 def add_run(sub: argparse._SubParsersAction) -> None:

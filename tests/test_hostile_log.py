@@ -9,6 +9,7 @@ lines: a refused log is blamed at ``LOG:1:1`` and the message names the event
 
 from __future__ import annotations
 
+import importlib.util
 import sqlite3
 import subprocess
 import sys
@@ -110,28 +111,19 @@ EVENTS = 1_000_000
 
 def big_log(path: Path, events: int, nodes: int) -> Path:
     """A log as a long run leaves it: a task tree of ``nodes`` nodes (each with up to
-    three children), then ``events`` fact changes.  Written by SQL, not event by event
-    (a million rows in seconds), into a file made by the real writer."""
-    good_log(path)
-    with closing(sqlite3.connect(path)) as conn:
-        conn.execute("PRAGMA synchronous = OFF")
-        conn.execute("DELETE FROM events")
-        conn.execute("""
-            INSERT INTO events (time, kind, task, agent, data)
-            WITH RECURSIVE c(i) AS (SELECT 1 UNION ALL SELECT i + 1 FROM c WHERE i < ?)
-            SELECT i * 1e-3, 'node', 'n' || i, 'robot',
-                   printf('{"name":"step %d","node_kind":"%s","parent":%s,"state":"done"}',
-                          i, iif(i = 1, 'task', 'atomic'),
-                          iif(i = 1, 'null', '"n' || ((i - 2) / 3 + 1) || '"'))
-            FROM c""", (nodes,))
-        conn.execute("""
-            INSERT INTO events (time, kind, task, agent, data)
-            WITH RECURSIVE c(i) AS (SELECT 1 UNION ALL SELECT i + 1 FROM c WHERE i < ?)
-            SELECT 100 + i * 1e-3, 'fact-added', NULL, 'robot',
-                   printf('{"o":"table","p":"isOn","s":"bottle%d"}', i % 10)
-            FROM c""", (events,))
-        conn.commit()
+    three children), then ``events`` fact changes; made by the log benchmark's own
+    generator (SQL, not event by event: a million rows in seconds)."""
+    _benchmark().make_log(path, events, nodes)
     return path
+
+
+def _benchmark():
+    """``benchmarks/log.py``, loaded by its path (benchmarks are scripts, not a package)."""
+    spec = importlib.util.spec_from_file_location(
+        "log_benchmark", HOSTILE.parents[1] / "benchmarks" / "log.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 @pytest.fixture(scope="module")

@@ -63,18 +63,21 @@ class _Networks(_Reader):
             return tuple(subtasks[i] for i in result.order), True, tuple(written)
         return tuple(subtasks), False, tuple(written)
 
-    def subtasks(self, node: Node, scope: dict[str, str]) -> list[Subtask]:
+    def entries(self, node: Node, example: str, what: str) -> tuple[Node, ...]:
+        """The entries of a list HDDL writes either as ``(and E1 E2 ...)`` or as one
+        entry ``E`` (subtasks, orderings); ``()`` has none."""
         if not isinstance(node, SList):
-            self.error(node, f"expected subtasks like '(and (t1 (task ?x)) ...)', found "
-                             f"{_show(node)}")
-            return []
+            self.error(node, f"expected {what} like '{example}', found {_show(node)}")
+            return ()
         if not node.items:
-            return []
+            return ()
         head = node.items[0]
-        entries = (node.items[1:] if isinstance(head, Symbol) and head.value == "and"
-                   else (node,))
+        return (tuple(node.items[1:]) if isinstance(head, Symbol) and head.value == "and"
+                else (node,))
+
+    def subtasks(self, node: Node, scope: dict[str, str]) -> list[Subtask]:
         out = []
-        for entry in entries:
+        for entry in self.entries(node, "(and (t1 (task ?x)) ...)", "subtasks"):
             subtask = self.subtask(entry, scope)
             if subtask is not None:
                 out.append(subtask)
@@ -118,17 +121,8 @@ class _Networks(_Reader):
                        entry.col)
 
     def ordering(self, node: Node) -> list[tuple[Symbol, Symbol]]:
-        if not isinstance(node, SList):
-            self.error(node, f"expected ordering constraints like '(and (< t1 t2))', found "
-                             f"{_show(node)}")
-            return []
-        if not node.items:
-            return []
-        head = node.items[0]
-        entries = (node.items[1:] if isinstance(head, Symbol) and head.value == "and"
-                   else (node,))
         out: list[tuple[Symbol, Symbol]] = []
-        for entry in entries:
+        for entry in self.entries(node, "(and (< t1 t2))", "ordering constraints"):
             items = entry.items if isinstance(entry, SList) else ()
             if len(items) == 3 and all(isinstance(i, Symbol) for i in items):
                 a, b, c = items

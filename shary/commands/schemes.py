@@ -8,18 +8,11 @@ from pathlib import Path
 from typing import Any
 
 from shary import builtin
-from shary.terminal import EXIT_BAD_INPUT, add_json_flag, emit_json, error, escape
+from shary.terminal import EXIT_BAD_INPUT, add_json_flag, emit_json, error, escape, listing
 from shary.terminal import out as _out
 from userfiles import yamlsafe
 from userfiles.errors import FileError, Problem
 from userfiles.outputs import output_file, write_output
-
-
-def first_sentence(doc: str) -> str:
-    """A doc's first sentence, for one-line listings ("Fig. 2" does not end it)."""
-    first = re.split(r"(?<!Fig)\.\s", " ".join(doc.split()), maxsplit=1)[0]
-    return first.rstrip(".") + "."
-
 
 # -- schemes, simulate ---------------------------------------------------
 
@@ -33,19 +26,10 @@ def add_schemes(sub: argparse._SubParsersAction) -> None:
 def cmd_schemes(args: argparse.Namespace) -> int:
     from shary.io.schemes import load_scheme
 
-    listed = []
-    for path in builtin.files("schemes"):
-        if path.stem == "acts":
-            continue
-        scheme = load_scheme(path)
-        listed.append({"name": scheme.name, "summary": first_sentence(scheme.doc),
-                       "doc": " ".join(scheme.doc.split()), "file": str(path)})
-    if args.json:
-        emit_json({"schemes": listed})
-        return 0
-    for item in listed:
-        _out.print(f"[bold]{item['name']:<24}[/bold] {escape(item['summary'])}")
-    return 0
+    schemes = [(load_scheme(path), path) for path in builtin.files("schemes")
+               if path.stem != "acts"]
+    return listing("schemes", [(s.name, s.doc, path) for s, path in schemes],
+                   json_mode=args.json, width=24)
 
 
 def add_simulate(sub: argparse._SubParsersAction) -> None:
