@@ -68,6 +68,13 @@ class Reader:
     def folder(self) -> Path:
         return Path(self.located.file).resolve().parent
 
+    @property
+    def shape_ok(self) -> bool:
+        """Whether the file has no problem beyond what loading let through (a duplicate
+        key keeps its first value): its shape is the schema's, so meaning checks meet
+        the types the schema promised and can go on to report everything else."""
+        return len(self.problems) <= len(self.located.problems)
+
     def problem(self, where: tuple, message: str, *, key: bool = False) -> None:
         """Record a problem at the value (or, with ``key``, the key) at path ``where``."""
         self.problems.append(self.located.problem(where, message, key=key))

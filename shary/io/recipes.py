@@ -80,7 +80,7 @@ def load_library(paths: list[str | os.PathLike[str]] | None = None, *,
     for reader in documents:
         builder.declare(reader)
     for reader in documents:
-        if not reader.problems:
+        if reader.shape_ok:
             builder.define(reader)
     for reader in documents:
         problems.extend(reader.problems)

@@ -95,6 +95,8 @@ def parse_scheme(located: yamlsafe.Located, *, acts: ActRegistry | None = None,
     builder = _Builder(located, acts or builtin_acts(), conditions, check_reachable,
                        chain + (invokes.identity(located.file),),
                        {} if loaded is None else loaded)
+    if not builder.reader.shape_ok:  # meaning is only checked on the schema's shape
+        raise FileError(builder.problems)
     scheme = builder.build()
     if builder.problems:
         raise FileError(builder.problems)
