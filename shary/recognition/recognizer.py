@@ -1,0 +1,458 @@
+"""Human action recognition: what people are doing, from the facts perception changes.
+
+JAHRVIS's Human Actions Recognition (Section VI-B), on the fact base:
+
+* it subscribes to **exactly the predicates the action models name** (and the
+  ``type`` facts that say who is a Human), through the fact base's change
+  notification: it never polls and never runs a query per change;
+* it keeps **candidates**: one action model with its roles bound to entities
+  (``place(alice, cube-1, red-cube)``), each *possibly started*, *possibly
+  progressing* or *possibly achieved*;
+* a **Move** starts a candidate (roles the move leaves open are bound from the
+  preconditions that hold), a **ProgEffect** moves it to progressing, a
+  **NecessEffect** achieves it (when all the necessary effects hold);
+* an effect seen **without a start** is attributed, in this order, to the
+  agent the effect names (``isHolding(alice, cube)``), to the agent for whom
+  the action's preconditions held a moment before (who was holding the cube),
+  to a human who was **near the object** (the paper's criterion: the models'
+  ``near`` facts within ``near.within``), or to nobody.  An effect whose
+  author is a robot is not a human action and is not recognized;
+* it is **robust to flicker**: a fact that vanishes and comes back within
+  ``settle`` is the same fact, not a new effect (``isHolding`` toggling ten
+  times during a place is one place, and the hold coming back is not a second
+  pick), and a candidate already in a state is not entered in it again.
+
+Every change of a candidate's state is a :class:`Recognition`: written to the
+context log (kind ``recognition``, read by ``shary log`` and drawn as the
+human's lane of the timeline) and handed to the listeners (the human plan
+manager will be one).  Candidates that neither move on nor end within
+``forget`` are dropped (``abandoned``); when a candidate is achieved, the
+agent's other candidates of the same action on the same entities are dropped
+with it (they were the same gesture seen two ways).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from itertools import count
+from typing import Any, NamedTuple
+
+from shary.facts import FactDatabase, FactEvent, Subscription
+from shary.recognition.models import ActionModels, Fact, HumanActionModel
+
+__all__ = ["STATES", "Candidate", "Recognition", "Recognizer"]
+
+STATES = ("started", "progressing", "achieved", "abandoned")
+"""A candidate's states, in the order they may be reached (abandoned: dropped unfinished)."""
+
+_RANK = {"started": 0, "progressing": 1, "achieved": 2}
+_TYPES = ("type", "rdf:type")
+
+
+class Recognition(NamedTuple):
+    """One candidate entering a state: what the log and the listeners receive."""
+
+    time: float
+    candidate: str
+    """The candidate's id (``c1``, ``c2`` …): its rows in the log belong together."""
+    state: str
+    action: str
+    action_class: str
+    agent: str | None
+    """The human it is attributed to; None: an effect nobody is known to have caused."""
+    params: dict[str, Any]
+    """role -> entity (None for a role nothing has bound yet)."""
+    cause: str
+    """What made the change: "move", "progress", "necessary" (seen), "near"/"before"
+    (attributed by the criterion), "nobody", "forget", "achieved-other"."""
+    fact: str
+    """The fact whose change caused it, ``predicate(subject, object)`` (``not`` for a removal)."""
+
+
+@dataclass
+class Candidate:
+    """An action model with bound roles, in one of the states."""
+
+    id: str
+    model: HumanActionModel
+    binding: dict[str, Any]
+    state: str
+    since: float
+    touched: float
+    attributed: str = ""
+
+    @property
+    def agent(self) -> Any:
+        return self.binding.get(self.model.agent)
+
+    def key(self) -> tuple:
+        return (self.model.name, *(self.binding.get(role) for role in self.model.roles))
+
+
+@dataclass
+class _Trigger:
+    model: HumanActionModel
+    kind: str  # "move", "progress", "necessary"
+    fact: Fact
+
+
+@dataclass
+class _Store:
+    """The current facts of the subscribed predicates, indexed both ways, and when the
+    ones that vanished went (for flicker, preconditions held a moment ago, nearness)."""
+
+    objects: dict[tuple[Any, Any], dict[Any, None]] = field(default_factory=dict)
+    subjects: dict[tuple[Any, Any], dict[Any, None]] = field(default_factory=dict)
+    gone: dict[tuple[Any, Any, Any], float] = field(default_factory=dict)
+    gone_objects: dict[tuple[Any, Any], dict[Any, float]] = field(default_factory=dict)
+    gone_subjects: dict[tuple[Any, Any], dict[Any, float]] = field(default_factory=dict)
+
+    def add(self, s: Any, p: Any, o: Any) -> float | None:
+        """Add a fact; when it had vanished, the time it went."""
+        self.objects.setdefault((s, p), {})[o] = None
+        self.subjects.setdefault((p, o), {})[s] = None
+        went = self.gone.pop((s, p, o), None)
+        if went is not None:
+            self.gone_objects[(s, p)].pop(o, None)
+            self.gone_subjects[(p, o)].pop(s, None)
+        return went
+
+    def remove(self, s: Any, p: Any, o: Any, now: float) -> None:
+        self.objects.get((s, p), {}).pop(o, None)
+        self.subjects.get((p, o), {}).pop(s, None)
+        self.gone[(s, p, o)] = now
+        self.gone_objects.setdefault((s, p), {})[o] = now
+        self.gone_subjects.setdefault((p, o), {})[s] = now
+
+    def forget(self, horizon: float) -> None:
+        """Forget facts that vanished before ``horizon``."""
+        for (s, p, o) in [f for f, t in self.gone.items() if t < horizon]:
+            del self.gone[(s, p, o)]
+            del self.gone_objects[(s, p)][o]
+            del self.gone_subjects[(p, o)][s]
+
+    def holds(self, s: Any, p: Any, o: Any) -> bool:
+        return o in self.objects.get((s, p), ())
+
+    def recently(self, s: Any, p: Any, o: Any, now: float, within: float) -> bool:
+        """Holds, or held until ``within`` seconds ago or less."""
+        if o in self.objects.get((s, p), ()):
+            return True
+        gone = self.gone.get((s, p, o))
+        return gone is not None and now - gone <= within
+
+    def completing(self, s: Any, p: Any, o: Any, now: float, within: float) -> list[Any]:
+        """What fills the missing side of (s, p, ?) or (?, p, o), now or ``within`` seconds
+        ago or less, in a stable order."""
+        if o is None:
+            found, went = self.objects.get((s, p), {}), self.gone_objects.get((s, p), {})
+        else:
+            found, went = self.subjects.get((p, o), {}), self.gone_subjects.get((p, o), {})
+        values = list(found)
+        values += [v for v, t in went.items() if now - t <= within and v not in found]
+        return sorted(values, key=str) if len(values) > 1 else values
+
+
+class Recognizer:
+    """Recognizes human actions from fact changes (see the module's documentation)."""
+
+    def __init__(self, models: ActionModels, facts: FactDatabase, *,
+                 perspective: str = "robot", clock: Callable[[], float],
+                 record: Callable[..., Any] | None = None):
+        self.models = models
+        self.facts = facts
+        self.perspective = perspective
+        self.clock = clock
+        self.record = record
+        self.listeners: list[Callable[[Recognition], Any]] = []
+        """Told of every recognition, after it is logged."""
+        self.candidates: dict[str, dict[tuple, Candidate]] = {n: {} for n in models.human}
+        """Live candidates (started or progressing) by model name, then key."""
+        self.achieved: list[Recognition] = []
+        """Every achievement so far, in order (the paper's *possibly achieved* list)."""
+        self._store = _Store()
+        self._triggers: dict[tuple[str, str], list[_Trigger]] = {}
+        for model in models.human.values():
+            for kind in ("move", "progress", "necessary"):
+                for fact in getattr(model, kind):
+                    key = (fact.predicate, "removed" if fact.negated else "added")
+                    self._triggers.setdefault(key, []).append(_Trigger(model, kind, fact))
+        self._near = [(f.predicate, f.subject == "Human") for f in models.near]
+        self._near_predicates = {f.predicate for f in models.near}
+        self._near_seen: dict[tuple[Any, Any], float] = {}  # (human, object) -> last near
+        self._types: dict[Any, tuple[str, ...]] = {}
+        self._subscriptions: list[Subscription] = []
+        self._ids = count(1)
+        self._swept = 0.0
+
+    # -- the three lists (JAHRVIS's HAR outputs) --------------------------------------------------
+
+    @property
+    def possibly_started(self) -> list[Candidate]:
+        return self._live("started")
+
+    @property
+    def possibly_progressing(self) -> list[Candidate]:
+        return self._live("progressing")
+
+    def _live(self, state: str) -> list[Candidate]:
+        return [c for by_key in self.candidates.values() for c in by_key.values()
+                if c.state == state]
+
+    # -- subscribing ------------------------------------------------------------------------------
+
+    def start(self) -> None:
+        """Read the current facts of the models' predicates, then follow their changes."""
+        predicates = self.models.predicates()
+        wanted = set(predicates)
+        for s, p, o in self.facts.triples(self.perspective):
+            if p in wanted:
+                self._store.add(s, p, o)
+                if p in self._near_predicates:
+                    self._note_near(s, p, o)
+        for predicate in (*predicates, *_TYPES):
+            self._subscriptions.append(self.facts.subscribe(
+                self.on_fact, predicate=predicate, perspective=self.perspective))
+
+    def stop(self) -> None:
+        for subscription in self._subscriptions:
+            self.facts.unsubscribe(subscription)
+        self._subscriptions.clear()
+
+    # -- one change -------------------------------------------------------------------------------
+
+    def on_fact(self, event: FactEvent) -> None:
+        """Take one change of a subscribed predicate into account."""
+        kind, s, p, o = event.kind, event.subject, event.predicate, event.object
+        if p in _TYPES:
+            self._types.pop(s, None)
+            return
+        now = self.clock()
+        store = self._store
+        if kind == "added":
+            # a fact back within `settle` of vanishing is the same fact: flicker, not an effect
+            gone = store.add(s, p, o)
+            if p in self._near_predicates:
+                self._note_near(s, p, o)
+            if gone is not None and now - gone < self.models.settle:
+                return
+        else:
+            store.remove(s, p, o, now)
+            if p in self._near_predicates:
+                self._note_near(s, p, o)
+        if now - self._swept >= 1.0:
+            self._sweep(now)
+        for trigger in self._triggers.get((p, kind), ()):
+            fact = trigger.fact
+            if fact.subject == fact.object and s != o:
+                continue
+            binding = {fact.subject: s, fact.object: o}
+            if trigger.kind == "move":
+                self._move(trigger, binding, now)
+            else:
+                self._effect(trigger, binding, now)
+
+    def _move(self, trigger: _Trigger, binding: dict[str, Any], now: float) -> None:
+        model = trigger.model
+        if not self._is(binding.get(model.agent), model.agent, agent=True):
+            return
+        for full in self._bind(model, binding, now):
+            live = self.candidates[model.name]
+            key = (model.name, *(full.get(role) for role in model.roles))
+            found = live.get(key)
+            if found is not None:
+                found.touched = now
+                continue
+            candidate = Candidate(f"c{next(self._ids)}", model, full, "started", now, now)
+            live[key] = candidate
+            self._emit(candidate, "move", trigger.fact, now)
+
+    def _effect(self, trigger: _Trigger, binding: dict[str, Any], now: float) -> None:
+        model, state = trigger.model, ("progressing" if trigger.kind == "progress" else "achieved")
+        classes = model.classes
+        if not all(self._is(value, classes[role]) for role, value in binding.items()
+                   if role != model.agent):
+            return
+        live = self.candidates[model.name]
+        matches = [c for c in live.values()
+                   if all(c.binding.get(role) in (None, value) for role, value in binding.items())]
+        if matches:
+            candidate = max(matches, key=lambda c: (_RANK[c.state], c.touched, c.id))
+            if _RANK[candidate.state] >= _RANK[state]:
+                candidate.touched = now
+                return
+            full = {**candidate.binding, **binding}
+            if state == "achieved" and not self._necessary_hold(model, full):
+                return
+            del live[candidate.key()]
+            candidate.binding, candidate.touched = full, now
+            if state == "progressing":
+                live[candidate.key()] = candidate
+            self._enter(candidate, state, trigger.kind, trigger.fact, now)
+            return
+        agent, cause = self._attribute(model, binding, now)
+        if cause == "robot":
+            return
+        full = {**binding, model.agent: agent}
+        if state == "achieved" and not self._necessary_hold(model, full):
+            return
+        candidate = Candidate(f"c{next(self._ids)}", model, full, state, now, now, cause)
+        if state == "progressing":
+            live[candidate.key()] = candidate
+        self._emit(candidate, cause, trigger.fact, now)
+        if state == "achieved":
+            self._drop_siblings(candidate, now)
+
+    def _enter(self, candidate: Candidate, state: str, cause: str, fact: Fact | None,
+               now: float) -> None:
+        candidate.state = state
+        self._emit(candidate, cause, fact, now)
+        if state == "achieved":
+            self._drop_siblings(candidate, now)
+
+    # -- binding and attribution ------------------------------------------------------------------
+
+    def _bind(self, model: HumanActionModel, binding: dict[str, Any],
+              now: float) -> list[dict[str, Any]]:
+        """Complete a binding through the preconditions that hold (or held ``settle``
+        seconds ago or less): one binding per way they hold; none if a bound one fails."""
+        results = [dict(binding)]
+        settle, store, classes = self.models.settle, self._store, model.classes
+        for fact in model.precond:
+            extended: list[dict[str, Any]] = []
+            for current in results:
+                s, o = current.get(fact.subject), current.get(fact.object)
+                if fact.negated:
+                    if s is None or o is None or not store.holds(s, fact.predicate, o):
+                        extended.append(current)
+                elif s is not None and o is not None:
+                    if store.recently(s, fact.predicate, o, now, settle):
+                        extended.append(current)
+                elif s is None and o is None:
+                    extended.append(current)
+                else:
+                    missing = fact.object if o is None else fact.subject
+                    for value in store.completing(s, fact.predicate, o, now, settle):
+                        if self._is(value, classes[missing], agent=missing == model.agent):
+                            extended.append({**current, missing: value})
+            results = extended
+        return [r for r in results
+                if all(self._is(v, classes[role]) for role, v in r.items()
+                       if role != model.agent and v is not None)]
+
+    def _attribute(self, model: HumanActionModel, binding: dict[str, Any],
+                   now: float) -> tuple[Any, str]:
+        """Who caused an effect seen without a start (see the module's documentation)."""
+        agent = binding.get(model.agent)
+        if agent is not None:
+            return (agent, "seen") if self._is(agent, model.agent, agent=True) else (None, "robot")
+        within = self.models.near_within
+        for fact in model.precond:  # for whom did the preconditions hold a moment ago?
+            if fact.negated or model.agent not in (fact.subject, fact.object):
+                continue
+            other = fact.object if fact.subject == model.agent else fact.subject
+            value = binding.get(other)
+            if value is None:
+                continue
+            s, o = (None, value) if fact.subject == model.agent else (value, None)
+            for author in self._store.completing(s, fact.predicate, o, now, within):
+                if self._is(author, model.agent, agent=True):
+                    return author, "before"
+                if self._is_agent(author):
+                    return None, "robot"
+        near: list[tuple[float, str]] = []
+        for value in binding.values():
+            for (human, obj), last in self._near_seen.items():
+                if obj == value and (last == float("inf") or now - last <= within) \
+                        and self._is(human, model.agent, agent=True):
+                    near.append((last, human))
+        if near:
+            return max(near, key=lambda item: (item[0], item[1]))[1], "near"
+        return None, "nobody"
+
+    def _note_near(self, s: Any, p: Any, o: Any) -> None:
+        """Keep when each human was last near each object (inf: near now)."""
+        for predicate, human_first in self._near:
+            if predicate != p:
+                continue
+            human, obj = (s, o) if human_first else (o, s)
+            near_now = self._store.holds(s, p, o)
+            self._near_seen[(human, obj)] = float("inf") if near_now else self.clock()
+
+    def _necessary_hold(self, model: HumanActionModel, binding: dict[str, Any]) -> bool:
+        store = self._store
+        for fact in model.necessary:
+            s, o = binding.get(fact.subject), binding.get(fact.object)
+            if s is None or o is None:
+                continue
+            if store.holds(s, fact.predicate, o) == fact.negated:
+                return False
+        return True
+
+    def _is(self, entity: Any, cls: str, *, agent: bool = False) -> bool:
+        """Whether the fact base says ``entity`` is a ``cls`` (an entity whose type is not
+        known passes, unless it must be the agent: only a known human acts)."""
+        if entity is None:
+            return not agent
+        types = self._types.get(entity)
+        if types is None:
+            types = self._types[entity] = tuple(
+                str(t) for predicate in _TYPES
+                for t in self.facts.objects(entity, predicate, self.perspective))
+        if not types:
+            return not agent
+        ontology = self.models.ontology
+        return any(t in ontology and ontology.is_a(t, cls) or t == cls for t in types)
+
+    def _is_agent(self, entity: Any) -> bool:
+        return self._is(entity, "Agent", agent=True)
+
+    # -- ends -------------------------------------------------------------------------------------
+
+    def _drop_siblings(self, achieved: Candidate, now: float) -> None:
+        """The agent's other live candidates of the same action on the same entities."""
+        values = {v for role, v in achieved.binding.items()
+                  if role != achieved.model.agent and v is not None}
+        live = self.candidates[achieved.model.name]
+        for key, other in list(live.items()):
+            if other is achieved or other.agent not in (achieved.agent, None):
+                continue
+            if values & {v for role, v in other.binding.items() if role != other.model.agent}:
+                del live[key]
+                other.state = "abandoned"
+                self._emit(other, "achieved-other", None, now)
+
+    def _sweep(self, now: float) -> None:
+        """Drop candidates untouched for ``forget`` seconds, and forget old vanished facts."""
+        self._swept = now
+        forget = self.models.forget
+        for live in self.candidates.values():
+            for key, candidate in list(live.items()):
+                if now - candidate.touched >= forget:
+                    del live[key]
+                    candidate.state = "abandoned"
+                    self._emit(candidate, "forget", None, now)
+        self._store.forget(now - max(self.models.settle, self.models.near_within))
+
+    def _emit(self, candidate: Candidate, cause: str, fact: Fact | None, now: float) -> None:
+        model = candidate.model
+        params = {role: candidate.binding.get(role) for role, _ in model.params}
+        shown = "" if fact is None else _shown(fact, candidate.binding)
+        recognition = Recognition(now, candidate.id, candidate.state, model.name,
+                                  model.action_class, candidate.agent, params, cause, shown)
+        if candidate.state == "achieved":
+            self.achieved.append(recognition)
+        if self.record is not None:
+            self.record("recognition", agent=recognition.agent, candidate=candidate.id,
+                        state=candidate.state, action=model.name,
+                        action_class=model.action_class,
+                        params={k: None if v is None else str(v) for k, v in params.items()},
+                        cause=cause, fact=shown or None)
+        for listener in self.listeners:
+            listener(recognition)
+
+
+def _shown(fact: Fact, binding: dict[str, Any]) -> str:
+    s, o = binding.get(fact.subject, fact.subject), binding.get(fact.object, fact.object)
+    return f"{'not ' if fact.negated else ''}{fact.predicate}({s}, {o})"
