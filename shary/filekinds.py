@@ -298,6 +298,12 @@ def _check_turtle(files: list[Path], context: Context) -> list[Problem]:
     return problems
 
 
+def _models() -> Any:
+    from shary.recognition import models
+
+    return models
+
+
 def _shipped_recipes() -> list[Path]:
     from shary.io.recipes import builtin_library_files
 
@@ -330,5 +336,8 @@ for _kind in (
     FileKind("problem", _check_problems, 4, detect=lambda d: "problem" in d,
              keys="problem:", shipped=_shipped_problems),
     FileKind("turtle", _check_turtle, 5, suffixes=(".ttl",)),
+    FileKind("action-models", lambda files, context: _models().check_files(files), 6,
+             detect=lambda d: "action-models" in d, keys="action-models:",
+             shipped=lambda: _models().shipped_files()),
 ):
     register(_kind)

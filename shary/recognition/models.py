@@ -331,3 +331,23 @@ class _Meaning:
 
 def _unknown_role(role: str, roles: tuple[str, ...]) -> str:
     return f"unknown role {role!r} (the roles here: {', '.join(roles)})"
+
+
+def check_files(files: list[Path]) -> list[Problem]:
+    """Every problem of action model files, for ``shary validate`` (each file alone, its
+    executors checked against the built-in atomic tasks)."""
+    from shary.io.recipes import load_library
+
+    atomic = load_library().atomic
+    problems: list[Problem] = []
+    for path in files:
+        try:
+            load_action_models([path], atomic=atomic)
+        except FileError as err:
+            problems.extend(err.problems)
+    return problems
+
+
+def shipped_files() -> list[Path]:
+    """The action model files that ship with the package."""
+    return sorted(MODELS.glob("*.yaml"))
