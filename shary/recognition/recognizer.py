@@ -185,6 +185,9 @@ class Recognizer:
         self._subscriptions: list[Subscription] = []
         self._ids = count(1)
         self._swept = 0.0
+        self._done: dict[str, list[tuple[dict[str, Any], float]]] = {n: [] for n in models.human}
+        """Recent achievements by model: an effect that is their tail is not a new action."""
+        self._recent = max(models.settle, models.near_within)
 
     # -- the three lists (JAHRVIS's HAR outputs) --------------------------------------------------
 
@@ -291,6 +294,10 @@ class Recognizer:
                 live[candidate.key()] = candidate
             self._enter(candidate, state, trigger.kind, trigger.fact, now)
             return
+        if any(now - when <= self._recent and all(done.get(r) in (None, v)
+                                                   for r, v in binding.items())
+               for done, when in self._done[model.name]):
+            return  # the tail of an action just achieved (the hold let go after the place)
         agent, cause = self._attribute(model, binding, now)
         if cause == "robot":
             return
@@ -433,7 +440,9 @@ class Recognizer:
                     del live[key]
                     candidate.state = "abandoned"
                     self._emit(candidate, "forget", None, now)
-        self._store.forget(now - max(self.models.settle, self.models.near_within))
+        self._store.forget(now - self._recent)
+        for name, done in self._done.items():
+            self._done[name] = [(b, t) for b, t in done if now - t <= self._recent]
 
     def _emit(self, candidate: Candidate, cause: str, fact: Fact | None, now: float) -> None:
         model = candidate.model
@@ -443,6 +452,7 @@ class Recognizer:
                                   model.action_class, candidate.agent, params, cause, shown)
         if candidate.state == "achieved":
             self.achieved.append(recognition)
+            self._done[model.name].append((dict(candidate.binding), now))
         if self.record is not None:
             self.record("recognition", agent=recognition.agent, candidate=candidate.id,
                         state=candidate.state, action=model.name,
