@@ -32,6 +32,7 @@ from shary.facts import FactDatabase
 from shary.log import ContextLog, read_events
 from shary.loop import EventLoop
 from shary.planning import HatpPlanner
+from shary.recognition.models import load_action_models
 from shary.supervisor import Supervisor
 from userfiles.outputs import output_folder, write_output
 
@@ -227,6 +228,9 @@ class _Run:
             noise=Noise(dict(scenario.flicker), list(scenario.lost)), rng=self.loop.random)
         self.sim.observers.append(self.perception.update)
         self.chronicles = ChronicleRecognizer(self.sup) if library.chronicles else None
+        self.action_models = (load_action_models(scenario.action_models, self.facts,
+                                                 atomic=library.atomic)
+                              if scenario.action_models else None)
 
     # -- setting up ----------------------------------------------------------------
 
@@ -332,6 +336,8 @@ class _Run:
         for person in self.people.values():
             person.begin()
         self.perception.start()
+        if self.action_models is not None:  # what is there at the start was not done by anyone
+            self.sup.recognize(self.action_models)
         start = time.perf_counter()
         while self.loop.now() < self.scenario.timeout - 1e-9:
             self.loop.advance(min(CHUNK, self.scenario.timeout - self.loop.now()))

@@ -189,3 +189,34 @@ def test_recognitions_are_in_the_context_log_for_shary_log(tmp_path, capsys):
     assert main(["log", str(path), "--kind", "recognition", "--json"]) == 0
     out = capsys.readouterr().out
     assert '"state": "achieved"' in out and '"action": "pick"' in out
+
+
+def test_a_hold_seen_back_after_a_long_gap_is_not_a_second_pick(world):
+    world.at(1, "add", "alice", "isHolding", "cube-1")
+    world.at(2, "remove", "alice", "isHolding", "cube-1")
+    world.at(6, "add", "alice", "isHolding", "cube-1")       # perception lost it for 4 s
+    assert [s for s in world.seen() if s[0] == "achieved"] == [
+        ("achieved", "pick", "alice", "cube-1")]
+
+
+def test_a_removal_nothing_started_counts_once_it_lasts(world):
+    world.at(1, "add", "alice", "isHolding", "cube-1")
+    world.at(10, "remove", "alice", "isHolding", "cube-1")
+    world.at(10.2, "add", "alice", "isHolding", "cube-1")    # flicker: forgotten
+    world.at(20, "remove", "alice", "isHolding", "cube-1")
+    world.at(20.5, "add", "bob", "isNear", "base-2")          # not yet a second
+    assert world.seen()[1:] == []
+    world.at(21.5, "add", "bob", "isNear", "base-1")          # lasted: possibly placing
+    assert world.seen()[1:] == [("progressing", "place", "alice", "cube-1", None)]
+
+
+def test_a_move_after_an_effect_joins_the_candidate_the_effect_made(world):
+    world.at(1, "add", "alice", "isHolding", "cube-1")
+    world.at(10, "remove", "alice", "isHolding", "cube-1")
+    world.at(12, "add", "alice", "handMovingToward", "base-1")
+    [joined] = world.recognizer.candidates["place"].values()
+    assert joined.binding == {"Human": "alice", "Pickable": "cube-1", "Support": "base-1"}
+    world.at(13, "add", "cube-1", "isOn", "base-1")
+    assert world.seen()[1:] == [("progressing", "place", "alice", "cube-1", None),
+                                ("achieved", "place", "alice", "cube-1", "base-1")]
+    assert world.rows[-1]["candidate"] == world.rows[-2]["candidate"] == joined.id

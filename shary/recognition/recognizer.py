@@ -20,7 +20,11 @@ JAHRVIS's Human Actions Recognition (Section VI-B), on the fact base:
 * it is **robust to flicker**: a fact that vanishes and comes back within
   ``settle`` is the same fact, not a new effect (``isHolding`` toggling ten
   times during a place is one place, and the hold coming back is not a second
-  pick), and a candidate already in a state is not entered in it again.
+  pick); a removal that no candidate explains counts only once it has lasted
+  ``settle``; a candidate already in a state is not entered in it again; and
+  an action achieved with the same entities within ``forget`` is achieved
+  again only if a movement starts it again (a hold seen back after a long gap
+  in perception is not a second pick).
 
 Every change of a candidate's state is a :class:`Recognition`: written to the
 context log (kind ``recognition``, read by ``shary log`` and drawn as the
@@ -188,6 +192,8 @@ class Recognizer:
         self._done: dict[str, list[tuple[dict[str, Any], float]]] = {n: [] for n in models.human}
         """Recent achievements by model: an effect that is their tail is not a new action."""
         self._recent = max(models.settle, models.near_within)
+        self._pending: list[tuple[_Trigger, dict[str, Any], float]] = []
+        """Removals that no candidate explains, waiting to last ``settle`` (flicker)."""
 
     # -- the three lists (JAHRVIS's HAR outputs) --------------------------------------------------
 
@@ -244,6 +250,8 @@ class Recognizer:
             store.remove(s, p, o, now)
             if p in self._near_predicates:
                 self._note_near(s, p, o)
+        if self._pending:
+            self._settled(now)
         if now - self._swept >= 1.0:
             self._sweep(now)
         for trigger in self._triggers.get((p, kind), ()):
@@ -260,12 +268,18 @@ class Recognizer:
         model = trigger.model
         if not self._is(binding.get(model.agent), model.agent, agent=True):
             return
+        live = self.candidates[model.name]
+        found = next((c for c in live.values() if all(c.binding.get(role) in (None, value)
+                                                      for role, value in binding.items())), None)
+        if found is not None:  # seen under way already (an effect came first): the same one
+            del live[found.key()]
+            found.binding, found.touched = {**found.binding, **binding}, now
+            live[found.key()] = found
+            return
         for full in self._bind(model, binding, now):
-            live = self.candidates[model.name]
             key = (model.name, *(full.get(role) for role in model.roles))
-            found = live.get(key)
-            if found is not None:
-                found.touched = now
+            if key in live:
+                live[key].touched = now
                 continue
             candidate = Candidate(f"c{next(self._ids)}", model, full, "started", now, now)
             live[key] = candidate
@@ -298,18 +312,48 @@ class Recognizer:
                                                    for r, v in binding.items())
                for done, when in self._done[model.name]):
             return  # the tail of an action just achieved (the hold let go after the place)
+        if trigger.fact.negated and state == "progressing":
+            # a removal nothing started may be flicker: it counts once it has lasted `settle`
+            self._pending.append((trigger, binding, now))
+            return
+        self._attribute_effect(trigger, binding, state, now)
+
+    def _attribute_effect(self, trigger: _Trigger, binding: dict[str, Any], state: str,
+                          now: float) -> None:
+        """An effect no live candidate explains: a new candidate, if someone did it."""
+        model, live = trigger.model, self.candidates[trigger.model.name]
         agent, cause = self._attribute(model, binding, now)
         if cause == "robot":
             return
         full = {**binding, model.agent: agent}
         if state == "achieved" and not self._necessary_hold(model, full):
             return
+        if any(done == full for done, _ in self._done[model.name]):
+            return  # achieved already, and not started again since: the effect came back
         candidate = Candidate(f"c{next(self._ids)}", model, full, state, now, now, cause)
         if state == "progressing":
             live[candidate.key()] = candidate
         self._emit(candidate, cause, trigger.fact, now)
         if state == "achieved":
             self._drop_siblings(candidate, now)
+
+    def _settled(self, now: float) -> None:
+        """Removals nothing started that have lasted ``settle``: attributed now (those
+        whose fact came back were flicker and are forgotten)."""
+        settle, store, waiting = self.models.settle, self._store, []
+        for trigger, binding, when in self._pending:
+            fact = trigger.fact
+            s, o = binding[fact.subject], binding[fact.object]
+            if store.gone.get((s, fact.predicate, o)) != when:
+                continue  # came back since (flicker); a later removal has its own entry
+            if now - when < settle:
+                waiting.append((trigger, binding, when))
+                continue
+            live = self.candidates[trigger.model.name]
+            if not any(all(c.binding.get(r) in (None, v) for r, v in binding.items())
+                       for c in live.values()):
+                self._attribute_effect(trigger, binding, "progressing", now)
+        self._pending = waiting
 
     def _enter(self, candidate: Candidate, state: str, cause: str, fact: Fact | None,
                now: float) -> None:
@@ -441,8 +485,9 @@ class Recognizer:
                     candidate.state = "abandoned"
                     self._emit(candidate, "forget", None, now)
         self._store.forget(now - self._recent)
+        kept = max(forget, self._recent)
         for name, done in self._done.items():
-            self._done[name] = [(b, t) for b, t in done if now - t <= self._recent]
+            self._done[name] = [(b, t) for b, t in done if now - t <= kept]
 
     def _emit(self, candidate: Candidate, cause: str, fact: Fact | None, now: float) -> None:
         model = candidate.model
