@@ -220,3 +220,34 @@ def test_a_move_after_an_effect_joins_the_candidate_the_effect_made(world):
     assert world.seen()[1:] == [("progressing", "place", "alice", "cube-1", None),
                                 ("achieved", "place", "alice", "cube-1", "base-1")]
     assert world.rows[-1]["candidate"] == world.rows[-2]["candidate"] == joined.id
+
+
+def test_the_timeline_shows_each_recognized_action_in_its_humans_lane(world):
+    import xml.etree.ElementTree as ET
+
+    from shary.log import LogEvent
+    from shary.timeline import render_timeline
+
+    world.at(1, "add", "alice", "handMovingToward", "base-1")   # no hold: no candidate
+    world.at(2, "add", "alice", "isHolding", "cube-1")
+    world.at(3, "add", "alice", "handMovingToward", "base-2")
+    world.at(4, "remove", "alice", "isHolding", "cube-1")
+    world.at(5, "add", "cube-1", "isOn", "base-2")
+    world.at(20, "add", "cube-3", "isOn", "base-1")            # nobody near
+    events = [LogEvent(i, t, "recognition", None, row.get("agent"),
+                       {k: v for k, v in row.items() if k != "agent"})
+              for i, (t, row) in enumerate(zip([2, 3, 4, 5, 20], world.rows, strict=True))]
+    root = ET.fromstring(render_timeline(events, "recognized"))
+    ns = "{http://www.w3.org/2000/svg}"
+    bars = {g.get("data-candidate"): g for g in root.iter(f"{ns}g")
+            if "recognized" in g.get("class", "").split()}
+    assert sorted((g.get("data-agent"), g.get("data-action"), g.get("data-state"))
+                  for g in bars.values()) == [("(nobody)", "place", "achieved"),
+                                              ("alice", "pick", "achieved"),
+                                              ("alice", "place", "achieved")]
+    place = bars[world.rows[1]["candidate"]]
+    assert (place.get("data-start"), place.get("data-progressing"), place.get("data-end")) == (
+        "3", "4", "5")
+    assert place.find(f"{ns}polygon[@class='achieved']") is not None
+    legend = [t.text for t in root.iter(f"{ns}text") if t.get("class") == "legend"]
+    assert {"possibly started", "possibly progressing", "possibly achieved"} <= set(legend)
