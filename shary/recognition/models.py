@@ -30,6 +30,7 @@ checks), so every mistake is refused at its line.
 
 from __future__ import annotations
 
+import functools
 import os
 import re
 from collections.abc import Iterable
@@ -89,7 +90,7 @@ class HumanActionModel:
     def roles(self) -> tuple[str, ...]:
         return (self.agent, *(role for role, _ in self.params))
 
-    @property
+    @functools.cached_property
     def classes(self) -> dict[str, str]:
         """role -> the class of what fills it (the agent's role is its own class)."""
         return {self.agent: self.agent, **dict(self.params)}

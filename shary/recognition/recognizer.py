@@ -176,22 +176,34 @@ class Recognizer:
         self.achieved: list[Recognition] = []
         """Every achievement so far, in order (the paper's *possibly achieved* list)."""
         self._store = _Store()
-        self._triggers: dict[tuple[str, str], list[_Trigger]] = {}
+        # (predicate, change) -> (side, class) -> triggers: an effect or move is looked up
+        # by the class of the entity in its non-agent role (side 0: subject, 1: object;
+        # None: the fact names the agent alone), so that with a model per kind of object
+        # a change meets only the models of its object's kind
+        self._triggers: dict[tuple[str, str], dict[tuple[int, str] | None, list[_Trigger]]] = {}
         for model in models.human.values():
             for kind in ("move", "progress", "necessary"):
                 for fact in getattr(model, kind):
                     key = (fact.predicate, "removed" if fact.negated else "added")
-                    self._triggers.setdefault(key, []).append(_Trigger(model, kind, fact))
+                    side = (0 if fact.subject != model.agent else
+                            1 if fact.object != model.agent else None)
+                    role = None if side is None else (fact.subject, fact.object)[side]
+                    by_class = self._triggers.setdefault(key, {})
+                    index = None if side is None else (side, model.classes[role])
+                    by_class.setdefault(index, []).append(_Trigger(model, kind, fact))
+        self._order = {id(t): i for i, t in enumerate(
+            t for by_class in self._triggers.values() for ts in by_class.values() for t in ts)}
         self._near = [(f.predicate, f.subject == "Human") for f in models.near]
         self._near_predicates = {f.predicate for f in models.near}
         self._near_seen: dict[tuple[Any, Any], float] = {}  # (human, object) -> last near
-        self._types: dict[Any, tuple[str, ...]] = {}
+        self._types: dict[Any, frozenset[str]] = {}
         self._subscriptions: list[Subscription] = []
         self._ids = count(1)
         self._swept = 0.0
         self._done: dict[str, list[tuple[dict[str, Any], float]]] = {n: [] for n in models.human}
         """Recent achievements by model: an effect that is their tail is not a new action."""
         self._recent = max(models.settle, models.near_within)
+        self._completions: dict[tuple[Any, Any, Any], list[Any]] = {}
         self._pending: list[tuple[_Trigger, dict[str, Any], float]] = []
         """Removals that no candidate explains, waiting to last ``settle`` (flicker)."""
 
@@ -239,6 +251,7 @@ class Recognizer:
             return
         now = self.clock()
         store = self._store
+        self._completions.clear()  # what preconditions complete, for this change's models
         if kind == "added":
             # a fact back within `settle` of vanishing is the same fact: flicker, not an effect
             gone = store.add(s, p, o)
@@ -254,7 +267,10 @@ class Recognizer:
             self._settled(now)
         if now - self._swept >= 1.0:
             self._sweep(now)
-        for trigger in self._triggers.get((p, kind), ()):
+        by_class = self._triggers.get((p, kind))
+        if not by_class:
+            return
+        for trigger in self._matching(by_class, s, o):
             fact = trigger.fact
             if fact.subject == fact.object and s != o:
                 continue
@@ -263,6 +279,22 @@ class Recognizer:
                 self._move(trigger, binding, now)
             else:
                 self._effect(trigger, binding, now)
+
+    def _matching(self, by_class: dict, s: Any, o: Any) -> list[_Trigger]:
+        """The triggers whose non-agent role's class the entity there is (every one, for
+        an entity of unknown type), in the models' order."""
+        buckets = [by_class[None]] if None in by_class else []
+        for side, entity in ((0, s), (1, o)):
+            closure = self._closure(entity)
+            if closure:
+                buckets += [by_class[(side, cls)] for cls in closure if (side, cls) in by_class]
+            else:
+                buckets += [triggers for key, triggers in by_class.items()
+                            if key is not None and key[0] == side]
+        if len(buckets) == 1:
+            return buckets[0]  # the common case: one kind of object, already in order
+        order = self._order
+        return sorted((t for bucket in buckets for t in bucket), key=lambda t: order[id(t)])
 
     def _move(self, trigger: _Trigger, binding: dict[str, Any], now: float) -> None:
         model = trigger.model
@@ -370,6 +402,7 @@ class Recognizer:
         seconds ago or less): one binding per way they hold; none if a bound one fails."""
         results = [dict(binding)]
         settle, store, classes = self.models.settle, self._store, model.classes
+        completions = self._completions
         for fact in model.precond:
             extended: list[dict[str, Any]] = []
             for current in results:
@@ -384,7 +417,12 @@ class Recognizer:
                     extended.append(current)
                 else:
                     missing = fact.object if o is None else fact.subject
-                    for value in store.completing(s, fact.predicate, o, now, settle):
+                    key = (s, fact.predicate, o)
+                    values = completions.get(key)
+                    if values is None:
+                        values = completions[key] = store.completing(s, fact.predicate, o,
+                                                                     now, settle)
+                    for value in values:
                         if self._is(value, classes[missing], agent=missing == model.agent):
                             extended.append({**current, missing: value})
             results = extended
@@ -446,15 +484,20 @@ class Recognizer:
         known passes, unless it must be the agent: only a known human acts)."""
         if entity is None:
             return not agent
-        types = self._types.get(entity)
-        if types is None:
-            types = self._types[entity] = tuple(
-                str(t) for predicate in _TYPES
-                for t in self.facts.objects(entity, predicate, self.perspective))
-        if not types:
-            return not agent
-        ontology = self.models.ontology
-        return any(t in ontology and ontology.is_a(t, cls) or t == cls for t in types)
+        closure = self._closure(entity)
+        return cls in closure if closure else not agent
+
+    def _closure(self, entity: Any) -> frozenset[str]:
+        """Every class ``entity`` is, by its ``type`` facts and the ontology (kept until
+        its type changes)."""
+        found = self._types.get(entity)
+        if found is None:
+            ontology = self.models.ontology
+            types = {str(t) for predicate in _TYPES
+                     for t in self.facts.objects(entity, predicate, self.perspective)}
+            found = self._types[entity] = frozenset(
+                types.union(*(ontology.superclasses(t) for t in types if t in ontology)))
+        return found
 
     def _is_agent(self, entity: Any) -> bool:
         return self._is(entity, "Agent", agent=True)
