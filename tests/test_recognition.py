@@ -251,3 +251,20 @@ def test_the_timeline_shows_each_recognized_action_in_its_humans_lane(world):
     assert place.find(f"{ns}polygon[@class='achieved']") is not None
     legend = [t.text for t in root.iter(f"{ns}text") if t.get("class") == "legend"]
     assert {"possibly started", "possibly progressing", "possibly achieved"} <= set(legend)
+
+
+def test_a_scenario_naming_unknown_or_broken_action_models_is_refused(tmp_path):
+    from hostile import assert_refused, run_inprocess
+
+    models = tmp_path / "mine.yaml"
+    models.write_text("action-models: mine\nhuman:\n  juggle: {agent: Human, "
+                      "necessary: ['isOn(Human, Human)']}\n")
+    scenario = tmp_path / "s.yaml"
+    scenario.write_text("scenario: s\naction-models: [juggling, mine.yaml]\n"
+                        "expect: {facts: []}\n")
+    assert_refused(run_inprocess("validate", scenario), scenario, models,
+                   message="no built-in action models 'juggling' \\(shipped: living-room, stack\\)")
+    scenario.write_text("scenario: s\naction-models: [mine.yaml]\nexpect: {facts: []}\n")
+    outcome = run_inprocess("validate", scenario)
+    assert_refused(outcome, scenario, models, message="depends on action models with errors")
+    assert "no class of the action ontology is called 'juggle'" in outcome.err
