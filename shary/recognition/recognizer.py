@@ -99,6 +99,19 @@ class _Trigger:
     model: HumanActionModel
     kind: str  # "move", "progress", "necessary"
     fact: Fact
+    gate: tuple[Fact, str] | None = None
+    """For a move: a precondition that completes a role the move leaves open, and that
+    role's class; the move can start this model only if something of that class
+    completes it (the cube held decides between place-cube and place-bottle)."""
+
+
+def _gate(model: HumanActionModel, fact: Fact) -> tuple[Fact, str] | None:
+    bound = {fact.subject, fact.object}
+    for pre in model.precond:
+        if not pre.negated and (pre.subject in bound) != (pre.object in bound):
+            missing = pre.object if pre.subject in bound else pre.subject
+            return pre, model.classes[missing]
+    return None
 
 
 @dataclass
@@ -190,7 +203,8 @@ class Recognizer:
                     role = None if side is None else (fact.subject, fact.object)[side]
                     by_class = self._triggers.setdefault(key, {})
                     index = None if side is None else (side, model.classes[role])
-                    by_class.setdefault(index, []).append(_Trigger(model, kind, fact))
+                    gate = _gate(model, fact) if kind == "move" else None
+                    by_class.setdefault(index, []).append(_Trigger(model, kind, fact, gate))
         self._order = {id(t): i for i, t in enumerate(
             t for by_class in self._triggers.values() for ts in by_class.values() for t in ts)}
         self._near = [(f.predicate, f.subject == "Human") for f in models.near]
@@ -204,6 +218,7 @@ class Recognizer:
         """Recent achievements by model: an effect that is their tail is not a new action."""
         self._recent = max(models.settle, models.near_within)
         self._completions: dict[tuple[Any, Any, Any], list[Any]] = {}
+        self._gate_classes: dict[tuple[Any, Any, Any], frozenset[str] | None] = {}
         self._pending: list[tuple[_Trigger, dict[str, Any], float]] = []
         """Removals that no candidate explains, waiting to last ``settle`` (flicker)."""
 
@@ -252,6 +267,7 @@ class Recognizer:
         now = self.clock()
         store = self._store
         self._completions.clear()  # what preconditions complete, for this change's models
+        self._gate_classes.clear()
         if kind == "added":
             # a fact back within `settle` of vanishing is the same fact: flicker, not an effect
             gone = store.add(s, p, o)
@@ -296,17 +312,36 @@ class Recognizer:
         order = self._order
         return sorted((t for bucket in buckets for t in bucket), key=lambda t: order[id(t)])
 
+    def _gate_open(self, gate: tuple[Fact, str], binding: dict[str, Any], now: float) -> bool:
+        """Whether something of the gate's class completes its precondition (the classes
+        of what completes one pattern are worked out once per change, for all models)."""
+        pre, cls = gate
+        key = (binding.get(pre.subject), pre.predicate, binding.get(pre.object))
+        classes = self._gate_classes.get(key)
+        if classes is None:
+            values = self._completions.get(key)
+            if values is None:
+                values = self._completions[key] = self._store.completing(
+                    *key, now, self.models.settle)
+            closures = [self._closure(v) for v in values]
+            classes = self._gate_classes[key] = (
+                None if any(not c for c in closures) else frozenset().union(*closures))
+        return classes is None or cls in classes  # None: something of unknown type
+
     def _move(self, trigger: _Trigger, binding: dict[str, Any], now: float) -> None:
         model = trigger.model
         if not self._is(binding.get(model.agent), model.agent, agent=True):
             return
         live = self.candidates[model.name]
-        found = next((c for c in live.values() if all(c.binding.get(role) in (None, value)
-                                                      for role, value in binding.items())), None)
-        if found is not None:  # seen under way already (an effect came first): the same one
+        found = live and next((c for c in live.values()
+                               if all(c.binding.get(role) in (None, value)
+                                      for role, value in binding.items())), None)
+        if found:  # seen under way already (an effect came first): the same one
             del live[found.key()]
             found.binding, found.touched = {**found.binding, **binding}, now
             live[found.key()] = found
+            return
+        if trigger.gate is not None and not self._gate_open(trigger.gate, binding, now):
             return
         for full in self._bind(model, binding, now):
             key = (model.name, *(full.get(role) for role in model.roles))
