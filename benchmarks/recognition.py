@@ -222,6 +222,7 @@ def main() -> None:
         "p50_latency_ms": round(p[49] * 1000, 4), "p99_latency_ms": round(p[98] * 1000, 4),
         "peer_p99_latency_ms": round(pp[98] * 1000, 4),
         "max_latency_ms": round(max(all_latencies) * 1000, 3),
+        "peer_max_latency_ms": round(max(all_peer) * 1000, 3),
         "repeats": args.repeat,
         "achievements": achieved, "expected_achievements": sum(expected.values()),
         "false_achievements": false, "missed_achievements": missed,
