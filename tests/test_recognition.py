@@ -268,3 +268,20 @@ def test_a_scenario_naming_unknown_or_broken_action_models_is_refused(tmp_path):
     outcome = run_inprocess("validate", scenario)
     assert_refused(outcome, scenario, models, message="depends on action models with errors")
     assert "no class of the action ontology is called 'juggle'" in outcome.err
+
+
+def test_a_models_file_brings_its_own_classes_in_turtle(tmp_path):
+    (tmp_path / "kinds.ttl").write_text(
+        "@prefix w: <http://shary.dev/world#> .\n"
+        "@prefix rdfs: <http://www.w3.org/2000/01/rdf-schema#> .\n"
+        "w:Mug rdfs:subClassOf w:Pickable .\n"
+        "w:HumanPickMug rdfs:subClassOf w:HumanPickAction .\n")
+    (tmp_path / "mugs.yaml").write_text(
+        "action-models: mugs\nontology: [kinds.ttl]\nhuman:\n  pick-mug:\n"
+        "    class: HumanPickMug\n    agent: Human\n    params: {Pickable: Mug}\n"
+        "    necessary: ['isHolding(Human, Pickable)']\n")
+    facts = FactDatabase()
+    models = load_action_models([tmp_path / "mugs.yaml"], facts)
+    assert models.human["pick-mug"].action_class == "HumanPickMug"
+    assert models.ontology.label("HumanPickMug") == "{Agent} @Pick {Pickable}"
+    assert facts.holds("Mug", "rdfs:subClassOf", "Pickable")
