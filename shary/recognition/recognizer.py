@@ -38,11 +38,12 @@ with it (they were the same gesture seen two ways).
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from itertools import count
 from typing import Any, NamedTuple
 
 from shary.facts import FactDatabase, FactEvent, Subscription
+from shary.recognition.memory import FactMemory
 from shary.recognition.models import ActionModels, Fact, HumanActionModel
 
 __all__ = ["STATES", "Candidate", "Recognition", "Recognizer"]
@@ -83,8 +84,12 @@ class Candidate:
     binding: dict[str, Any]
     state: str
     since: float
+    """When it was first seen (started, or an effect seen without a start)."""
     touched: float
+    """When a change last concerned it (``forget`` counts from here)."""
     attributed: str = ""
+    """How an effect seen without a start was attributed ("seen", "before", "near",
+    "nobody"); empty when a movement started it."""
 
     @property
     def agent(self) -> Any:
@@ -114,63 +119,6 @@ def _gate(model: HumanActionModel, fact: Fact) -> tuple[Fact, str] | None:
     return None
 
 
-@dataclass
-class _Store:
-    """The current facts of the subscribed predicates, indexed both ways, and when the
-    ones that vanished went (for flicker, preconditions held a moment ago, nearness)."""
-
-    objects: dict[tuple[Any, Any], dict[Any, None]] = field(default_factory=dict)
-    subjects: dict[tuple[Any, Any], dict[Any, None]] = field(default_factory=dict)
-    gone: dict[tuple[Any, Any, Any], float] = field(default_factory=dict)
-    gone_objects: dict[tuple[Any, Any], dict[Any, float]] = field(default_factory=dict)
-    gone_subjects: dict[tuple[Any, Any], dict[Any, float]] = field(default_factory=dict)
-
-    def add(self, s: Any, p: Any, o: Any) -> float | None:
-        """Add a fact; when it had vanished, the time it went."""
-        self.objects.setdefault((s, p), {})[o] = None
-        self.subjects.setdefault((p, o), {})[s] = None
-        went = self.gone.pop((s, p, o), None)
-        if went is not None:
-            self.gone_objects[(s, p)].pop(o, None)
-            self.gone_subjects[(p, o)].pop(s, None)
-        return went
-
-    def remove(self, s: Any, p: Any, o: Any, now: float) -> None:
-        self.objects.get((s, p), {}).pop(o, None)
-        self.subjects.get((p, o), {}).pop(s, None)
-        self.gone[(s, p, o)] = now
-        self.gone_objects.setdefault((s, p), {})[o] = now
-        self.gone_subjects.setdefault((p, o), {})[s] = now
-
-    def forget(self, horizon: float) -> None:
-        """Forget facts that vanished before ``horizon``."""
-        for (s, p, o) in [f for f, t in self.gone.items() if t < horizon]:
-            del self.gone[(s, p, o)]
-            del self.gone_objects[(s, p)][o]
-            del self.gone_subjects[(p, o)][s]
-
-    def holds(self, s: Any, p: Any, o: Any) -> bool:
-        return o in self.objects.get((s, p), ())
-
-    def recently(self, s: Any, p: Any, o: Any, now: float, within: float) -> bool:
-        """Holds, or held until ``within`` seconds ago or less."""
-        if o in self.objects.get((s, p), ()):
-            return True
-        gone = self.gone.get((s, p, o))
-        return gone is not None and now - gone <= within
-
-    def completing(self, s: Any, p: Any, o: Any, now: float, within: float) -> list[Any]:
-        """What fills the missing side of (s, p, ?) or (?, p, o), now or ``within`` seconds
-        ago or less, in a stable order."""
-        if o is None:
-            found, went = self.objects.get((s, p), {}), self.gone_objects.get((s, p), {})
-        else:
-            found, went = self.subjects.get((p, o), {}), self.gone_subjects.get((p, o), {})
-        values = list(found)
-        values += [v for v, t in went.items() if now - t <= within and v not in found]
-        return sorted(values, key=str) if len(values) > 1 else values
-
-
 class Recognizer:
     """Recognizes human actions from fact changes (see the module's documentation)."""
 
@@ -188,7 +136,7 @@ class Recognizer:
         """Live candidates (started or progressing) by model name, then key."""
         self.achieved: list[Recognition] = []
         """Every achievement so far, in order (the paper's *possibly achieved* list)."""
-        self._store = _Store()
+        self._store = FactMemory()
         # (predicate, change) -> (side, class) -> triggers: an effect or move is looked up
         # by the class of the entity in its non-agent role (side 0: subject, 1: object;
         # None: the fact names the agent alone), so that with a model per kind of object
