@@ -105,6 +105,8 @@ class Supervisor:
         from shary.recognition.execution import RobotActions
         from shary.recognition.recognizer import Recognizer
 
+        if self.recognizer is not None:  # new models replace the old, never run beside them
+            self.recognizer.stop()
         self.recognizer = Recognizer(models, self.facts, perspective=perspective,
                                      clock=self.loop.now, record=self.record)
         self.robot_actions = RobotActions(self, models)
