@@ -18,6 +18,7 @@ from typing import Any
 
 from jsonschema import Draft202012Validator
 
+from planner.agendas import open_vars, read_agendas
 from planner.ahp import AHPError, priority_vector
 from planner.domain import (
     AGENT_KINDS,
@@ -27,7 +28,6 @@ from planner.domain import (
     Domain,
     EntityType,
     Method,
-    OpenVar,
     Problem,
     Rule,
     SelectedRule,
@@ -255,29 +255,8 @@ class _DomainBuilder(_Builder):
             decompositions.append(Decomposition(
                 dec_name, vars_, pre, tuple(subtasks), dec.get("doc", "") or "",
                 weight=float(dec.get("weight", 1.0)),
-                open=self._open(where, dec.get("open"), dict(vars_))))
+                open=open_vars(self, where, dec.get("open"), dict(vars_))))
         return Method(name, params, tuple(decompositions), spec.get("doc", "") or "")
-
-    def _open(self, path: tuple, raw: Any, vars_: dict[str, str]) -> tuple[OpenVar, ...]:
-        """A decomposition's open variables: each must be one of its ``vars``; an AgentX's
-        of an agent type."""
-        out = []
-        for var, spec in _items(raw):
-            if var not in vars_:
-                self.problem(path + ("open", var), f"{var!r} is not a variable of this "
-                             f"decomposition (declare it in vars){did_you_mean(var, vars_)}",
-                             key=True)
-                continue
-            if isinstance(spec, dict) and "query" in spec:
-                out.append(OpenVar(var, "query", query=str(spec["query"])))
-                continue
-            etype = self.types.get(vars_[var])
-            if etype is not None and not etype.agent:
-                self.problem(path + ("open", var), f"an AgentX variable must be of an agent "
-                             f"type; {var!r} is a {vars_[var]}")
-            names = spec.get("any-of") if isinstance(spec, dict) else None
-            out.append(OpenVar(var, "agentx", any_of=tuple(str(n) for n in names or ())))
-        return tuple(out)
 
     def _subtask(self, path: tuple, text: str, variables: dict[str, str]) -> Subtask | None:
         match = _CALL.match(text)
@@ -424,34 +403,11 @@ class _ProblemBuilder(_Builder):
             rules[name] = SelectedRule(rule, {k: float(v) for k, v in table.items()},
                                        float(spec.get("weight", 1.0)))
         weights, scale = self._criteria(rules)
-        agendas = []
-        for agent, texts in _items(data.get("agendas")):
-            if entities.get(agent) is None or not domain.types[entities[agent]].agent:
-                self.problem(("agendas", agent), f"{agent!r} is not an agent of this problem"
-                             f"{did_you_mean(agent, entities)}", key=True)
-                continue
-            agenda = [self._task(("agendas", agent, i), str(t), entities)
-                      for i, t in enumerate(texts or [])]
-            agendas.append((agent, tuple(t for t in agenda if t is not None)))
-        if agendas:
-            self._check_any_of(entities)
+        agendas = read_agendas(self, entities)
         return Problem(str(data.get("problem", "problem")), domain, entities, initial,
                        tuple(tasks), goals, rules, weights, scale,
                        int(data.get("budget_ms", 1000)), data.get("doc", "") or "",
-                       self.located.file, tuple(agendas), dict(data.get("policy") or {}))
-
-    def _check_any_of(self, entities: dict[str, str]) -> None:
-        """The agents an AgentX names must be this problem's, of the variable's type."""
-        for method in self.domain.methods.values():
-            for dec in method.decompositions:
-                kinds = dict(dec.vars)
-                for open_var in dec.open:
-                    for name in open_var.any_of:
-                        if entities.get(name) != kinds.get(open_var.var):
-                            self.problem(("agendas",), f"{method.name}[{dec.name}] leaves "
-                                         f"{open_var.var} to any-of {list(open_var.any_of)}, "
-                                         f"but {name!r} is not a {kinds.get(open_var.var)} of "
-                                         f"this problem", key=True)
+                       self.located.file, agendas, dict(data.get("policy") or {}))
 
     def _check_value(self, path: tuple, kind: str, value: Any, entities: dict[str, str]) -> None:
         if value is None or kind == "any":

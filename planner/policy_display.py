@@ -11,7 +11,8 @@ so that the ids in a picture are the plan's:
 * :func:`tree_dot` -- the same, plus the robot's options the policy did not
   keep (dashed, grey, with the cost they would have had): what was explored;
 * :func:`streams_dot` -- one cluster per branch, one row per agent, the
-  agent's tasks in order: who does what in each case.
+  agent's tasks in order, a column per round of turns: who does what, and
+  when, in each case.
 
 :func:`policy_lines` is the terminal's view: the policy as an indented list.
 """
@@ -167,28 +168,37 @@ def streams_dot(policy: Policy, title: str = "") -> str:
     colours = _colours(plan)
     graph = _graph("conditional_streams", plan, title, rankdir="LR")
     tasks = {t["id"]: t for t in plan["primitive"]}
-    for number, branch in enumerate(plan["branches"], start=1):
+    count = len(plan["agents"])
+    numbered = list(enumerate(plan["branches"], start=1))
+    for number, branch in reversed(numbered):  # dot stacks LR clusters bottom up
         chosen = [_option_text(plan, tasks[i]) for i in branch["tasks"]
                   if "decision" in tasks[i]]
         with graph.subgraph(name=f"cluster_b{number}") as cluster:
             cluster.attr(label=_label(f"branch {number}: cost {branch['cost']:.4g}",
                                       "; ".join(chosen) or "no decision"),
                          style="rounded", color="#999999", labeljust="l")
+            rounds: dict[int, list[str]] = {}
             for agent in plan["agents"]:
-                row = [tasks[i] for i in branch["tasks"] if tasks[i]["kind"] == "action"
-                       and _owner(tasks[i], agent)]
-                if not row:
-                    continue
                 head = f"b{number}_{agent}"
-                fill, line = colours[agent]
+                line = colours[agent][1]
                 cluster.node(head, _label(agent), shape="plaintext", style="",
                              fontcolor=line)
+                rounds.setdefault(-1, []).append(head)
                 before = head
-                for task in row:
-                    node = f"b{number}_{task['id']}"
+                for turn, task_id in enumerate(branch["tasks"]):
+                    task = tasks[task_id]
+                    if task["kind"] == "done" or not _owner(task, agent):
+                        continue
+                    node = f"b{number}_{task_id}"
                     _task_node(cluster, task, colours, node)
                     cluster.edge(before, node, style="invis" if before == head else "")
+                    rounds.setdefault(turn // count, []).append(node)
                     before = node
+            for nodes in rounds.values():  # one column per round of turns
+                with cluster.subgraph() as rank:
+                    rank.attr(rank="same")
+                    for node in nodes:
+                        rank.node(node)
     return graph.source
 
 
