@@ -8,9 +8,10 @@ and a problem's ``agendas`` (each agent's own tasks, in turn order).
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
-from planner.domain import OpenVar
+from planner.domain import Action, Method, OpenVar
 from userfiles.schema import did_you_mean
 
 
@@ -39,6 +40,39 @@ def open_vars(builder: Any, path: tuple, raw: Any, vars_: dict[str, str]
         names = spec.get("any-of") if isinstance(spec, dict) else None
         out.append(OpenVar(var, "agentx", any_of=tuple(str(n) for n in names or ())))
     return tuple(out)
+
+
+def read_assigns(builder: Any, actions: dict[str, Action], methods: dict[str, Method]
+                 ) -> dict[str, Action]:
+    """The actions' ``assigns`` (once every task's parameters are known): each key a
+    parameter of an agent type, each task written as a subtask over the parameters; and
+    each decomposition's ``abandon`` a method of the domain."""
+    out = dict(actions)
+    for name, spec in _items(builder.data.get("actions")):
+        if name not in actions or not isinstance(spec, dict):
+            continue
+        action = actions[name]
+        variables = dict(action.params)
+        assigns = []
+        for param, texts in _items(spec.get("assigns")):
+            path = ("actions", name, "assigns", param)
+            kind = variables.get(param)
+            if kind is None or kind not in builder.types or not builder.types[kind].agent:
+                builder.problem(path, f"{param!r} is not a parameter of {name} naming an "
+                                f"agent{did_you_mean(param, variables)}", key=True)
+                continue
+            subtasks = [builder._subtask(path + (i,), str(t), variables)
+                        for i, t in enumerate(texts or [])]
+            assigns.append((param, tuple(s for s in subtasks if s is not None)))
+        if assigns:
+            out[name] = dataclasses.replace(action, assigns=tuple(assigns))
+    for name, spec in _items(builder.data.get("methods")):
+        for index, dec in enumerate((spec or {}).get("decompositions") or []):
+            target = dec.get("abandon") if isinstance(dec, dict) else None
+            if target is not None and target not in methods:
+                builder.problem(("methods", name, "decompositions", index, "abandon"),
+                                f"unknown method {target!r}{did_you_mean(target, methods)}")
+    return out
 
 
 def read_agendas(builder: Any, entities: dict[str, str]

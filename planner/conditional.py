@@ -38,6 +38,9 @@ from planner.state import State
 IDLE = "IDLE"
 WAIT = "WAIT"
 DONE = "DONE"
+MARK = "/"
+"""The agenda entry ``("/Name", ())`` ends a task of a method some decomposition may
+``abandon``: what is left of it lies before the mark."""
 """The step that ends a branch: the last controlled agenda drained (it costs nothing)."""
 DEFAULT_MAX_STEPS = 400
 DEFAULT_MAX_NODES = 500_000
@@ -85,6 +88,9 @@ class Expansion:
     decomposition: str
     bindings: tuple[tuple[str, Any], ...]
     subtasks: int
+    """Agenda entries it put in the task's place (its subtasks, and the end mark)."""
+    dropped: int = 0
+    """Agenda entries after them it abandoned."""
 
 
 @dataclass(frozen=True)
@@ -99,6 +105,8 @@ class Step:
     expansions: tuple[Expansion, ...] = ()
     weight: float = 1.0
     """Its option's weight, when it is one of a human's options."""
+    assigned: tuple[tuple[str, int], ...] = ()
+    """How many tasks the action put at the head of which agent's agenda."""
 
     def __str__(self) -> str:
         return f"{self.name}({', '.join(str(a) for a in self.args)})"
@@ -148,13 +156,20 @@ class _Option:
     bundle: Bundle
     cost: float = 0.0
     duration: float = 0.0
+    assigned: tuple[tuple[str, Agenda], ...] = ()
+
+
+def marked_methods(problem: Problem) -> frozenset[str]:
+    """The methods some decomposition may abandon: their tasks end with a mark."""
+    return frozenset(d.abandon for m in problem.domain.methods.values()
+                     for d in m.decompositions if d.abandon)
 
 
 class Explorer:
     """The AND/OR search of one conditional problem."""
 
     def __init__(self, problem: Problem, max_steps: int | None = None,
-                 max_nodes: int | None = None, worst: bool = False):
+                 max_nodes: int | None = None, worst: bool = False, merge: bool = True):
         self.problem = problem
         self.domain = problem.domain
         self.order = tuple(agent for agent, _ in problem.agendas)
@@ -167,12 +182,16 @@ class Explorer:
         self.max_steps = int(max_steps or policy.get("max_steps", DEFAULT_MAX_STEPS))
         self.max_nodes = int(max_nodes or DEFAULT_MAX_NODES)
         self.worst = worst
+        self.merge = merge
+        """Whether a turn reached again is explored once (False: the tree HATP/EHDA
+        explores, for comparison)."""
         self.nodes = 0
         self.cut = 0
         self.loops = 0
         self.memo: dict[tuple, Turn | None] = {}
         self.active: set[tuple] = set()
         self.dead_ends: list[str] = []
+        self.marked = marked_methods(problem)
 
     # -- the turns -----------------------------------------------------------------------
 
@@ -211,7 +230,8 @@ class Explorer:
             node = self._expand(bundle, agendas, t, steps)
         finally:
             self.active.discard(key)
-        self.memo[key] = node
+        if self.merge:
+            self.memo[key] = node
         return node
 
     def _expand(self, bundle: Bundle, agendas: tuple[Agenda, ...], t: int,
@@ -238,6 +258,16 @@ class Explorer:
             return node
         for option in options:
             new = agendas[:t] + (option.agenda,) + agendas[t + 1:]
+            for target, tasks in option.assigned:
+                if target not in self.order:
+                    self._dead(f"{target} is given tasks but has no agenda in the problem")
+                    new = None
+                    break
+                at = self.order.index(target)
+                new = new[:at] + (tasks + new[at],) + new[at + 1:]
+            if new is None:
+                continue
+            handed = tuple((target, len(tasks)) for target, tasks in option.assigned)
             if option.action is None:  # the agenda drained through empty decompositions
                 step = Step(agent, IDLE, (), self.idle_cost, 0.0, option.expansions,
                             option.weight)
@@ -248,7 +278,7 @@ class Explorer:
                     child = self._turn(option.bundle, new, nxt, steps + 1)
             else:
                 step = Step(agent, option.action.name, option.args, option.cost,
-                            option.duration, option.expansions, option.weight)
+                            option.duration, option.expansions, option.weight, handed)
                 child = self._turn(option.bundle, new, nxt, steps + 1)
             if child is None:
                 if not controlled:
@@ -294,18 +324,32 @@ class Explorer:
                 return
             self._tick()
             (name, args), rest = agenda[0], agenda[1:]
+            if name.startswith(MARK):  # the end of a task: nothing to do
+                stack.append((rest, expansions + (Expansion(name, (), "", (), 0),), weight,
+                              bundle))
+                continue
             action = self.domain.actions.get(name)
             if action is not None:
                 applied = self._apply(action, args, bundle)
                 if applied is not None:
                     child, cost, duration = applied
-                    yield _Option(expansions, action, args, weight, rest, child, cost, duration)
+                    yield _Option(expansions, action, args, weight, rest, child, cost, duration,
+                                  self._assigned(action, args, child))
                 continue
             method = self.domain.methods[name]
             found = list(self._decompose(method, args, bundle))
             for dec, bindings, subtasks, new_bundle in reversed(found):
-                exp = Expansion(name, args, dec.name, bindings, len(subtasks))
-                stack.append((subtasks + rest, expansions + (exp,), weight * dec.weight,
+                kept = rest
+                if dec.abandon is not None:
+                    end = (MARK + dec.abandon, ())
+                    if end not in rest:
+                        self._dead(f"{name}[{dec.name}] abandons {dec.abandon}, which it is "
+                                   "not part of")
+                        continue
+                    kept = rest[rest.index(end) + 1:]
+                exp = Expansion(name, args, dec.name, bindings, len(subtasks),
+                                len(rest) - len(kept))
+                stack.append((subtasks + kept, expansions + (exp,), weight * dec.weight,
                               new_bundle))
 
     def _apply(self, action: Action, args: tuple, bundle: Bundle
@@ -328,6 +372,18 @@ class Explorer:
         if self.worst:
             return tuple(out), max(costs), max(durations)
         return tuple(out), sum(costs) / len(costs), sum(durations) / len(durations)
+
+    def _assigned(self, action: Action, args: tuple, bundle: Bundle
+                  ) -> tuple[tuple[str, Agenda], ...]:
+        """The tasks the action hands to other agents, their arguments evaluated after it
+        (in the first state of the bundle: they name entities, not open values)."""
+        if not action.assigns:
+            return ()
+        state, assignment = bundle[0]
+        env = dict(zip(action.names, _resolve(args, assignment), strict=True))
+        return tuple((env[param], tuple((sub.task, tuple(a(env, state.get) for a in sub.args))
+                                        for sub in subtasks))
+                     for param, subtasks in action.assigns)
 
     def _decompose(self, method: Method, args: tuple, bundle: Bundle
                    ) -> Iterator[tuple[Decomposition, tuple, Agenda, Bundle]]:
@@ -352,8 +408,12 @@ class Explorer:
                 state = bundle[0][0]
                 subtasks = tuple((sub.task, tuple(arg(env, state.get) for arg in sub.args))
                                  for sub in dec.subtasks)
+                if method.name in self.marked:
+                    subtasks += ((MARK + method.name, ()),)
                 bindings = tuple((v, env[v]) for v, _ in dec.vars)
                 yield dec, bindings, subtasks, new_bundle
+                if method.first:
+                    return
 
     def _open(self, method: Method, dec: Decomposition, env: dict, args: tuple,
               bundle: Bundle) -> tuple[dict, Bundle] | None:
@@ -385,9 +445,9 @@ class Explorer:
 
 
 def explore(problem: Problem, max_steps: int | None = None, max_nodes: int | None = None,
-            worst: bool = False) -> Exploration:
+            worst: bool = False, merge: bool = True) -> Exploration:
     """The AND/OR graph of a conditional problem (one with ``agendas``)."""
-    return Explorer(problem, max_steps, max_nodes, worst).run()
+    return Explorer(problem, max_steps, max_nodes, worst, merge).run()
 
 
 def _resolve(args: tuple, assignment: Assignment) -> tuple:

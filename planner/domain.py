@@ -59,6 +59,9 @@ class Action:
     deletes: tuple[tuple[str, Callable[[dict[str, Any]], tuple]], ...] = ()
     """HDDL: the goal facts it deletes whatever the state, as a predicate and a function
     of the arguments giving the fact's arguments (for the search's goal protection)."""
+    assigns: tuple[tuple[str, tuple[Subtask, ...]], ...] = ()
+    """Conditional plans: tasks this action puts at the head of another agent's agenda
+    (by the parameter naming that agent) -- asking someone for help gives them a task."""
     names: tuple[str, ...] = field(init=False, repr=False, compare=False)
     """The parameters' names, in order (the search zips them with arguments)."""
 
@@ -116,6 +119,10 @@ class Decomposition:
     to the others open at that point (conditional plans: :mod:`planner.conditional`)."""
     open: tuple[OpenVar, ...] = ()
     """The variables left open to execution time (AgentX, query parameters)."""
+    abandon: str | None = None
+    """Conditional plans: taking this decomposition drops what is left of the nearest
+    enclosing task of this method from the agenda (its subtasks replace it): giving up
+    the current way of doing it, as when the robot asks for help and plans again."""
 
 
 @dataclass(frozen=True)
@@ -141,6 +148,9 @@ class Method:
     params: tuple[tuple[str, str], ...]
     decompositions: tuple[Decomposition, ...]
     doc: str = ""
+    first: bool = False
+    """Conditional plans: only the first decomposition and binding (in file, then name
+    order) whose precondition holds is used -- a rule, not a choice (``choose: first``)."""
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ from typing import Any
 
 from jsonschema import Draft202012Validator
 
-from planner.agendas import open_vars, read_agendas
+from planner.agendas import open_vars, read_agendas, read_assigns
 from planner.ahp import AHPError, priority_vector
 from planner.domain import (
     AGENT_KINDS,
@@ -142,6 +142,7 @@ class _DomainBuilder(_Builder):
                                                       spec.get("params"))
         methods = {n: self._method(n, s) for n, s in _items(data.get("methods"))
                    if isinstance(s, dict)}
+        actions = read_assigns(self, actions, methods)
         rules = {n: self._rule(n, s, actions, methods) for n, s in _items(data.get("rules"))
                  if isinstance(s, dict)}
         domain = Domain(str(data.get("domain", "domain")), self.types, actions, methods, rules,
@@ -254,9 +255,10 @@ class _DomainBuilder(_Builder):
                     subtasks.append(sub)
             decompositions.append(Decomposition(
                 dec_name, vars_, pre, tuple(subtasks), dec.get("doc", "") or "",
-                weight=float(dec.get("weight", 1.0)),
+                weight=float(dec.get("weight", 1.0)), abandon=dec.get("abandon"),
                 open=open_vars(self, where, dec.get("open"), dict(vars_))))
-        return Method(name, params, tuple(decompositions), spec.get("doc", "") or "")
+        return Method(name, params, tuple(decompositions), spec.get("doc", "") or "",
+                      first=spec.get("choose") == "first")
 
     def _subtask(self, path: tuple, text: str, variables: dict[str, str]) -> Subtask | None:
         match = _CALL.match(text)

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from planner.conditional import DONE, IDLE, LEAF_KIND, WAIT, OpenValue, Step
+from planner.conditional import DONE, IDLE, LEAF_KIND, MARK, WAIT, OpenValue, Step
 from planner.policy import Choice, Policy, performer
 
 FORMAT = "shary-conditional-plan/1"
@@ -96,15 +96,20 @@ def _task(step: Step, parents: dict[str, list], ids: Any, previous: int | None,
     agenda = parents.setdefault(step.agent, [])
     for exp in step.expansions:
         parent = agenda.pop(0) if agenda else None
+        if exp.method.startswith(MARK):  # the end of a task
+            continue
         node = {"id": next(ids), "name": exp.method,
                 "params": [_value(a) for a in exp.args], "agent": step.agent,
                 "decomposition": parent, "method": exp.decomposition,
                 "bindings": {k: _value(v) for k, v in exp.bindings}}
         abstract.append(node)
+        del agenda[:exp.dropped]
         agenda[:0] = [node["id"]] * exp.subtasks
     parent = None
     if step.name not in _KINDS:
         parent = agenda.pop(0) if agenda else None
+    for target, count in step.assigned:
+        parents.setdefault(target, [])[:0] = [None] * count
     return {"id": next(ids), "name": step.name, "kind": _KINDS.get(step.name, "action"),
             "agent": _value(performer(policy.problem, step)),
             "params": [_value(a) for a in step.args],

@@ -135,9 +135,10 @@ def _open_values(steps: list) -> list:
 
 
 def _replay_branch(problem: Problem, policy: Any, steps: list, assignment: dict) -> list[str]:
-    from planner.conditional import DONE, IDLE, WAIT, OpenValue
+    from planner.conditional import DONE, IDLE, MARK, WAIT, OpenValue, marked_methods
 
     domain = problem.domain
+    marked = marked_methods(problem)
     values: dict[tuple[str, str], Any] = dict(problem.initial)
     order = [agent for agent, _ in problem.agendas]
     controlled = policy.exploration.controlled
@@ -156,6 +157,9 @@ def _replay_branch(problem: Problem, policy: Any, steps: list, assignment: dict)
             return [f"{label}: it is {order[turn % len(order)]}'s turn"]
         agenda = agendas[step.agent]
         for exp in step.expansions:
+            if exp.method.startswith(MARK) and agenda and agenda[0] == (exp.method, ()):
+                del agenda[0]
+                continue
             if not agenda or agenda[0] != (exp.method, tuple(exp.args)):
                 return [f"{label}: {exp.method}{tuple(exp.args)} is not at the head of "
                         f"{step.agent}'s agenda"]
@@ -175,11 +179,28 @@ def _replay_branch(problem: Problem, policy: Any, steps: list, assignment: dict)
             if dec.pre is not None and not dec.pre(resolve(env), get):
                 return [f"{label}: {exp.method}[{dec.name}] used while its precondition is "
                         f"false: {dec.pre.text}"]
+            if method.first:
+                first = _first_choice(problem, method, env, resolve, get)
+                if first != (dec.name, exp.bindings):
+                    return [f"{label}: {exp.method} chooses its first applicable "
+                            f"decomposition, {first}, not {dec.name}"]
             subtasks = [(s.task, tuple(a(env, get) for a in s.args)) for s in dec.subtasks]
+            if method.name in marked:
+                subtasks.append((MARK + method.name, ()))
             if len(subtasks) != exp.subtasks:
                 return [f"{label}: {exp.method}[{dec.name}] has {len(subtasks)} subtasks, "
                         f"the plan says {exp.subtasks}"]
-            agenda[:1] = subtasks
+            rest = agenda[1:]
+            if dec.abandon is not None:
+                end = (MARK + dec.abandon, ())
+                if end not in rest:
+                    return [f"{label}: {exp.method}[{dec.name}] abandons {dec.abandon}, "
+                            "which it is not part of"]
+                rest = rest[rest.index(end) + 1:]
+            if len(agenda) - 1 - len(rest) != exp.dropped:
+                return [f"{label}: {exp.method}[{dec.name}] drops {len(agenda) - 1 - len(rest)}"
+                        f" tasks, the plan says {exp.dropped}"]
+            agenda[:] = subtasks + rest
         if step.name in (IDLE, DONE):
             if agenda:
                 return [f"{label}: {step.agent}'s agenda is not empty"]
@@ -200,6 +221,12 @@ def _replay_branch(problem: Problem, policy: Any, steps: list, assignment: dict)
         action.apply(env, get, lambda e, a, v, _w=writes: _w.append(((e, a), v)))
         values.update(writes)
         del agenda[0]
+        for param, subtasks in action.assigns:
+            target = env[param]
+            if target not in agendas:
+                return [f"{label}: gives tasks to {target}, who has no agenda"]
+            agendas[target][:0] = [(s.task, tuple(a(env, get) for a in s.args))
+                                   for s in subtasks]
     if any(agendas[a] for a in order if a in controlled):
         return ["the branch ends before every controlled agenda is done"]
     for (entity, attribute), wanted in problem.goals.items():
@@ -207,3 +234,17 @@ def _replay_branch(problem: Problem, policy: Any, steps: list, assignment: dict)
             return [f"goal {fact_text(entity, attribute)} == {wanted!r} does not hold at the "
                     f"leaf ({values.get((entity, attribute))!r})"]
     return []
+
+
+def _first_choice(problem: Problem, method: Any, env: dict, resolve: Any, get: Any
+                  ) -> tuple[str, tuple] | None:
+    """A ``choose: first`` method's choice: its first decomposition and binding (closed
+    variables, in name order) whose precondition holds."""
+    for dec in method.decompositions:
+        opened = {o.var for o in dec.open}
+        closed = [(v, k) for v, k in dec.vars if v not in opened]
+        for values in itertools.product(*(problem.of_type(k) for _, k in closed)):
+            trial = {**env, **dict(zip((v for v, _ in closed), values, strict=True))}
+            if dec.pre is None or dec.pre(resolve(trial), get):
+                return dec.name, tuple((v, trial[v]) for v, _ in dec.vars)
+    return None
