@@ -25,12 +25,18 @@ from __future__ import annotations
 import argparse
 import json
 import statistics
+import sys
 import time
 from pathlib import Path
 
-from planner import load_domain, load_problem
-from planner.conditional import explore
-from planner.policy import select
+# Run as a script, this folder comes first on the path, and its planner.py would shadow
+# the planner package.
+HERE = Path(__file__).resolve().parent
+sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != HERE]
+
+from planner import load_domain, load_problem  # noqa: E402
+from planner.conditional import explore  # noqa: E402
+from planner.policy import select  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 PROBLEMS = {

@@ -132,7 +132,7 @@ def tree_dot(policy: Policy, title: str = "") -> str:
     rejected = _rejected(policy, plan, tasks)
     for number, (after, text, value) in enumerate(rejected):
         node = f"r{number}"
-        graph.node(node, _label(text, f"not chosen: then {value:.4g}"), style="dashed",
+        graph.node(node, _label(text, f"not chosen: {value:.4g} from here"), style="dashed",
                    color="#999999", fontcolor="#777777")
         graph.edge(f"p{after}" if after is not None else node, node, style="dashed",
                    color="#999999")

@@ -60,6 +60,28 @@ def test_stack_matches_hatpehda() -> None:
         assert all(p in ids for p in task["predecessors"])
 
 
+def test_icra_stack_matches_hatpehda() -> None:
+    """HATP/EHDA's stack_ex: 13 branches; the best policy asks the human to share the goal
+    (20.0) rather than fetch the red cube (moves cost 10) or ask for punctual help."""
+    problem, policy = _solve(ROOT / "planner" / "domains" / "stack-icra.yaml",
+                             ROOT / "planner" / "problems" / "stack-icra.yaml")
+    assert policy.leaves == 13
+    assert policy.cost == pytest.approx(20.0)
+    assert validate_conditional(problem, policy) == []
+    (branch,) = policy.branches
+    assert "AskSharedGoal(robot, human, stack)" in map(str, branch)
+    rejected = sorted(str(step) for step, _ in _others(policy.root))
+    assert rejected == ["AskPunctualHelp(robot, human, red, base, stack)",
+                        "MoveTo(robot, side_h)"]
+
+
+def _others(choice) -> list:  # type: ignore[no-untyped-def]
+    found = list(choice.others)
+    for _, _, child in choice.options:
+        found += _others(child)
+    return found
+
+
 def test_worst_case_and_weights(tmp_path: Path) -> None:
     """Worst case takes the dearest option; a weight makes an option likelier."""
     _, worst = _solve(STACK, PROBLEM, "worst")
