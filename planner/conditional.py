@@ -28,7 +28,9 @@ returns, as long as it is one of the candidates the plan lists.
 from __future__ import annotations
 
 import itertools
+import sys
 from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -43,7 +45,8 @@ MARK = "/"
 ``abandon``: what is left of it lies before the mark."""
 """The step that ends a branch: the last controlled agenda drained (it costs nothing)."""
 DEFAULT_MAX_STEPS = 400
-DEFAULT_MAX_NODES = 500_000
+DEFAULT_MAX_NODES = 200_000
+_ABSENT = object()
 _EXPANSIONS_PER_TURN = 10_000
 """Decompositions one turn may go through before it reaches an action (a method that
 decomposes into itself forever is cut there)."""
@@ -125,6 +128,19 @@ class Turn:
 LEAF_KIND = "leaf"
 
 
+@contextmanager
+def deep(steps: int) -> Iterator[None]:
+    """Room for a recursion as deep as a branch of ``steps`` turns (a few frames a turn).
+    The calls are Python to Python, which Python 3.11 makes without the C stack; the
+    schema bounds ``max_steps``."""
+    old = sys.getrecursionlimit()
+    sys.setrecursionlimit(max(old, 4 * steps + 1000))
+    try:
+        yield
+    finally:
+        sys.setrecursionlimit(old)
+
+
 class BudgetExhausted(Exception):
     """The node budget ran out: the exploration stops."""
 
@@ -192,6 +208,8 @@ class Explorer:
         self.active: set[tuple] = set()
         self.dead_ends: list[str] = []
         self.marked = marked_methods(problem)
+        self.initial = problem.initial
+        """Turns are remembered by how their states differ from it (small keys)."""
 
     # -- the turns -----------------------------------------------------------------------
 
@@ -200,7 +218,8 @@ class Explorer:
         agendas = tuple(tasks for _, tasks in self.problem.agendas)
         exhausted = None
         try:
-            root = self._turn(((state, ()),), agendas, 0, 0) if self.order else None
+            with deep(self.max_steps):
+                root = self._turn(((state, ()),), agendas, 0, 0) if self.order else None
         except BudgetExhausted:
             root = None
             exhausted = (f"node budget: {self.max_nodes:,} turns and decompositions "
@@ -215,7 +234,10 @@ class Explorer:
 
     def _turn(self, bundle: Bundle, agendas: tuple[Agenda, ...], t: int,
               steps: int) -> Turn | None:
-        key = (tuple((frozenset(s.items().items()), a) for s, a in bundle), agendas, t)
+        initial = self.initial
+        key = (tuple((frozenset(kv for kv in s.items().items()
+                                if initial.get(kv[0], _ABSENT) != kv[1]), a)
+                     for s, a in bundle), agendas, t)
         if key in self.memo:
             return self.memo[key]
         if key in self.active:
@@ -497,4 +519,5 @@ def count_leaves(root: Turn | None, chosen: dict[int, int] | None = None) -> int
         counts[id(node)] = total
         return total
 
-    return count(root)
+    with deep(DEFAULT_MAX_STEPS * 5):
+        return count(root)

@@ -21,7 +21,18 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from planner.conditional import DONE, IDLE, LEAF_KIND, WAIT, Exploration, OpenValue, Step, Turn
+from planner.conditional import (
+    DEFAULT_MAX_STEPS,
+    DONE,
+    IDLE,
+    LEAF_KIND,
+    WAIT,
+    Exploration,
+    OpenValue,
+    Step,
+    Turn,
+    deep,
+)
 from planner.domain import Problem
 from planner.evaluate import Evaluator
 
@@ -70,7 +81,8 @@ def select(problem: Problem, exploration: Exploration, mode: str = "expected") -
     if exploration.root is None:
         return Policy(problem, exploration, mode, None, None, leaves)
     chooser = _Chooser(problem, mode)
-    root = chooser.choice(exploration.root, ())
+    with deep(DEFAULT_MAX_STEPS * 5):
+        root = chooser.choice(exploration.root, ())
     policy = Policy(problem, exploration, mode, root, root.value, leaves)
     for branch in walk(root):
         policy.branches.append([step for step, _ in branch])

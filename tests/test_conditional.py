@@ -249,3 +249,70 @@ def test_cli_json_yaml_and_render(tmp_path: Path) -> None:
     refused = run_inprocess("plan", "fig6", ROOT / "planner" / "problems" / "fig6.yaml",
                             "--render", "policy", "-o", picture)
     assert refused.status == 2 and "conditional problems" in refused.err
+
+
+RUNAWAY = """
+domain: runaway
+types:
+  Token:
+    dynamic: {taken: bool}
+  Agent:
+    agent: true
+    static: {kind: string}
+    dynamic: {turns: number}
+actions:
+  Take:
+    params: {ag: Agent, t: Token}
+    agent: ag
+    pre: not t.taken
+    effects: [t.taken = true, ag.turns = ag.turns + 1]
+  Tick:
+    params: {ag: Agent}
+    agent: ag
+    effects: [ag.turns = ag.turns + 1]
+methods:
+  Spin:
+    params: {ag: Agent}
+    decompositions: [{name: again, subtasks: ["Spin(ag)"]}]
+  Grab:
+    doc: The human takes any token left, forever.
+    params: {ag: Agent}
+    decompositions:
+      - name: one
+        vars: {t: Token}
+        pre: not t.taken
+        subtasks: ["Take(ag, t)", "Grab(ag)"]
+  Keep:
+    doc: The robot waits until the human has taken twelve tokens.
+    params: {ag: Agent, h: Agent}
+    decompositions:
+      - {name: stop, pre: h.turns >= 12, subtasks: []}
+      - {name: tick, pre: h.turns < 12, subtasks: ["Tick(ag)", "Keep(ag, h)"]}
+"""
+
+
+@pytest.mark.parametrize(("robot", "expected"), [
+    ("Spin(robot)", "more than 10,000 decompositions before an action"),
+    ("Keep(robot, human)", "search budget exhausted"),
+])
+def test_runaway_conditional_searches_answer(tmp_path: Path, robot: str, expected: str
+                                             ) -> None:
+    """A method that decomposes into itself, a human with millions of ways to go: each answers
+    'no plan' (exit 1) within the hostile-input limits."""
+    from hostile import MAX_MB, MAX_SECONDS, run_subprocess
+
+    (tmp_path / "d.yaml").write_text(RUNAWAY, "utf-8")
+    tokens = "".join(f"  t{i}: {{type: Token, taken: false}}\n" for i in range(24))
+    (tmp_path / "p.yaml").write_text(
+        f"problem: runaway\ndomain: runaway\nentities:\n{tokens}"
+        "  robot: {type: Agent, kind: robot, turns: 0}\n"
+        "  human: {type: Agent, kind: human, turns: 0}\n"
+        f'agendas:\n  robot: ["{robot}"]\n  human: ["Grab(human)"]\n'
+        "policy: {max_steps: 500}\n", "utf-8")
+    # a lower node budget than the default (200,000: 2.4 s of CPU, 135 MB measured) keeps
+    # the test light on a loaded machine
+    outcome = run_subprocess("plan", tmp_path / "d.yaml", tmp_path / "p.yaml",
+                             "--max-nodes", "50000")
+    assert "Traceback" not in outcome.out + outcome.err, outcome.err
+    assert outcome.status == 1 and expected in outcome.out, outcome.out[-2000:]
+    assert outcome.seconds < MAX_SECONDS and outcome.peak_mb < MAX_MB, outcome

@@ -74,6 +74,7 @@ def _print(problem, policy, exploration, errors, elapsed) -> None:  # type: igno
         if exploration.exhausted:
             _out.print(f"[bold red]search budget exhausted[/bold red]: "
                        f"{escape(exploration.exhausted)}")
+            return
         _out.print("[bold red]no conditional plan[/bold red]: no policy answers every "
                    "human choice; where branches ended:")
         for why in exploration.dead_ends or ["the agendas give no action"]:
