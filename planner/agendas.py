@@ -91,6 +91,15 @@ def read_agendas(builder: Any, entities: dict[str, str]
                   for i, t in enumerate(texts or [])]
         agendas.append((agent, tuple(t for t in agenda if t is not None)))
     if agendas:
+        if "tasks" in builder.data:
+            builder.problem(("agendas",), "a problem has tasks (one plan) or agendas (a "
+                            "conditional plan), not both", key=True)
+        specs = builder.data.get("entities") or {}
+        kinds = {agent: (specs.get(agent) or {}).get("kind") for agent, _ in agendas}
+        if all(kind in domain.uncontrolled for kind in kinds.values()):
+            builder.problem(("agendas",), "no agent of the agendas is controlled (the "
+                            f"domain leaves the choices of {', '.join(domain.uncontrolled)} "
+                            "to them): give the robot an agenda", key=True)
         _check_any_of(builder, entities, [name for _, tasks in agendas for name, _ in tasks])
     return tuple(agendas)
 

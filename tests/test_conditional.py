@@ -316,3 +316,19 @@ def test_runaway_conditional_searches_answer(tmp_path: Path, robot: str, expecte
     assert "Traceback" not in outcome.out + outcome.err, outcome.err
     assert outcome.status == 1 and expected in outcome.out, outcome.out[-2000:]
     assert outcome.seconds < MAX_SECONDS and outcome.peak_mb < MAX_MB, outcome
+
+
+def test_ahp_criteria_score_each_branch(tmp_path: Path) -> None:
+    """With AHP criteria, a branch's score is the evaluator's weighted sum (cost and
+    makespan here), plus its waits; the policy is their expectation."""
+    path = tmp_path / "p.yaml"
+    path.write_text(PROBLEM.read_text("utf-8") + "criteria:\n  names: [cost, duration]\n"
+                    "  matrix: [[1, 3], [1/3, 1]]\n", "utf-8")
+    problem, policy = _solve(STACK, path)
+    assert problem.weights["cost"] == pytest.approx(0.75)
+    assert validate_conditional(problem, policy) == []
+    plain = sorted([15, 15, 17, 20, 20, 22])
+    assert sorted(policy.branch_costs) != plain
+    expected = sum(policy.branch_costs[i] * p for i, p in enumerate(
+        [1 / 6, 1 / 6, 1 / 6, 1 / 6, 1 / 6, 1 / 6]))
+    assert policy.cost == pytest.approx(expected)
