@@ -291,12 +291,12 @@ class Explorer:
                 continue
             handed = tuple((target, len(tasks)) for target, tasks in option.assigned)
             if option.action is None:  # the agenda drained through empty decompositions
-                step = Step(agent, IDLE, (), self.idle_cost, 0.0, option.expansions,
-                            option.weight)
                 if controlled and self._done(new):
-                    child: Turn | None = self._leaf(option.bundle)
                     step = Step(agent, DONE, (), 0.0, 0.0, option.expansions, option.weight)
+                    child: Turn | None = self._leaf(option.bundle)
                 else:
+                    step = Step(agent, IDLE, (), self.idle_cost, 0.0, option.expansions,
+                                option.weight)
                     child = self._turn(option.bundle, new, nxt, steps + 1)
             else:
                 step = Step(agent, option.action.name, option.args, option.cost,
@@ -427,15 +427,31 @@ class Explorer:
                             dec.pre.fn(_env(env, a), s.get) for s, a in bundle):
                         continue
                     new_bundle = bundle
-                state = bundle[0][0]
-                subtasks = tuple((sub.task, tuple(arg(env, state.get) for arg in sub.args))
-                                 for sub in dec.subtasks)
+                subtasks = self._subtasks(dec, env, new_bundle)
+                if subtasks is None:
+                    continue
                 if method.name in self.marked:
                     subtasks += ((MARK + method.name, ()),)
                 bindings = tuple((v, env[v]) for v, _ in dec.vars)
                 yield dec, bindings, subtasks, new_bundle
                 if method.first:
                     return
+
+    def _subtasks(self, dec: Decomposition, env: dict, bundle: Bundle) -> Agenda | None:
+        """The decomposition's subtasks, their arguments evaluated in each state of the
+        bundle: None (with a dead end said) if they differ -- one plan for every
+        assignment of the open values needs the same tasks in all of them."""
+        found = None
+        for state, _ in bundle:
+            subtasks = tuple((sub.task, tuple(arg(env, state.get) for arg in sub.args))
+                             for sub in dec.subtasks)
+            if found is None:
+                found = subtasks
+            elif subtasks != found:
+                self._dead(f"[{dec.name}]: its subtasks' arguments depend on the open values "
+                           f"({_agenda_text(found)} or {_agenda_text(subtasks)})")
+                return None
+        return found
 
     def _open(self, method: Method, dec: Decomposition, env: dict, args: tuple,
               bundle: Bundle) -> tuple[dict, Bundle] | None:
@@ -488,6 +504,10 @@ def _env(env: dict, assignment: Assignment) -> dict:
 
 def _number(value: Any, env: dict, get: Any) -> float:
     return float(value.fn(env, get)) if callable(value) else float(value)
+
+
+def _agenda_text(agenda: Agenda) -> str:
+    return ", ".join(f"{name}({', '.join(map(str, args))})" for name, args in agenda)
 
 
 def _head(agenda: Agenda) -> str:
