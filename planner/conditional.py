@@ -12,7 +12,9 @@ goals, they must hold there.
 :func:`explore` builds that AND/OR graph.  It is a DAG: a turn reached again
 with the same state, agendas and open values is explored once (the memo), and
 a turn that comes back to itself on its own path (a wait loop that changes
-nothing) is a dead end, not an endless branch.  An AND node is dead as soon as
+nothing) is a dead end, not an endless branch (what such a cut, or the step
+budget's, decided is not remembered: it depends on the way the turn was
+reached).  An AND node is dead as soon as
 one of its options is: the plan must answer every human choice (HATP/EHDA
 silently drops such options; docs/benchmarks.md).  Choosing the policy --
 costs, expected or worst case, social rules per branch -- is
@@ -248,11 +250,14 @@ class Explorer:
             return None
         self._tick()
         self.active.add(key)
+        cuts = self.loops + self.cut
         try:
             node = self._expand(bundle, agendas, t, steps)
         finally:
             self.active.discard(key)
-        if self.merge:
+        # What a loop or the step budget cut below it depends on how it was reached: it
+        # is remembered only when nothing was.
+        if self.merge and self.loops + self.cut == cuts:
             self.memo[key] = node
         return node
 
