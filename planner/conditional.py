@@ -47,6 +47,8 @@ MARK = "/"
 ``abandon``: what is left of it lies before the mark."""
 """The step that ends a branch: the last controlled agenda drained (it costs nothing)."""
 DEFAULT_MAX_STEPS = 400
+MAX_STEPS = 2000
+"""The most turns a branch may have (the schema's bound on ``max_steps``)."""
 DEFAULT_MAX_NODES = 200_000
 _ABSENT = object()
 _EXPANSIONS_PER_TURN = 10_000
@@ -162,6 +164,8 @@ class Exploration:
     exhausted: str | None = None
     dead_ends: list[str] = field(default_factory=list)
     """A few places where no option was left, for the explanation."""
+    max_steps: int = DEFAULT_MAX_STEPS
+    """The step budget it ran with (turns per branch)."""
 
 
 @dataclass
@@ -197,7 +201,8 @@ class Explorer:
         policy = problem.policy
         self.idle_cost = float(policy.get("idle_cost", 0.0))
         self.wait_cost = float(policy.get("wait_cost", 1.0))
-        self.max_steps = int(max_steps or policy.get("max_steps", DEFAULT_MAX_STEPS))
+        self.max_steps = min(int(max_steps or policy.get("max_steps", DEFAULT_MAX_STEPS)),
+                             MAX_STEPS)
         self.max_nodes = int(max_nodes or DEFAULT_MAX_NODES)
         self.worst = worst
         self.merge = merge
@@ -227,7 +232,7 @@ class Explorer:
             exhausted = (f"node budget: {self.max_nodes:,} turns and decompositions "
                          "explored (raise it with --max-nodes)")
         return Exploration(root, self.order, self.controlled, self.nodes, self.cut,
-                           self.loops, exhausted, self.dead_ends)
+                           self.loops, exhausted, self.dead_ends, self.max_steps)
 
     def _tick(self) -> None:
         self.nodes += 1
@@ -540,9 +545,11 @@ def count_leaves(root: Turn | None, chosen: dict[int, int] | None = None) -> int
         elif chosen is not None and node.kind == "or" and id(node) in chosen:
             total = count(node.children[chosen[id(node)]][1])
         else:
-            total = sum(count(child) for _, child in node.children)
+            total = 0
+            for _, child in node.children:  # a loop, not sum(): no C frame per level
+                total += count(child)
         counts[id(node)] = total
         return total
 
-    with deep(DEFAULT_MAX_STEPS * 5):
+    with deep(MAX_STEPS):
         return count(root)

@@ -22,10 +22,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from planner.conditional import (
-    DEFAULT_MAX_STEPS,
     DONE,
     IDLE,
     LEAF_KIND,
+    MAX_STEPS,
     WAIT,
     Exploration,
     OpenValue,
@@ -81,7 +81,7 @@ def select(problem: Problem, exploration: Exploration, mode: str = "expected") -
     if exploration.root is None:
         return Policy(problem, exploration, mode, None, None, leaves)
     chooser = _Chooser(problem, mode)
-    with deep(DEFAULT_MAX_STEPS * 5):
+    with deep(MAX_STEPS):
         root = chooser.choice(exploration.root, ())
     policy = Policy(problem, exploration, mode, root, root.value, leaves)
     for branch in walk(root):

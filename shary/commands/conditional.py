@@ -16,6 +16,7 @@ import time
 
 import yaml
 
+from planner.conditional import MAX_STEPS
 from shary.commands.schemes import draw
 from shary.terminal import emit_json, error, escape
 from shary.terminal import out as _out
@@ -33,6 +34,9 @@ def plan_conditional(args: argparse.Namespace, problem) -> int:  # type: ignore[
                                  [r for r in args.rules.split(",") if r])
         except KeyError as err:
             return error(str(err.args[0]), json_mode=args.json)
+    if args.max_depth is not None and not 1 <= args.max_depth <= MAX_STEPS:
+        return error(f"--max-depth is the turns per branch of a conditional plan: 1 to "
+                     f"{MAX_STEPS:,}", json_mode=args.json)
     mode = args.mode or problem.policy.get("mode", "expected")
     started = time.process_time()
     exploration = explore(problem, max_steps=args.max_depth, max_nodes=args.max_nodes,
@@ -75,9 +79,16 @@ def _print(problem, policy, exploration, errors, elapsed) -> None:  # type: igno
             _out.print(f"[bold red]search budget exhausted[/bold red]: "
                        f"{escape(exploration.exhausted)}")
             return
-        _out.print("[bold red]no conditional plan[/bold red]: no policy answers every "
-                   "human choice; where branches ended:")
-        for why in exploration.dead_ends or ["the agendas give no action"]:
+        _out.print("[bold red]no conditional plan[/bold red]: no policy brings every "
+                   "branch to its end; where branches ended:")
+        reasons = list(exploration.dead_ends)
+        if exploration.cut:
+            reasons.append(f"{exploration.cut} branch(es) cut after {exploration.max_steps} "
+                           "turns (the step budget: policy max_steps, or --max-depth)")
+        if exploration.loops:
+            reasons.append(f"{exploration.loops} branch(es) came back to a turn they had "
+                           "been at, nothing changed (a loop)")
+        for why in reasons:
             _out.print(f"  {escape(why)}")
         return
     if exploration.cut or exploration.loops:
