@@ -75,14 +75,16 @@ def _task_node(graph: graphviz.Digraph, task: dict[str, Any],
                    fontsize="8", style="rounded,filled")
         return
     agent = task["agent"]
+    queries = [f"?{p['var']}: {p['query']}  ({' | '.join(p['candidates'])})"
+               for p in task["params"] if isinstance(p, dict) and "query" in p]
     if isinstance(agent, dict):  # AgentX: the candidates' colours side by side
         fills = ":".join(colours.get(a, PALETTE[-1])[0] for a in agent["any-of"])
-        graph.node(node_id, _label(task_text(task), f"#{task['id']}  {_who(task)}"),
+        graph.node(node_id, _label(task_text(task), f"#{task['id']}  {_who(task)}", *queries),
                    fillcolor=fills, style="striped", color=TASK_LINE)
         return
     fill, line = colours.get(agent, PALETTE[-1])
-    graph.node(node_id, _label(task_text(task), f"#{task['id']}  {agent}"), fillcolor=fill,
-               color=line)
+    graph.node(node_id, _label(task_text(task), f"#{task['id']}  {agent}", *queries),
+               fillcolor=fill, color=line)
 
 
 def _draw(graph: graphviz.Digraph, plan: dict[str, Any]) -> dict[int, dict]:
