@@ -44,3 +44,26 @@ def test_a_bad_say_step_says_why(facts, args, message):
 
 def test_about_is_read_as_a_call():
     assert parse_about(" give(alice, cup, jido) ") == ("give", ["alice", "cup", "jido"])
+
+
+def test_shary_validate_refuses_a_bad_say_step_at_its_line(write):
+    from tests.hostile import assert_refused, run_inprocess
+
+    path = write("say.yaml", """\
+        tasks:
+          greet: {params: [person], scheme: robot-task}
+        recipes:
+          - task: greet
+            act: REALIZE-TASK
+            steps:
+              - {do: say, with: {act: boast, about: "explore-place({robot}, {person})", to: _}}
+              - {do: say, with: {act: propose, about: "juggle({robot})", to: $person}}
+              - {do: say, with: {act: propose, about: "pick({robot}, {objet})", to: _}}
+              - {do: say, with: {act: propose, about: "give-object({robot})", to: _}}
+        """)
+    outcome = run_inprocess("validate", path)
+    assert_refused(outcome, path, message="say: unknown act 'boast'")
+    for line, message in ((7, "unknown act 'boast'"), (8, "no label for 'juggle'"),
+                          (9, "{objet} is not a parameter here"),
+                          (10, "give-object takes the agent and Object, Partner")):
+        assert f"{path}:{line}:" in outcome.err and message in outcome.err, outcome.err

@@ -28,13 +28,15 @@ from typing import Any
 
 from shary.dialogue.reg import Referrer
 from shary.dialogue.verbalize import ACTS, verbalize
+from userfiles.schema import did_you_mean
 
-__all__ = ["SAY_PARAMS", "Speech", "parse_about"]
+__all__ = ["SAY_PARAMS", "Speech", "check_say", "parse_about"]
 
 SAY_PARAMS = ("act", "about", "to")
 """The parameters of the ``say`` atomic task."""
 
 _ABOUT = re.compile(r"\s*([\w.-]+)\s*\(([^()]*)\)\s*")
+_PLACEHOLDER = re.compile(r"\{([^{}]*)\}")
 
 
 def parse_about(text: str) -> tuple[str, list[str]]:
@@ -48,6 +50,43 @@ def parse_about(text: str) -> tuple[str, list[str]]:
         raise ValueError(f"say: {text!r} has an unbound or empty argument; the agent comes "
                          "first, then the action's parameters")
     return match.group(1), args
+
+
+def check_say(args: Mapping[str, Any], params: set[str]) -> list[tuple[str, str]]:
+    """What is wrong with a ``say`` step's arguments as a recipe writes them (values
+    before substitution; ``params`` are the names ``{name}`` may use): (argument,
+    message) pairs, so that ``shary validate`` refuses the step at its line."""
+    problems: list[tuple[str, str]] = []
+    act = args.get("act")
+    if isinstance(act, str) and not act.startswith("$") and act not in ACTS:
+        problems.append(("act", f"say: unknown act {act!r}; one of: {', '.join(ACTS)}"))
+    about = args.get("about")
+    if not isinstance(about, str) or about.startswith("$"):
+        return problems
+    unknown = [n for n in _PLACEHOLDER.findall(about) if n not in params]
+    if unknown:
+        return problems + [("about", f"say: {{{unknown[0]}}} is not a parameter here"
+                                     f"{did_you_mean(unknown[0], sorted(params))}; "
+                                     f"parameters: {', '.join(sorted(params))}")]
+    filled = _PLACEHOLDER.sub(lambda m: m.group(1), about)
+    try:
+        name, values = parse_about(filled)
+        _action(_ontology(), name, values)
+    except ValueError as err:
+        problems.append(("about", str(err).replace(repr(filled), repr(about))))
+    return problems
+
+
+def _action(ontology: Any, name: str, values: list[str]) -> tuple[str, list[str]]:
+    """The class and parameter roles of the action ``name`` called with ``values``."""
+    cls = ontology.action_class(name)
+    if cls is None or not ontology.label(cls):
+        raise ValueError(f"say: the action ontology has no label for {name!r}")
+    roles = [p.role for p in ontology.parameters(cls)]
+    if len(values) != len(roles) + 1:
+        raise ValueError(f"say: {name} takes the agent and {', '.join(roles) or 'nothing'}"
+                         f" ({len(roles) + 1} arguments), not {len(values)}")
+    return cls, roles
 
 
 @functools.cache
@@ -78,13 +117,7 @@ class Speech:
             raise ValueError(f"say: unknown act {act!r}; one of: {', '.join(ACTS)}")
         name, values = parse_about(args.get("about", ""))
         ontology = self.ontology or _ontology()
-        cls = ontology.action_class(name)
-        if cls is None or not ontology.label(cls):
-            raise ValueError(f"say: the action ontology has no label for {name!r}")
-        roles = [p.role for p in ontology.parameters(cls)]
-        if len(values) != len(roles) + 1:
-            raise ValueError(f"say: {name} takes the agent and {', '.join(roles) or 'nothing'}"
-                             f" ({len(roles) + 1} arguments), not {len(values)}")
+        cls, roles = _action(ontology, name, values)
         addressee = args.get("to")
         addressee = str(addressee) if addressee not in (None, "", "_") else None
         agents = {t for t in values if self._is_agent(t)}
