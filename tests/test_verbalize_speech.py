@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pytest
+from hostile import assert_refused, run_inprocess
 
 from shary.dialogue.speech import Speech, parse_about
 from shary.facts import FactDatabase
@@ -47,8 +48,6 @@ def test_about_is_read_as_a_call():
 
 
 def test_shary_validate_refuses_a_bad_say_step_at_its_line(write):
-    from tests.hostile import assert_refused, run_inprocess
-
     path = write("say.yaml", """\
         tasks:
           greet: {params: [person], scheme: robot-task}
