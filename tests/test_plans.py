@@ -5,7 +5,6 @@ from __future__ import annotations
 
 from typing import Any
 
-
 import planner
 from planner.conditional import explore
 from planner.policy import select
