@@ -18,7 +18,8 @@ def test_schemes_lists_the_builtins(shary):
     status, out, _ = shary("schemes")
     assert status == 0
     names = [line.split()[0] for line in out.splitlines()]
-    assert names == ["ask-help", "give-object-attentive", "give-object", "perform", "robot-task"]
+    assert names == ["ask-help", "give-object-attentive", "give-object", "perform", "robot-task",
+                     "shared-plan-task"]
 
 
 def test_simulate_runs_a_script_of_events_and_waits(shary):
