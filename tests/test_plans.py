@@ -153,11 +153,13 @@ class Table:
         self.human = Human(self, choices=choices)
         self.log.listeners.append(self.human.on)
         self.outcome: list[str] = []
+        self.agendas: list[dict[str, list[str]]] = []
         self.follower = PlanFollower(self.sup, stack_plan(), humans=["human"],
                                      replan=self.replan if replan else None,
                                      done=self.outcome.append)
 
-    def replan(self, reason: str) -> SharedPlan:
+    def replan(self, agendas: dict[str, list[str]]) -> SharedPlan:
+        self.agendas.append(agendas)
         return stack_plan()  # the tests' worlds are replanned from the start's plan
 
     def run(self, seconds: float = 120) -> None:
@@ -249,6 +251,9 @@ def test_a_place_that_fails_twice_fails_the_plan_which_is_replanned():
     states = [d["state"] for _, d in table.log.of("shared-plan")]
     assert states[:3] == ["started", "replan", "started"] or "replan" in states
     assert table.follower.replans == 1
+    # what was left: the failed place's abstract task whole, not the robot's first pick
+    assert table.agendas[0]["robot"][0] == "PlaceRed(robot, red_cube_1)"
+    assert table.agendas[0]["human"][0] == "Pick(human, stick)"
 
 
 def test_without_a_replan_port_a_failed_action_fails_the_plan():

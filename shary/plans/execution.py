@@ -27,6 +27,7 @@ from typing import Any
 
 from shary.plans.beliefs import HumanBeliefs
 from shary.plans.human import HumanPlanManager
+from shary.plans.replan import remaining_agendas
 from shary.plans.robot import RobotPlanManager
 from shary.plans.states import TaskStates
 from shary.plans.tasks import ACTION, DONE, SharedPlan, is_open
@@ -42,12 +43,13 @@ _TREE_STATE = {"PLANNED": "planned", "TODO": "todo", "ONGOING": "ongoing",
 class PlanFollower:
     """Follows a shared plan with the robot and the humans in it (see the module).
 
-    ``replan(reason)`` returns a new :class:`SharedPlan` from what is now true,
+    ``replan(agendas)`` (each agent's tasks still to do, :mod:`shary.plans.replan`)
+    returns a new :class:`SharedPlan` from what is now true,
     or None; ``done(outcome)`` is told ``"achieved"`` or ``"failed"`` once.
     """
 
     def __init__(self, sup: Any, plan: SharedPlan, *, humans: list[str] | None = None,
-                 replan: Callable[[str], SharedPlan | None] | None = None,
+                 replan: Callable[[dict[str, list[str]]], SharedPlan | None] | None = None,
                  done: Callable[[str], Any] | None = None, decision_wait: float = 6.0,
                  max_replans: int = 3, name: str = "shared-plan"):
         if sup.robot_actions is None:
@@ -63,6 +65,9 @@ class PlanFollower:
         self.finished: str | None = None
         self.robot = RobotPlanManager(sup, sup.robot_actions.models)
         self.hpm = HumanPlanManager(self, decision_wait)
+        self.watchers: list[Callable[[str, int], Any]] = []
+        """Told ``(event, task)``: a task ``due``, ``started`` by the robot, ``done``
+        (what a simulated partner follows)."""
         self.root = sup.tree.add(TASK, f"{name}: {plan.problem}")
         self.generation = 0
         self._load(plan)
@@ -124,6 +129,7 @@ class PlanFollower:
         for task in following:
             self.states.send(task.id, "ready")
             self.node(task.id)
+            self._tell("due", task.id)
         if len(following) > 1:  # a human decision: their action says which branch
             for task in following:
                 self._resolve(task.id)
@@ -176,8 +182,13 @@ class PlanFollower:
 
     # -- the robot's tasks -------------------------------------------------------------
 
+    def _tell(self, event: str, task: int) -> None:
+        for watcher in self.watchers:
+            watcher(event, task)
+
     def _robot_does(self, task: int) -> None:
         generation = self.generation
+        self._tell("started", task)
         self.states.send(task, "start", [self.sup.robot, *[
             h for h in self.humans if self.beliefs.watching(h, task)]])
 
@@ -196,6 +207,7 @@ class PlanFollower:
 
     def _executed(self, task: int, *, seen: bool) -> None:
         self.executed.add(task)
+        self._tell("done", task)
         self.states.send(task, "achieved", [self.sup.robot])
         if seen:
             self.states.send(task, "achieved", self.humans)
@@ -266,7 +278,8 @@ class PlanFollower:
         new = None
         if self.replanner is not None and self.replans < self.max_replans:
             self.replans += 1
-            new = self.replanner(reason)
+            new = self.replanner(remaining_agendas(old, self.current, self.executed,
+                                                   self.agents))
         for task in pending:
             self.states.send(task, "drop", reason="replanned" if new else reason)
         if new is None:
