@@ -35,6 +35,12 @@ class HumanBeliefs:
     def stop(self) -> None:
         for subscription in self._subscriptions:
             self.sup.facts.unsubscribe(subscription)
+        self._subscriptions = []
+
+    @property
+    def pending(self) -> bool:
+        """Whether a human has still to be told something they missed."""
+        return any(self.unseen.values()) or bool(self._speaking)
 
     def watching(self, human: str, task: int) -> bool:
         """Whether ``human`` looks at the robot or at something the task is about."""

@@ -103,8 +103,8 @@ class PlanFollower:
             return
         self.finished = outcome
         self.hpm.stop()
-        self.beliefs.stop()
-        self.states.stop()
+        for human in self.humans:  # the end of the task: what they missed, they need now
+            self.beliefs.needs(human)
         self.sup.tree.set_state(self.root, "done" if outcome == "achieved" else "failed",
                                 reason or None)
         self.sup.record("shared-plan", task=self.root, agent=self.sup.robot, state=outcome,
@@ -147,7 +147,7 @@ class PlanFollower:
             return
         agent, _ = self._resolve(task.id)
         if agent == self.sup.robot:
-            self._robot_does(task.id)
+            self._robot_when_free(task.id, self.generation)
         else:
             self.hpm.due([task])
             self.beliefs.needs(agent)
@@ -185,6 +185,21 @@ class PlanFollower:
     def _tell(self, event: str, task: int) -> None:
         for watcher in self.watchers:
             watcher(event, task)
+
+    def _robot_when_free(self, task: int, generation: int) -> None:
+        """Start the robot's task unless a human holds one of its objects: then wait
+        (they may be doing it: their action, recognized, will say)."""
+        if generation != self.generation or self.finished or task in self.executed:
+            return
+        held = [h for h in self.humans for o in self.objects_of(task)
+                if self.sup.facts.holds(h, "isHolding", o)]
+        if not held:
+            self._robot_does(task)
+            return
+        if self.states.state(task, self.sup.robot) == "TODO":
+            self.sup.record("plan-wait", task=self.states.fact_name(task), agent=self.sup.robot,
+                            why=f"{held[0]} holds what it is about")
+        self.sup.loop.call_later(0.5, self._robot_when_free, task, generation)
 
     def _robot_does(self, task: int) -> None:
         generation = self.generation

@@ -97,8 +97,9 @@ class Replanner:
                 spec["top"] = sorted(above)[0]
         for agent, spec in entities.items():
             if spec.get("type") == "Agent":
-                held = [b for b in blocks
-                        if self.facts.holds(self.names.get(agent, agent), "isHolding", b)]
+                # a block seen on a support is not held any more (a hold fades out late)
+                held = [b for b in blocks if entities[b].get("on") is None
+                        and self.facts.holds(self.names.get(agent, agent), "isHolding", b)]
                 spec.pop("holding", None)
                 if held:
                     spec["holding"] = held[0]

@@ -58,4 +58,5 @@ class StackSession:
 
     @property
     def busy(self) -> bool:
-        return self.follower is not None and self.follower.finished is None
+        follower = self.follower
+        return follower is not None and (follower.finished is None or follower.beliefs.pending)

@@ -21,7 +21,7 @@ LAYOUT: dict[str, tuple[float, float, list[float], str, str]] = {
     "red_cube_1": (0.05, -0.18, [CUBE] * 3, "cube", "red"),
     "red_cube_2": (-0.2, 0.16, [CUBE] * 3, "cube", "red"),
     "stick": (-0.32, 0.1, [0.3, 0.04, 0.03], "stick", "brown"),
-    "blue_cube_1": (0.2, -0.18, [CUBE] * 3, "cube", "blue"),
+    "blue_cube_1": (0.1, -0.1, [CUBE] * 3, "cube", "blue"),
     "blue_cube_2": (-0.06, 0.18, [CUBE] * 3, "cube", "blue"),
     "green_cube": (-0.08, -0.18, [CUBE] * 3, "cube", "green"),
     "yellow_cube_1": (0.4, -0.2, [CUBE] * 3, "cube", "yellow"),

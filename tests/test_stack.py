@@ -1,0 +1,40 @@
+"""The StackBuildingTask on the simulated PR2: every stack scenario meets its expectations."""
+
+from __future__ import annotations
+
+import json
+import sqlite3
+
+import pytest
+
+from sim.run import run_scenario
+from sim.scenario import SCENARIOS_DIR
+
+STACK = sorted(p.stem for p in SCENARIOS_DIR.glob("stack-*.yaml"))
+
+
+def test_the_seven_stack_scenarios_are_shipped():
+    assert STACK == ["stack-flicker", "stack-human-chooses-placement",
+                     "stack-human-leaves-it-to-robot", "stack-human-unexpected-action",
+                     "stack-nominal", "stack-not-seen", "stack-place-fails-twice"]
+
+
+@pytest.mark.parametrize("name", [s for s in STACK if s != "stack-not-seen"])
+def test_a_stack_scenario_passes(name):
+    result = run_scenario(SCENARIOS_DIR / f"{name}.yaml")
+    assert result.passed, result.differences
+
+
+def test_not_seen_is_told_and_the_timeline_shows_the_plan(tmp_path):
+    result = run_scenario(SCENARIOS_DIR / "stack-not-seen.yaml", out=tmp_path)
+    assert result.passed, result.differences
+    with sqlite3.connect(tmp_path / "log.sqlite") as db:
+        rows = [(kind, agent, json.loads(data)) for kind, agent, data in db.execute(
+            "SELECT kind, agent, data FROM events WHERE kind IN ('plan-task', 'speech', "
+            "'belief') ORDER BY seq")]
+    missed = [i for i, (kind, agent, data) in enumerate(rows) if kind == "belief"]
+    told = [i for i, (kind, agent, data) in enumerate(rows)
+            if kind == "speech" and "placed the green cube" in data["text"]]
+    assert missed and told and missed[0] < told[0]
+    assert (tmp_path / "timeline.svg").stat().st_size > 0
+    assert (tmp_path / "tree.svg").read_text().count("StackBuildingTask") >= 1
