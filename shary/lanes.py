@@ -94,6 +94,7 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
     cancels: dict[str, str] = {}
     looks: dict[tuple[str, str], Item] = {}
     recognized: dict[str, Item] = {}  # candidate -> its open segment
+    plan_tasks: dict[tuple[str, str | None], Item] = {}  # (task, view) -> its open state
     received: list[tuple[LogEvent, Item]] = []
     plans: list[Item] = []
     replan: str | None = None
@@ -187,6 +188,8 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
             _attention(e, looks, items)
         elif e.kind == "recognition" and isinstance(d.get("candidate"), str):
             _recognized(e, recognized, items)
+        elif e.kind == "plan-task" and isinstance(d.get("name"), str):
+            _plan_task(e, plan_tasks, items)
 
     for request, item in open_actions.items():
         item.kind = "running"
@@ -194,7 +197,8 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
         item.tooltip += "\nstill running when the log ends"
         if request in cancels:
             item.tooltip += f"\n{cancels[request]}"
-    for item in [*open_acts.values(), *looks.values(), *recognized.values()]:
+    for item in [*open_acts.values(), *looks.values(), *recognized.values(),
+                 *plan_tasks.values()]:
         item.tooltip += "\nstill going when the log ends"
 
     robot = robot or first_robot or next(
@@ -312,6 +316,41 @@ def _recognized(e: LogEvent, open_items: dict[str, Item], items: list[Item]) -> 
         del open_items[candidate]
         item.end = e.time
         item.attrs["data-end"] = repr(e.time)
+
+
+PLAN_STATE_COLOURS = {
+    "TODO": "#9db9d8", "ONGOING": "#4e79a7", "NOT_STARTING": "#f28e2b",
+    "NOT_FINISHED": "#e15759", "NOT_SEEN": "#b07aa1", "SUSPENDED": "#8c8c8c",
+}
+"""The shared plan's task states drawn in the timeline (PLANNED, EXECUTED and UNPLANNED
+are the ends of the bars)."""
+
+
+def _plan_task(e: LogEvent, open_items: dict[tuple[str, str | None], Item],
+               items: list[Item]) -> None:
+    """A shared plan's task state (``plan-task`` rows, :mod:`shary.plans`): a bar per
+    state in the lane of the agent who does the task, as the robot believes it; a
+    human's estimated view adds only what differs from it (NOT_SEEN)."""
+    d = e.data
+    name, state = str(d["name"]), str(d.get("state"))
+    doer = name.split("(", 1)[1].split(",")[0].rstrip(")").strip() if "(" in name else ""
+    key = (str(e.task), e.agent)
+    item = open_items.pop(key, None)
+    if item is not None:
+        item.end = e.time
+    if not doer or state not in PLAN_STATE_COLOURS:
+        return
+    if d.get("estimate") and state != "NOT_SEEN":
+        return  # a human's view says the same as the robot's
+    lane = e.agent if state == "NOT_SEEN" else doer
+    item = Item(lane or "", "plan", e.time, None, f"{name} {state}",
+                f"{name}: {state} in {e.agent}'s view from {when(e.time)} s"
+                + (f" ({d['reason']})" if d.get("reason") else ""), f"plan-{state}",
+                colour=PLAN_STATE_COLOURS[state],
+                attrs={"data-task": str(e.task), "data-state": state,
+                       "data-start": repr(e.time)})
+    items.append(item)
+    open_items[key] = item
 
 
 def shown(value: Any) -> str:

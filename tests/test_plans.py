@@ -268,10 +268,13 @@ def test_the_human_places_a_cube_the_robot_was_to_place_and_it_is_accepted():
     table = Table(choices=["0", "0"])
     # at 14.5 s the human has placed blue_cube_2 on the stick; they put the green cube on it
     table.loop.call_later(11.0, table.human.do, "Pick", "green_cube")
+    table.loop.call_later(16.0, table.human.do, "Place", "green_cube", "blue_cube_2")
     table.run()
     assert table.outcome == ["achieved"]
     useful = [d for _, d in table.log.of("plan-match") if d["match"] == "useful"]
-    assert useful, table.log.of("plan-match")
+    assert [d["action"] for d in useful] == ["pick", "place"], table.log.of("plan-match")
+    assert table.log.of("plan-wait"), "the robot did not wait while the human held the cube"
+    assert table.states("robot")["Place(robot, green_cube, blue_cube_2)"] == "EXECUTED"
 
 
 def test_an_action_the_plan_does_not_expect_makes_it_replan():

@@ -9,8 +9,8 @@ on (``looksAt`` facts from perception) becomes NOT_SEEN in that view; the
 robot then informs them with a generated sentence ("I placed the green cube
 on the blue cube") when they look back, or before their own next action needs
 it, and the task becomes EXECUTED in their view.  Before speaking the robot
-waits for their attention (the inform is only said while they look at it or
-at the task).
+waits for their attention: an inform is only said while they look at the
+robot or at what the task is about.
 """
 
 from __future__ import annotations
@@ -61,8 +61,10 @@ class HumanBeliefs:
                                 state="NOT_SEEN", why="looked away")
 
     def needs(self, human: str) -> None:
-        """``human``'s own action is next: what they missed, they should know now."""
-        self._inform(human, attentive=False)
+        """``human``'s own action is next, or the plan is over: what they missed they
+        should know now (said once they attend to the robot or the task, as JAHRVIS's
+        Communication Manager perceives the human before speaking)."""
+        self._inform(human, attentive=True)
 
     def _looks(self, event: Any) -> None:
         if str(event.predicate).rsplit("#", 1)[-1] != "looksAt" or event.kind != "added":
@@ -72,7 +74,8 @@ class HumanBeliefs:
             self.sup.loop.call_soon(self._inform, human, True)
 
     def _inform(self, human: str, attentive: bool) -> None:
-        """Tell ``human`` the oldest task they missed (one sentence at a time)."""
+        """Tell ``human`` the oldest task they missed (one sentence at a time), if they
+        attend to it (``attentive``)."""
         pending = self.unseen.get(human)
         if not pending or human in self._speaking:
             return
@@ -101,6 +104,6 @@ class HumanBeliefs:
                 pending.remove(task)
             follower.states.send(task, "seen", [human], reason="informed")
             if pending:
-                self._inform(human, False)
+                self._inform(human, True)
 
         follower.robot.request("speak", {"text": text}, follower.node(task), said)

@@ -109,7 +109,8 @@ class TaskStates(SchemeListener):
         reason = getattr(event, "data", None)
         self.sup.record("plan-task", task=self.fact_name(task), agent=view, state=name,
                         name=self.names[task], event=getattr(event, "name", None),
-                        reason=reason if isinstance(reason, str) else None)
+                        reason=reason if isinstance(reason, str) else None,
+                        estimate=True if view != self.sup.robot else None)
         self.sup.facts.set(self.fact_name(task), "taskState", name, perspective=view)
         if self.changed is not None and event is not None:
             self.changed(task, view, name)
