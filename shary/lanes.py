@@ -34,6 +34,15 @@ ACTION_STYLES = {  # status: (fill, stroke, text)
     "running": ("url(#hatch)", "#3b6fa0", "#1d3550"),
 }
 LOOK_COLOUR = "#8fc7c2"
+TEAM_COLOURS = {"team-task": "#76b7b2", "done": "#4e9f8f", "failed": "#e15759",
+                "associated": "#b07aa1", "user-mode": "#f28e2b"}
+"""A team's bars: tasks (running, done, failed), associations, user-mode control."""
+POINT_COLOURS = {"received": "#e15f99", "unexpected": "#ffffff", "question": "#f1ce63",
+                 "answer": "#59a14f", "expired": "#bab0ac"}
+"""Points in the act row: acts people sent, and a team's questions and answers."""
+MESSAGE_KINDS = ("message", "message-lost")
+TEAM_KINDS = frozenset({"task-running", "task-done", "task-failed", "associate", "release",
+                        "control", "question", "answer", "respawn", "help-request"})
 MAIN_ARGS = ("object", "target", "place", "to", "into", "text")
 
 @dataclass
@@ -98,6 +107,7 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
     looks: dict[tuple[str, str], Item] = {}
     received: list[tuple[LogEvent, Item]] = []
     plans: list[Item] = []
+    team = _Team()
     replan: str | None = None
     first_robot: str | None = None
     times: list[float] = []
@@ -108,7 +118,8 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
 
     for e in events:
         times.append(e.time)
-        meet(e.agent)
+        if e.kind not in MESSAGE_KINDS:  # a message's sender may be a manager, not an agent
+            meet(e.agent)
         d = e.data
         if e.kind == "node" and d.get("parent") is not None and e.task:
             subtasks.add(e.task)
@@ -188,6 +199,8 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
             replan = None
         elif e.kind in ("fact-added", "fact-removed"):
             _attention(e, looks, items)
+        elif e.kind in TEAM_KINDS:
+            team.take(e, items, plans)
 
     for request, item in open_actions.items():
         item.kind = "running"
@@ -195,7 +208,7 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
         item.tooltip += "\nstill running when the log ends"
         if request in cancels:
             item.tooltip += f"\n{cancels[request]}"
-    for item in [*open_acts.values(), *looks.values()]:
+    for item in [*open_acts.values(), *looks.values(), *team.open.values()]:
         item.tooltip += "\nstill going when the log ends"
 
     robot = robot or first_robot or next(
@@ -283,3 +296,91 @@ def _value(value: Any) -> str:
 def shown_time(t: float) -> str:
     """Seconds as a log shows them: at most three decimals, no trailing zeros."""
     return f"{t:.3f}".rstrip("0").rstrip(".") if math.isfinite(t) else str(t)
+
+
+class _Team:
+    """A team's rows (:mod:`shary.team`) as items: bars of team tasks, associations and
+    user mode in a ``team`` row; questions and answers as points in the act row; respawns
+    in the task band."""
+
+    def __init__(self) -> None:
+        self.open: dict[tuple[str, str], Item] = {}
+        self.questions: dict[str, str] = {}
+
+    def bar(self, key: tuple[str, str], e: LogEvent, label: str, tooltip: str,
+            kind: str) -> Item:
+        item = Item(str(e.agent), "team", e.time, None, label, tooltip, kind,
+                    TEAM_COLOURS[kind], attrs={"data-start": repr(e.time), "data-team": key[0]})
+        previous = self.open.pop(key, None)
+        if previous is not None:
+            _close(previous, e.time, "superseded")
+        self.open[key] = item
+        return item
+
+    def take(self, e: LogEvent, items: list[Item], plans: list[Item]) -> None:
+        d, agent = e.data, e.agent
+        if e.kind == "task-running" and agent and e.task:
+            items.append(self.bar(("task", e.task), e, e.task,
+                                  f"{agent}: team task {e.task}", "team-task"))
+        elif e.kind in ("task-done", "task-failed") and e.task:
+            item = self.open.pop(("task", e.task), None)
+            if item is not None:
+                outcome = "done" if e.kind == "task-done" else "failed"
+                item.colour = TEAM_COLOURS[outcome]
+                item.attrs["data-status"] = outcome
+                _close(item, e.time, outcome + (f": {d['reason']}" if d.get("reason") else ""))
+        elif e.kind == "associate" and agent:
+            items.append(self.bar(("with", agent), e, f"with {d.get('requester')}",
+                                  f"{agent} associated with {d.get('requester')}"
+                                  + (f", {d['suspended']} suspended" if d.get("suspended")
+                                     else ""), "associated"))
+        elif e.kind == "release" and agent:
+            item = self.open.pop(("with", agent), None)
+            if item is not None:
+                _close(item, e.time, f"released by {d.get('by')}")
+        elif e.kind == "control" and agent and d.get("mode") == "user":
+            items.append(self.bar(("control", agent), e, f"user mode: {d.get('by')}",
+                                  f"{d.get('by')} drives {agent}"
+                                  + (f" (task {e.task})" if e.task else ""), "user-mode"))
+        elif e.kind == "control" and agent:
+            item = self.open.pop(("control", agent), None)
+            if item is not None:
+                _close(item, e.time, f"handed back by {d.get('by')}")
+        elif e.kind in ("question", "help-request") and agent:
+            items.append(self.point(e, agent))
+        elif e.kind == "answer":
+            items.append(self.answer(e))
+        elif e.kind == "respawn":
+            plans.append(Item("", "plan", e.time, e.time, f"respawn {e.task}",
+                              f"{d.get('by')} failed at {shown_time(e.time)} s: {e.task} is "
+                              f"done again ({d.get('reason')})", "respawn", point=True,
+                              attrs={"data-task": e.task or "", "data-start": repr(e.time)}))
+
+    def point(self, e: LogEvent, agent: str) -> Item:
+        d = e.data
+        if e.kind == "help-request":
+            label = f"help: {d.get('skill')}"
+            tooltip = f"{agent} asks for help: {d.get('skill')} {_value(d.get('args') or {})}"
+        else:
+            text = str(d.get("text", "?"))
+            self.questions[str(d.get("question"))] = text
+            label = f"? {text}"
+            data = d.get("data") if isinstance(d.get("data"), dict) else {}
+            tooltip = (f"{agent} asks {text!r} ({d.get('question_type')}, priority "
+                       f"{d.get('priority')}, expires after {d.get('expires')} s)"
+                       + "".join(f"\n{k}: {_value(v)}" for k, v in data.items()))
+        return Item(agent, "act", e.time, e.time, label, tooltip, "question", point=True,
+                    attrs={"data-start": repr(e.time), "data-question": str(d.get("question"))})
+
+    def answer(self, e: LogEvent) -> Item:
+        d = e.data
+        text = self.questions.get(str(d.get("question")), "?")
+        value = _value(d.get("value")) if d.get("value") is not None else "nothing"
+        if d.get("expired"):
+            agent, kind, label = str(d.get("asker")), "expired", f"expired: {value}"
+            tooltip = f"nobody answered {text!r} in time; fallback: {value}"
+        else:
+            agent, kind, label = str(e.agent), "answer", f"answer: {value}"
+            tooltip = f"{e.agent} answers {value} to {d.get('asker')}: {text!r}"
+        return Item(agent, "act", e.time, e.time, label, tooltip, kind, point=True,
+                    attrs={"data-start": repr(e.time), "data-question": str(d.get("question"))})

@@ -17,7 +17,12 @@ common time axis in engine seconds. Inside a lane:
   are bars coloured by how they ended: done, failed, cancelled, or still
   running when the log ends (hatched, up to the end of the log);
 * **attention** (``fact-added`` / ``fact-removed`` of ``AGENT looksAt X``) is
-  a thin row, drawn only when the log holds such facts.
+  a thin row, drawn only when the log holds such facts;
+* a **team**'s rows (:mod:`shary.team`): each agent's team tasks, associations
+  and user-mode control as bars in a ``team`` row, questions, help requests
+  and answers as points among the acts, respawns in the task band.
+
+:mod:`shary.lanes` reads the log into these items; this module draws them.
 
 Top-level tasks get dotted vertical lines at their start and end, labelled in
 a band above the lanes, where the planner's plans are marked too. Items that
@@ -42,7 +47,17 @@ from typing import Any
 from xml.sax.saxutils import escape, quoteattr
 
 from planner.display import text_width
-from shary.lanes import ACTION_STYLES, LOOK_COLOUR, Item, TaskSpan, Timeline, collect, shown_time
+from shary.lanes import (
+    ACTION_STYLES,
+    LOOK_COLOUR,
+    POINT_COLOURS,
+    TEAM_COLOURS,
+    Item,
+    TaskSpan,
+    Timeline,
+    collect,
+    shown_time,
+)
 from shary.log import LogEvent, stream_events
 from userfiles.outputs import write_output
 
@@ -89,7 +104,7 @@ def render_timeline(events: Iterable[LogEvent], title: str = "", *, robot: str |
     lanes: list[tuple[str, dict[str, list[tuple[Item, int]]]]] = []
     for agent in tl.agents:
         rows = {}
-        for kind in ("act", "action", "look"):
+        for kind in ("act", "action", "team", "look"):
             rows[kind], r = _pack([i for i in tl.items if i.agent == agent and i.row == kind],
                                   x, tl.t_max, FONT - 1 if kind == "look" else FONT)
             right = max(right, r)
@@ -103,10 +118,10 @@ def render_timeline(events: Iterable[LogEvent], title: str = "", *, robot: str |
     y = band_top + max(1, _rows(band_rows)) * BAND_ROW + 22
     out.append(_axis(t0, end, step, x, y, above=True))
     lanes_top = y = y + 6
-    heights = {"act": ROW, "action": ROW, "look": LOOK_ROW}
-    captions = {"act": "acts", "action": "actions", "look": "looks at"}
+    heights = {"act": ROW, "action": ROW, "team": ROW, "look": LOOK_ROW}
+    captions = {"act": "acts", "action": "actions", "team": "team", "look": "looks at"}
     for index, (agent, rows) in enumerate(lanes):
-        counts = {kind: max(kind != "look", _rows(rows[kind])) for kind in rows}
+        counts = {kind: max(kind in ("act", "action"), _rows(rows[kind])) for kind in rows}
         lane_h = 2 * LANE_PAD + sum(counts[k] * heights[k] for k in counts)
         parts = [f'<rect class="lane-bg" x="{MARGIN}" y="{_n(y)}" '
                  f'width="{_n(width - 2 * MARGIN)}" height="{_n(lane_h)}" '
@@ -240,7 +255,7 @@ def _item(item: Item, top: float, height: float, x: Any, t_end: float) -> str:
     if item.point:
         cx = x(item.start)
         r = height / 2 - 4
-        fill = "#ffffff" if item.kind == "unexpected" else "#e15f99"
+        fill = POINT_COLOURS.get(item.kind, POINT_COLOURS["received"])
         shape = (f'<polygon points="{_n(cx)},{_n(mid - r)} {_n(cx + r)},{_n(mid)} '
                  f'{_n(cx)},{_n(mid + r)} {_n(cx - r)},{_n(mid)}" fill="{fill}" '
                  'stroke="#9e2a63" stroke-width="1.5"/>')
@@ -293,10 +308,12 @@ def _band(item: Item, top: float, x: Any, t_end: float) -> str:
     right = x(item.end if item.end is not None else t_end)
     mid = top + BAND_ROW / 2
     if item.point:
-        return (f'<g class="plan"{attrs}><title>{_esc(item.tooltip)}</title>'
+        fill, stroke = ("#e15759", "#7a1f20") if item.kind == "respawn" else ("#edc948",
+                                                                               "#8a6d00")
+        return (f'<g class="{item.kind}"{attrs}><title>{_esc(item.tooltip)}</title>'
                 f'<polygon points="{_n(left)},{_n(mid - 5)} {_n(left + 5)},{_n(mid + 5)} '
-                f'{_n(left - 5)},{_n(mid + 5)}" fill="#edc948" stroke="#8a6d00"/>'
-                + _text(left + 8, mid + 4, item.label, "label", fill="#5c4a00") + "</g>")
+                f'{_n(left - 5)},{_n(mid + 5)}" fill="{fill}" stroke="{stroke}"/>'
+                + _text(left + 8, mid + 4, item.label, "label", fill=stroke) + "</g>")
     return (f'<g class="task"{attrs}><title>{_esc(item.tooltip)}</title>'
             f'<line x1="{_n(left)}" y1="{_n(mid + 5)}" x2="{_n(right)}" y2="{_n(mid + 5)}" '
             'stroke="#555" stroke-width="2"/>'
@@ -346,9 +363,28 @@ def _legend(tl: Timeline, left: float, top: float, width: float) -> tuple[str, f
     if any(i.row == "look" for i in tl.items):
         entries.append((f'<rect width="18" height="6" y="-7" fill="{LOOK_COLOUR}"/>',
                         "looks at"))
-    if tl.plans:
+    for kind, text in (("question", "question asked"), ("answer", "answer"),
+                       ("expired", "question expired")):
+        if kind in kinds:
+            entries.append((diamond.format(POINT_COLOURS[kind]), text))
+    team = [i for i in tl.items if i.row == "team"]
+    for colour, text, shown in (
+            ("done", "team task done", any(i.attrs.get("data-status") == "done" for i in team)),
+            ("failed", "team task failed",
+             any(i.attrs.get("data-status") == "failed" for i in team)),
+            ("team-task", "team task under way",
+             any(i.kind == "team-task" and i.end is None for i in team)),
+            ("associated", "associated with a person", "associated" in kinds),
+            ("user-mode", "user mode (a person drives)", "user-mode" in kinds)):
+        if shown:
+            entries.append((f'<rect width="18" height="10" y="-9" '
+                            f'fill="{TEAM_COLOURS[colour]}"/>', text))
+    if any(p.kind == "plan" for p in tl.plans):
         entries.append(('<polygon points="9,-9 14,1 4,1" fill="#edc948" stroke="#8a6d00"/>',
                         "plan from the planner"))
+    if any(p.kind == "respawn" for p in tl.plans):
+        entries.append(('<polygon points="9,-9 14,1 4,1" fill="#e15759" stroke="#7a1f20"/>',
+                        "task respawned"))
     entries.append(('<line x1="9" y1="-12" x2="9" y2="4" stroke="#555" stroke-dasharray="2,3"/>',
                     "task start / end"))
     parts, cx, cy = [], left, top

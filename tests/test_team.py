@@ -397,3 +397,29 @@ def test_messages_survive_a_round_trip_through_json() -> None:
                     Assignment("tasks", "K-10", task="t", skill="s", args={"x": 1}),
                     Progress("K-10", "tasks", task="t", status="done")):
         assert message_from_dict(json.loads(json.dumps(message.as_dict()))) == message
+
+
+def test_the_timeline_has_a_lane_per_agent_with_the_team(tmp_path: Path) -> None:
+    import re
+
+    from shary.timeline import render_timeline
+
+    team, log, _ = build(tmp_path, edit=_answers_no)
+    eva1 = team.human("EVA1")
+    team.loop.call_later(42.0, lambda: eva1.request_help("point-light", {"target": "P3"},
+                                                         release_after=3.0))
+    team.run(900)
+    log.close()
+    svg = render_timeline(read_events(tmp_path / "run.sqlite"))
+    lanes = re.findall(r'<g class="lane" data-agent="([^"]+)"', svg)
+    assert lanes[0] == "Robonaut-B" and set(lanes) == {"Robonaut-B", "EVA1", "EVA2", "K-10",
+                                                       "IVA"}  # no lane for the managers
+    def items(cls: str) -> list[str]:
+        return re.findall(rf'<g class="{cls}" data-agent="([^"]+)"', svg)
+
+    assert items("team team-task").count("K-10") == 3  # three inspections, each failed
+    assert items("act question").count("K-10") == 3 and items("act answer") == ["IVA"] * 3
+    assert items("act question").count("EVA1") == 1  # the help request
+    assert items("team associated") == ["K-10"]
+    assert svg.count('<g class="respawn"') == 2 and "respawn weld-P1-P2" in svg
+    assert "answer: no" in svg and "team task failed" in svg
