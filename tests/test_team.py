@@ -422,4 +422,4 @@ def test_the_timeline_has_a_lane_per_agent_with_the_team(tmp_path: Path) -> None
     assert items("act question").count("EVA1") == 1  # the help request
     assert items("team associated") == ["K-10"]
     assert svg.count('<g class="respawn"') == 2 and "respawn weld-P1-P2" in svg
-    assert "answer: no" in svg and "team task failed" in svg
+    assert "answers no" in svg and "team task failed" in svg
