@@ -450,3 +450,19 @@ def test_questions_carry_what_the_team_attaches_and_people_ask_on_their_own(
     (release,) = kinds(path, "release")
     serve = kinds(path, "serve")[0]
     assert release.data["by"] == "EVA1" and release.time == pytest.approx(serve.time + 1 + 4)
+
+
+def test_a_world_performs_what_a_person_accepted(tmp_path: Path) -> None:
+    team, log, _ = build(tmp_path)
+    eva1 = team.human("EVA1")
+    carried: list[str] = []
+
+    def carry(assignment) -> None:  # the world moves the panel, then says it is done
+        carried.append(assignment.args["panel"])
+        team.loop.call_later(7.0, eva1.report, assignment.task, "done")
+
+    eva1.performers["mount-panel"] = carry
+    assert team.run(900) == "done"
+    log.close()
+    done = {e.task: e for e in kinds(tmp_path / "run.sqlite", "task-done")}
+    assert carried == ["P1"] and done["mount-P1"].time == 1.0 + 7.0
