@@ -466,3 +466,19 @@ def test_a_world_performs_what_a_person_accepted(tmp_path: Path) -> None:
     log.close()
     done = {e.task: e for e in kinds(tmp_path / "run.sqlite", "task-done")}
     assert carried == ["P1"] and done["mount-P1"].time == 1.0 + 7.0
+
+
+def test_a_task_goes_to_an_agent_with_the_resources_it_needs(tmp_path: Path) -> None:
+    from dataclasses import replace
+
+    def k10_welds_without_a_tool(spec):
+        k10 = replace(spec.agents["K-10"], skills=(*spec.agents["K-10"].skills, "weld-seam"))
+        weld = replace(spec.tasks["weld-P1-P2"], needs=("welding-tool",))
+        return replace(spec, agents={**spec.agents, "K-10": k10},
+                       tasks={**spec.tasks, "weld-P1-P2": weld})
+
+    team, log, _ = build(tmp_path, edit=k10_welds_without_a_tool)
+    assert team.run(900) == "done"
+    log.close()
+    row = next(e for e in kinds(tmp_path / "run.sqlite", "delegation") if e.task == "weld-P1-P2")
+    assert row.agent == "Robonaut-B" and row.data["candidates"] == 1
