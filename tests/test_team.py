@@ -482,3 +482,26 @@ def test_a_task_goes_to_an_agent_with_the_resources_it_needs(tmp_path: Path) -> 
     log.close()
     row = next(e for e in kinds(tmp_path / "run.sqlite", "delegation") if e.task == "weld-P1-P2")
     assert row.agent == "Robonaut-B" and row.data["candidates"] == 1
+
+
+def test_the_same_help_asked_twice_is_served_once_and_both_hear(tmp_path: Path) -> None:
+    team, log, _ = build(tmp_path)
+    eva1 = team.human("EVA1")
+    heard: list[tuple[str, str]] = []
+    eva1.listeners.append(lambda m: heard.append((m.task, m.status))
+                          if m.kind == "progress" else None)
+
+    def twice() -> None:
+        eva1.request_help("point-light", {"target": "P3"})
+        eva1.request_help("point-light", {"target": "P3"})
+
+    team.loop.call_later(10.0, twice)  # K-10 is idle: it associates at once
+    team.loop.call_later(30.0, lambda: team.interaction.release("EVA1", "K-10"))
+    assert team.run(900) == "done"
+    log.close()
+    served = [task for task, status in heard if status == "served"]
+    assert len(served) == 2 and len(set(served)) == 2
+    lights = [e for e in kinds(tmp_path / "run.sqlite", "exec-request")
+              if e.data["atomic"] == "aim-light"]
+    assert len(lights) == 1
+    team.start()  # a started team does not start again

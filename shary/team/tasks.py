@@ -74,9 +74,15 @@ class TaskManager:
         """Told when the goal is over ("done" or "failed")."""
         self.delegations = 0
         self._ready: list[TeamTask] = []
+        self.started = False
+        """Whether :meth:`start` ran (a goal starts once)."""
         team.port.subscribe(self.address, self.handle)
 
     def start(self) -> None:
+        """Make the tasks without constraints ready and delegate them (once)."""
+        if self.started:
+            return
+        self.started = True
         self.team.record("goal", tasks=len(self.tasks),
                          constraints=sum(len(t.spec.after) for t in self.tasks.values()))
         for task in self.tasks.values():
