@@ -1,8 +1,12 @@
-"""What a run's timeline shows, collected from its context log: items in agents' lanes.
+"""What a context log says, as items drawn in one lane per agent (:mod:`shary.timeline`).
 
-:func:`collect` pairs the log's events into :class:`Item` s (acts, actions,
-attention, recognized human actions) and :class:`TaskSpan` s; drawing them is
-:mod:`shary.timeline`'s job (see its documentation for what each looks like).
+:func:`collect` pairs the log's events into :class:`Item` s: acts (a scheme
+state's act, from its entry to its exit), acts sent by people (points),
+actions (``exec-request`` … ``exec-result``), attention (``looksAt`` facts),
+recognized human actions (``recognition``, :mod:`shary.recognition`),
+and a team's rows (:mod:`shary.team`): each agent's team tasks, questions and
+answers, associations and user-mode control, respawns in the task band.  The
+drawing is :mod:`shary.timeline`'s; this module only reads.
 """
 
 from __future__ import annotations
@@ -16,6 +20,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from shary.log import LogEvent
+from shary.plans.lane import plan_task
 
 ACT_COLOURS = {
     "ASK-TASK": "#4e79a7", "ASK-HELP": "#3f8fbf", "REALIZE-TASK": "#59a14f",
@@ -24,14 +29,27 @@ ACT_COLOURS = {
 }
 _PALETTE = ("#4f8f8a", "#b8860b", "#c0587e", "#8c6d4f", "#6b6ecf", "#637939", "#a55194")
 """For other acts, picked by a checksum of the name: stable across runs, dark under white."""
-STATUSES = ("done", "failed", "cancelled", "running")
-"""How an action may end in the timeline (running: still going when the log ends)."""
+ACTION_STYLES = {  # status: (fill, stroke, text)
+    "done": ("#cfe0f1", "#3b6fa0", "#1d3550"),
+    "failed": ("#e15759", "#a12b2d", "#ffffff"),
+    "cancelled": ("#d3d3d3", "#8c8c8c", "#4d4d4d"),
+    "running": ("url(#hatch)", "#3b6fa0", "#1d3550"),
+}
 LOOK_COLOUR = "#8fc7c2"
+TEAM_COLOURS = {"team-task": "#76b7b2", "done": "#4e9f8f", "failed": "#e15759",
+                "associated": "#b07aa1", "user-mode": "#f28e2b"}
+"""A team's bars: tasks (running, done, failed), associations, user-mode control."""
+POINT_COLOURS = {"received": "#e15f99", "unexpected": "#ffffff", "question": "#f1ce63",
+                 "answer": "#59a14f", "expired": "#bab0ac", "breakpoint": "#4e79a7"}
+"""Points in the act row: acts people sent, and a team's questions and answers."""
+ROUTING_KINDS = frozenset({"message", "message-lost", "message-ignored", "heard",
+                           "delegation"})
+"""A team's routing rows: they name managers (``tasks``, ``interaction``) or the agent
+chosen, not who acted; they open no lane."""
+TEAM_KINDS = frozenset({"task-running", "task-done", "task-failed", "associate", "release",
+                        "control", "question", "answer", "respawn", "help-request",
+                        "breakpoint"})
 MAIN_ARGS = ("object", "target", "place", "to", "into", "text")
-
-
-# -- what the log says -----------------------------------------------------------
-
 
 @dataclass
 class Item:
@@ -93,10 +111,11 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
     open_actions: dict[str, Item] = {}
     cancels: dict[str, str] = {}
     looks: dict[tuple[str, str], Item] = {}
-    recognized: dict[str, Item] = {}  # candidate -> its open segment
+    recognized: dict[str, Item] = {}  # candidate -> its bar
     plan_tasks: dict[tuple[str, str | None], Item] = {}  # (task, view) -> its open state
     received: list[tuple[LogEvent, Item]] = []
     plans: list[Item] = []
+    team = _Team()
     replan: str | None = None
     first_robot: str | None = None
     times: list[float] = []
@@ -107,7 +126,8 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
 
     for e in events:
         times.append(e.time)
-        meet(e.agent)
+        if e.kind not in ROUTING_KINDS:
+            meet(e.agent)
         d = e.data
         if e.kind == "node" and d.get("parent") is not None and e.task:
             subtasks.add(e.task)
@@ -162,13 +182,13 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
             open_actions[d["request"]] = item
             items.append(item)
         elif e.kind == "exec-cancel" and isinstance(d.get("request"), str):
-            cancels[d["request"]] = f"cancel asked at {when(e.time)} s: {d.get('reason', '')}"
+            cancels[d["request"]] = f"cancel asked at {shown_time(e.time)} s: {d.get('reason', '')}"
         elif (e.kind in ("exec-result", "person-action-end")
               and isinstance(d.get("request"), str)):
             item = open_actions.pop(d["request"], None)
             if item is not None:
                 status = str(d.get("status", "done"))
-                item.kind = status if status in STATUSES else "done"
+                item.kind = status if status in ACTION_STYLES else "done"
                 item.attrs["data-status"] = status
                 note = f"{status}" + (f": {d['reason']}" if d.get("reason") else "")
                 _close(item, e.time, note)
@@ -178,7 +198,8 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
             steps = d.get("steps") if isinstance(d.get("steps"), list) else []
             label = (f"{'new plan' if replan is not None else 'plan'}: {len(steps)} "
                      f"{'step' if len(steps) == 1 else 'steps'}")
-            tooltip = (f"plan for {names.get(e.task or '', e.task)} [{e.task}] at {when(e.time)} s"
+            tooltip = (f"plan for {names.get(e.task or '', e.task)} [{e.task}] at "
+                       f"{shown_time(e.time)} s"
                        + (f"\nreplanned because {replan}" if replan else "")
                        + "".join(f"\n  {step}" for step in steps))
             plans.append(Item("", "plan", e.time, e.time, label, tooltip, "plan", point=True,
@@ -189,7 +210,9 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
         elif e.kind == "recognition" and isinstance(d.get("candidate"), str):
             _recognized(e, recognized, items)
         elif e.kind == "plan-task" and isinstance(d.get("name"), str):
-            _plan_task(e, plan_tasks, items)
+            plan_task(e, plan_tasks, items, Item, shown_time)
+        elif e.kind in TEAM_KINDS:
+            team.take(e, items, plans)
 
     for request, item in open_actions.items():
         item.kind = "running"
@@ -197,8 +220,8 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
         item.tooltip += "\nstill running when the log ends"
         if request in cancels:
             item.tooltip += f"\n{cancels[request]}"
-    for item in [*open_acts.values(), *looks.values(), *recognized.values(),
-                 *plan_tasks.values()]:
+    for item in [*open_acts.values(), *looks.values(), *team.open.values(),
+                 *recognized.values(), *plan_tasks.values()]:
         item.tooltip += "\nstill going when the log ends"
 
     robot = robot or first_robot or next(
@@ -216,14 +239,15 @@ def _suspension(item: Item, time: float, suspended: bool) -> None:
         item.suspended.append((time, None))
     elif not suspended and going:
         item.suspended[-1] = (item.suspended[-1][0], time)
-        item.tooltip += f"\nsuspended {when(item.suspended[-1][0])} – {when(time)} s"
+        item.tooltip += f"\nsuspended {shown_time(item.suspended[-1][0])} – {shown_time(time)} s"
 
 
 def _close(item: Item, time: float, note: str) -> None:
     _suspension(item, time, False)
     item.end = time
     item.attrs["data-end"] = repr(time)
-    item.tooltip += f"\n{when(item.start)} – {when(time)} s ({when(time - item.start)} s), {note}"
+    item.tooltip += (f"\n{shown_time(item.start)} – {shown_time(time)} s "
+                     f"({shown_time(time - item.start)} s), {note}")
 
 
 def _act_item(e: LogEvent, state: str | None, task_name: str) -> Item:
@@ -239,7 +263,7 @@ def _act_item(e: LogEvent, state: str | None, task_name: str) -> Item:
 
 def _received_item(e: LogEvent) -> Item:
     act = str(e.data.get("act", "?"))
-    tooltip = f"{e.agent} → {act} at {when(e.time)} s" + (f" [{e.task}]" if e.task else "")
+    tooltip = f"{e.agent} → {act} at {shown_time(e.time)} s" + (f" [{e.task}]" if e.task else "")
     return Item(str(e.agent), "act", e.time, e.time, act, tooltip, "received", point=True,
                 attrs={"data-act": act, "data-start": repr(e.time)})
 
@@ -249,8 +273,8 @@ def _action_item(e: LogEvent) -> Item:
     atomic = str(d.get("atomic", "?"))
     args = d.get("args") if isinstance(d.get("args"), dict) else {}
     main = next((k for k in MAIN_ARGS if k in args), next(iter(sorted(args)), None))
-    label = f"{atomic} {shown(args[main])}" if main is not None else atomic
-    call = ", ".join(f"{k}={shown(v)}" for k, v in args.items())
+    label = f"{atomic} {_value(args[main])}" if main is not None else atomic
+    call = ", ".join(f"{k}={_value(v)}" for k, v in args.items())
     tooltip = f"{e.agent}: {atomic}({call}) [{d['request']}, task {e.task}]"
     return Item(str(e.agent), "action", e.time, None, label, tooltip, "running",
                 attrs={"data-atomic": atomic, "data-request": d["request"],
@@ -264,7 +288,7 @@ def _attention(e: LogEvent, looks: dict[tuple[str, str], Item], items: list[Item
                                   (("s", "subject"), ("p", "predicate"), ("o", "object")))
     if predicate != "looksAt" or not isinstance(subject, str) or not subject:
         return
-    key = (subject, shown(target))
+    key = (subject, _value(target))
     if e.kind == "fact-removed":
         item = looks.pop(key, None)
         if item is not None:
@@ -288,10 +312,10 @@ def _recognized(e: LogEvent, open_items: dict[str, Item], items: list[Item]) -> 
     candidate, state = d["candidate"], str(d.get("state"))
     params = d.get("params") if isinstance(d.get("params"), dict) else {}
     label = " ".join([str(d.get("action", "?")),
-                      *(shown(v) for v in params.values() if v is not None)])
+                      *(_value(v) for v in params.values() if v is not None)])
     cause = f", {d['cause']}" if d.get("cause") else ""
     fact = f" ({d['fact']})" if d.get("fact") else ""
-    line = f"possibly {state} at {when(e.time)} s{cause}{fact}"
+    line = f"possibly {state} at {shown_time(e.time)} s{cause}{fact}"
     item = open_items.get(candidate)
     if item is None:
         agent = e.agent or NOBODY
@@ -318,48 +342,107 @@ def _recognized(e: LogEvent, open_items: dict[str, Item], items: list[Item]) -> 
         item.attrs["data-end"] = repr(e.time)
 
 
-PLAN_STATE_COLOURS = {
-    "TODO": "#9db9d8", "ONGOING": "#4e79a7", "NOT_STARTING": "#f28e2b",
-    "NOT_FINISHED": "#e15759", "NOT_SEEN": "#b07aa1", "SUSPENDED": "#8c8c8c",
-}
-"""The shared plan's task states drawn in the timeline (PLANNED, EXECUTED and UNPLANNED
-are the ends of the bars)."""
-
-
-def _plan_task(e: LogEvent, open_items: dict[tuple[str, str | None], Item],
-               items: list[Item]) -> None:
-    """A shared plan's task state (``plan-task`` rows, :mod:`shary.plans`): a bar per
-    state in the lane of the agent who does the task, as the robot believes it; a
-    human's estimated view adds only what differs from it (NOT_SEEN)."""
-    d = e.data
-    name, state = str(d["name"]), str(d.get("state"))
-    doer = name.split("(", 1)[1].split(",")[0].rstrip(")").strip() if "(" in name else ""
-    key = (str(e.task), e.agent)
-    item = open_items.pop(key, None)
-    if item is not None:
-        item.end = e.time
-    if not doer or state not in PLAN_STATE_COLOURS:
-        return
-    if d.get("estimate") and state != "NOT_SEEN":
-        return  # a human's view says the same as the robot's
-    lane = e.agent if state == "NOT_SEEN" else doer
-    item = Item(lane or "", "plan", e.time, None, f"{name} {state}",
-                f"{name}: {state} in {e.agent}'s view from {when(e.time)} s"
-                + (f" ({d['reason']})" if d.get("reason") else ""), f"plan-{state}",
-                colour=PLAN_STATE_COLOURS[state],
-                attrs={"data-task": str(e.task), "data-state": state,
-                       "data-start": repr(e.time)})
-    items.append(item)
-    open_items[key] = item
-
-
-def shown(value: Any) -> str:
-    """A value as the timeline writes it: a bare word as it is, anything else as JSON."""
+def _value(value: Any) -> str:
     if isinstance(value, str):
         return value if value and not re.search(r"\s", value) else json.dumps(value)
     return json.dumps(value, ensure_ascii=False, separators=(",", ":"), sort_keys=True)
 
 
-def when(t: float) -> str:
-    """Seconds as the timeline writes them: at most three decimals, no trailing zeros."""
+def shown_time(t: float) -> str:
+    """Seconds as a log shows them: at most three decimals, no trailing zeros."""
     return f"{t:.3f}".rstrip("0").rstrip(".") if math.isfinite(t) else str(t)
+
+
+class _Team:
+    """A team's rows (:mod:`shary.team`) as items: bars of team tasks, associations and
+    user mode in a ``team`` row; questions and answers as points in the act row; respawns
+    in the task band."""
+
+    def __init__(self) -> None:
+        self.open: dict[tuple[str, str], Item] = {}
+        self.questions: dict[str, str] = {}
+
+    def bar(self, key: tuple[str, str], e: LogEvent, label: str, tooltip: str,
+            kind: str) -> Item:
+        item = Item(str(e.agent), "team", e.time, None, label, tooltip, kind,
+                    TEAM_COLOURS[kind], attrs={"data-start": repr(e.time), "data-team": key[0]})
+        previous = self.open.pop(key, None)
+        if previous is not None:
+            _close(previous, e.time, "superseded")
+        self.open[key] = item
+        return item
+
+    def take(self, e: LogEvent, items: list[Item], plans: list[Item]) -> None:
+        d, agent = e.data, e.agent
+        if e.kind == "task-running" and agent and e.task:
+            items.append(self.bar(("task", e.task), e, e.task,
+                                  f"{agent}: team task {e.task}", "team-task"))
+        elif e.kind in ("task-done", "task-failed") and e.task:
+            item = self.open.pop(("task", e.task), None)
+            if item is not None:
+                outcome = "done" if e.kind == "task-done" else "failed"
+                item.colour = TEAM_COLOURS[outcome]
+                item.attrs["data-status"] = outcome
+                _close(item, e.time, outcome + (f": {d['reason']}" if d.get("reason") else ""))
+        elif e.kind == "associate" and agent:
+            items.append(self.bar(("with", agent), e, f"with {d.get('requester')}",
+                                  f"{agent} associated with {d.get('requester')}"
+                                  + (f", {d['suspended']} suspended" if d.get("suspended")
+                                     else ""), "associated"))
+        elif e.kind == "release" and agent:
+            item = self.open.pop(("with", agent), None)
+            if item is not None:
+                _close(item, e.time, f"released by {d.get('by')}")
+        elif e.kind == "control" and agent and d.get("mode") == "user":
+            items.append(self.bar(("control", agent), e, f"user mode: {d.get('by')}",
+                                  f"{d.get('by')} drives {agent}"
+                                  + (f" (task {e.task})" if e.task else ""), "user-mode"))
+        elif e.kind == "control" and agent:
+            item = self.open.pop(("control", agent), None)
+            if item is not None:
+                _close(item, e.time, f"handed back by {d.get('by')}")
+        elif e.kind in ("question", "help-request", "breakpoint") and agent:
+            items.append(self.point(e, agent))
+        elif e.kind == "answer":
+            items.append(self.answer(e))
+        elif e.kind == "respawn":
+            plans.append(Item("", "plan", e.time, e.time, f"respawn {e.task}",
+                              f"{d.get('by')} failed at {shown_time(e.time)} s: {e.task} is "
+                              f"done again ({d.get('reason')})", "respawn", point=True,
+                              attrs={"data-task": e.task or "", "data-start": repr(e.time)}))
+
+    def point(self, e: LogEvent, agent: str) -> Item:
+        d = e.data
+        kind = "question"
+        if e.kind == "help-request":
+            label = f"asks for {d.get('skill')}"
+            tooltip = f"{agent} asks for help: {d.get('skill')} {_value(d.get('args') or {})}"
+        elif e.kind == "breakpoint":
+            kind, label = "breakpoint", f"breakpoint before {d.get('before')}"
+            tooltip = (f"{agent} stops {e.task} at a breakpoint, before {d.get('before')}, "
+                       "to serve a request")
+        else:
+            text = str(d.get("text", "?"))
+            self.questions[str(d.get("question"))] = text
+            data = d.get("data") if isinstance(d.get("data"), dict) else {}
+            label = f"asks “{text}”" + (" [image]" if data.get("image") else "")
+            tooltip = (f"{agent} asks {text!r} ({d.get('question_type')}, priority "
+                       f"{d.get('priority')}, expires after {d.get('expires')} s)"
+                       + "".join(f"\n{k}: {_value(v)}" for k, v in data.items()))
+        return Item(agent, "act", e.time, e.time, label, tooltip, kind, point=True,
+                    attrs={"data-start": repr(e.time), "data-event": e.kind,
+                           "data-question": str(d.get("question", ""))})
+
+    def answer(self, e: LogEvent) -> Item:
+        d = e.data
+        text = self.questions.get(str(d.get("question")), "?")
+        value = _value(d.get("value")) if d.get("value") is not None else "nothing"
+        if d.get("expired"):
+            agent, kind, label = str(d.get("asker")), "expired", f"no answer: taken as {value}"
+            tooltip = f"nobody answered {text!r} in time; fallback: {value}"
+        else:
+            agent, kind, label = str(e.agent), "answer", f"answers {value}"
+            tooltip = f"{e.agent} answers {value} to {d.get('asker')}: {text!r}"
+        return Item(agent, "act", e.time, e.time, label, tooltip, kind, point=True,
+                    attrs={"data-start": repr(e.time), "data-event": e.kind,
+                           "data-question": str(d.get("question"))})

@@ -22,7 +22,12 @@ common time axis in engine seconds. Inside a lane:
   progressing, a green diamond when possibly achieved, grey when abandoned;
   effects nobody is known to have caused go to a lane of their own, (nobody);
 * **attention** (``fact-added`` / ``fact-removed`` of ``AGENT looksAt X``) is
-  a thin row, drawn only when the log holds such facts.
+  a thin row, drawn only when the log holds such facts;
+* a **team**'s rows (:mod:`shary.team`): each agent's team tasks, associations
+  and user-mode control as bars in a ``team`` row, questions, help requests
+  and answers as points among the acts, respawns in the task band.
+
+:mod:`shary.lanes` reads the log into these items; this module draws them.
 
 Top-level tasks get dotted vertical lines at their start and end, labelled in
 a band above the lanes, where the planner's plans are marked too. Items that
@@ -48,15 +53,18 @@ from xml.sax.saxutils import escape, quoteattr
 
 from planner.display import text_width
 from shary.lanes import (
+    ACTION_STYLES,
     LOOK_COLOUR,
-    PLAN_STATE_COLOURS,
+    POINT_COLOURS,
+    TEAM_COLOURS,
     Item,
     TaskSpan,
     Timeline,
     collect,
-    when,
+    shown_time,
 )
 from shary.log import LogEvent, stream_events
+from shary.plans.lane import PLAN_STATE_COLOURS
 from userfiles.outputs import write_output
 
 # -- geometry (pixels) ---------------------------------------------------------
@@ -75,23 +83,15 @@ SMALL = 9
 MIN_LABEL_INSIDE = 36  # a bar narrower than this has its label beside it
 LABEL_ROWS = 3         # a label beside a bar never opens a sub-row past this many
 FONT_FAMILY = "DejaVu Sans, Helvetica, Arial, sans-serif"
-
-ACTION_STYLES = {  # status: (fill, stroke, text)
-    "done": ("#cfe0f1", "#3b6fa0", "#1d3550"),
-    "failed": ("#e15759", "#a12b2d", "#ffffff"),
-    "cancelled": ("#d3d3d3", "#8c8c8c", "#4d4d4d"),
-    "running": ("url(#hatch)", "#3b6fa0", "#1d3550"),
-}
 RECOGNIZED_STYLES = {  # a recognized human action's state: (fill, stroke, text)
     "rec-started": ("#fdebd0", "#c77c12", "#5c3a06"),
     "rec-progressing": ("#f6b04d", "#c77c12", "#3d2604"),
     "rec-achieved": ("#59a14f", "#2f6b2a", "#ffffff"),
     "rec-abandoned": ("#eeeeee", "#9a9a9a", "#666666"),
 }
-ROWS = ("act", "action", "plan", "recognized", "look")
-"""The rows of a lane, top to bottom (recognized and look only when the log has them)."""
+ROWS = ("act", "action", "plan", "recognized", "team", "look")
+"""The rows of a lane, top to bottom (all but acts and actions only when the log has them)."""
 _NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ufffe\uffff\ud800-\udfff]")
-
 
 # -- drawing ---------------------------------------------------------------------
 
@@ -132,9 +132,10 @@ def render_timeline(events: Iterable[LogEvent], title: str = "", *, robot: str |
     y = band_top + max(1, _rows(band_rows)) * BAND_ROW + 22
     out.append(_axis(t0, end, step, x, y, above=True))
     lanes_top = y = y + 6
-    heights = {"act": ROW, "action": ROW, "plan": ROW, "recognized": ROW, "look": LOOK_ROW}
+    heights = {"act": ROW, "action": ROW, "plan": ROW, "recognized": ROW, "team": ROW,
+               "look": LOOK_ROW}
     captions = {"act": "acts", "action": "actions", "plan": "plan tasks",
-                "recognized": "recognized", "look": "looks at"}
+                "recognized": "recognized", "team": "team", "look": "looks at"}
     for index, (agent, rows) in enumerate(lanes):
         counts = {kind: max(kind in ("act", "action"), _rows(rows[kind])) for kind in rows}
         lane_h = 2 * LANE_PAD + sum(counts[k] * heights[k] for k in counts)
@@ -192,8 +193,8 @@ def _task_item(s: TaskSpan, t_end: float) -> Item:
     over = s.end is not None
     return Item("", "task", s.start, s.end if over else t_end,
                 f"{s.name}: {s.outcome}" if over else f"{s.name}: still running",
-                f"task {s.name} [{s.node}] {when(s.start)} – "
-                + (f"{when(s.end)} s, {s.outcome}" if s.end is not None else "…"), "task",
+                f"task {s.name} [{s.node}] {shown_time(s.start)} – "
+                + (f"{shown_time(s.end)} s, {s.outcome}" if s.end is not None else "…"), "task",
                 attrs={"data-task": s.node, "data-start": repr(s.start)}
                 | ({"data-end": repr(s.end)} if s.end is not None else {}))
 
@@ -271,7 +272,8 @@ def _item(item: Item, top: float, height: float, x: Any, t_end: float) -> str:
         cx = x(item.start)
         r = height / 2 - 4
         fill, stroke = (RECOGNIZED_STYLES["rec-achieved"][:2] if item.kind == "rec-achieved"
-                        else ("#ffffff" if item.kind == "unexpected" else "#e15f99", "#9e2a63"))
+                        else (POINT_COLOURS.get(item.kind, POINT_COLOURS["received"]),
+                              "#9e2a63"))
         shape = (f'<polygon points="{_n(cx)},{_n(mid - r)} {_n(cx + r)},{_n(mid)} '
                  f'{_n(cx)},{_n(mid + r)} {_n(cx - r)},{_n(mid)}" fill="{fill}" '
                  f'stroke="{stroke}" stroke-width="1.5"/>')
@@ -348,10 +350,12 @@ def _band(item: Item, top: float, x: Any, t_end: float) -> str:
     right = x(item.end if item.end is not None else t_end)
     mid = top + BAND_ROW / 2
     if item.point:
-        return (f'<g class="plan"{attrs}><title>{_esc(item.tooltip)}</title>'
+        fill, stroke = ("#e15759", "#7a1f20") if item.kind == "respawn" else ("#edc948",
+                                                                               "#8a6d00")
+        return (f'<g class="{item.kind}"{attrs}><title>{_esc(item.tooltip)}</title>'
                 f'<polygon points="{_n(left)},{_n(mid - 5)} {_n(left + 5)},{_n(mid + 5)} '
-                f'{_n(left - 5)},{_n(mid + 5)}" fill="#edc948" stroke="#8a6d00"/>'
-                + _text(left + 8, mid + 4, item.label, "label", fill="#5c4a00") + "</g>")
+                f'{_n(left - 5)},{_n(mid + 5)}" fill="{fill}" stroke="{stroke}"/>'
+                + _text(left + 8, mid + 4, item.label, "label", fill=stroke) + "</g>")
     return (f'<g class="task"{attrs}><title>{_esc(item.tooltip)}</title>'
             f'<line x1="{_n(left)}" y1="{_n(mid + 5)}" x2="{_n(right)}" y2="{_n(mid + 5)}" '
             'stroke="#555" stroke-width="2"/>'
@@ -368,7 +372,7 @@ def _axis(t0: float, end: float, step: float, x: Any, y: float, *, above: bool) 
         tick = -4 if above else 4
         parts.append(f'<line x1="{_n(x(t))}" y1="{_n(y)}" x2="{_n(x(t))}" y2="{_n(y + tick)}" '
                      'stroke="#555" stroke-width="1"/>')
-        parts.append(_text(x(t), y - 7 if above else y + 15, f"{when(t)} s", "tick",
+        parts.append(_text(x(t), y - 7 if above else y + 15, f"{shown_time(t)} s", "tick",
                            size=SMALL + 1, fill="#444", anchor="middle"))
     return f'<g class="axis">{"".join(parts)}</g>'
 
@@ -420,9 +424,28 @@ def _legend(tl: Timeline, left: float, top: float, width: float) -> tuple[str, f
     if any(i.row == "look" for i in tl.items):
         entries.append((f'<rect width="18" height="6" y="-7" fill="{LOOK_COLOUR}"/>',
                         "looks at"))
-    if tl.plans:
+    for kind, text in (("question", "question or help request"), ("answer", "answer"),
+                       ("expired", "question expired"), ("breakpoint", "breakpoint")):
+        if kind in kinds:
+            entries.append((diamond.format(POINT_COLOURS[kind]), text))
+    team = [i for i in tl.items if i.row == "team"]
+    for colour, text, shown in (
+            ("done", "team task done", any(i.attrs.get("data-status") == "done" for i in team)),
+            ("failed", "team task failed",
+             any(i.attrs.get("data-status") == "failed" for i in team)),
+            ("team-task", "team task under way",
+             any(i.kind == "team-task" and i.end is None for i in team)),
+            ("associated", "associated with a person", "associated" in kinds),
+            ("user-mode", "user mode (a person drives)", "user-mode" in kinds)):
+        if shown:
+            entries.append((f'<rect width="18" height="10" y="-9" '
+                            f'fill="{TEAM_COLOURS[colour]}"/>', text))
+    if any(p.kind == "plan" for p in tl.plans):
         entries.append(('<polygon points="9,-9 14,1 4,1" fill="#edc948" stroke="#8a6d00"/>',
                         "plan from the planner"))
+    if any(p.kind == "respawn" for p in tl.plans):
+        entries.append(('<polygon points="9,-9 14,1 4,1" fill="#e15759" stroke="#7a1f20"/>',
+                        "task respawned"))
     entries.append(('<line x1="9" y1="-12" x2="9" y2="4" stroke="#555" stroke-dasharray="2,3"/>',
                     "task start / end"))
     parts, cx, cy = [], left, top
@@ -478,7 +501,6 @@ def _fit(text: str, room: float, size: float) -> str:
         if text_width(short, size) <= room:
             return short
     return ""
-
 
 def _n(v: float) -> str:
     return f"{v:.2f}".rstrip("0").rstrip(".")
