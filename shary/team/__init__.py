@@ -1,0 +1,1 @@
+"""HRI/OS: teams of humans and robots (agents, managers, spatial reasoning)."""
