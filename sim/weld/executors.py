@@ -1,0 +1,284 @@
+"""What the site's robots and astronauts do, over simulated time.
+
+The robots' atomic tasks reach the site through the engine's executor port
+(:class:`shary.executors.Executor`): ``drive`` (to a site place), ``weld`` (a
+seam: Robonaut-B's right arm follows it, the bead grows as the torch goes),
+``inspect`` (a seam: K-10 aims its camera and light at it and reads the weld),
+``point-light`` (K-10's spotlight at a point) and ``snapshot`` (a picture from
+K-10's camera).  The astronauts' work — carrying a panel from the pallet to
+the frame and tacking it — is :meth:`SiteActions.mount`, which the run starts
+when a person accepts that task.
+
+Motion reuses :mod:`sim.motion`'s kinematic activities (bases at a bounded
+speed, joints at a bounded speed) on the clock of :class:`sim.simulation.Simulation`;
+physics steps only where it decides something (a carried panel follows its
+constraint, a tacked panel stays put).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from shary.executors import Reporter, Request
+
+from ..avatar import Avatar
+from ..kinematics import reach
+from ..motion import BaseMotion, Instant, JointMotion, Lazy, Sequence, Wait
+from ..simulation import TICK, Simulation, Walk
+from ..world import pb
+from .site import PANEL_Z, PANELS, WeldSite, seam_x
+
+WELDER_ARM = "right"
+SOUND, BAD = 0.8, 0.4
+"""A bead read at or above SOUND is good, below BAD is bad; between, K-10 is unsure."""
+WALK_SPEED = 0.5
+"""Suited astronauts carrying a panel, m/s."""
+INSPECT_SECONDS = 2.0
+WELD_SECONDS_PER_POINT = 2.0
+LANE_Y = -1.6
+"""Robots drive along this line south of the frame, then turn in to their spot."""
+MAST = (0.3, 0.0, 1.4)
+"""K-10's pan-tilt head in its base frame (pan joint axis, tilt joint height)."""
+
+
+class SiteActions:
+    """The robots' executors and the astronauts' work on one :class:`WeldSite`."""
+
+    def __init__(self, site: WeldSite, sim: Simulation, *,
+                 qualities: dict[str, list[float]] | None = None,
+                 snapshot_dir: Path | None = None,
+                 tell: Callable[[str, str, str], None] = lambda who, kind, text: None):
+        self.site = site
+        self.sim = sim
+        self.qualities = {seam: list(q) for seam, q in (qualities or {}).items()}
+        """Seam -> the quality of each successive weld of it (the last one repeats)."""
+        self.snapshot_dir = snapshot_dir
+        self.snapshots: list[str] = []
+        self.tell = tell
+        self.running: dict[str, int] = {}  # request id -> activity handle
+        self.people: dict[str, Avatar] = {}
+
+    # -- the executor port ------------------------------------------------------------
+
+    def start(self, request: Request, reporter: Reporter) -> None:
+        act = getattr(self, "_" + request.atomic.replace("-", "_"), None)
+        if act is None:
+            reporter.failed(request, f"the site cannot perform {request.atomic!r}")
+            return
+        try:
+            activity, finish = act(request)
+        except (KeyError, ValueError) as err:
+            reporter.failed(request, str(err.args[0]) if err.args else str(err))
+            return
+
+        def over() -> None:
+            self.running.pop(request.id, None)
+            outcome = finish()
+            if isinstance(outcome, str):
+                reporter.failed(request, outcome)
+            else:
+                reporter.done(request, **outcome)
+
+        self.running[request.id] = self.sim.start(activity, over)
+
+    def cancel(self, request: Request) -> None:
+        handle = self.running.pop(request.id, None)
+        if handle is not None:
+            self.sim.stop(handle)
+
+    # -- robots ---------------------------------------------------------------------
+
+    def _drive(self, request: Request) -> tuple[Any, Callable[[], Any]]:
+        robot, place = request.agent, request.args["place"]
+        if place not in self.site.places:
+            raise KeyError(f"no place {place!r} on the site (places: "
+                           f"{', '.join(self.site.places)})")
+        x, y, yaw = self.site.places[place]
+        cx, cy, _ = self.site.base_pose(robot)
+        waypoints = [(cx, LANE_Y), (x, LANE_Y), (x, y)] if abs(cx - x) > 0.05 else [(x, y)]
+        return BaseMotion(self.site, robot, waypoints, yaw), lambda: {"place": place}
+
+    def _weld(self, request: Request) -> tuple[Any, Callable[[], Any]]:
+        robot, seam = request.agent, request.args["seam"]
+        points = self.site.seam_points(seam)
+        quality = self._next_quality(seam)
+        parts: list[Any] = [Instant(lambda: self.site.grind(seam), "grind")]
+        arm = self.site.robot(robot).arm(WELDER_ARM)
+
+        for i, point in enumerate(points):
+            def move(point: tuple[float, float, float] = point) -> JointMotion:
+                q, _ = reach(self.site, robot, point, arm=WELDER_ARM)
+                return JointMotion(self.site, robot, dict(zip(arm.joints, q, strict=True)))
+
+            parts += [Lazy(move, "reach"), Wait(WELD_SECONDS_PER_POINT, label="weld"),
+                      Instant(lambda i=i: self.site.lay_bead(seam, quality,
+                                                               (i + 1) / len(points)))]
+        home = {j: self.site.robot(robot).home.get(j, 0.0) for j in arm.joints}
+        parts.append(JointMotion(self.site, robot, home))
+
+        def finish() -> dict[str, Any] | str:
+            bead = self.site.beads.get(seam)
+            return {"seam": seam} if bead is not None else f"no bead along {seam}"
+
+        return Sequence(parts, "weld"), finish
+
+    def _next_quality(self, seam: str) -> float:
+        left = self.qualities.get(seam) or [0.95]
+        return left.pop(0) if len(left) > 1 else left[0]
+
+    def _inspect(self, request: Request) -> tuple[Any, Callable[[], Any]]:
+        robot, seam = request.agent, request.args["seam"]
+        centre = (seam_x(seam), self.site.seam_points(seam)[0][1], PANEL_Z)
+        aim = Lazy(lambda: self.aim(robot, centre), "aim")
+
+        def finish() -> dict[str, Any] | str:
+            bead = self.site.beads.get(seam)
+            quality = bead.quality if bead is not None else 0.0
+            image = self.snapshot(robot, f"inspect-{seam}", f"{robot} inspects {seam}")
+            verdict = ("sound" if quality >= SOUND else "bad" if quality < BAD else "unsure")
+            self.tell(robot, "inspect", f"{seam}: {verdict} (bead read {quality:.2f})")
+            if verdict == "bad":
+                return f"the weld of {seam} is bad"
+            return {"seam": seam, "verdict": verdict, "quality": round(quality, 2),
+                    **({"image": image} if image else {})}
+
+        return Sequence([aim, Wait(INSPECT_SECONDS, label="inspect")], "inspect"), finish
+
+    def _point_light(self, request: Request) -> tuple[Any, Callable[[], Any]]:
+        robot = request.agent
+        point = tuple(float(request.args[k]) for k in ("x", "y", "z"))
+        return Lazy(lambda: self.aim(robot, point), "aim"), lambda: {"at": list(point)}
+
+    def _snapshot(self, request: Request) -> tuple[Any, Callable[[], Any]]:
+        robot = request.agent
+        label = str(request.args.get("label", "view"))
+        image: list[str] = []
+        return (Instant(lambda: image.append(self.snapshot(robot, label, label) or "")),
+                lambda: {"image": image[0]} if image and image[0] else {})
+
+    def aim(self, robot: str, point: tuple[float, float, float]) -> JointMotion:
+        """K-10's head (camera and spotlight) turned towards a point in the world."""
+        pan, tilt = self.pan_tilt(robot, point)
+        r = self.site.robot(robot)
+        return JointMotion(self.site, robot, {r.joint("light_pan_joint"): pan,
+                                              r.joint("light_tilt_joint"): tilt}, speed=1.5)
+
+    def pan_tilt(self, robot: str, point: tuple[float, float, float]) -> tuple[float, float]:
+        """The head's (pan, tilt) that make it look at ``point``."""
+        x, y, yaw = self.site.base_pose(robot)
+        mx = x + MAST[0] * math.cos(yaw) - MAST[1] * math.sin(yaw)
+        my = y + MAST[0] * math.sin(yaw) + MAST[1] * math.cos(yaw)
+        dx, dy, dz = point[0] - mx, point[1] - my, point[2] - MAST[2]
+        pan = math.atan2(dy, dx) - yaw
+        pan = math.atan2(math.sin(pan), math.cos(pan))
+        tilt = math.atan2(dz, math.hypot(dx, dy))
+        r = self.site.robot(robot)
+        lo, hi = r.limits[r.joint("light_tilt_joint")]
+        return pan, max(lo, min(hi, tilt))
+
+    def light_direction(self, robot: str) -> tuple[float, float, float]:
+        """Where K-10's spotlight points now (a unit vector in the world)."""
+        _, orn = self.site.link_pose(robot, "spotlight_link")
+        m = pb.getMatrixFromQuaternion(orn)
+        return (m[0], m[3], m[6])
+
+    def snapshot(self, robot: str, label: str, caption: str) -> str | None:
+        """A PNG of what ``robot``'s camera sees, named after the time and ``label``;
+        its path, or None when the run writes no files."""
+        if self.snapshot_dir is None:
+            return None
+        now = self.sim.loop.now()
+        name = f"{robot.lower()}-{len(self.snapshots) + 1:02d}-{now:06.1f}s-{label}.png"
+        path = self.snapshot_dir / name
+        self.site.snapshot(path, 480, 360, robot, [f"{now:.1f} s   {caption}"])
+        self.snapshots.append(name)
+        return str(path)
+
+    # -- astronauts -----------------------------------------------------------------
+
+    def add_person(self, name: str, x: float, y: float, yaw: float,
+                   suit: tuple[float, float, float, float] = (0.95, 0.95, 0.93, 1.0)) -> Avatar:
+        avatar = Avatar(self.site, name, x, y, yaw, suit)
+        self.people[name] = avatar
+        self.sim.people[name] = avatar
+        return avatar
+
+    def mount(self, panel: str, carriers: list[str], done: Callable[[], Any]) -> int:
+        """Carriers walk to the pallet, lift ``panel``, carry it to its place on the frame,
+        hold it there and tack it (the panel follows a constraint; physics carries it)."""
+        if panel not in PANELS:
+            raise KeyError(f"no panel {panel!r} (panels: {', '.join(PANELS)})")
+        site = self.site
+        body = site.panels[panel]
+        pallet, _ = site.call(pb.getBasePositionAndOrientation, body)
+        mount_at, upright = site.mount_pose(panel)
+        people = [self.people[c] for c in carriers]
+        sides = [(-1) ** i for i in range(len(people))]  # one at each end of the panel
+
+        def to(ax: float, ay: float, facing: float) -> list[Walk]:
+            return [Walk(p, [(ax + s * 0.75, ay)], WALK_SPEED, final_yaw=facing)
+                    for p, s in zip(people, sides, strict=True)]
+
+        carry_y = -0.6
+        lift_at = [pallet[0], pallet[1], PANEL_Z]
+        parts: list[Any] = [_Together(to(pallet[0], pallet[1] - 0.3, math.pi / 2)),
+                            Instant(lambda: site.lift(panel, list(pallet), upright)),
+                            _Carry(site, panel, list(pallet), lift_at, 0.4, upright)]
+        carry = _Together(to(mount_at[0], carry_y, math.pi / 2),
+                          follow=lambda: self._between(panel, people, carry_y, upright))
+        parts += [carry,
+                  _Carry(site, panel, None, mount_at, 0.3, upright),
+                  Wait(1.0, label="align"),
+                  Instant(lambda: site.tack(panel), "tack")]
+        return self.sim.start(Sequence(parts, "mount"), done)
+
+    def _between(self, panel: str, people: list[Avatar], y: float,
+                 orientation: tuple[float, ...]) -> None:
+        x = sum(p.x for p in people) / len(people)
+        self.site.carry_to(panel, [x, y, PANEL_Z], orientation)
+        self.site.step(TICK)
+
+
+class _Together:
+    """Several activities advanced side by side; over when all are (``follow`` after each
+    tick: the carried panel follows the carriers)."""
+
+    def __init__(self, parts: list[Any], follow: Callable[[], Any] | None = None):
+        self.parts = list(parts)
+        self.follow = follow
+        self.label = "together"
+
+    def advance(self, dt: float) -> bool:
+        self.parts = [p for p in self.parts if not p.advance(dt)]
+        if self.follow is not None:
+            self.follow()
+        return not self.parts
+
+
+class _Carry:
+    """A held panel moved in a straight line at a bounded speed, physics stepped as it goes."""
+
+    label = "carry"
+
+    def __init__(self, site: WeldSite, panel: str, start: list[float] | None,
+                 goal: list[float], speed: float, orientation: tuple[float, ...]):
+        self.site, self.panel = site, panel
+        self.start, self.goal = start, goal
+        self.speed, self.orientation = speed, orientation
+        self.at: list[float] | None = None
+
+    def advance(self, dt: float) -> bool:
+        if self.at is None:
+            pos = self.start or list(self.site.call(
+                pb.getBasePositionAndOrientation, self.site.panels[self.panel])[0])
+            self.at = list(pos)
+        left = math.dist(self.at, self.goal)
+        step = min(left, self.speed * dt)
+        if left > 1e-9:
+            self.at = [a + (g - a) * step / left for a, g in zip(self.at, self.goal, strict=True)]
+        self.site.carry_to(self.panel, self.at, self.orientation)
+        self.site.step(dt)
+        return step >= left - 1e-9
