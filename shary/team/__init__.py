@@ -1,1 +1,21 @@
-"""HRI/OS: teams of humans and robots (agents, managers, spatial reasoning)."""
+"""HRI/OS on shary's kernel: a team of robots, people and software agents as peers.
+
+The parts (docs/teams.md):
+
+- :mod:`shary.team.spec` and :mod:`shary.team.teamfile`: the team file
+  (agents, skills, behaviours, questions, scoring, the goal's tasks);
+- :mod:`shary.team.messages`: the typed messages and the message port;
+- :mod:`shary.team.agents`: robot agents (a supervisor each), human proxies,
+  software agents; breakpoints, association, control authority;
+- :mod:`shary.team.tasks`: the Task Manager;
+- :mod:`shary.team.resources`: the Resource Manager and its criteria;
+- :mod:`shary.team.interaction`: the Interaction Manager (questions, help);
+- :mod:`shary.team.context`: the Context Manager (summaries of the log);
+- :mod:`shary.team.team`: :class:`Team`, which builds and runs all of them.
+"""
+
+from shary.team.spec import TeamSpec
+from shary.team.team import AgentLog, Team
+from shary.team.teamfile import load_team, robot_library
+
+__all__ = ["AgentLog", "Team", "TeamSpec", "load_team", "robot_library"]

@@ -1,0 +1,610 @@
+"""Team agents as peers: robot agents, human proxies, software agents.
+
+HRI/OS (Section 3): "each team agent (human, robot, or software) has a set of
+skills and resources that they contribute to the team".  Every agent here
+receives messages from the :class:`~shary.team.messages.MessagePort` and
+answers with messages; the managers never reach into an agent's insides
+beyond what the Resource Manager's criteria read (:meth:`Agent.availability`,
+:meth:`Agent.activity_score`, :meth:`Agent.track_record`, the position).
+
+- :class:`RobotAgent` wraps one shary :class:`~shary.supervisor.Supervisor`
+  (its own schemes, agenda and task tree, on the team's loop and log).  A team
+  task becomes a goal on its agenda.  Help requests are served only at a
+  **breakpoint** of its current task: the moment one atomic task is over and
+  the next would start (:class:`_Gate`); the robot then **associates** with
+  the requester (an agenda hold: its own goal stays suspended) until released
+  (Fig. 7).  **Control authority**: a human may take control (user mode), send
+  the robot atomic tasks through its executor port, and hand back.
+- :class:`HumanProxy` represents a person: it accepts assignments and
+  questions and answers for the person.  With a :class:`~shary.team.spec.
+  Behaviour` the person is simulated on the loop (accept, refuse, answer late,
+  ignore); without one, a user interface calls :meth:`HumanProxy.reply`,
+  :meth:`HumanProxy.report` and :meth:`HumanProxy.answer`.
+- :class:`SoftwareAgent` offers services (the context manager; the spatial
+  reasoner) to the others: an ``Act`` ``QUERY`` gets an ``INFORM`` back.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections import deque
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+from shary.executors import Executor, ExecutorRegistry, Outcome, Reporter, Request
+from shary.team.messages import Act, Answer, Assignment, Message, Progress, Question
+from shary.team.resources import HELP, QUESTION, TASK, Need
+from shary.team.spec import ACCEPT, ANSWER, IGNORE, AgentSpec, Delay
+
+if TYPE_CHECKING:
+    from shary.agenda import Goal
+    from shary.supervisor import Supervisor
+    from shary.team.team import Team
+
+IDLE, WORKING, ANSWERING, ASSOCIATED, CONTROLLED = (
+    "idle", "working", "answering", "associated", "controlled")
+SYSTEM, USER = "system", "user"
+"""Control authority: the robot decides (system) or a human drives it (user)."""
+TEAM_PRIORITY = 0
+"""The agenda priority of a team task."""
+ASSOCIATED_PRIORITY = 100
+"""Help requests served during an association run at this priority (above team tasks)."""
+CONTROL_PRIORITY = 1000
+"""A human in control holds the robot's agenda above everything it would do itself."""
+
+# Acts between agents (the Interaction Manager and the people use them).
+REQUEST_HELP, RELEASE, TAKE_CONTROL, HAND_BACK, QUERY, INFORM = (
+    "REQUEST-HELP", "RELEASE", "TAKE-CONTROL", "HAND-BACK", "QUERY", "INFORM")
+
+
+class Agent:
+    """What every team member has: name, kind, skills, place, and its track record."""
+
+    def __init__(self, team: Team, spec: AgentSpec):
+        self.team = team
+        self.spec = spec
+        self.name = spec.name
+        self.kind = spec.kind
+        self.skills = frozenset(spec.skills)
+        self.position: tuple[float, ...] | None = spec.at
+        self.current: str | None = None
+        """The team task this agent holds (offered or running): one at a time."""
+        self.activity = IDLE
+        self._recent: deque[float] = deque()
+        self._record: dict[str, list[int]] = {TASK: [0, 0], QUESTION: [0, 0], HELP: [0, 0]}
+        team.port.subscribe(self.name, self.handle)
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.name} {self.activity}>"
+
+    # -- what the Resource Manager's criteria read --------------------------------
+
+    def availability(self, need: Need) -> float | None:
+        if need.what == QUESTION:
+            return 1.0 if self.activity == IDLE else 0.5
+        return 1.0 if self.current is None and self.activity == IDLE else 0.2
+
+    def activity_score(self, need: Need) -> float:
+        return {IDLE: 1.0, ANSWERING: 0.6, WORKING: 0.3}.get(self.activity, 0.0)
+
+    def track_record(self, what: str) -> tuple[int, int]:
+        """(positive replies, requests) of one kind: accepted tasks, answered questions."""
+        yes, asked = self._record[what]
+        return yes, asked
+
+    def count(self, what: str, positive: bool) -> None:
+        entry = self._record[what]
+        entry[1] += 1
+        entry[0] += int(positive)
+
+    def recent_load(self, now: float, window: float) -> int:
+        recent = self._recent
+        while recent and recent[0] < now - window:
+            recent.popleft()
+        return len(recent)
+
+    def took(self, now: float) -> None:
+        self._recent.append(now)
+
+    # -- messages -----------------------------------------------------------------
+
+    def send(self, message: Message) -> None:
+        self.team.port.send(message)
+
+    def progress(self, to: str, task: str, status: str, reason: str = "", **data: Any) -> None:
+        self.send(Progress(self.name, to, task=task, status=status, reason=reason, data=data))
+
+    def handle(self, message: Message) -> None:
+        self.team.record("message-ignored", agent=self.name, type=message.kind)
+
+
+# -- robots ------------------------------------------------------------------------
+
+
+class RobotAgent(Agent):
+    """A robot on the team: one supervisor, its agenda, breakpoints, association, control."""
+
+    def __init__(self, team: Team, spec: AgentSpec, sup: Supervisor):
+        super().__init__(team, spec)
+        self.sup = sup
+        self.world: ExecutorRegistry = sup.executors
+        """The executors of the world (the simulation or the robot): the same port for the
+        robot's own tasks and for teleoperation."""
+        sup.executors = _GatedRegistry(self)
+        sup.agenda.listeners.append(self._goal_over)
+        self.mode = SYSTEM
+        self.controller: str | None = None
+        self.associated: str | None = None
+        self.pending: Act | None = None
+        """A help request waiting for the next breakpoint."""
+        self.held: tuple[Request, Reporter] | None = None
+        self._goals: dict[int, tuple[str, str]] = {}
+        """Agenda goal id -> (what it is for: team task or help request id, who asked)."""
+        self._teleop_ids = itertools.count(1)
+        self.last_failure = ""
+        """Why the robot's last atomic task failed (the reason its task failed)."""
+
+    def availability(self, need: Need) -> float | None:
+        if self.mode == USER:
+            return None
+        if need.what == HELP:
+            if self.associated is not None and self.associated != need.requester:
+                return None
+            return 1.0 if self.current is None else 0.5
+        return super().availability(need)
+
+    def activity_score(self, need: Need) -> float:
+        return 1.0 if self.current is None else 0.5
+
+    # -- team tasks -----------------------------------------------------------------
+
+    def handle(self, message: Message) -> None:
+        if isinstance(message, Assignment):
+            self._assigned(message)
+        elif isinstance(message, Act) and message.act == REQUEST_HELP:
+            self._help_requested(message)
+        elif isinstance(message, Act) and message.act == RELEASE:
+            self.release(message.sender)
+        elif isinstance(message, Act) and message.act == TAKE_CONTROL:
+            self.take_control(message.sender)
+        elif isinstance(message, Act) and message.act == HAND_BACK:
+            self.hand_back(message.sender)
+        else:
+            super().handle(message)
+
+    def _assigned(self, message: Assignment) -> None:
+        reason = ("under user control" if self.mode == USER
+                  else f"associated with {self.associated}" if self.associated
+                  else f"busy with {self.current}" if self.current not in (None, message.task)
+                  else "" if message.skill in self.sup.library.tasks
+                  else f"cannot do {message.skill}")
+        if reason:
+            self.progress(message.sender, message.task, "refused", reason)
+            return
+        self.current = message.task
+        self.activity = WORKING
+        goal = self.sup.agenda.add(message.skill, message.args, priority=TEAM_PRIORITY,
+                                   source=f"team:{message.task}#{message.attempt}")
+        self._goals[goal.id] = (message.task, message.sender)
+        self.progress(message.sender, message.task, "accepted")
+
+    def _goal_over(self, goal: Goal) -> None:
+        found = self._goals.pop(goal.id, None)
+        if found is None:
+            return
+        what, who = found
+        outcome = "done" if goal.state == "done" else "failed"
+        reason = self.last_failure if outcome == "failed" else ""
+        self.last_failure = ""
+        if what == self.current:
+            self.current = None
+            self.activity = IDLE if self.associated is None else ASSOCIATED
+            self.progress(who, what, outcome, reason)
+        else:  # a help request served
+            self.progress(who, what, "served" if outcome == "done" else "failed", reason)
+        self.team.loop.call_soon(self._breakpoint_if_idle)
+
+    # -- help requests, breakpoints, association ----------------------------------------
+
+    def _help_requested(self, message: Act) -> None:
+        requester = str(message.data.get("requester", message.sender))
+        if self.mode == USER or (self.associated not in (None, requester)):
+            self.progress(message.sender, message.task or "", "refused",
+                          "under user control" if self.mode == USER
+                          else f"associated with {self.associated}")
+            return
+        if self.associated == requester:
+            self._serve(message)
+            return
+        if self.pending is not None:
+            self.progress(message.sender, message.task or "", "refused",
+                          f"already waiting to serve {self.pending.data.get('requester')}")
+            return
+        self.pending = message
+        self.progress(message.sender, message.task or "", "waiting",
+                      "until a breakpoint of the current task")
+        self.team.loop.call_soon(self._breakpoint_if_idle)
+
+    def _idle(self) -> bool:
+        agenda = self.sup.agenda
+        return agenda.active is None or self.held is not None
+
+    def _breakpoint_if_idle(self) -> None:
+        if self.pending is not None and self._idle():
+            self._associate()
+
+    def at_breakpoint(self, request: Request, reporter: Reporter) -> bool:
+        """Called before each atomic task starts: whether the robot stops here to serve a
+        waiting request (the atomic task is then held, and cancelled by the suspension)."""
+        if self.pending is None:
+            return False
+        self.held = (request, reporter)
+        self.team.record("breakpoint", task=self.current, agent=self.name,
+                         before=request.atomic, node=request.node)
+        self._associate()
+        return True
+
+    def release_held(self, request: Request) -> bool:
+        """The suspension cancelled the held atomic task: report it cancelled."""
+        if self.held is None or self.held[0].id != request.id:
+            return False
+        _, reporter = self.held
+        self.held = None
+        reporter.cancelled(request, "suspended at a breakpoint")
+        return True
+
+    def _associate(self) -> None:
+        message, self.pending = self.pending, None
+        if message is None:
+            return
+        requester = str(message.data.get("requester", message.sender))
+        self.associated = requester
+        self.activity = ASSOCIATED
+        self.team.record("associate", task=message.task, agent=self.name, requester=requester,
+                         suspended=self.current)
+        self.sup.agenda.hold(f"associated:{requester}", ASSOCIATED_PRIORITY)
+        self._serve(message)
+
+    def _serve(self, message: Act) -> None:
+        skill = str(message.data.get("skill", ""))
+        args = dict(message.data.get("args") or {})
+        if skill not in self.sup.library.tasks:
+            self.progress(message.sender, message.task or "", "failed", f"cannot do {skill}")
+            return
+        goal = self.sup.agenda.add(skill, args, priority=ASSOCIATED_PRIORITY,
+                                   source=f"help:{message.task}")
+        self._goals[goal.id] = (message.task or "", message.sender)
+        self.progress(message.sender, message.task or "", "serving")
+
+    def release(self, requester: str) -> None:
+        """The requester lets the robot go: its own task resumes (Fig. 7's end)."""
+        if self.associated != requester:
+            self.team.record("release-ignored", agent=self.name, by=requester,
+                             associated=self.associated)
+            return
+        self.associated = None
+        self.activity = WORKING if self.current else IDLE
+        self.team.record("release", task=self.current, agent=self.name, by=requester)
+        self.sup.agenda.release(f"associated:{requester}")
+
+    # -- control authority ---------------------------------------------------------------
+
+    def take_control(self, human: str) -> bool:
+        """User mode: ``human`` drives the robot; its own goals wait (logged with the task)."""
+        if self.mode == USER:
+            self.team.record("control-refused", task=self.current, agent=self.name, by=human,
+                             controller=self.controller)
+            return False
+        self.mode, self.controller = USER, human
+        self.team.record("control", task=self.current, agent=self.name, mode=USER, by=human)
+        self.sup.agenda.hold(f"control:{human}", CONTROL_PRIORITY)
+        return True
+
+    def teleoperate(self, human: str, atomic: str, args: dict[str, Any],
+                    on_outcome: Callable[[Outcome], Any] | None = None) -> Request | None:
+        """One atomic task sent by the human in control, through the world's executors."""
+        if self.mode != USER or self.controller != human:
+            self.team.record("teleop-refused", agent=self.name, by=human, atomic=atomic,
+                             reason="not in control")
+            return None
+        request = Request(f"{self.sup.ids}t{next(self._teleop_ids)}", atomic, dict(args),
+                          self.name, self.current or "teleoperation")
+        self.team.record("exec-request", task=request.node, agent=self.name, atomic=atomic,
+                         request=request.id, args=args, by=human)
+
+        def report(outcome: Outcome) -> None:
+            self.team.record("exec-result", task=request.node, agent=self.name,
+                             request=request.id, status=outcome.status,
+                             reason=outcome.reason or None)
+            if on_outcome is not None:
+                on_outcome(outcome)
+
+        executor = self.world.get(atomic)
+        reporter = Reporter(report, self.team.loop.call_soon)
+        if executor is None:
+            reporter.failed(request, f"no executor is registered for {atomic!r}")
+        else:
+            executor.start(request, reporter)
+        return request
+
+    def hand_back(self, human: str) -> bool:
+        """System mode again: the robot's own goals go on."""
+        if self.mode != USER or self.controller != human:
+            self.team.record("control-refused", agent=self.name, by=human, mode=SYSTEM)
+            return False
+        self.mode, self.controller = SYSTEM, None
+        self.team.record("control", task=self.current, agent=self.name, mode=SYSTEM, by=human)
+        self.sup.agenda.release(f"control:{human}")
+        return True
+
+
+class _Gate:
+    """An executor of the world, with the robot's breakpoints in front of it."""
+
+    __slots__ = ("robot", "inner")
+
+    def __init__(self, robot: RobotAgent, inner: Executor):
+        self.robot = robot
+        self.inner = inner
+
+    def start(self, request: Request, reporter: Reporter) -> None:
+        if not self.robot.at_breakpoint(request, reporter):
+            self.inner.start(request, _StepReporter(reporter, self.robot, request))
+
+    def cancel(self, request: Request) -> None:
+        if not self.robot.release_held(request):
+            self.inner.cancel(request)
+
+
+class _StepReporter(Reporter):
+    """Passes an executor's reports on, and tells who delegated the task of each step done
+    (the robot's progress events, HRI/OS Section 3.6)."""
+
+    def __init__(self, inner: Reporter, robot: RobotAgent, request: Request):
+        self.inner = inner
+        self.robot = robot
+        self.request = request
+
+    def done(self, request: Request, **result: Any) -> None:
+        self.inner.done(request, **result)
+        robot = self.robot
+        if robot.current is not None and robot.team.tasks is not None:
+            robot.progress(robot.team.tasks.address, robot.current, "step",
+                           atomic=request.atomic)
+
+    def failed(self, request: Request, reason: str) -> None:
+        self.robot.last_failure = f"{request.atomic}: {reason}"
+        self.inner.failed(request, reason)
+
+    def cancelled(self, request: Request, reason: str = "cancelled") -> None:
+        self.inner.cancelled(request, reason)
+
+
+class _GatedRegistry(ExecutorRegistry):
+    """The supervisor's view of the world's executors: each behind the robot's gate, plus
+    the team's own atomic tasks (``ask``)."""
+
+    def __init__(self, robot: RobotAgent):
+        super().__init__()
+        self.robot = robot
+        self._gates: dict[str, _Gate] = {}
+
+    def register(self, atomic: str, executor: Executor) -> None:
+        self.robot.world.register(atomic, executor)
+
+    def get(self, atomic: str) -> Executor | None:
+        inner = self.robot.team.own_executor(atomic, self.robot) or self.robot.world.get(atomic)
+        if inner is None:
+            return None
+        gate = self._gates.get(atomic)
+        if gate is None or gate.inner is not inner:
+            gate = self._gates[atomic] = _Gate(self.robot, inner)
+        return gate
+
+    def names(self) -> list[str]:
+        return self.robot.world.names()
+
+
+# -- human proxies -------------------------------------------------------------------
+
+
+class HumanProxy(Agent):
+    """A person on the team (see the module's docstring)."""
+
+    def __init__(self, team: Team, spec: AgentSpec):
+        super().__init__(team, spec)
+        self.remote = spec.remote
+        self.behaviour = spec.behaviour
+        self.assignments: dict[str, Assignment] = {}
+        self.questions: list[Question] = []
+        """Questions waiting for this person, the most urgent first."""
+        self.listeners: list[Callable[[Message], Any]] = []
+        """A user interface hears each message the person receives here."""
+        self._answering: str | None = None
+
+    def availability(self, need: Need) -> float | None:
+        if need.what != QUESTION and self.remote:
+            return None  # a remote person does not carry panels
+        if need.what == QUESTION:
+            return 1.0 / (1.0 + len(self.questions))
+        return super().availability(need)
+
+    def handle(self, message: Message) -> None:
+        for listener in self.listeners:
+            listener(message)
+        if isinstance(message, Assignment):
+            self.assignments[message.task] = message
+            self.current = message.task
+            if self.behaviour is not None:
+                self._simulate_assignment(message)
+        elif isinstance(message, Question):
+            self.questions.append(message)
+            self.questions.sort(key=lambda q: -q.priority)
+            if self.behaviour is not None:
+                self._next_question()
+        elif isinstance(message, Progress) or isinstance(message, Answer):
+            self.team.record("heard", agent=self.name, type=message.kind,
+                             task=getattr(message, "task", None),
+                             status=getattr(message, "status", None))
+        else:
+            super().handle(message)
+
+    # -- what a person (or their interface) does ------------------------------------------
+
+    def reply(self, task: str, accept: bool, reason: str = "") -> None:
+        """Accept or refuse an assignment."""
+        message = self.assignments.get(task)
+        if message is None:
+            return
+        if accept:
+            self.activity = WORKING
+            self.progress(message.sender, task, "accepted")
+        else:
+            del self.assignments[task]
+            self.current = None
+            self.progress(message.sender, task, "refused", reason or "the person said no")
+
+    def report(self, task: str, status: str, reason: str = "") -> None:
+        """A task the person accepted is ``done`` or ``failed``."""
+        message = self.assignments.pop(task, None)
+        if message is None:
+            return
+        self.current = None
+        self.activity = ANSWERING if self._answering else IDLE
+        self.progress(message.sender, task, status, reason)
+
+    def answer(self, question: str, value: str) -> None:
+        """Answer a question the person was asked."""
+        found = next((q for q in self.questions if q.id == question), None)
+        if found is None:
+            return
+        self.questions.remove(found)
+        self.send(Answer(self.name, found.sender, question=found.id, value=value))
+        self._answered()
+
+    def decline(self, question: str, reason: str = "") -> None:
+        """Say one cannot answer (the Interaction Manager asks someone else)."""
+        found = next((q for q in self.questions if q.id == question), None)
+        if found is None:
+            return
+        self.questions.remove(found)
+        self.progress(found.sender, found.id, "refused", reason or "cannot answer")
+        self._answered()
+
+    def withdraw(self, question: str) -> None:
+        """The question expired or was answered by someone else."""
+        self.questions = [q for q in self.questions if q.id != question]
+        if self._answering == question:
+            self._answered()
+
+    def _answered(self) -> None:
+        self._answering = None
+        self.activity = WORKING if self.current else IDLE
+        if self.behaviour is not None:
+            self._next_question()
+
+    def request_help(self, skill: str, args: dict[str, Any] | None = None, *,
+                     release_after: float | None = None) -> str:
+        """Ask the team for help (a robot's skill): the Interaction Manager finds one."""
+        return self.team.interaction.request_help(self.name, skill, dict(args or {}),
+                                                  release_after=release_after)
+
+    # -- the simulated person -----------------------------------------------------------
+
+    def _draw(self, delay: Delay) -> float:
+        low, high = delay
+        return low if high <= low else self.team.loop.random.uniform(low, high)
+
+    def _simulate_assignment(self, message: Assignment) -> None:
+        behaviour = self.behaviour
+        assert behaviour is not None
+        reply = behaviour.assignments
+        if reply.reply == IGNORE:
+            self.team.record("ignored", task=message.task, agent=self.name)
+            return
+        loop = self.team.loop
+        accept = reply.reply == ACCEPT
+
+        def answer() -> None:
+            if self.assignments.get(message.task) is not message:
+                return  # withdrawn meanwhile
+            self.reply(message.task, accept)
+            if accept:
+                loop.call_later(self._draw(behaviour.work_time(message.skill)),
+                                self._finish, message)
+
+        loop.call_later(self._draw(reply.after), answer)
+
+    def _finish(self, message: Assignment) -> None:
+        if self.assignments.get(message.task) is message:
+            self.report(message.task, "done")
+
+    def _next_question(self) -> None:
+        behaviour = self.behaviour
+        if behaviour is None or self._answering is not None or not self.questions:
+            return
+        question = self.questions[0]
+        reply = behaviour.questions
+        if reply.reply == IGNORE:
+            return
+        self._answering = question.id
+        self.activity = ANSWERING
+
+        def answer() -> None:
+            if self._answering != question.id:
+                return
+            if reply.reply == ANSWER:
+                self.answer(question.id, self._answer_to(question))
+            else:
+                self.decline(question.id, "the person will not answer")
+
+        self.team.loop.call_later(self._draw(reply.after), answer)
+
+    def _answer_to(self, question: Question) -> str:
+        behaviour = self.behaviour
+        assert behaviour is not None
+        if question.topic in behaviour.answers:
+            return behaviour.answers[question.topic]
+        if question.choices:
+            return question.choices[0]
+        return "yes" if question.type == "yes-no" else "ok"
+
+    def start_script(self) -> None:
+        """Put the person's own help requests on the clock."""
+        if self.behaviour is None:
+            return
+        for request in self.behaviour.requests:
+            self.team.loop.call_later(request.at, self.request_help, request.ask,
+                                      dict(request.args), release_after=request.release)
+
+
+# -- software agents -----------------------------------------------------------------
+
+
+Service = Callable[[dict[str, Any]], dict[str, Any]]
+"""A service: the query's data -> the answer's data."""
+
+
+class SoftwareAgent(Agent):
+    """An agent that does not change the world: it answers ``QUERY`` acts for its services."""
+
+    def __init__(self, team: Team, spec: AgentSpec):
+        super().__init__(team, spec)
+        self.services: dict[str, Service] = {}
+
+    def offer(self, name: str, service: Service) -> None:
+        self.services[name] = service
+
+    def handle(self, message: Message) -> None:
+        if not (isinstance(message, Act) and message.act == QUERY):
+            super().handle(message)
+            return
+        name = str(message.data.get("service", ""))
+        service = self.services.get(name)
+        if service is None:
+            result: dict[str, Any] = {"error": f"{self.name} offers no service {name!r} "
+                                      f"(it offers {', '.join(sorted(self.services)) or 'none'})"}
+        else:
+            result = service(dict(message.data))
+        self.send(Act(self.name, message.sender, id=message.id, act=INFORM,
+                      data={"service": name, **result}, task=message.task))
