@@ -149,9 +149,11 @@ def test_words_it_cannot_read_get_a_free_text_question(site: SpatialReasoner) ->
     assert isinstance(unknown, Question) and "where are you" in unknown.text
 
 
-def test_aim_gives_pan_and_tilt_in_the_agents_frame(site: SpatialReasoner) -> None:
-    pan, tilt = site.aim("K-10", (2.5, 0.0, 0.0), mount_height=0.0)
-    assert pan == pytest.approx(0.0) and tilt == pytest.approx(0.0)
-    pan, tilt = site.aim("K-10", (1.5, 1.0, 1.0), mount_height=0.0)
-    assert pan == pytest.approx(-math.pi / 4)  # K-10 faces south: west is on its right
-    assert tilt == pytest.approx(math.atan2(1.0, math.sqrt(2)))
+def test_the_service_answers_a_point_or_a_question(site: SpatialReasoner) -> None:
+    said = "point the light at the bottom right corner of panel P3"
+    answer = site.service({"words": said, "speaker": "EVA1", "addressee": "K-10"})
+    assert answer["point"] == pytest.approx([3.0, -0.015, 0.5])
+    assert answer["frame"] == "referent" and answer["perspective"] == "EVA1"
+    asked = site.service({"words": said.replace("P3", "P4"), "speaker": "EVA2",
+                          "addressee": "K-10"})
+    assert asked["to"] == "EVA2" and len(asked["choices"]) == 2 and "point" not in asked

@@ -420,6 +420,9 @@ class HumanProxy(Agent):
         """Questions waiting for this person, the most urgent first."""
         self.listeners: list[Callable[[Message], Any]] = []
         """A user interface hears each message the person receives here."""
+        self.performers: dict[str, Callable[[Assignment], Any]] = {}
+        """Skill -> what carries out the person's accepted task in a simulated world (the
+        astronauts carry a panel); it calls :meth:`report` when the work is over."""
         self._answering: str | None = None
 
     def availability(self, need: Need) -> float | None:
@@ -459,6 +462,9 @@ class HumanProxy(Agent):
         if accept:
             self.activity = WORKING
             self.progress(message.sender, task, "accepted")
+            performer = self.performers.get(message.skill)
+            if performer is not None:
+                performer(message)
         else:
             del self.assignments[task]
             self.current = None
@@ -529,7 +535,7 @@ class HumanProxy(Agent):
             if self.assignments.get(message.task) is not message:
                 return  # withdrawn meanwhile
             self.reply(message.task, accept)
-            if accept:
+            if accept and message.skill not in self.performers:
                 loop.call_later(self._draw(behaviour.work_time(message.skill)),
                                 self._finish, message)
 

@@ -427,19 +427,21 @@ class SpatialReasoner:
                 f"({point[0]:.2f}, {point[1]:.2f}, {point[2]:.2f})")
         return Resolved(request, ref.name, point, local, frame, holder.name, says)
 
-    # -- acting on the answer ---------------------------------------------------------
+    # -- as a team's software agent ------------------------------------------------
 
-    def aim(self, agent: str, point: Vec3, mount_height: float = 0.0) -> tuple[float, float]:
-        """(pan, tilt) in radians that point a device on ``agent`` at ``point``: pan from the
-        agent's heading (positive to its left), tilt up from the horizontal."""
-        thing = self.thing(agent)
-        if thing is None:
-            raise KeyError(f"the position of {agent} is unknown")
-        dx, dy = point[0] - thing.x, point[1] - thing.y
-        dz = point[2] - (thing.z + mount_height)
-        pan = math.atan2(dy, dx) - thing.yaw
-        pan = math.atan2(math.sin(pan), math.cos(pan))
-        return pan, math.atan2(dz, math.hypot(dx, dy))
+    def service(self, data: dict[str, Any]) -> dict[str, Any]:
+        """The ``spatial`` service a team's software agent offers (HRI/OS's SRA): a query
+        with ``words``, ``speaker`` and ``addressee`` gets back ``point`` (x, y, z in the
+        world), the ``frame``, whose ``perspective`` and what was understood (``says``),
+        or a ``question`` for the speaker (``to``, ``choices``)."""
+        answer = self.understand(str(data.get("words", "")), str(data.get("speaker", "")),
+                                 str(data.get("addressee", "")))
+        if isinstance(answer, Resolved):
+            return {"point": [round(v, 4) for v in answer.point], "frame": answer.frame,
+                    "perspective": answer.perspective, "referent": answer.referent,
+                    "says": answer.says}
+        return {"question": answer.text, "to": answer.to, "choices": list(answer.choices),
+                "question_type": answer.kind}
 
 
 # ---------------------------------------------------------------------- geometry

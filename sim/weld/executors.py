@@ -27,9 +27,10 @@ from shary.executors import Reporter, Request
 from ..avatar import Avatar
 from ..kinematics import reach
 from ..motion import BaseMotion, Instant, JointMotion, Lazy, Sequence, Wait
-from ..simulation import TICK, Simulation, Walk
+from ..simulation import Simulation, Walk
 from ..world import pb
-from .site import PANEL_Z, PANELS, WeldSite, seam_x
+from .layout import PANEL_Z, PANELS, seam_x
+from .site import WeldSite
 
 WELDER_ARM = "right"
 SOUND, BAD = 0.8, 0.4
@@ -230,7 +231,7 @@ class SiteActions:
         carry = _Together(to(mount_at[0], carry_y, math.pi / 2),
                           follow=lambda: self._between(panel, people, carry_y, upright))
         parts += [carry,
-                  _Carry(site, panel, None, mount_at, 0.3, upright),
+                  _Carry(site, panel, None, mount_at, 0.3, upright, physics=True),
                   Wait(1.0, label="align"),
                   Instant(lambda: site.tack(panel), "tack")]
         return self.sim.start(Sequence(parts, "mount"), done)
@@ -238,8 +239,7 @@ class SiteActions:
     def _between(self, panel: str, people: list[Avatar], y: float,
                  orientation: tuple[float, ...]) -> None:
         x = sum(p.x for p in people) / len(people)
-        self.site.carry_to(panel, [x, y, PANEL_Z], orientation)
-        self.site.step(TICK)
+        self.site.carry_to(panel, [x, y, PANEL_Z], orientation, kinematic=True)
 
 
 class _Together:
@@ -259,15 +259,19 @@ class _Together:
 
 
 class _Carry:
-    """A held panel moved in a straight line at a bounded speed, physics stepped as it goes."""
+    """A held panel moved in a straight line at a bounded speed.  ``physics``: PyBullet steps
+    as it goes (the panel follows its constraint, and meets the frame as physics says);
+    otherwise it is moved kinematically (a walk across open ground decides nothing)."""
 
     label = "carry"
 
     def __init__(self, site: WeldSite, panel: str, start: list[float] | None,
-                 goal: list[float], speed: float, orientation: tuple[float, ...]):
+                 goal: list[float], speed: float, orientation: tuple[float, ...],
+                 physics: bool = False):
         self.site, self.panel = site, panel
         self.start, self.goal = start, goal
         self.speed, self.orientation = speed, orientation
+        self.physics = physics
         self.at: list[float] | None = None
 
     def advance(self, dt: float) -> bool:
@@ -279,6 +283,7 @@ class _Carry:
         step = min(left, self.speed * dt)
         if left > 1e-9:
             self.at = [a + (g - a) * step / left for a, g in zip(self.at, self.goal, strict=True)]
-        self.site.carry_to(self.panel, self.at, self.orientation)
-        self.site.step(dt)
+        self.site.carry_to(self.panel, self.at, self.orientation, kinematic=not self.physics)
+        if self.physics:
+            self.site.step(dt)
         return step >= left - 1e-9

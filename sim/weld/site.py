@@ -28,21 +28,23 @@ from dataclasses import dataclass
 
 from ..room import Part
 from ..world import LivingRoom, pb
+from .layout import (
+    PALLET,
+    PALLET_TOP,
+    PANEL_HEIGHT,
+    PANEL_MASS,
+    PANEL_THICKNESS,
+    PANEL_WIDTH,
+    PANEL_Y,
+    PANEL_Z,
+    PANELS,
+    SEAM_BEAD,
+    panel_x,
+    robot_places,
+    seam_x,
+)
 
 MOON_GRAVITY = -1.62
-PANELS = ("P1", "P2", "P3", "P4")
-PANEL_WIDTH, PANEL_HEIGHT, PANEL_THICKNESS = 1.0, 1.0, 0.03
-PANEL_MASS = 15.0
-PANEL_Z = 1.05
-"""Height of a mounted panel's centre (its bottom edge is at 0.55 m)."""
-PANEL_Y = -0.07
-"""A mounted panel's centre: just south of the frame's beams."""
-FACING_SOUTH = -math.pi / 2
-"""Where a mounted panel's front (and the work side of the site) faces."""
-PALLET = (6.0, -2.5)
-PALLET_TOP = 0.15
-SEAM_BEAD = 0.012
-"""Half the width of a weld bead, in metres."""
 GROUND_RGBA = (0.55, 0.54, 0.52, 1.0)
 FRAME_RGBA = (0.45, 0.47, 0.52, 1.0)
 PANEL_RGBA = ((0.72, 0.74, 0.78, 1.0), (0.62, 0.66, 0.72, 1.0))
@@ -51,45 +53,12 @@ GOOD_BEAD = (0.95, 0.72, 0.35, 1.0)
 BAD_BEAD = (0.25, 0.18, 0.12, 1.0)
 
 
-def panel_x(panel: str) -> float:
-    """Where panel P1…P4 is mounted along the frame."""
-    return PANELS.index(panel) + 0.5
-
-
-def seam_panels(seam: str) -> tuple[str, str]:
-    """``"P2-P3"`` -> ("P2", "P3"), checked (ValueError for a seam the frame does not have)."""
-    left, _, right = seam.partition("-")
-    if left not in PANELS or right not in PANELS or PANELS.index(right) != PANELS.index(left) + 1:
-        raise ValueError(f"no seam {seam!r} on the frame (seams: {', '.join(SEAMS)})")
-    return left, right
-
-
-SEAMS = tuple(f"{a}-{b}" for a, b in zip(PANELS, PANELS[1:], strict=False))
-
-
-def seam_x(seam: str) -> float:
-    left, _ = seam_panels(seam)
-    return panel_x(left) + PANEL_WIDTH / 2
-
-
 @dataclass(frozen=True)
 class Bead:
     """A weld along a seam: its body and its quality (1 sound, 0 useless)."""
 
     body: int
     quality: float
-
-
-def robot_places() -> dict[str, tuple[float, float, float]]:
-    """Where the robots stand, by name: home spots, a welding spot and an inspection spot
-    for each seam (facing the frame)."""
-    places = {"robonaut-home": (-1.5, -1.6, 0.0), "k10-home": (-1.5, -3.2, 0.0)}
-    for seam in SEAMS:
-        x = seam_x(seam)
-        places[f"weld-{seam}"] = (x - 0.25, -0.72, math.pi / 2)
-        # east of the seam, so the welder (on its west side) does not hide it
-        places[f"inspect-{seam}"] = (x + 1.0, -2.2, math.pi / 2)
-    return places
 
 
 class WeldSite(LivingRoom):
@@ -151,9 +120,15 @@ class WeldSite(LivingRoom):
             childFrameOrientation=orientation)
         self.call(pb.changeConstraint, self.carried[panel], at, orientation, maxForce=2000)
 
-    def carry_to(self, panel: str, at: list[float], orientation: tuple[float, ...]) -> None:
-        """Move the carrying pivot; physics brings the panel along."""
+    def carry_to(self, panel: str, at: list[float], orientation: tuple[float, ...],
+                 kinematic: bool = False) -> None:
+        """Move the carrying pivot: physics brings the panel along as it steps, or, with
+        ``kinematic``, the panel is put there at once (a walk across open ground)."""
         self.call(pb.changeConstraint, self.carried[panel], at, orientation, maxForce=2000)
+        if kinematic:
+            body = self.panels[panel]
+            self.call(pb.resetBasePositionAndOrientation, body, at, orientation)
+            self.call(pb.resetBaseVelocity, body, [0, 0, 0], [0, 0, 0])
 
     def put_down(self, panel: str) -> None:
         """The carriers let go: the panel is left to physics (and falls unless tacked)."""
