@@ -29,7 +29,7 @@ from ..kinematics import reach
 from ..motion import BaseMotion, Instant, JointMotion, Lazy, Sequence, Wait
 from ..simulation import Simulation, Walk
 from ..world import pb
-from .layout import PANEL_Z, PANELS, seam_x
+from .layout import PANEL_Y, PANEL_Z, PANELS, panel_x, seam_x
 from .site import WeldSite
 
 WELDER_ARM = "right"
@@ -148,6 +148,14 @@ class SiteActions:
 
         return Sequence([aim, Wait(INSPECT_SECONDS, label="inspect")], "inspect"), finish
 
+    def _aim(self, request: Request) -> tuple[Any, Callable[[], Any]]:
+        robot, target = request.agent, str(request.args["target"])
+        if target in PANELS:
+            point = (panel_x(target), PANEL_Y, PANEL_Z)
+        else:
+            point = (seam_x(target), PANEL_Y, PANEL_Z)  # ValueError names the seams
+        return Lazy(lambda: self.aim(robot, point), "aim"), lambda: {"target": target}
+
     def _point_light(self, request: Request) -> tuple[Any, Callable[[], Any]]:
         robot = request.agent
         point = tuple(float(request.args[k]) for k in ("x", "y", "z"))
@@ -217,7 +225,8 @@ class SiteActions:
         pallet, _ = site.call(pb.getBasePositionAndOrientation, body)
         mount_at, upright = site.mount_pose(panel)
         people = [self.people[c] for c in carriers]
-        sides = [(-1) ** i for i in range(len(people))]  # one at each end of the panel
+        # one at each end of the panel, the first (whose task it is) at its west end
+        sides = [-(-1) ** i for i in range(len(people))]
 
         def to(ax: float, ay: float, facing: float) -> list[Walk]:
             return [Walk(p, [(ax + s * 0.75, ay)], WALK_SPEED, final_yaw=facing)

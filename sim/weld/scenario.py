@@ -250,14 +250,14 @@ def judge(expect: WeldExpect, rows: list[Row], outcome: str | None, end: float) 
                                f"({a}: {spans[a][0]:.1f}-{spans[a][1]:.1f}s, "
                                f"{b}: {spans[b][0]:.1f}-{spans[b][1]:.1f}s)")
     i = 0
-    for _, kind, _, agent, _ in rows:
-        if i < len(expect.events) and _matches(expect.events[i], kind, agent):
+    for _, kind, _, agent, data in rows:
+        if i < len(expect.events) and _matches(expect.events[i], kind, agent, data):
             i += 1
     if i < len(expect.events):
         differences.append(f"expected the events {', '.join(expect.events)} in this order; "
                            f"missing from {expect.events[i]!r} on")
     for event in expect.no_events:
-        hits = [t for t, kind, _, agent, _ in rows if _matches(event, kind, agent)]
+        hits = [t for t, kind, _, agent, data in rows if _matches(event, kind, agent, data)]
         if hits:
             differences.append(f"unexpected {event!r} at {hits[0]:.1f}s")
     images = sum(1 for _, kind, _, _, data in rows
@@ -271,6 +271,10 @@ def judge(expect: WeldExpect, rows: list[Row], outcome: str | None, end: float) 
     return differences
 
 
-def _matches(event: str, kind: str, agent: str | None) -> bool:
+def _matches(event: str, kind: str, agent: str | None, data: dict[str, Any]) -> bool:
+    """Whether a row is the event ``KIND [by AGENT]``; a progress status (``refused``,
+    ``accepted``, ``served``) names the message that carried it."""
     name, _, who = event.partition(" by ")
-    return kind == name and (not who or agent == who)
+    same = kind == name or (kind == "message" and data.get("type") == "progress"
+                            and data.get("status") == name)
+    return same and (not who or agent == who)
