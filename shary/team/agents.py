@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING, Any
 from shary.executors import Executor, ExecutorRegistry, Outcome, Reporter, Request
 from shary.team.messages import Act, Answer, Assignment, Message, Progress, Question
 from shary.team.resources import HELP, QUESTION, TASK, Need
-from shary.team.spec import ACCEPT, ANSWER, IGNORE, AgentSpec, Delay
+from shary.team.spec import ACCEPT, ANSWER, IGNORE, AgentSpec, Delay, HelpRequest
 
 if TYPE_CHECKING:
     from shary.agenda import Goal
@@ -169,6 +169,8 @@ class RobotAgent(Agent):
             self.take_control(message.sender)
         elif isinstance(message, Act) and message.act == HAND_BACK:
             self.hand_back(message.sender)
+        elif isinstance(message, (Answer, Progress)):
+            pass  # answers reach the asking step through the Interaction Manager's callback
         else:
             super().handle(message)
 
@@ -271,6 +273,8 @@ class RobotAgent(Agent):
         if skill not in self.sup.library.tasks:
             self.progress(message.sender, message.task or "", "failed", f"cannot do {skill}")
             return
+        self.team.record("serve", task=message.task, agent=self.name,
+                         requester=message.data.get("requester"), skill=skill, args=args or None)
         goal = self.sup.agenda.add(skill, args, priority=ASSOCIATED_PRIORITY,
                                    source=f"help:{message.task}")
         self._goals[goal.id] = (message.task or "", message.sender)
@@ -368,7 +372,7 @@ class _StepReporter(Reporter):
     def done(self, request: Request, **result: Any) -> None:
         self.inner.done(request, **result)
         robot = self.robot
-        if robot.current is not None and robot.team.tasks is not None:
+        if robot.current is not None and robot.associated is None:
             robot.progress(robot.team.tasks.address, robot.current, "step",
                            atomic=request.atomic)
 
@@ -580,8 +584,10 @@ class HumanProxy(Agent):
         if self.behaviour is None:
             return
         for request in self.behaviour.requests:
-            self.team.loop.call_later(request.at, self.request_help, request.ask,
-                                      dict(request.args), release_after=request.release)
+            self.team.loop.call_later(request.at, self._scripted_request, request)
+
+    def _scripted_request(self, request: HelpRequest) -> None:
+        self.request_help(request.ask, dict(request.args), release_after=request.release)
 
 
 # -- software agents -----------------------------------------------------------------

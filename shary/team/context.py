@@ -144,7 +144,7 @@ def _take(summary: Summary, event: LogEvent) -> None:
             if entry["request"] == data.get("request"):
                 entry["end"], entry["status"] = time, data.get("status")
                 break
-    elif kind in ("associate", "release", "breakpoint", "control", "help-request"):
+    elif kind in ("associate", "release", "breakpoint", "control", "help-request", "serve"):
         say((time, _sentence(kind, event)))
 
 
@@ -161,4 +161,8 @@ def _sentence(kind: str, event: LogEvent) -> str:
         mode = data.get("mode")
         return (f"{data.get('by')} took control of {event.agent}" if mode == "user"
                 else f"{data.get('by')} handed {event.agent} back")
+    if kind == "serve":
+        args = ", ".join(f"{k}={v}" for k, v in (data.get("args") or {}).items())
+        return f"{event.agent} served {data.get('requester')}: {data.get('skill')}" + (
+            f" ({args})" if args else "")
     return f"{event.agent} asked for help: {data.get('skill')}"

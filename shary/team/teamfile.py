@@ -63,6 +63,7 @@ class _Meaning:
     def team(self) -> TeamSpec:
         data = self.reader.data
         library, recipes = self.library()
+        self.tasks_of_robots = library.tasks if library is not None else None
         agents = {name: self.agent(name, raw, library)
                   for name, raw in data["agents"].items()}
         questions = {topic: self.question(topic, raw)
@@ -228,6 +229,19 @@ class _Meaning:
             among = f"among {', '.join(raw['by'])} " if candidates else ""
             self.problem(where + ("do",), f"nobody {among}has the skill {skill!r}"
                          f"{did_you_mean(skill, known)}")
+        robots = [a for a in pool if a.kind == ROBOT and skill in a.skills]
+        if robots and self.tasks_of_robots is not None and skill in self.tasks_of_robots:
+            params = self.tasks_of_robots[skill].params
+            given = raw.get("with") or {}
+            missing = [p for p in params if p not in given]
+            for arg in given:
+                if arg not in params:
+                    self.problem(where + ("with", arg), f"{skill} has no parameter {arg!r}"
+                                 f"{did_you_mean(arg, params)}; its parameters: "
+                                 f"{', '.join(params) or 'none'}", key=True)
+            if missing:
+                self.problem(where + ("do",), f"{skill} needs {', '.join(missing)} "
+                             "(under 'with:')")
         at = raw.get("at")
         within = self.reader.duration(where + ("reply-within",), raw.get("reply-within", 30))
         return TaskSpec(name, skill, dict(raw.get("with") or {}), tuple(raw.get("after") or ()),
@@ -249,14 +263,16 @@ class _Meaning:
             self.problem(("goal", "tasks", cycle[0], "after"),
                          f"the tasks wait for each other in a cycle: {' -> '.join(cycle)}")
             return
-        for task in tasks.values():
-            if task.respawn is None:
-                continue
+        respawning = [t for t in tasks.values() if t.respawn is not None]
+        before = _ancestors(tasks) if respawning else {}
+        position = {name: i for i, name in enumerate(tasks)}
+        for task in respawning:
+            assert task.respawn is not None
             where = ("goal", "tasks", task.name, "respawn")
             if task.respawn not in tasks:
                 self.problem(where, f"no task {task.respawn!r} in the goal"
                              f"{did_you_mean(task.respawn, tasks)}")
-            elif task.respawn not in _ancestors(task.name, tasks):
+            elif not before[task.name] >> position[task.respawn] & 1:
                 self.problem(where, f"{task.name} can only respawn a task it comes after "
                              f"({task.respawn} is not before it)")
 
@@ -340,13 +356,27 @@ def _cycle(tasks: dict[str, TaskSpec]) -> list[str]:
     return []
 
 
-def _ancestors(name: str, tasks: dict[str, TaskSpec]) -> set[str]:
-    """The tasks ``name`` comes after, directly or not."""
-    seen: set[str] = set()
-    todo = list(tasks[name].after)
-    while todo:
-        task = todo.pop()
-        if task in tasks and task not in seen:
-            seen.add(task)
-            todo.extend(tasks[task].after)
-    return seen
+def _ancestors(tasks: dict[str, TaskSpec]) -> dict[str, int]:
+    """Task -> the tasks it comes after, directly or not, as a bit set over the tasks'
+    order (an int): linear in the constraints, so ten thousand tasks that each respawn
+    the first one cost milliseconds, not a walk of the chain each.  No cycle allowed."""
+    bit = {name: 1 << i for i, name in enumerate(tasks)}
+    found: dict[str, int] = {}
+    for root in tasks:
+        stack = [root]
+        while stack:
+            name = stack[-1]
+            if name in found:
+                stack.pop()
+                continue
+            pending = [b for b in tasks[name].after if b in tasks and b not in found]
+            if pending:
+                stack.extend(pending)
+                continue
+            stack.pop()
+            total = 0
+            for b in tasks[name].after:
+                if b in tasks:
+                    total |= found[b] | bit[b]
+            found[name] = total
+    return found
