@@ -158,7 +158,8 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
 
     for e in events:
         times.append(e.time)
-        meet(e.agent)
+        if e.kind not in _ROUTING:
+            meet(e.agent)
         d = e.data
         if e.kind == "node" and d.get("parent") is not None and e.task:
             subtasks.add(e.task)
@@ -235,6 +236,13 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
             plans.append(Item("", "plan", e.time, e.time, label, tooltip, "plan", point=True,
                               attrs={"data-task": e.task or "", "data-start": repr(e.time)}))
             replan = None
+        elif e.kind in _DIALOGUE and (e.agent or d.get("asker")):
+            items.append(_dialogue_item(e))
+        elif e.kind == "respawn":
+            plans.append(Item("", "plan", e.time, e.time, f"respawn {e.task}",
+                              f"{e.task} respawned at {_t(e.time)} s after {d.get('by')}: "
+                              f"{d.get('reason', '')}", "plan", point=True,
+                              attrs={"data-task": e.task or "", "data-start": repr(e.time)}))
         elif e.kind in ("fact-added", "fact-removed"):
             _attention(e, looks, items)
 
@@ -288,6 +296,37 @@ def _received_item(e: LogEvent) -> Item:
     tooltip = f"{e.agent} → {act} at {_t(e.time)} s" + (f" [{e.task}]" if e.task else "")
     return Item(str(e.agent), "act", e.time, e.time, act, tooltip, "received", point=True,
                 attrs={"data-act": act, "data-start": repr(e.time)})
+
+
+_ROUTING = frozenset({"message", "message-lost", "message-ignored", "heard", "delegation"})
+"""A team's routing rows: they name managers (``tasks``, ``interaction``), not lanes."""
+_DIALOGUE = frozenset({"question", "answer", "help-request", "breakpoint", "associate",
+                       "release", "control"})
+"""A team's dialogue and authority events (docs/teams.md), drawn as points in a lane."""
+
+
+def _dialogue_item(e: LogEvent) -> Item:
+    """A question (with its picture), an answer, a help request, a breakpoint, an
+    association, a release or a change of control authority, in its agent's lane."""
+    d = e.data
+    attached = d.get("data") if isinstance(d.get("data"), dict) else {}
+    agent = str(e.agent or d.get("asker"))
+    label = {
+        "question": f"asks “{d.get('text')}”" + (" [image]" if attached.get("image") else ""),
+        "answer": (f"no answer: taken as {d.get('value')}" if d.get("expired")
+                   else f"answers {d.get('value')}"),
+        "help-request": f"asks for {d.get('skill')}",
+        "breakpoint": f"breakpoint before {d.get('before')}",
+        "associate": f"associates with {d.get('requester')}",
+        "release": f"released by {d.get('by')}",
+        "control": f"{d.get('mode')} mode ({d.get('by')})",
+    }[e.kind]
+    details = "".join(f"\n{k}: {_value(v)}" for k, v in {**d, **attached}.items()
+                      if k != "data")
+    return Item(agent, "act", e.time, e.time, label,
+                f"{agent}: {e.kind} at {_t(e.time)} s" + (f" [{e.task}]" if e.task else "")
+                + details, "received", point=True,
+                attrs={"data-event": e.kind, "data-start": repr(e.time)})
 
 
 def _action_item(e: LogEvent) -> Item:
@@ -590,7 +629,9 @@ def _legend(tl: Timeline, left: float, top: float, width: float) -> tuple[str, f
                         "act suspended"))
     kinds = {i.kind for i in tl.items}
     diamond = '<polygon points="9,-10 15,-4 9,2 3,-4" fill="{}" stroke="#9e2a63"/>'
-    for kind, fill, text in (("received", "#e15f99", "act sent by a human"),
+    dialogue = any("data-event" in i.attrs for i in tl.items)
+    for kind, fill, text in (("received", "#e15f99", "act sent, question, answer, request"
+                              if dialogue else "act sent by a human"),
                              ("unexpected", "#ffffff", "act no task expected")):
         if kind in kinds:
             entries.append((diamond.format(fill), text))
@@ -605,8 +646,10 @@ def _legend(tl: Timeline, left: float, top: float, width: float) -> tuple[str, f
         entries.append((f'<rect width="18" height="6" y="-7" fill="{LOOK_COLOUR}"/>',
                         "looks at"))
     if tl.plans:
+        respawns = any(p.label.startswith("respawn ") for p in tl.plans)
         entries.append(('<polygon points="9,-9 14,1 4,1" fill="#edc948" stroke="#8a6d00"/>',
-                        "plan from the planner"))
+                        "plan from the planner, respawned task" if respawns
+                        else "plan from the planner"))
     entries.append(('<line x1="9" y1="-12" x2="9" y2="4" stroke="#555" stroke-dasharray="2,3"/>',
                     "task start / end"))
     parts, cx, cy = [], left, top

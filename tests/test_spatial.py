@@ -58,7 +58,7 @@ def test_a_corner_from_the_speakers_perspective(site: SpatialReasoner) -> None:
                                        "EVA1", "K-10"))
     # EVA1 faces north: its right is east, so the corner is P3's east end, at the bottom,
     # on the south face that EVA1 sees
-    assert answer.point == pytest.approx((3.0, -0.015, 0.5))
+    assert answer.point == pytest.approx((2.97, -0.015, 0.53))
     assert (answer.referent, answer.frame, answer.perspective) == ("P3", "referent", "EVA1")
     assert answer.local[0] > 0  # on EVA1's right
     assert "EVA1's point of view" in answer.says
@@ -73,7 +73,7 @@ def test_right_for_the_speaker_is_left_for_the_rover_facing_it(site: SpatialReas
     assert dx * k10_right[0] + dy * k10_right[1] < 0
     # and "as you see it" resolves from the rover: the other end, on the north face
     rover = _resolved(site.understand(said + " as you see it", "EVA1", "K-10"))
-    assert rover.point == pytest.approx((2.0, 0.015, 0.5))
+    assert rover.point == pytest.approx((2.03, 0.015, 0.53))
     assert rover.perspective == "K-10"
     assert rover.local[0] > 0
 
@@ -83,8 +83,8 @@ def test_edge_on_speaker_is_asked_which_corner(site: SpatialReasoner) -> None:
     assert isinstance(answer, Question)
     assert answer.to == "EVA2" and answer.kind == "multiple-choice"
     assert set(answer.choices) == {"the bottom east corner", "the bottom west corner"}
-    # on the panel's own front, since EVA2 sees neither face
-    assert answer.answers["the bottom east corner"] == pytest.approx((4.0, -0.015, 0.5))
+    # on the panel's own front, since EVA2 sees neither face; corners are 3 cm inside
+    assert answer.answers["the bottom east corner"] == pytest.approx((3.97, -0.015, 0.53))
     assert "edge-on" in answer.text
 
 
@@ -97,7 +97,7 @@ def test_an_unnamed_panel_is_the_one_looked_at_or_a_question(site: SpatialReason
     site.facts.add("EVA1", "looksAt", "P2")
     answer = _resolved(site.understand(said, "EVA1", "K-10"))
     assert answer.referent == "P2"
-    assert answer.point == pytest.approx((1.0, -0.015, 1.5))
+    assert answer.point == pytest.approx((1.03, -0.015, 1.47))
 
 
 def test_an_unknown_name_gets_a_question_naming_the_choices(site: SpatialReasoner) -> None:
@@ -135,7 +135,7 @@ def test_ego_frames_of_speaker_addressee_and_object(site: SpatialReasoner) -> No
 def test_exo_frame_uses_the_world_axes(site: SpatialReasoner) -> None:
     east = _resolved(site.understand("point the light at the bottom east corner of P3",
                                      "EVA2", "K-10"))
-    assert east.frame == "exo" and east.point[0] == pytest.approx(3.0)
+    assert east.frame == "exo" and east.point[0] == pytest.approx(2.97)
     north = _resolved(site.understand("move to the north side of box-1", "EVA1", "K-10"))
     assert north.point[:2] == pytest.approx((2.5, -0.3))
 
@@ -152,7 +152,7 @@ def test_words_it_cannot_read_get_a_free_text_question(site: SpatialReasoner) ->
 def test_the_service_answers_a_point_or_a_question(site: SpatialReasoner) -> None:
     said = "point the light at the bottom right corner of panel P3"
     answer = site.service({"words": said, "speaker": "EVA1", "addressee": "K-10"})
-    assert answer["point"] == pytest.approx([3.0, -0.015, 0.5])
+    assert answer["point"] == pytest.approx([2.97, -0.015, 0.53])
     assert answer["frame"] == "referent" and answer["perspective"] == "EVA1"
     asked = site.service({"words": said.replace("P3", "P4"), "speaker": "EVA2",
                           "addressee": "K-10"})

@@ -43,6 +43,8 @@ Vec3 = tuple[float, float, float]
 EDGE_ON = math.cos(math.radians(70))
 """Below this |cos| between the holder's right and an object's width axis, the holder
 sees the object edge-on and cannot tell its left from its right: ask."""
+INSET = 0.03
+"""How far inside a face's edges its corners and edges are taken to be, in metres."""
 BESIDE = 0.5
 """How far beyond an object's side a point "left of" it lies, in metres."""
 COMPASS = {"north": (0.0, 1.0), "south": (0.0, -1.0), "east": (1.0, 0.0), "west": (-1.0, 0.0)}
@@ -390,10 +392,12 @@ class SpatialReasoner:
         depth = ref.thickness / 2 + 0.005  # on the surface, not inside it
 
         def corner(sign: int) -> Vec3:
-            half = ref.width / 2 * sign
+            # on the face, just inside its edges: a light aimed at the very edge would
+            # pass into the gap beside it
+            half = max(0.0, ref.width / 2 - INSET) * sign
+            rise = vertical * max(0.0, ref.height / 2 - INSET)
             return (ref.x + half * width_axis[0] + depth * normal[0],
-                    ref.y + half * width_axis[1] + depth * normal[1],
-                    ref.z + vertical * ref.height / 2)
+                    ref.y + half * width_axis[1] + depth * normal[1], ref.z + rise)
 
         if not wants_side:
             return self._done(request, ref, corner(0), holder, frame,

@@ -48,7 +48,7 @@ def robot_places() -> dict[str, tuple[float, float, float]]:
     places = {"robonaut-home": (-1.5, -1.6, 0.0), "k10-home": (-1.5, -3.2, 0.0)}
     for seam in SEAMS:
         x = seam_x(seam)
-        places[f"weld-{seam}"] = (x - 0.25, -0.72, math.pi / 2)
-        # east of the seam, so the welder (on its west side) does not hide it
-        places[f"inspect-{seam}"] = (x + 1.0, -2.2, math.pi / 2)
+        places[f"weld-{seam}"] = (x + 0.25, -0.72, math.pi / 2)
+        # west of the seam, so the welder (on its east side) does not hide it
+        places[f"inspect-{seam}"] = (x - 1.0, -2.2, math.pi / 2)
     return places

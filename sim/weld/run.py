@@ -51,6 +51,8 @@ ATOMIC = ("drive", "weld", "inspect", "aim", "point-light", "snapshot")
 """The atomic tasks the site performs for its robots (sim/scenarios/weld/recipes.yaml)."""
 HUMANOID_RESOURCE = "welding-tool"
 SEAM_QUESTION = "seam-okay"
+VIEWED = ("question", "answer", "respawn", "associate", "release", "control", "spatial")
+"""The events after which ``--snapshots`` takes a view of the whole site."""
 SUITS = ((0.95, 0.95, 0.93, 1.0), (0.93, 0.55, 0.2, 1.0), (0.3, 0.55, 0.9, 1.0))
 """Suit colours, one per astronaut in turn (white, orange, blue)."""
 
@@ -74,7 +76,8 @@ def run_weld(path: str | Path, *, seed: int = 0, out: str | Path | None = None,
     with WeldSite(gui=gui) as site:
         log: Any = ContextLog(log_path, seed=seed) if log_path is not None else _Rows()
         try:
-            run = _WeldRun(scenario, site, _Told(log, story), seed, out_dir)
+            run = _WeldRun(scenario, site, _Told(log, story), seed, out_dir,
+                           views=snapshots)
             setup = time.perf_counter() - wall
             wall = time.perf_counter()
             end = run.go()
@@ -92,7 +95,7 @@ def run_weld(path: str | Path, *, seed: int = 0, out: str | Path | None = None,
                                seed, run.sim.physics_steps + site_steps(site))
             if out_dir is not None:
                 if snapshots:
-                    run.overview(out_dir / "site-end.png")
+                    run.overview("end")
                 result.outputs = run.write(out_dir, log)
                 write_output(out_dir / "summary.json", json.dumps(result.summary(), indent=2)
                              + "\n")
@@ -124,11 +127,12 @@ class _Rows:
 
 
 class _Told:
-    """The context log, each event also told to the story."""
+    """The context log, each event also told to the story (and to ``watchers``)."""
 
     def __init__(self, log: Any, story: TeamStory):
         self.log = log
         self.story = story
+        self.watchers: list[Any] = []
         if hasattr(log, "path"):
             self.path = log.path  # the Context Manager reads the log's file
 
@@ -136,6 +140,8 @@ class _Told:
                agent: str | None = None, **data: Any) -> int:
         row = self.log.record(t, kind, task=task, agent=agent, **data)
         self.story.event(t, kind, agent, data, task)
+        for watcher in self.watchers:
+            watcher(kind, agent, task)
         return row
 
     def flush(self) -> None:
@@ -146,9 +152,13 @@ class _WeldRun:
     """One run's parts, wired together."""
 
     def __init__(self, scenario: WeldScenario, site: WeldSite, log: _Told, seed: int,
-                 out_dir: Path | None):
+                 out_dir: Path | None, views: bool = False):
         self.scenario = scenario
         self.site = site
+        self.out_dir = out_dir
+        self.views = 0
+        if views and out_dir is not None:
+            log.watchers.append(self._moment)
         spec = scenario.team
         self.loop = EventLoop(seed=seed)
         self.facts = FactDatabase()
@@ -244,14 +254,25 @@ class _WeldRun:
         self.team.record("run-end", scenario=self.scenario.name)
         return self.loop.now()
 
-    def overview(self, path: Path) -> None:
+    def _moment(self, kind: str, agent: str | None, task: str | None) -> None:
+        """A view of the whole site at the moments worth seeing (``--snapshots``)."""
+        if kind in VIEWED:
+            self.overview(f"{kind}" + (f" by {agent}" if agent else ""))
+
+    def overview(self, label: str) -> None:
+        """A view of the whole site, framing every robot and astronaut and the frame."""
         from ..world import framing
+
+        assert self.out_dir is not None
+        self.views += 1
+        now = self.loop.now()
+        path = self.out_dir / f"site-{self.views:02d}-{now:06.1f}s-{label.replace(' ', '-')}.png"
 
         points = [(x, y, 0.6) for x, y, _ in (self.site.base_pose(r) for r in self.site.robots)]
         points += [(a.x, a.y, 1.0) for a in self.actions.people.values()]
         points += [(0.0, 0.0, 1.0), (4.0, 0.0, 1.0)]
         self.site.snapshot(path, 800, 600, framing(points, 4 / 3),
-                           [f"{self.loop.now():.1f} s   {self.scenario.name}: the site"])
+                           [f"{now:.1f} s   {self.scenario.name}: {label}"])
 
     def write(self, out_dir: Path, log: Any) -> dict[str, str]:
         from shary.timeline import write_timeline

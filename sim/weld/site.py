@@ -27,7 +27,7 @@ import math
 from dataclasses import dataclass
 
 from ..room import Part
-from ..world import LivingRoom, pb
+from ..world import LivingRoom, Vec3, pb
 from .layout import (
     PALLET,
     PALLET_TOP,
@@ -49,6 +49,8 @@ GROUND_RGBA = (0.55, 0.54, 0.52, 1.0)
 FRAME_RGBA = (0.45, 0.47, 0.52, 1.0)
 PANEL_RGBA = ((0.72, 0.74, 0.78, 1.0), (0.62, 0.66, 0.72, 1.0))
 """Panels alternate two greys, so their seams show."""
+SPOT_RGBA = (1.0, 0.95, 0.45, 0.85)
+SPOT_RADIUS = 0.12
 GOOD_BEAD = (0.95, 0.72, 0.35, 1.0)
 BAD_BEAD = (0.25, 0.18, 0.12, 1.0)
 
@@ -69,6 +71,8 @@ class WeldSite(LivingRoom):
         self.tacks: dict[str, int] = {}
         self.carried: dict[str, int] = {}
         self.beads: dict[str, Bead] = {}
+        self.spots: dict[str, int] = {}
+        """A spotlight's name -> the disc of light it casts (where its beam meets a body)."""
         super().__init__(gui=gui, robot=None, gravity=MOON_GRAVITY)
 
     def _furnish(self) -> None:
@@ -189,6 +193,43 @@ class WeldSite(LivingRoom):
         old = self.beads.pop(seam, None)
         if old is not None:
             self.call(pb.removeBody, old.body)
+
+    # -- light ----------------------------------------------------------------------
+
+    def shine(self, light: str, origin: Vec3, direction: Vec3,
+              reach: float = 12.0) -> Vec3 | None:
+        """Cast a spotlight's beam (a ray from ``origin`` along ``direction``) and put its
+        disc of light where it meets the first body; that point, or None if it meets
+        nothing within ``reach`` metres (the disc is then taken away)."""
+        end = [o + reach * d for o, d in zip(origin, direction, strict=True)]
+        hit = self.call(pb.rayTest, list(origin), end)[0]
+        old = self.spots.pop(light, None)
+        if old is not None:
+            self.call(pb.removeBody, old)
+        if hit[0] < 0:
+            return None
+        point, normal = tuple(hit[3]), hit[4]
+        vis = self.call(pb.createVisualShape, pb.GEOM_CYLINDER, radius=SPOT_RADIUS,
+                        length=0.004, rgbaColor=list(SPOT_RGBA))
+        # the disc lies on the surface: its axis (z) along the surface's normal
+        orn = _z_towards(normal)
+        at = [p + 0.003 * n for p, n in zip(point, normal, strict=True)]
+        self.spots[light] = self.call(pb.createMultiBody, baseMass=0,
+                                      baseVisualShapeIndex=vis, basePosition=at,
+                                      baseOrientation=orn)
+        return point
+
+
+def _z_towards(normal: Vec3) -> tuple[float, ...]:
+    """A quaternion turning +z onto ``normal``."""
+    nx, ny, nz = normal
+    axis = (-ny, nx, 0.0)  # z x normal
+    s = math.hypot(*axis)
+    angle = math.atan2(s, nz)
+    if s < 1e-9:
+        return (0.0, 0.0, 0.0, 1.0) if nz > 0 else (1.0, 0.0, 0.0, 0.0)
+    k = math.sin(angle / 2) / s
+    return (axis[0] * k, axis[1] * k, 0.0, math.cos(angle / 2))
 
 
 def _flat() -> tuple[float, ...]:

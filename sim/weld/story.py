@@ -46,7 +46,7 @@ class TeamStory:
                 f"{data.get('reason', '')})")
         elif kind == "message" and data.get("status") == "refused" \
                 and data.get("type") == "progress":
-            say(t, who, "person", f"refuses {data.get('task')}"
+            say(t, who, "person", f"refuses {task}"
                 + (f": {data['reason']}" if data.get("reason") else ""))
         elif kind == "exec-request":
             by = f" (driven by {data['by']})" if data.get("by") else ""
