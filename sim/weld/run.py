@@ -242,6 +242,10 @@ class _WeldRun:
 
     def go(self) -> float:
         """Run until the goal is over and nothing moves; the simulated time at the end."""
+        for member in self.scenario.team.agents.values():
+            if member.kind != "software":  # each a lane of the timeline, in the file's order
+                self.team.record("member", agent=member.name, member_kind=member.kind,
+                                 skills=list(member.skills), remote=member.remote or None)
         self.team.start()
         timeout = self.scenario.timeout
         while self.loop.now() < timeout - 1e-9:
