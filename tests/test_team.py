@@ -197,3 +197,229 @@ def test_the_context_manager_says_what_an_agent_did(tmp_path: Path) -> None:
     with pytest.raises(SystemExit) as exit_:
         run_inprocess("context", path, "--last", "ten minutes")
     assert exit_.value.code == 2
+
+
+def _behave(spec, name: str, **changes):
+    from dataclasses import replace
+
+    agent = spec.agents[name]
+    behaviour = replace(agent.behaviour, **changes)
+    return replace(spec, agents={**spec.agents, name: replace(agent, behaviour=behaviour)})
+
+
+def _question(spec, **changes):
+    from dataclasses import replace
+
+    question = replace(spec.questions["seam-okay"], **changes)
+    return replace(spec, questions={**spec.questions, "seam-okay": question})
+
+
+def test_an_unanswered_question_falls_back_and_a_late_answer_is_logged(tmp_path: Path) -> None:
+    from shary.team.spec import Reply
+
+    def slow_iva_with_fallback(spec):
+        spec = _behave(spec, "IVA", questions=Reply("answer", (90.0, 90.0)))
+        return _question(spec, fallback="yes", expires=30.0)
+
+    team, log, _ = build(tmp_path, edit=slow_iva_with_fallback)
+    assert team.run(900) == "done"
+    log.close()
+    path = tmp_path / "run.sqlite"
+    (answer,) = kinds(path, "answer")
+    assert answer.data["value"] == "yes" and answer.data["expired"] is True
+    assert answer.agent is None and answer.data["after"] == 30.0
+    late = kinds(path, "answer-late")
+    assert late == []  # the question was withdrawn from IVA when it expired
+    assert team.agents["IVA"].track_record("question") == (0, 1)
+
+
+def test_an_expired_question_without_fallback_fails_the_step(tmp_path: Path) -> None:
+    from shary.team.spec import Reply
+
+    def silent_iva(spec):
+        spec = _behave(spec, "IVA", questions=Reply("ignore"))
+        return _question(spec, expires=20.0)
+
+    team, log, _ = build(tmp_path, edit=silent_iva)
+    assert team.run(900) == "failed"
+    log.close()
+    path = tmp_path / "run.sqlite"
+    failed = kinds(path, "task-failed")
+    assert failed and failed[0].task == "inspect-P1-P2"
+    assert "nobody answered 'Is this seam okay?' within 20s" in failed[0].data["reason"]
+    # every attempt respawned the weld first, then gave up
+    assert len(kinds(path, "respawn")) == 2 and kinds(path, "task-given-up")
+
+
+def test_a_person_who_declines_passes_the_question_on(tmp_path: Path) -> None:
+    from shary.team.spec import Reply
+
+    def iva_declines(spec):
+        spec = _behave(spec, "IVA", questions=Reply("refuse", (1.0, 1.0)))
+        spec = _behave(spec, "EVA1", questions=Reply("refuse", (1.0, 1.0)))
+        return _behave(spec, "EVA2", questions=Reply("answer", (2.0, 2.0)),
+                       answers={"seam-okay": "yes"})
+
+    team, log, _ = build(tmp_path, edit=iva_declines)
+    assert team.run(900) == "done"
+    log.close()
+    path = tmp_path / "run.sqlite"
+    routed = [e.agent for e in kinds(path, "delegation") if e.data["need"] == "question"]
+    assert routed == ["IVA", "EVA1", "EVA2"]
+    (answer,) = kinds(path, "answer")
+    assert answer.agent == "EVA2" and answer.data["after"] == 4.0
+
+
+def test_refusing_and_silent_people_are_passed_over(tmp_path: Path) -> None:
+    from shary.team.spec import Reply
+
+    def eva1_refuses_eva2_ignores(spec):
+        from dataclasses import replace
+
+        spec = _behave(spec, "EVA1", assignments=Reply("refuse", (1.0, 1.0)))
+        spec = _behave(spec, "EVA2", assignments=Reply("ignore"))
+        eva3 = replace(spec.agents["EVA2"], name="EVA3",
+                       behaviour=replace(spec.agents["EVA2"].behaviour,
+                                         assignments=Reply("accept", (1.0, 1.0))))
+        return replace(spec, agents={**spec.agents, "EVA3": eva3})
+
+    team, log, _ = build(tmp_path, edit=eva1_refuses_eva2_ignores)
+    assert team.run(2000) == "done"
+    log.close()
+    path = tmp_path / "run.sqlite"
+    mounted = {e.task: e.agent for e in kinds(path, "task-done") if e.task.startswith("mount")}
+    assert set(mounted.values()) == {"EVA3"}  # one task per agent: one after the other
+    expired = kinds(path, "assignment-expired")
+    assert expired and {e.agent for e in expired} == {"EVA2"}
+    assert expired[0].data["after"] == 30.0
+    refusals = [e for e in kinds(path, "message") if e.data.get("status") == "refused"]
+    assert {e.agent for e in refusals} == {"EVA1"}
+    # past answers: the refuser and the silent one now rank below EVA3
+    assert team.agents["EVA1"].track_record("task")[0] == 0
+    assert team.agents["EVA3"].track_record("task") == (2, 2)
+
+
+def test_a_question_that_does_not_make_the_robot_wait(tmp_path: Path) -> None:
+    team, log, _ = build(tmp_path, edit=lambda s: _question(s, wait=False, accept=()))
+    assert team.run(900) == "done"
+    team.loop.advance(30)  # the answer comes after the goal is over
+    log.close()
+    path = tmp_path / "run.sqlite"
+    (question,) = kinds(path, "question")
+    (answer,) = kinds(path, "answer")
+    done = next(e for e in kinds(path, "task-done") if e.task == "inspect-P1-P2")
+    assert done.time == question.time < answer.time  # it went on without the answer
+
+
+def test_a_person_answers_the_most_urgent_question_first(tmp_path: Path) -> None:
+    from shary.team.spec import QuestionSpec, Reply
+
+    def only_iva_answers(spec):
+        for name in ("EVA1", "EVA2"):
+            spec = _behave(spec, name, questions=Reply("refuse", (1.0, 1.0)))
+        return spec
+
+    team, log, _ = build(tmp_path, edit=only_iva_answers)
+    answers: list[str] = []
+    low = QuestionSpec("chat", "Lunch?", "choice", ("now", "later"), priority=0, expires=600)
+    high = QuestionSpec("alarm", "Abort the weld?", priority=50, expires=600)
+    for spec in (low, low, high):
+        team.interaction.ask("K-10", spec, on_answer=lambda a: answers.append(a.value))
+    team.loop.advance(60)
+    log.close()
+    # the others decline, so IVA gets all three; the first one, already being answered,
+    # stays first; then the urgent one jumps the queue
+    assert answers == ["now", "yes", "now"]
+    rows = kinds(tmp_path / "run.sqlite", "question")
+    assert rows[0].data["choices"] == ["now", "later"] and rows[0].data["question_type"] == "choice"
+
+
+def test_the_resource_manager_explains_and_takes_new_criteria(tmp_path: Path) -> None:
+    from shary.team.resources import TASK, Need
+
+    team, log, _ = build(tmp_path)
+
+    class PreferEva2:
+        name = "prefer-eva2"
+
+        def score(self, agent, need, now):
+            return 1.0 if agent.name == "EVA2" else 0.0
+
+    need = Need(TASK, "mount-panel", at=(1.0, 1.0), subject="t")
+    ranked = team.resources.rank(need, team.agents.values())
+    assert [r.agent.name for r in ranked] == ["EVA1", "EVA2"]  # EVA1 stands at (1, 1)
+    assert ranked[0].parts["distance"] == 1.0 and set(ranked[0].parts) == {
+        "capability", "availability", "distance", "workload", "activity", "past-answers"}
+    team.resources.add(PreferEva2(), weight=100.0)
+    assert team.resources.choose(need, team.agents.values()).name == "EVA2"
+    log.close()
+    (row,) = kinds(tmp_path / "run.sqlite", "delegation")
+    assert row.agent == "EVA2" and row.data["ranking"][0]["by"]["prefer-eva2"] == 1.0
+
+
+def test_weights_from_ahp_comparisons(tmp_path: Path) -> None:
+    text = (DATA / "seam-team.yaml").read_text("utf-8").replace(
+        "goal:\n", "scoring:\n  compare:\n    availability: {distance: 3, workload: 3}\n"
+        "    distance: {workload: 1}\ngoal:\n")
+    (tmp_path / "seam-recipes.yaml").write_text((DATA / "seam-recipes.yaml").read_text())
+    path = tmp_path / "team.yaml"
+    path.write_text(text)
+    weights = load_team(path).weights
+    assert weights["availability"] == pytest.approx(0.6)
+    assert weights["distance"] == pytest.approx(0.2) == pytest.approx(weights["workload"])
+
+
+def test_a_software_agent_answers_queries_with_the_context(tmp_path: Path) -> None:
+    from shary.team.messages import Act
+
+    team, log, _ = build(tmp_path)
+    replies: list = []
+    team.port.subscribe("console", replies.append)
+    team.run(900)
+    team.port.send(Act("console", "CM", id="x1", act="QUERY",
+                       data={"service": "context", "agent": "Robonaut-B"}))
+    team.port.send(Act("console", "CM", id="x2", act="QUERY", data={"service": "spatial"}))
+    team.loop.run_until_idle()
+    log.close()
+    assert [r.act for r in replies] == ["INFORM", "INFORM"]
+    assert [t["task"] for t in replies[0].data["tasks"]] == ["weld-P1-P2"]
+    assert "offers no service 'spatial'" in replies[1].data["error"]
+
+
+def test_messages_survive_a_round_trip_through_json() -> None:
+    import json
+
+    from shary.team.messages import Answer, Assignment, Progress, Question, message_from_dict
+
+    for message in (Question("K-10", "IVA", id="q1", text="ok?", choices=("a", "b"),
+                             data={"image": "seam.png"}),
+                    Answer("IVA", "K-10", question="q1", value="a"),
+                    Assignment("tasks", "K-10", task="t", skill="s", args={"x": 1}),
+                    Progress("K-10", "tasks", task="t", status="done")):
+        assert message_from_dict(json.loads(json.dumps(message.as_dict()))) == message
+
+
+def test_the_timeline_has_a_lane_per_agent_with_the_team(tmp_path: Path) -> None:
+    import re
+
+    from shary.timeline import render_timeline
+
+    team, log, _ = build(tmp_path, edit=_answers_no)
+    eva1 = team.human("EVA1")
+    team.loop.call_later(42.0, lambda: eva1.request_help("point-light", {"target": "P3"},
+                                                         release_after=3.0))
+    team.run(900)
+    log.close()
+    svg = render_timeline(read_events(tmp_path / "run.sqlite"))
+    lanes = re.findall(r'<g class="lane" data-agent="([^"]+)"', svg)
+    assert lanes[0] == "Robonaut-B" and set(lanes) == {"Robonaut-B", "EVA1", "EVA2", "K-10",
+                                                       "IVA"}  # no lane for the managers
+    def items(cls: str) -> list[str]:
+        return re.findall(rf'<g class="{cls}" data-agent="([^"]+)"', svg)
+
+    assert items("team team-task").count("K-10") == 3  # three inspections, each failed
+    assert items("act question").count("K-10") == 3 and items("act answer") == ["IVA"] * 3
+    assert items("act question").count("EVA1") == 1  # the help request
+    assert items("team associated") == ["K-10"]
+    assert svg.count('<g class="respawn"') == 2 and "respawn weld-P1-P2" in svg
+    assert "answer: no" in svg and "team task failed" in svg

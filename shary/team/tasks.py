@@ -111,7 +111,10 @@ class TaskManager:
             if not candidates:
                 waiting.append(task)  # all busy: wait for one to be free
             elif all(a.name in task.refused for a in candidates):
-                self._nobody(task)
+                if all(a.name in task.refused for a in self._capable(task)):
+                    self._nobody(task)
+                else:
+                    waiting.append(task)  # a busy one that has not refused may take it
             elif not self.delegate(task, candidates):
                 waiting.append(task)  # the free ones cannot take it now (user mode …)
         self._ready = waiting + self._ready  # + those made ready meanwhile
@@ -136,6 +139,11 @@ class TaskManager:
         task.timer = team.loop.call_later(task.spec.reply_within, self._no_reply, task,
                                           agent.name)
         return True
+
+    def _capable(self, task: TeamTask) -> list[Agent]:
+        """Every agent that may do ``task``, busy or not."""
+        return [a for a in self.team.agents.values() if task.spec.skill in a.skills
+                and (not task.spec.by or a.name in task.spec.by)]
 
     def _nobody(self, task: TeamTask) -> None:
         """Every free capable agent refused this attempt: it counts as a failed one."""

@@ -25,17 +25,12 @@ from typing import TYPE_CHECKING, Any
 from shary.executors import Executor, ExecutorRegistry, Request
 from shary.loop import EventLoop
 from shary.recipes import RecipeLibrary
-from shary.team.agents import (
-    HAND_BACK,
-    TAKE_CONTROL,
-    Agent,
-    HumanProxy,
-    RobotAgent,
-    SoftwareAgent,
-)
+from shary.team.agents import HAND_BACK, TAKE_CONTROL, Agent, SoftwareAgent
 from shary.team.interaction import AskExecutor, InteractionManager
 from shary.team.messages import Act, MessagePort
+from shary.team.proxy import HumanProxy
 from shary.team.resources import ResourceManager
+from shary.team.robot import RobotAgent
 from shary.team.spec import HUMAN, ROBOT, TeamSpec
 from shary.team.tasks import TaskManager
 

@@ -33,8 +33,9 @@ from shary.facts import FactDatabase
 from shary.log import ContextLog, read_events
 from shary.loop import EventLoop
 from shary.team import Team
-from shary.team.agents import INFORM, QUERY, HumanProxy
+from shary.team.agents import INFORM, QUERY
 from shary.team.messages import Act, Assignment, Message
+from shary.team.proxy import HumanProxy
 from shary.team.spatial import SpatialReasoner
 from userfiles.outputs import output_folder, write_output
 
