@@ -38,11 +38,15 @@ TEAM_COLOURS = {"team-task": "#76b7b2", "done": "#4e9f8f", "failed": "#e15759",
                 "associated": "#b07aa1", "user-mode": "#f28e2b"}
 """A team's bars: tasks (running, done, failed), associations, user-mode control."""
 POINT_COLOURS = {"received": "#e15f99", "unexpected": "#ffffff", "question": "#f1ce63",
-                 "answer": "#59a14f", "expired": "#bab0ac"}
+                 "answer": "#59a14f", "expired": "#bab0ac", "breakpoint": "#4e79a7"}
 """Points in the act row: acts people sent, and a team's questions and answers."""
-MESSAGE_KINDS = ("message", "message-lost")
+ROUTING_KINDS = frozenset({"message", "message-lost", "message-ignored", "heard",
+                           "delegation"})
+"""A team's routing rows: they name managers (``tasks``, ``interaction``) or the agent
+chosen, not who acted; they open no lane."""
 TEAM_KINDS = frozenset({"task-running", "task-done", "task-failed", "associate", "release",
-                        "control", "question", "answer", "respawn", "help-request"})
+                        "control", "question", "answer", "respawn", "help-request",
+                        "breakpoint"})
 MAIN_ARGS = ("object", "target", "place", "to", "into", "text")
 
 @dataclass
@@ -118,7 +122,7 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
 
     for e in events:
         times.append(e.time)
-        if e.kind not in MESSAGE_KINDS:  # a message's sender may be a manager, not an agent
+        if e.kind not in ROUTING_KINDS:
             meet(e.agent)
         d = e.data
         if e.kind == "node" and d.get("parent") is not None and e.task:
@@ -346,7 +350,7 @@ class _Team:
             item = self.open.pop(("control", agent), None)
             if item is not None:
                 _close(item, e.time, f"handed back by {d.get('by')}")
-        elif e.kind in ("question", "help-request") and agent:
+        elif e.kind in ("question", "help-request", "breakpoint") and agent:
             items.append(self.point(e, agent))
         elif e.kind == "answer":
             items.append(self.answer(e))
@@ -358,29 +362,36 @@ class _Team:
 
     def point(self, e: LogEvent, agent: str) -> Item:
         d = e.data
+        kind = "question"
         if e.kind == "help-request":
-            label = f"help: {d.get('skill')}"
+            label = f"asks for {d.get('skill')}"
             tooltip = f"{agent} asks for help: {d.get('skill')} {_value(d.get('args') or {})}"
+        elif e.kind == "breakpoint":
+            kind, label = "breakpoint", f"breakpoint before {d.get('before')}"
+            tooltip = (f"{agent} stops {e.task} at a breakpoint, before {d.get('before')}, "
+                       "to serve a request")
         else:
             text = str(d.get("text", "?"))
             self.questions[str(d.get("question"))] = text
-            label = f"? {text}"
             data = d.get("data") if isinstance(d.get("data"), dict) else {}
+            label = f"asks “{text}”" + (" [image]" if data.get("image") else "")
             tooltip = (f"{agent} asks {text!r} ({d.get('question_type')}, priority "
                        f"{d.get('priority')}, expires after {d.get('expires')} s)"
                        + "".join(f"\n{k}: {_value(v)}" for k, v in data.items()))
-        return Item(agent, "act", e.time, e.time, label, tooltip, "question", point=True,
-                    attrs={"data-start": repr(e.time), "data-question": str(d.get("question"))})
+        return Item(agent, "act", e.time, e.time, label, tooltip, kind, point=True,
+                    attrs={"data-start": repr(e.time), "data-event": e.kind,
+                           "data-question": str(d.get("question", ""))})
 
     def answer(self, e: LogEvent) -> Item:
         d = e.data
         text = self.questions.get(str(d.get("question")), "?")
         value = _value(d.get("value")) if d.get("value") is not None else "nothing"
         if d.get("expired"):
-            agent, kind, label = str(d.get("asker")), "expired", f"expired: {value}"
+            agent, kind, label = str(d.get("asker")), "expired", f"no answer: taken as {value}"
             tooltip = f"nobody answered {text!r} in time; fallback: {value}"
         else:
-            agent, kind, label = str(e.agent), "answer", f"answer: {value}"
+            agent, kind, label = str(e.agent), "answer", f"answers {value}"
             tooltip = f"{e.agent} answers {value} to {d.get('asker')}: {text!r}"
         return Item(agent, "act", e.time, e.time, label, tooltip, kind, point=True,
-                    attrs={"data-start": repr(e.time), "data-question": str(d.get("question"))})
+                    attrs={"data-start": repr(e.time), "data-event": e.kind,
+                           "data-question": str(d.get("question"))})

@@ -363,8 +363,8 @@ def _legend(tl: Timeline, left: float, top: float, width: float) -> tuple[str, f
     if any(i.row == "look" for i in tl.items):
         entries.append((f'<rect width="18" height="6" y="-7" fill="{LOOK_COLOUR}"/>',
                         "looks at"))
-    for kind, text in (("question", "question asked"), ("answer", "answer"),
-                       ("expired", "question expired")):
+    for kind, text in (("question", "question or help request"), ("answer", "answer"),
+                       ("expired", "question expired"), ("breakpoint", "breakpoint")):
         if kind in kinds:
             entries.append((diamond.format(POINT_COLOURS[kind]), text))
     team = [i for i in tl.items if i.row == "team"]

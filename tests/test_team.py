@@ -422,4 +422,31 @@ def test_the_timeline_has_a_lane_per_agent_with_the_team(tmp_path: Path) -> None
     assert items("act question").count("EVA1") == 1  # the help request
     assert items("team associated") == ["K-10"]
     assert svg.count('<g class="respawn"') == 2 and "respawn weld-P1-P2" in svg
-    assert "answer: no" in svg and "team task failed" in svg
+    assert "answers no" in svg and "team task failed" in svg
+
+
+def test_questions_carry_what_the_team_attaches_and_people_ask_on_their_own(
+        tmp_path: Path) -> None:
+    from shary.team.spec import HelpRequest
+
+    def eva1_asks_for_light(spec):
+        return _behave(spec, "EVA1", requests=(
+            HelpRequest(41.0, "point-light", {"target": "P3-corner"}, release=4.0),))
+
+    team, log, _ = build(tmp_path, edit=eva1_asks_for_light)
+    seen: list[tuple[str, str]] = []
+    team.attach("seam-okay", lambda robot, request: {
+        "image": f"{robot.name}-{request.id.split('/')[-1]}.png"})
+    team.human("IVA").listeners.append(lambda m: seen.append((m.kind, getattr(m, "text", ""))))
+    assert team.run(900) == "done"
+    log.close()
+    path = tmp_path / "run.sqlite"
+    (question,) = kinds(path, "question")
+    assert question.data["data"] == {"image": "K-10-r5.png"}
+    assert ("question", "Is this seam okay?") in seen
+    (request,) = kinds(path, "help-request")
+    assert (request.agent, request.time, request.data["args"]) == (
+        "EVA1", 41.0, {"target": "P3-corner"})
+    (release,) = kinds(path, "release")
+    serve = kinds(path, "serve")[0]
+    assert release.data["by"] == "EVA1" and release.time == pytest.approx(serve.time + 1 + 4)
