@@ -50,8 +50,10 @@ class TeamStory:
                 + (f": {data['reason']}" if data.get("reason") else ""))
         elif kind == "exec-request":
             by = f" (driven by {data['by']})" if data.get("by") else ""
-            say(t, who, "action", action_text(str(data.get("atomic")),
-                                              dict(data.get("args") or {})) + by)
+            args = dict(data.get("args") or {})
+            text = (f"{data.get('atomic')} “{args['words']}” as {args.get('speaker')} sees it"
+                    if "words" in args else action_text(str(data.get("atomic")), args))
+            say(t, who, "action", text + by)
         elif kind == "exec-result" and data.get("status") == "failed":
             say(t, who, "failed", str(data.get("reason", "")))
         elif kind == "question":
