@@ -450,3 +450,58 @@ def test_questions_carry_what_the_team_attaches_and_people_ask_on_their_own(
     (release,) = kinds(path, "release")
     serve = kinds(path, "serve")[0]
     assert release.data["by"] == "EVA1" and release.time == pytest.approx(serve.time + 1 + 4)
+
+
+def test_a_world_performs_what_a_person_accepted(tmp_path: Path) -> None:
+    team, log, _ = build(tmp_path)
+    eva1 = team.human("EVA1")
+    carried: list[str] = []
+
+    def carry(assignment) -> None:  # the world moves the panel, then says it is done
+        carried.append(assignment.args["panel"])
+        team.loop.call_later(7.0, eva1.report, assignment.task, "done")
+
+    eva1.performers["mount-panel"] = carry
+    assert team.run(900) == "done"
+    log.close()
+    done = {e.task: e for e in kinds(tmp_path / "run.sqlite", "task-done")}
+    assert carried == ["P1"] and done["mount-P1"].time == 1.0 + 7.0
+
+
+def test_a_task_goes_to_an_agent_with_the_resources_it_needs(tmp_path: Path) -> None:
+    from dataclasses import replace
+
+    def k10_welds_without_a_tool(spec):
+        k10 = replace(spec.agents["K-10"], skills=(*spec.agents["K-10"].skills, "weld-seam"))
+        weld = replace(spec.tasks["weld-P1-P2"], needs=("welding-tool",))
+        return replace(spec, agents={**spec.agents, "K-10": k10},
+                       tasks={**spec.tasks, "weld-P1-P2": weld})
+
+    team, log, _ = build(tmp_path, edit=k10_welds_without_a_tool)
+    assert team.run(900) == "done"
+    log.close()
+    row = next(e for e in kinds(tmp_path / "run.sqlite", "delegation") if e.task == "weld-P1-P2")
+    assert row.agent == "Robonaut-B" and row.data["candidates"] == 1
+
+
+def test_the_same_help_asked_twice_is_served_once_and_both_hear(tmp_path: Path) -> None:
+    team, log, _ = build(tmp_path)
+    eva1 = team.human("EVA1")
+    heard: list[tuple[str, str]] = []
+    eva1.listeners.append(lambda m: heard.append((m.task, m.status))
+                          if m.kind == "progress" else None)
+
+    def twice() -> None:
+        eva1.request_help("point-light", {"target": "P3"})
+        eva1.request_help("point-light", {"target": "P3"})
+
+    team.loop.call_later(10.0, twice)  # K-10 is idle: it associates at once
+    team.loop.call_later(30.0, lambda: team.interaction.release("EVA1", "K-10"))
+    assert team.run(900) == "done"
+    log.close()
+    served = [task for task, status in heard if status == "served"]
+    assert len(served) == 2 and len(set(served)) == 2
+    lights = [e for e in kinds(tmp_path / "run.sqlite", "exec-request")
+              if e.data["atomic"] == "aim-light"]
+    assert len(lights) == 1
+    team.start()  # a started team does not start again

@@ -53,6 +53,7 @@ class Agent:
         self.name = spec.name
         self.kind = spec.kind
         self.skills = frozenset(spec.skills)
+        self.resources = frozenset(spec.resources)
         self.position: tuple[float, ...] | None = spec.at
         self.current: str | None = None
         """The team task this agent holds (offered or running): one at a time."""

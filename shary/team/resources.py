@@ -44,6 +44,8 @@ class Need:
     kinds: tuple[str, ...] = ("robot", "human")
     by: tuple[str, ...] = ()
     """Only these agents (empty: any)."""
+    needs: tuple[str, ...] = ()
+    """Resources the agent must have (a camera, a welding tool)."""
     subject: str = ""
     """What the need is for (a task's or a question's id), for the log."""
     requester: str = ""
@@ -72,14 +74,17 @@ class Ranked:
 
 
 class Capability:
-    """Tasks and help need the skill; any human can be asked a question."""
+    """Tasks and help need the skill and the resources named; any human can be asked a
+    question."""
 
     name = "capability"
 
     def score(self, agent: Agent, need: Need, now: float) -> float | None:
         if need.what == QUESTION:
             return 1.0
-        return 1.0 if need.skill in agent.skills else None
+        if need.skill not in agent.skills or not agent.resources.issuperset(need.needs):
+            return None
+        return 1.0
 
 
 class Availability:

@@ -56,11 +56,12 @@ class RobotAgent(Agent):
         self.mode = SYSTEM
         self.controller: str | None = None
         self.associated: str | None = None
-        self.pending: Act | None = None
-        """A help request waiting for the next breakpoint."""
+        self.pending: list[Act] = []
+        """Help requests of one person waiting for the next breakpoint."""
         self.held: tuple[Request, Reporter] | None = None
-        self._goals: dict[int, tuple[str, str]] = {}
-        """Agenda goal id -> (what it is for: team task or help request id, who asked)."""
+        self._goals: dict[int, list[tuple[str, str]]] = {}
+        """Agenda goal id -> what it is for (team task or help request id) and who asked:
+        several, when the agenda merged the same request made twice."""
         self._teleop_ids = itertools.count(1)
         self.last_failure = ""
         """Why the robot's last atomic task failed (the reason its task failed)."""
@@ -108,29 +109,29 @@ class RobotAgent(Agent):
         self.activity = WORKING
         goal = self.sup.agenda.add(message.skill, message.args, priority=TEAM_PRIORITY,
                                    source=f"team:{message.task}#{message.attempt}")
-        self._goals[goal.id] = (message.task, message.sender)
+        self._goals.setdefault(goal.id, []).append((message.task, message.sender))
         self.progress(message.sender, message.task, "accepted")
 
     def _goal_over(self, goal: Goal) -> None:
         found = self._goals.pop(goal.id, None)
         if found is None:
             return
-        what, who = found
         outcome = "done" if goal.state == "done" else "failed"
         reason = self.last_failure if outcome == "failed" else ""
         self.last_failure = ""
-        if what == self.current:
-            self.current = None
-            self.activity = IDLE if self.associated is None else ASSOCIATED
-            self.progress(who, what, outcome, reason)
-        else:  # a help request served
-            self.progress(who, what, "served" if outcome == "done" else "failed", reason)
+        for what, who in found:
+            if what == self.current:
+                self.current = None
+                self.activity = IDLE if self.associated is None else ASSOCIATED
+                self.progress(who, what, outcome, reason)
+            else:  # a help request served
+                self.progress(who, what, "served" if outcome == "done" else "failed", reason)
         self.team.loop.call_soon(self._breakpoint_if_idle)
 
     # -- help requests, breakpoints, association ----------------------------------------
 
     def _help_requested(self, message: Act) -> None:
-        requester = str(message.data.get("requester", message.sender))
+        requester = _requester(message)
         if self.mode == USER or (self.associated not in (None, requester)):
             self.progress(message.sender, message.task or "", "refused",
                           "under user control" if self.mode == USER
@@ -139,11 +140,12 @@ class RobotAgent(Agent):
         if self.associated == requester:
             self._serve(message)
             return
-        if self.pending is not None:
+        waiting_for = _requester(self.pending[0]) if self.pending else requester
+        if waiting_for != requester:
             self.progress(message.sender, message.task or "", "refused",
-                          f"already waiting to serve {self.pending.data.get('requester')}")
+                          f"already waiting to serve {waiting_for}")
             return
-        self.pending = message
+        self.pending.append(message)
         self.progress(message.sender, message.task or "", "waiting",
                       "until a breakpoint of the current task")
         self.team.loop.call_soon(self._breakpoint_if_idle)
@@ -153,13 +155,13 @@ class RobotAgent(Agent):
         return agenda.active is None or self.held is not None
 
     def _breakpoint_if_idle(self) -> None:
-        if self.pending is not None and self._idle():
+        if self.pending and self._idle():
             self._associate()
 
     def at_breakpoint(self, request: Request, reporter: Reporter) -> bool:
         """Called before each atomic task starts: whether the robot stops here to serve a
         waiting request (the atomic task is then held, and cancelled by the suspension)."""
-        if self.pending is None:
+        if not self.pending:
             return False
         self.held = (request, reporter)
         self.team.record("breakpoint", task=self.current, agent=self.name,
@@ -177,16 +179,17 @@ class RobotAgent(Agent):
         return True
 
     def _associate(self) -> None:
-        message, self.pending = self.pending, None
-        if message is None:
+        messages, self.pending = self.pending, []
+        if not messages:
             return
-        requester = str(message.data.get("requester", message.sender))
+        requester = _requester(messages[0])
         self.associated = requester
         self.activity = ASSOCIATED
-        self.team.record("associate", task=message.task, agent=self.name, requester=requester,
-                         suspended=self.current)
+        self.team.record("associate", task=messages[0].task, agent=self.name,
+                         requester=requester, suspended=self.current)
         self.sup.agenda.hold(f"associated:{requester}", ASSOCIATED_PRIORITY)
-        self._serve(message)
+        for message in messages:
+            self._serve(message)
 
     def _serve(self, message: Act) -> None:
         skill = str(message.data.get("skill", ""))
@@ -198,7 +201,7 @@ class RobotAgent(Agent):
                          requester=message.data.get("requester"), skill=skill, args=args or None)
         goal = self.sup.agenda.add(skill, args, priority=ASSOCIATED_PRIORITY,
                                    source=f"help:{message.task}")
-        self._goals[goal.id] = (message.task or "", message.sender)
+        self._goals.setdefault(goal.id, []).append((message.task or "", message.sender))
         self.progress(message.sender, message.task or "", "serving")
 
     def release(self, requester: str) -> None:
@@ -261,6 +264,11 @@ class RobotAgent(Agent):
         self.team.record("control", task=self.current, agent=self.name, mode=SYSTEM, by=human)
         self.sup.agenda.release(f"control:{human}")
         return True
+
+
+def _requester(message: Act) -> str:
+    """Who a help request is for (the Interaction Manager passes it on)."""
+    return str(message.data.get("requester", message.sender))
 
 
 class _Gate:

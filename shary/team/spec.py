@@ -79,6 +79,8 @@ class TaskSpec:
     args: dict[str, Any] = field(default_factory=dict)
     after: tuple[str, ...] = ()
     by: tuple[str, ...] = ()
+    needs: tuple[str, ...] = ()
+    """Resources the agent must have besides the skill."""
     at: tuple[float, ...] | None = None
     attempts: int = 2
     respawn: str | None = None

@@ -74,9 +74,15 @@ class TaskManager:
         """Told when the goal is over ("done" or "failed")."""
         self.delegations = 0
         self._ready: list[TeamTask] = []
+        self.started = False
+        """Whether :meth:`start` ran (a goal starts once)."""
         team.port.subscribe(self.address, self.handle)
 
     def start(self) -> None:
+        """Make the tasks without constraints ready and delegate them (once)."""
+        if self.started:
+            return
+        self.started = True
         self.team.record("goal", tasks=len(self.tasks),
                          constraints=sum(len(t.spec.after) for t in self.tasks.values()))
         for task in self.tasks.values():
@@ -106,8 +112,9 @@ class TaskManager:
         for task in ready:
             if task.state != READY:
                 continue
-            candidates = [a for a in free.get(task.spec.skill, ())
-                          if a.current is None and (not task.spec.by or a.name in task.spec.by)]
+            candidates = [a for a in free.get(task.spec.skill, ()) if a.current is None
+                          and (not task.spec.by or a.name in task.spec.by)
+                          and a.resources.issuperset(task.spec.needs)]
             if not candidates:
                 waiting.append(task)  # all busy: wait for one to be free
             elif all(a.name in task.refused for a in candidates):
@@ -123,7 +130,8 @@ class TaskManager:
         """Offer ``task`` to the best of ``candidates`` that has not refused it; False if
         none can take it now."""
         team = self.team
-        need = Need(TASK, task.spec.skill, task.spec.at, by=task.spec.by, subject=task.name)
+        need = Need(TASK, task.spec.skill, task.spec.at, by=task.spec.by,
+                    needs=task.spec.needs, subject=task.name)
         agent = team.resources.choose(need, candidates, free=lambda a: (
             a.current is None and a.name not in task.refused))
         if agent is None:
@@ -143,7 +151,8 @@ class TaskManager:
     def _capable(self, task: TeamTask) -> list[Agent]:
         """Every agent that may do ``task``, busy or not."""
         return [a for a in self.team.agents.values() if task.spec.skill in a.skills
-                and (not task.spec.by or a.name in task.spec.by)]
+                and (not task.spec.by or a.name in task.spec.by)
+                and a.resources.issuperset(task.spec.needs)]
 
     def _nobody(self, task: TeamTask) -> None:
         """Every free capable agent refused this attempt: it counts as a failed one."""

@@ -151,7 +151,9 @@ class Team:
     # -- running ------------------------------------------------------------------------
 
     def start(self) -> None:
-        """Start the goal and the people's own scripts."""
+        """Start the goal and the people's own scripts (once: later calls do nothing)."""
+        if self.tasks.started:
+            return
         self.tasks.start()
         for agent in self.agents.values():
             if isinstance(agent, HumanProxy):

@@ -68,6 +68,7 @@ class _Meaning:
                   for name, raw in data["agents"].items()}
         questions = {topic: self.question(topic, raw)
                      for topic, raw in (data.get("questions") or {}).items()}
+        self.answers(agents, questions)
         tasks = {name: self.task(name, raw, agents)
                  for name, raw in data["goal"]["tasks"].items()}
         self.constraints(tasks)
@@ -213,6 +214,18 @@ class _Meaning:
                             bool(raw.get("wait", priority >= 5)), tuple(raw.get("accept") or ()),
                             raw.get("fallback"))
 
+    def answers(self, agents: dict[str, AgentSpec], questions: dict[str, QuestionSpec]) -> None:
+        """A simulated person's answer to a declared question must be one it can have."""
+        for agent in agents.values():
+            for topic, value in (agent.behaviour.answers if agent.behaviour else {}).items():
+                question = questions.get(topic)
+                possible = (("yes", "no") if question is not None and question.type == "yes-no"
+                            else question.choices if question is not None else ())
+                if possible and value not in possible:
+                    self.problem(("agents", agent.name, "behaviour", "answers", topic),
+                                 f"{value!r} is not an answer to {question.text!r} (one of "
+                                 f"{', '.join(possible)})")
+
     # -- the goal -----------------------------------------------------------------
 
     def task(self, name: str, raw: dict[str, Any], agents: dict[str, AgentSpec]) -> TaskSpec:
@@ -224,11 +237,18 @@ class _Meaning:
                 self.problem(where + ("by", index), f"no agent {agent!r} in the team"
                              f"{did_you_mean(agent, agents)}")
         pool = candidates or list(agents.values())
+        needs = tuple(raw.get("needs") or ())
+        among = f"among {', '.join(raw['by'])} " if candidates else ""
         if not any(skill in a.skills for a in pool):
             known = sorted({s for a in pool for s in a.skills})
-            among = f"among {', '.join(raw['by'])} " if candidates else ""
             self.problem(where + ("do",), f"nobody {among}has the skill {skill!r}"
                          f"{did_you_mean(skill, known)}")
+        elif needs and not any(skill in a.skills and set(needs) <= set(a.resources)
+                               for a in pool):
+            self.problem(where + ("needs",), f"nobody {among}with the skill {skill!r} has "
+                         f"{', '.join(needs)} (they have: "
+                         + "; ".join(f"{a.name}: {', '.join(a.resources) or 'nothing'}"
+                                     for a in pool if skill in a.skills) + ")")
         robots = [a for a in pool if a.kind == ROBOT and skill in a.skills]
         if robots and self.tasks_of_robots is not None and skill in self.tasks_of_robots:
             params = self.tasks_of_robots[skill].params
@@ -245,7 +265,7 @@ class _Meaning:
         at = raw.get("at")
         within = self.reader.duration(where + ("reply-within",), raw.get("reply-within", 30))
         return TaskSpec(name, skill, dict(raw.get("with") or {}), tuple(raw.get("after") or ()),
-                        tuple(raw.get("by") or ()), tuple(at) if at else None,
+                        tuple(raw.get("by") or ()), needs, tuple(at) if at else None,
                         int(raw.get("attempts", 2)), raw.get("respawn"), within or 30.0,
                         raw.get("doc", ""))
 
