@@ -157,3 +157,11 @@ def test_the_service_answers_a_point_or_a_question(site: SpatialReasoner) -> Non
     asked = site.service({"words": said.replace("P3", "P4"), "speaker": "EVA2",
                           "addressee": "K-10"})
     assert asked["to"] == "EVA2" and len(asked["choices"]) == 2 and "point" not in asked
+    corner = asked["answers"][asked["choices"][0]]
+    assert len(corner) == 3  # a choice of corner is its point
+    which = site.service({"words": "point the light at the top left corner of the panel",
+                          "speaker": "EVA1", "addressee": "K-10"})
+    assert which["answers"]["P2"] == "P2"  # a choice of panel names it
+    chosen = site.service({"words": "point the light at the top left corner of the panel",
+                           "speaker": "EVA1", "addressee": "K-10", "referent": "P2"})
+    assert chosen["referent"] == "P2" and chosen["point"] == pytest.approx([1.03, -0.015, 1.47])

@@ -160,3 +160,28 @@ def test_robot_supports_human_lights_the_corner_from_the_speakers_side(tmp_path:
     assert kinds[:3] == ["breakpoint", "associate", "release"]
     assert "goal-resumed" in kinds[3:]
     assert list((tmp_path / name).glob("k-10-*light-for-EVA1.png"))
+
+
+def test_an_ambiguous_request_is_asked_back_to_the_speaker(tmp_path: Path) -> None:
+    """EVA1 says "the panel" and looks at none: K-10 asks EVA1 which one (nearest first),
+    EVA1 picks the first choice, and K-10 lights that panel's corner."""
+    import shutil
+
+    source = builtin_scenarios()["weld-robot-supports-human"]
+    shutil.copytree(source.parent / "weld", tmp_path / "weld")
+    team = tmp_path / "weld" / "robot-supports-human.team.yaml"
+    text = team.read_text("utf-8").replace("corner of panel P3", "corner of the panel")
+    text = text.replace("""      questions: {reply: ignore}
+      requests:""", """      questions: {reply: answer, after: 2s}
+      requests:""")
+    team.write_text(text, "utf-8")
+    scenario = tmp_path / "ambiguous.yaml"
+    scenario.write_text(source.read_text("utf-8").replace(
+        "spatial by K-10,", "spatial by K-10, question by K-10, answer by EVA1, spatial by K-10,"),
+        "utf-8")
+    result = run_scenario(scenario, out=tmp_path / "out")
+    assert result.passed, result.differences
+    spatial = [e for e in _events(tmp_path / "out" / "log.sqlite") if e.kind == "spatial"]
+    assert spatial[0].data["choices"][0] == "P3" and "which panel" in spatial[0].data["question"]
+    assert spatial[1].data["referent"] == "P3"
+    assert spatial[1].data["point"] == pytest.approx([2.97, PANEL_Y - 0.02, 0.58], abs=0.01)

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 Vec3 = tuple[float, float, float]
@@ -434,17 +434,34 @@ class SpatialReasoner:
     # -- as a team's software agent ------------------------------------------------
 
     def service(self, data: dict[str, Any]) -> dict[str, Any]:
-        """The ``spatial`` service a team's software agent offers (HRI/OS's SRA): a query
-        with ``words``, ``speaker`` and ``addressee`` gets back ``point`` (x, y, z in the
-        world), the ``frame``, whose ``perspective`` and what was understood (``says``),
-        or a ``question`` for the speaker (``to``, ``choices``)."""
-        answer = self.understand(str(data.get("words", "")), str(data.get("speaker", "")),
-                                 str(data.get("addressee", "")))
+        """The ``spatial`` service a team's software agent offers (HRI/OS's SRA).
+
+        A query with ``words``, ``speaker`` and ``addressee`` gets back ``point`` (x, y,
+        z in the world), the ``frame``, whose ``perspective`` and what was understood
+        (``says``); or a ``question`` for the speaker (``to``, ``choices``, and
+        ``answers``: each choice's point, or the object it names).  The speaker's
+        choice of object comes back as ``referent``, which then stands for the object
+        the words named."""
+        words = str(data.get("words", ""))
+        speaker, addressee = str(data.get("speaker", "")), str(data.get("addressee", ""))
+        chosen = data.get("referent")
+        if chosen:
+            try:
+                request = parse(words, speaker, addressee)
+            except SpatialError as err:
+                return {"question": str(err), "to": speaker, "choices": [], "answers": {},
+                        "question_type": "free-text"}
+            answer: Resolved | Question = self.resolve(replace(request, referent=str(chosen),
+                                                               kind=None))
+        else:
+            answer = self.understand(words, speaker, addressee)
         if isinstance(answer, Resolved):
             return {"point": [round(v, 4) for v in answer.point], "frame": answer.frame,
                     "perspective": answer.perspective, "referent": answer.referent,
                     "says": answer.says}
         return {"question": answer.text, "to": answer.to, "choices": list(answer.choices),
+                "answers": {k: [round(v, 4) for v in a] if isinstance(a, tuple) else a
+                            for k, a in answer.answers.items()},
                 "question_type": answer.kind}
 
 

@@ -34,7 +34,7 @@ from shary.log import ContextLog, read_events
 from shary.loop import EventLoop
 from shary.team import Team
 from shary.team.agents import INFORM, QUERY
-from shary.team.messages import Act, Assignment, Message
+from shary.team.messages import Act, Answer, Assignment, Message, Question
 from shary.team.proxy import HumanProxy
 from shary.team.spatial import SpatialReasoner
 from userfiles.outputs import output_folder, write_output
@@ -51,6 +51,8 @@ from .story import TeamStory
 ATOMIC = ("drive", "weld", "inspect", "aim", "point-light", "snapshot")
 """The atomic tasks the site performs for its robots (sim/scenarios/weld/recipes.yaml)."""
 HUMANOID_RESOURCE = "welding-tool"
+ASK_SPEAKER_FOR = 30.0
+"""Seconds K-10 waits for a speaker to say which object or corner they meant."""
 SEAM_QUESTION = "seam-okay"
 VIEWED = ("question", "answer", "respawn", "associate", "release", "control", "spatial")
 """The events after which ``--snapshots`` takes a view of the whole site."""
@@ -333,7 +335,10 @@ class _Noting:
 class _Light:
     """K-10's ``point-light``: the words go to the spatial reasoning agent (a ``QUERY``
     through the message port); its point is where the head turns.  An ambiguous reference
-    comes back as a question for the speaker, and the step fails with it."""
+    comes back as a question, which K-10 puts to the speaker (a multiple-choice
+    ``Question`` message, answered through the person's proxy): a chosen corner is
+    lit, a chosen object is resolved again; no answer within :data:`ASK_SPEAKER_FOR`
+    seconds, or a question without choices, fails the step with the question."""
 
     def __init__(self, team: Team, actions: SiteActions, robot: str):
         self.team = team
@@ -341,9 +346,13 @@ class _Light:
         self.robot = robot
         self.address = f"{robot}/spatial"
         self.waiting: dict[str, tuple[Request, Reporter]] = {}
-        team.port.subscribe(self.address, self._informed)
+        """Query or question id -> the step waiting for it."""
+        self.meanings: dict[str, dict[str, Any]] = {}
+        """Question id -> what each of its choices means (a point, an object's name)."""
+        self.timers: dict[str, Any] = {}
+        team.port.subscribe(self.address, self._heard)
 
-    def start(self, request: Request, reporter: Reporter) -> None:
+    def start(self, request: Request, reporter: Reporter, referent: str | None = None) -> None:
         reasoner = next((a.name for a in self.team.agents.values()
                          if "spatial" in a.spec.services), None)
         if reasoner is None:
@@ -353,22 +362,68 @@ class _Light:
         self.waiting[qid] = (request, reporter)
         self.team.port.send(Act(self.address, reasoner, id=qid, act=QUERY, data={
             "service": "spatial", "words": request.args.get("words", ""),
-            "speaker": request.args.get("speaker", ""), "addressee": self.robot}))
+            "speaker": request.args.get("speaker", ""), "addressee": self.robot,
+            **({"referent": referent} if referent else {})}))
 
-    def _informed(self, message: Message) -> None:
-        if not isinstance(message, Act) or message.act != INFORM:
-            return
-        found = self.waiting.pop(message.id, None)
+    def _heard(self, message: Message) -> None:
+        found = self.waiting.pop(message.id if isinstance(message, Act)
+                                 else getattr(message, "question", ""), None)
         if found is None:
             return
         request, reporter = found
-        data = message.data
+        if isinstance(message, Answer):
+            self._answered(message, request, reporter)
+        elif isinstance(message, Act) and message.act == INFORM:
+            self._informed(message.data, request, reporter)
+
+    def _informed(self, data: dict[str, Any], request: Request, reporter: Reporter) -> None:
         self.team.record("spatial", agent=self.robot, **{k: v for k, v in data.items()
-                                                        if k != "service"})
+                                                        if k not in ("service", "answers")})
         point = data.get("point")
-        if not point:
+        if point:
+            self._aim(point, request, reporter)
+            return
+        speaker = str(data.get("to") or request.args.get("speaker", ""))
+        choices = tuple(data.get("choices") or ())
+        if not choices or speaker not in self.team.agents:
             reporter.failed(request, f"ambiguous: {data.get('question') or data.get('error')}")
             return
+        qid = self.team.port.new_id("q")
+        self.waiting[qid] = (request, reporter)
+        self.meanings[qid] = dict(data.get("answers") or {})
+        self.team.record("question", task=request.node, agent=self.robot, question=qid,
+                         text=data.get("question"), question_type="multiple-choice",
+                         choices=list(choices), to=speaker)
+        self.team.port.send(Question(self.address, speaker, id=qid,
+                                     text=str(data.get("question")), type="multiple-choice",
+                                     choices=choices, expires=ASK_SPEAKER_FOR,
+                                     topic="spatial", task=request.node))
+        self.timers[qid] = self.team.loop.call_later(ASK_SPEAKER_FOR, self._unanswered, qid)
+
+    def _answered(self, answer: Answer, request: Request, reporter: Reporter) -> None:
+        meaning = self.meanings.pop(answer.question, {}).get(str(answer.value))
+        timer = self.timers.pop(answer.question, None)
+        if timer is not None:
+            timer.cancel()
+        self.team.record("answer", task=request.node, agent=answer.sender,
+                         question=answer.question, asker=self.robot, value=answer.value)
+        if isinstance(meaning, list):
+            self._aim(meaning, request, reporter)
+        elif isinstance(meaning, str):
+            self.start(request, reporter, referent=meaning)
+        else:
+            reporter.failed(request, f"{answer.sender} answered {answer.value!r}, not one of "
+                                     "the choices")
+
+    def _unanswered(self, qid: str) -> None:
+        self.timers.pop(qid, None)
+        found = self.waiting.pop(qid, None)
+        self.meanings.pop(qid, None)
+        if found is not None:
+            request, reporter = found
+            reporter.failed(request, f"nobody said which within {ASK_SPEAKER_FOR:g}s")
+
+    def _aim(self, point: list[float], request: Request, reporter: Reporter) -> None:
         x, y, z = (float(v) for v in point)
         aim = Request(request.id, "point-light", {"x": x, "y": y, "z": z}, request.agent,
                       request.node)
@@ -378,4 +433,5 @@ class _Light:
         for qid, (waiting, _) in list(self.waiting.items()):
             if waiting.id == request.id:
                 del self.waiting[qid]
+                self.meanings.pop(qid, None)
         self.actions.cancel(request)

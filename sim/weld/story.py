@@ -59,10 +59,10 @@ class TeamStory:
         elif kind == "question":
             attached = data.get("data") or {}
             image = f"  [image {attached['image']}]" if attached.get("image") else ""
-            say(t, who, "speech", f"{data.get('text')}{image}")
-        elif kind == "message" and data.get("type") == "question" and data.get("to") \
-                and data.get("agent") != data.get("to"):
-            say(t, "IM", "act", f"routes “{data.get('text')}” to {data['to']}")
+            to = f"({data['to']}) " if data.get("to") else ""
+            say(t, who, "speech", f"{to}{data.get('text')}{image}")
+        elif kind == "message" and data.get("type") == "question" and who == "interaction":
+            say(t, "IM", "act", f"routes “{data.get('text')}” to {data.get('to')}")
         elif kind == "answer":
             if data.get("expired"):
                 say(t, "IM", "failed", f"nobody answered in time; taken as "
@@ -73,7 +73,8 @@ class TeamStory:
             args = data.get("args") or {}
             say(t, who, "speech", str(args.get("words") or data.get("skill")))
         elif kind == "spatial":
-            say(t, who, "action", str(data.get("says") or data.get("question")))
+            say(t, "SRA", "action", str(data["says"]) if data.get("says")
+                else f"cannot tell for {who}: the reference is ambiguous")
         elif kind == "breakpoint":
             say(t, who, "act", f"breakpoint before {data.get('before')}: suspends {task}")
         elif kind == "associate":
