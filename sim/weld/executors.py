@@ -40,6 +40,8 @@ WALK_SPEED = 0.5
 CARRY_HALF_SPAN = 0.9
 """Carriers stand this far either side of a panel's centre (beyond its ends: a spotlight
 aimed at the panel's corner passes between them)."""
+ARMS = 0.3
+"""How far in front of its carriers a panel is held, in metres."""
 INSPECT_SECONDS = 2.0
 WELD_SECONDS_PER_POINT = 2.0
 LANE_Y = -1.6
@@ -270,24 +272,27 @@ class SiteActions:
             return [Walk(p, [(ax + s * CARRY_HALF_SPAN, ay)], WALK_SPEED, final_yaw=facing)
                     for p, s in zip(people, sides, strict=True)]
 
+        # the panel is held at arm's length, north of its carriers: on the frame it slides
+        # the last stretch on its own, clear of whoever mounts the next panel
         carry_y = -0.6
         lift_at = [pallet[0], pallet[1], PANEL_Z]
-        parts: list[Any] = [_Together(to(pallet[0], pallet[1] - 0.3, math.pi / 2)),
+        parts: list[Any] = [_Together(to(pallet[0], pallet[1] - ARMS, math.pi / 2)),
                             Instant(lambda: site.lift(panel, list(pallet), upright)),
                             _Carry(site, panel, list(pallet), lift_at, 0.4, upright)]
-        carry = _Together(to(mount_at[0], carry_y, math.pi / 2),
-                          follow=lambda: self._between(panel, people, upright))
+        shift = -sum(sides) / len(sides) * CARRY_HALF_SPAN  # one carrier: at the west end
+        carry = _Together(to(mount_at[0], carry_y - ARMS, math.pi / 2),
+                          follow=lambda: self._held(panel, people, shift, upright))
         parts += [carry,
                   _Carry(site, panel, None, mount_at, 0.3, upright, physics=True),
                   Wait(1.0, label="align"),
                   Instant(lambda: site.tack(panel), "tack")]
         return self.sim.start(Sequence(parts, "mount"), done)
 
-    def _between(self, panel: str, people: list[Avatar],
-                 orientation: tuple[float, ...]) -> None:
-        """The carried panel between its carriers' hands."""
-        x = sum(p.x for p in people) / len(people)
-        y = sum(p.y for p in people) / len(people)
+    def _held(self, panel: str, people: list[Avatar], shift: float,
+              orientation: tuple[float, ...]) -> None:
+        """The carried panel in its carriers' hands: between them, at arm's length."""
+        x = sum(p.x for p in people) / len(people) + shift
+        y = sum(p.y for p in people) / len(people) + ARMS
         self.site.carry_to(panel, [x, y, PANEL_Z], orientation, kinematic=True)
 
 

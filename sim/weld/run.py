@@ -214,9 +214,15 @@ class _WeldRun:
         def perform(message: Assignment) -> None:
             panel = str(message.args.get("panel", ""))
             carriers = [proxy.name, *[h for h in [message.args.get("helper")] if h]]
+            def over() -> None:
+                if self.site.mounted(panel):
+                    proxy.report(message.task, "done")
+                else:  # physics had the last word: something stood in the way
+                    proxy.report(message.task, "failed", f"{panel} did not reach its place "
+                                 "on the frame")
+
             try:
-                self.actions.mount(panel, carriers,
-                                   lambda: proxy.report(message.task, "done"))
+                self.actions.mount(panel, carriers, over)
             except KeyError as err:
                 proxy.report(message.task, "failed", str(err.args[0]))
         return perform
