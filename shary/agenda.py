@@ -30,6 +30,8 @@ if TYPE_CHECKING:
     from shary.supervisor import Supervisor, TaskRun
 
 PENDING, ACTIVE, SUSPENDED, DONE, FAILED = "pending", "active", "suspended", "done", "failed"
+CANCELLED = "cancelled"
+OVER = (DONE, FAILED, CANCELLED)
 
 
 @dataclass(eq=False)
@@ -44,6 +46,10 @@ class Goal:
     sources: set[str] = field(default_factory=set)
     state: str = PENDING
     run: TaskRun | None = None
+    scheme: Any = None
+    """The scheme variant to run it with (None: the task's own choice)."""
+    initiator: str | None = None
+    """The person who asked for it (None: a goal of the robot's or of its operator)."""
 
     @property
     def key(self) -> tuple[str, tuple[tuple[str, str], ...]]:
@@ -61,39 +67,65 @@ class TaskAgenda:
         self.sup = sup
         self.goals: list[Goal] = []
         self._ids = itertools.count(1)
+        self.admits: list[Any] = []
+        """Gates a goal must pass to start (``gate(goal) -> bool``): the interaction
+        sessions' (:mod:`shary.dialogue.sessions`): no task with a person outside
+        a session with them.  A gate that changes its mind calls :meth:`reconsider`."""
 
     def todo(self, name: str = "default") -> list[Goal]:
         """The goals of one TODO list that are not over, in the order they were added."""
-        return [g for g in self.goals if g.todo == name and g.state not in (DONE, FAILED)]
+        return [g for g in self.goals if g.todo == name and g.state not in OVER]
 
     @property
     def active(self) -> Goal | None:
         return next((g for g in self.goals if g.state == ACTIVE), None)
 
     def add(self, task: str, args: dict[str, Any] | None = None, *, priority: int = 0,
-            todo: str = "default", source: str = "request") -> Goal:
+            todo: str = "default", source: str = "request", scheme: Any = None,
+            initiator: str | None = None) -> Goal:
         """Add a goal unless the same one (task and arguments) is already there."""
         args = dict(args or {})
         if task not in self.sup.library.tasks:
             raise KeyError(f"unknown task {task!r}")
         key = _key(task, args)
         for goal in self.goals:
-            if goal.key == key and goal.state not in (DONE, FAILED):
+            if goal.key == key and goal.state not in OVER:
                 goal.sources.add(source)
                 if priority > goal.priority:
                     goal.priority = priority
                 self.sup.record("goal-merged", goal=goal.id, name=task, source=source)
                 self.sup.loop.call_soon(self._schedule)
                 return goal
-        goal = Goal(next(self._ids), task, args, priority, todo, {source})
+        goal = Goal(next(self._ids), task, args, priority, todo, {source}, scheme=scheme,
+                    initiator=initiator)
         self.goals.append(goal)
         self.sup.record("goal-added", goal=goal.id, name=task, args=args, priority=priority,
                         todo=todo, source=source)
         self.sup.loop.call_soon(self._schedule)
         return goal
 
+    def reconsider(self) -> None:
+        """Look again at which goal to run (a gate of :attr:`admits` changed its mind)."""
+        self.sup.loop.call_soon(self._schedule)
+
+    def cancel(self, goal: Goal, reason: str) -> None:
+        """Drop a goal: its task, if it runs, stops at once (everything it does is
+        cancelled), and the next goal starts."""
+        if goal.state in OVER:
+            return
+        goal.state = CANCELLED
+        if goal.run is not None:
+            goal.run.cancel(reason)
+        self.sup.record("goal-over", task=goal.run.node if goal.run else None, goal=goal.id,
+                        name=goal.task, outcome=CANCELLED, reason=reason)
+        self.sup.loop.call_soon(self._schedule)
+
+    def _admitted(self, goal: Goal) -> bool:
+        return goal.state != PENDING or all(gate(goal) for gate in self.admits)
+
     def _best(self) -> Goal | None:
-        waiting = [g for g in self.goals if g.state in (PENDING, SUSPENDED, ACTIVE)]
+        waiting = [g for g in self.goals if g.state in (PENDING, SUSPENDED, ACTIVE)
+                   and self._admitted(g)]
         if not waiting:
             return None
         return max(waiting, key=lambda g: (g.priority, -g.id))
@@ -119,9 +151,12 @@ class TaskAgenda:
         best.state = ACTIVE
         self.sup.record("goal-started", goal=best.id, name=best.task)
         best.run = self.sup.start_task(best.task, best.args,
-                                       on_finish=lambda run, g=best: self._finished(g, run))
+                                       on_finish=lambda run, g=best: self._finished(g, run),
+                                       scheme=best.scheme, initiator=best.initiator)
 
     def _finished(self, goal: Goal, run: TaskRun) -> None:
+        if goal.state in OVER:
+            return
         goal.state = DONE if run.outcome == "done" else FAILED
         self.sup.record("goal-over", task=run.node, goal=goal.id, name=goal.task,
                         outcome=run.outcome)
@@ -216,7 +251,7 @@ class ChronicleRecognizer:
         args = {k: t.resolve(partial.bindings) for k, t in chronicle.args.items()}
         key = (chronicle.name, tuple(sorted((k, str(v)) for k, v in partial.bindings.items())))
         self.sup.record("chronicle", chronicle=chronicle.name, bindings=partial.bindings)
-        if key in self.fired and any(g.state not in (DONE, FAILED) and g.key == _key(
+        if key in self.fired and any(g.state not in OVER and g.key == _key(
                 chronicle.task, args) for g in self.sup.agenda.goals):
             return
         self.fired.add(key)

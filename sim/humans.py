@@ -51,6 +51,8 @@ class Answer:
 
     reply: str | None
     after: tuple[float, float] = (1.0, 1.0)
+    choose: dict[str, Any] | None = None
+    """For a question (ASK-WHICH): the description of the thing meant (``{isOn: shelf}``)."""
 
 
 @dataclass(frozen=True)
@@ -75,6 +77,13 @@ class ScriptStep:
     on: str | None = None
     take: str | None = None
     look: str | None = None
+    act: str | None = None
+    """A communication act the person starts (ASK-TASK, CANCEL) about ``task``."""
+    task: str | None = None
+    args: dict[str, Any] = field(default_factory=dict)
+    """The act's task arguments: names, or descriptions (``{type: Cube, color: green}``)."""
+    words: str | None = None
+    """What the person says aloud with the act."""
 
 
 @dataclass(frozen=True)
@@ -103,7 +112,8 @@ def profile_from(name: str, data: dict[str, Any]) -> Profile:
     """A :class:`Profile` from checked YAML data (see sim/schemas/profile.schema.json)."""
     answers = {}
     for act, spec in (data.get("answers") or {}).items():
-        answers[act] = Answer(spec.get("reply"), parse_range(spec.get("after", "1s")))
+        answers[act] = Answer(spec.get("reply"), parse_range(spec.get("after", "1s")),
+                              spec.get("choose"))
     distractions = []
     for spec in data.get("distractions") or []:
         when = spec.get("when", {})
@@ -119,7 +129,9 @@ def profile_from(name: str, data: dict[str, Any]) -> Profile:
         script.append(ScriptStep(parse_range(spec.get("after", 0)),
                                  seconds(spec["at"]) if "at" in spec else None,
                                  spec.get("walk"), spec.get("put"), spec.get("on"),
-                                 spec.get("take"), spec.get("look")))
+                                 spec.get("take"), spec.get("look"), spec.get("act"),
+                                 spec.get("task"), dict(spec.get("with") or {}),
+                                 spec.get("say")))
     return Profile(name, answers, str(data.get("attention", "robot")), tuple(distractions),
                    None if takes is None else parse_range(takes.get("after", "1s")),
                    bool(data.get("helps", True)), float(data.get("speed", WALK_SPEED)),

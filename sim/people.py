@@ -159,13 +159,21 @@ class Person:
             return
         self._pending.remove(pending)
         run, act, answer = pending
-        self.sim.loop.call_later(self._draw(answer.after), self._answer, run, act, answer.reply)
+        self.sim.loop.call_later(self._draw(answer.after), self._answer, run, act, answer)
 
-    def _answer(self, run: Any, act: str, reply: str) -> None:
+    def _answer(self, run: Any, act: str, answer: Any) -> None:
         if run.ended:
             return
-        self.say(self.name, {"H-AGREE": "Yes.", "H-DISAGREE": "No, thanks."}.get(reply, reply))
-        self.sup.receive_act(self.name, reply, task=run.node)
+        reply = answer.reply
+        if answer.choose is not None:
+            self.say(self.name, "The one " + " and ".join(
+                f"{'on' if p == 'isOn' else 'in' if p == 'isIn' else p} the {v}"
+                if p in ("isOn", "isIn") else str(v) for p, v in answer.choose.items()) + ".")
+        else:
+            self.say(self.name, {"H-AGREE": "Yes.", "H-DISAGREE": "No, thanks."}.get(reply,
+                                                                                   reply))
+        data = {"choice": dict(answer.choose)} if answer.choose is not None else None
+        self.sup.receive_act(self.name, reply, data, task=run.node)
         if act == "ASK-HELP" and reply == "H-AGREE" and self.profile.helps:
             obj = run.env.get("object")
             if obj is not None:
@@ -326,6 +334,8 @@ class Person:
         self._current_step = step
         if step.look is not None:
             self.look(step.look)
+        if step.act is not None:
+            self.tell(step.act, step.task, step.args, step.words)
         activity: Activity | None = None
         if step.walk is not None:
             activity = self.walk_to(step.walk)
@@ -361,6 +371,16 @@ class Person:
         return self._logged(Sequence([self._reach(spot), Instant(let_go, f"put {obj}"),
                                       self._reach(None)], f"put {obj} on {furniture}"),
                             "place", object=obj, on=furniture)
+
+    def tell(self, act: str, task: str | None, args: dict[str, Any],
+             words: str | None) -> None:
+        """Start a communication act (a request, a cancellation), saying ``words``."""
+        if words:
+            self.say(self.name, words)
+        data: dict[str, Any] = {"with": dict(args)} if args else {}
+        if task is not None:
+            data["task"] = task
+        self.sup.receive_act(self.name, act, data or None)
 
     @property
     def pending(self) -> bool:

@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 import planner
-from shary.agenda import ChronicleRecognizer
+from shary.agenda import OVER, ChronicleRecognizer
 from shary.executors import ExecutorRegistry
 from shary.facts import FactDatabase
 from shary.log import ContextLog, read_events
@@ -348,7 +348,7 @@ class _Run:
 
     def _quiet(self) -> bool:
         return (not self.sup.runs and self.sup.agenda.active is None
-                and not any(g.state not in ("done", "failed") for g in self.sup.agenda.goals)
+                and not any(g.state not in OVER for g in self.sup.agenda.goals)
                 and not self.sim.busy and self.loop.clock.next_due() is None
                 and not any(p.pending for p in self.people.values()))
 

@@ -1,0 +1,176 @@
+"""Person-initiated acts: a person asks for a task, cancels one, or changes a plan.
+
+The supervisor gives an act that no task expects to its ``initiative``
+handlers (:attr:`shary.supervisor.Supervisor.initiative`); :class:`Initiative`
+is the dialogue's.  The act's data says what it is about:
+
+``ASK-TASK``  ``{task: NAME, with: {PARAM: VALUE}}``; a value is a thing's
+              name or a description (``{type: Cube, color: green}``).  Each
+              description is resolved in the robot's facts: nothing fits ->
+              the robot says so (attention first: :func:`~shary.dialogue.attention.tell`);
+              several fit -> it asks which (:mod:`~shary.dialogue.disambiguation`);
+              one -> the task goes to the agenda with its H-initiated variant,
+              the ``task-requested`` scheme (the robot agrees or refuses, e.g.
+              when its hand is busy).  Parameters the person leaves out that
+              a role of the task would take (``partner``) are the person.
+``CANCEL``    ``{task: NAME}`` (or nothing: the person's current task).  A task
+              whose scheme expects CANCEL hears it (``task-requested`` stops
+              and puts back what it took); any other is cancelled on the agenda.
+
+The robot's side of these dialogues are recipes with functions, registered
+here on the supervisor: ``reply-task``, ``stop-task`` (and the
+disambiguation's ``ask-which``, ``understand-which``).
+"""
+
+from __future__ import annotations
+
+import itertools
+from typing import TYPE_CHECKING, Any
+
+from shary.dialogue import attention, disambiguation, say
+from shary.dialogue.disambiguation import Question
+from shary.recipes import ROBOT_PARAM, Recipe, Step, Term
+
+if TYPE_CHECKING:
+    from shary.agenda import Goal
+    from shary.model import Scheme
+    from shary.supervisor import Supervisor, TaskRun
+
+REQUESTED_SCHEME = "task-requested"
+"""The H-initiated variant every task runs with when a person asked for it."""
+DISAMBIGUATE_TASK = "disambiguate"
+
+
+class Initiative:
+    """The dialogue's handler of person-initiated acts (see the module's docstring)."""
+
+    def __init__(self, sup: Supervisor):
+        self.sup = sup
+        self.questions: dict[str, Question] = {}
+        self._ids = itertools.count(1)
+        self._requested: Scheme | None = None
+        sup.initiative.append(self.handle)
+        sup.functions.setdefault("reply-task", reply_task)
+        sup.functions.setdefault("stop-task", stop_task)
+        sup.functions.setdefault("ask-which", disambiguation.ask_which)
+        sup.functions.setdefault("understand-which", disambiguation.understand_which)
+
+    # -- acts ----------------------------------------------------------------------
+
+    def handle(self, agent: str, act: str, data: Any) -> bool:
+        """Take a person's act that no task expects; False when it is not one of ours."""
+        data = data if isinstance(data, dict) else {}
+        if act == "ASK-TASK":
+            self.ask(agent, str(data.get("task", "")), dict(data.get("with") or {}))
+            return True
+        if act == "CANCEL":
+            return self.cancel(agent, data.get("task"))
+        return False
+
+    def requested_scheme(self) -> Scheme:
+        """The H-initiated variant (loaded once, with the library's acts)."""
+        if self._requested is None:
+            from shary.io.schemes import load_scheme
+
+            self._requested = load_scheme(REQUESTED_SCHEME, acts=self.sup.library.acts)
+        return self._requested
+
+    def ask(self, agent: str, task: str, args: dict[str, Any]) -> None:
+        """A person asked for ``task``: resolve what they described, then agenda it."""
+        sup = self.sup
+        task_type = sup.library.tasks.get(task)
+        if task_type is None:
+            sup.record("request-refused", agent=agent, name=task, reason="unknown task")
+            attention.tell(sup, agent, "Sorry, I do not know how to do that.")
+            return
+        for role, term in task_type.roles.items():
+            if (term.kind == "param" and term.value not in args and role != ROBOT_PARAM
+                    and term.value in task_type.params):
+                args[term.value] = agent
+        self._resolve(agent, task, args)
+
+    def _resolve(self, agent: str, task: str, args: dict[str, Any]) -> None:
+        sup = self.sup
+        for param, value in args.items():
+            if not isinstance(value, dict):
+                continue
+            found = disambiguation.matches(sup.facts, value)
+            sup.record("request-resolved", agent=agent, name=task, param=param,
+                       description=value, matches=found)
+            if not found:
+                attention.tell(sup, agent, f"Sorry, I found no "
+                               f"{disambiguation.described(value)}.")
+                return
+            if len(found) > 1:
+                self._ask_which(agent, task, args, param, found)
+                return
+            args[param] = found[0]
+        goal = sup.agenda.add(task, args, source=f"request:{agent}",
+                              scheme=self.requested_scheme(), initiator=agent)
+        sup.record("request-accepted", agent=agent, name=task, goal=goal.id)
+
+    def _ask_which(self, agent: str, task: str, args: dict[str, Any], param: str,
+                   found: list[str]) -> None:
+        def then(q: Question) -> None:
+            if q.chosen is not None:
+                self._resolve(agent, task, {**args, param: q.chosen})
+
+        q = Question(f"q{next(self._ids)}", agent, param, found, then)
+        self.questions[q.id] = q
+        self.sup.start_task(DISAMBIGUATE_TASK, {"partner": agent, "question": q.id},
+                            on_finish=lambda run: self._answered(q))
+
+    def _answered(self, q: Question) -> None:
+        self.questions.pop(q.id, None)
+        self.sup.record("question-over", agent=q.partner, question=q.id, chosen=q.chosen,
+                        candidates=q.candidates)
+        q.then(q)
+
+    def cancel(self, agent: str, task: Any) -> bool:
+        """Stop the person's task (the named one, or their latest)."""
+        sup = self.sup
+        goals = [g for g in reversed(sup.agenda.goals)
+                 if g.state in ("pending", "active", "suspended")
+                 and (task is None or g.task == task)
+                 and (g.initiator == agent or agent in map(str, g.args.values()))]
+        if not goals:
+            return False
+        goal: Goal = goals[0]
+        run = goal.run
+        if run is not None and not run.ended and run.expects("CANCEL"):
+            run.deliver("CANCEL", {"agent": agent})
+        else:
+            sup.agenda.cancel(goal, f"cancelled by {agent}")
+        return True
+
+
+# -- the robot's side: recipe functions -------------------------------------------
+
+def _task_object(run: TaskRun) -> str | None:
+    value = run.env.get("object")
+    return None if value is None else str(value)
+
+
+def reply_task(run: TaskRun, recipe: Recipe) -> list[Step]:
+    """REPLY-TASK: refuse (R-DISAGREE) when the hand holds something the task is not
+    about, saying so; agree otherwise (the act is ``done``)."""
+    facts, robot = run.sup.facts, run.robot
+    held = sorted(str(o) for o in facts.objects(robot, "isHolding"))
+    wanted = _task_object(run)
+    busy = [o for o in held if o != wanted]
+    if busy:
+        return [say("refuse", f"Sorry, I cannot: my hand is busy with the {busy[0]}.",
+                    emit="R-DISAGREE")]
+    return [say("agree", "Yes, I will do that.")]
+
+
+def stop_task(run: TaskRun, recipe: Recipe) -> list[Step]:
+    """STOP-TASK: put back the task's object if the robot holds it, and say so."""
+    wanted = _task_object(run)
+    holding = wanted is not None and run.sup.facts.holds(run.robot, "isHolding", wanted)
+    steps = [say("stop", "All right, I stop." + (f" I put the {wanted} back." if holding
+                                                   else ""))]
+    if holding and "put-back" in run.sup.library.atomic:
+        steps.append(Step("put-back", "put-back", None, {"object": Term("const", wanted)},
+                          None, ("stop",)))
+    return steps
