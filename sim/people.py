@@ -167,7 +167,7 @@ class Person:
         reply = answer.reply
         if answer.choose is not None:
             self.say(self.name, "The one " + " and ".join(
-                f"{'on' if p == 'isOn' else 'in' if p == 'isIn' else p} the {v}"
+                f"{'on' if p == 'isOn' else 'in'} the {str(v).replace('-', ' ')}"
                 if p in ("isOn", "isIn") else str(v) for p, v in answer.choose.items()) + ".")
         else:
             self.say(self.name, {"H-AGREE": "Yes.", "H-DISAGREE": "No, thanks."}.get(reply,

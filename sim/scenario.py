@@ -122,6 +122,8 @@ def _schema(name: str) -> Draft202012Validator:
     return validator(SCHEMAS_DIR, name)
 
 
+_TEXT_PARAMS = frozenset({"text"})
+"""Task parameters whose value is words to say (the inform task's), not a thing."""
 _WORD_VALUED = frozenset({"type", "color"})
 """Predicates whose object is a word (a class, a colour), not a thing of the scenario."""
 
@@ -399,7 +401,8 @@ class _Reading:
                         f"{', '.join(task.params) or 'nothing'}; wrong: {', '.join(wrong)}")
             roles = {term.value for term in task.roles.values() if term.kind == "param"}
             for param, value in args.items():
-                if not isinstance(value, str) or param not in task.params:
+                if not isinstance(value, str) or param not in task.params \
+                        or param in _TEXT_PARAMS:
                     continue
                 if param in roles and value not in agents:
                     problem(where + ("with", param), f"{param} {value!r} is not a person of "

@@ -21,7 +21,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from shary.dialogue import look, say
+from shary.dialogue import say
 from shary.recipes import Recipe, Step
 
 if TYPE_CHECKING:
@@ -118,10 +118,9 @@ def _question(run: TaskRun) -> Question:
 
 
 def ask_which(run: TaskRun, recipe: Recipe) -> list[Step]:
-    """The ASK-WHICH recipe: look at the partner, ask the question."""
+    """The ASK-WHICH recipe: ask the question (the partner attends: the scheme waited)."""
     q = _question(run)
-    return [look("look", q.partner),
-            say("ask", question_text(run.sup.facts, q.candidates), after=("look",))]
+    return [say("ask", question_text(run.sup.facts, q.candidates))]
 
 
 def understand_which(run: TaskRun, recipe: Recipe) -> list[Step]:
