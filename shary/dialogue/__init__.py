@@ -1,4 +1,8 @@
-"""The robot's dialogue with people: who may start what, and what is said when.
+"""The communication manager: the robot's dialogue with people, and its language.
+
+The language (verbalization, referring expressions, requests) is in
+:mod:`~shary.dialogue.verbalize`, :mod:`~shary.dialogue.reg` and
+:mod:`~shary.dialogue.requests`.
 
 SHARY's section 2.2: "either partner may propose at any time".  The engine
 core only delivers an act to a task that expects it; this package adds what
