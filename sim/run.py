@@ -252,6 +252,9 @@ class _Run:
             facts.add(place, "type", "Place")
         for furniture in FURNITURE:
             facts.add(furniture, "type", "Furniture")
+            # its own kind too ("coffee-table" is a CoffeeTable): what people call it
+            facts.add(furniture, "type", "".join(
+                w.title() for w in furniture.split("-") if not w.isdigit()))
             facts.add(furniture, "place", MANIPULATION_PLACES.get(furniture, "base"))
             facts.add(furniture, "container", furniture in CONTAINERS)
             facts.add(furniture, "seat", furniture in SEATS)

@@ -22,15 +22,13 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from shary.dialogue import say
+from shary.dialogue.reg import ATTRIBUTES, Referrer
+from shary.dialogue.verbalize import humanize
 from shary.recipes import Recipe, Step
 
 if TYPE_CHECKING:
     from shary.supervisor import TaskRun
 
-GENERIC_TYPES = frozenset({"Object", "Agent", "Furniture", "Place", "Human", "Robot"})
-"""Types too general to name a thing by ("the object")."""
-CONTRASTS = ("color", "isOn", "isIn", "shape")
-"""The relations a question tells things apart by, in this order of preference."""
 _PLACE_WORDS = {"isOn": "on", "isIn": "in"}
 
 
@@ -46,56 +44,36 @@ def matches(facts: Any, description: dict[str, Any], perspective: str = "robot")
                   if all(facts.holds(thing, p, v, perspective) for p, v in pairs[1:]))
 
 
-def _value(facts: Any, thing: str, predicate: str, perspective: str) -> str | None:
-    values = sorted(str(v) for v in facts.objects(thing, predicate, perspective))
-    return values[0] if values else None
+def contrast(facts: Any, things: list[str], description: dict[str, Any] | None = None,
+             perspective: str = "robot") -> list[str]:
+    """Each thing named by what tells it from the others, in the listener's words
+    (referring expressions, :mod:`shary.dialogue.reg`): ``the green cube on the coffee
+    table``, then ``the one on the store table``; what the person said is kept."""
+    referrer = Referrer.for_perspective(facts, perspective)
+    given = [(str(p), str(v)) for p, v in (description or {}).items() if p in ATTRIBUTES]
+    named = []
+    for i, thing in enumerate(things):
+        found = referrer.describe(thing, context=things, given=given)
+        named.append(found.text(head="one" if i and found.relations and not found.pointing
+                                else None))
+    return named
 
 
-def noun(facts: Any, thing: str, perspective: str = "robot") -> str:
-    """What a thing is, in words: its most specific type (``cube``), else its name."""
-    kinds = sorted(str(t) for t in facts.objects(thing, "type", perspective)
-                   if str(t) not in GENERIC_TYPES)
-    return kinds[0].lower() if kinds else thing
-
-
-def _relation(predicate: str, value: str) -> str:
-    return f"{_PLACE_WORDS[predicate]} the {value}" if predicate in _PLACE_WORDS else value
-
-
-def contrast(facts: Any, things: list[str], perspective: str = "robot") -> list[str]:
-    """Each thing named by what tells it from the others: ``the green cube on the
-    coffee-table``, ``the one on the shelf`` (its name when nothing does)."""
-    head = noun(facts, things[0], perspective)
-    colour = {_value(facts, t, "color", perspective) for t in things}
-    shared = colour.pop() if len(colour) == 1 else None
-    for predicate in CONTRASTS:
-        values = [_value(facts, t, predicate, perspective) for t in things]
-        if None in values or len(set(values)) < len(values):
-            continue
-        words = []
-        for i, value in enumerate(values):
-            if predicate == "color":
-                words.append(f"the {value} {head}" if i == 0 else f"the {value} one")
-            else:
-                first = f"the {shared + ' ' if shared else ''}{head}" if i == 0 else "the one"
-                words.append(f"{first} {_relation(predicate, str(value))}")
-        return words
-    return [f"the {thing}" for thing in things]
-
-
-def question_text(facts: Any, things: list[str], perspective: str = "robot") -> str:
+def question_text(facts: Any, things: list[str], description: dict[str, Any] | None = None,
+                  perspective: str = "robot") -> str:
     """``Do you mean A, B or C?``"""
-    named = contrast(facts, things, perspective)
+    named = contrast(facts, things, description, perspective)
     return f"Do you mean {', '.join(named[:-1])} or {named[-1]}?"
 
 
 def described(description: dict[str, Any]) -> str:
-    """A description in words, as the person gave it: ``green cube`` (for "no such")."""
+    """A description in words, as the person gave it: ``blue cube`` (for "no such")."""
     colour = description.get("color")
     kind = description.get("type")
-    where = [_relation(p, str(v)) for p, v in description.items() if p in _PLACE_WORDS]
-    words = [str(colour)] if colour else []
-    words.append(str(kind).lower() if kind else "such thing")
+    where = [f"{_PLACE_WORDS[p]} the {humanize(str(v))}" for p, v in description.items()
+             if p in _PLACE_WORDS]
+    words = [humanize(str(colour))] if colour else []
+    words.append(humanize(str(kind)).lower() if kind else "such thing")
     return " ".join(words + where)
 
 
@@ -107,6 +85,8 @@ class Question:
     partner: str
     param: str
     candidates: list[str]
+    description: dict[str, Any]
+    """What the person said of the thing (kept in the question's words)."""
     then: Callable[[Question], Any]
     """Called when the dialogue is over (with :attr:`chosen` set or not)."""
     chosen: str | None = None
@@ -120,7 +100,7 @@ def _question(run: TaskRun) -> Question:
 def ask_which(run: TaskRun, recipe: Recipe) -> list[Step]:
     """The ASK-WHICH recipe: ask the question (the partner attends: the scheme waited)."""
     q = _question(run)
-    return [say("ask", question_text(run.sup.facts, q.candidates))]
+    return [say("ask", question_text(run.sup.facts, q.candidates, q.description))]
 
 
 def understand_which(run: TaskRun, recipe: Recipe) -> list[Step]:
@@ -137,6 +117,6 @@ def understand_which(run: TaskRun, recipe: Recipe) -> list[Step]:
     if len(left) == 1:
         q.chosen = left[0]
         others = [t for t in q.candidates if t != left[0]]
-        named = contrast(run.sup.facts, [left[0], *others])[0]
+        named = contrast(run.sup.facts, [left[0], *others], q.description)[0]
         return [say("understood", f"All right, {named}.", emit="chosen")]
     return [say("unclear", "Sorry, I did not understand which one.", emit="unclear")]

@@ -102,7 +102,7 @@ class Initiative:
                                f"{disambiguation.described(value)}.")
                 return
             if len(found) > 1:
-                self._ask_which(agent, task, args, param, found)
+                self._ask_which(agent, task, args, param, found, value)
                 return
             args[param] = found[0]
         goal = sup.agenda.add(task, args, source=f"request:{agent}",
@@ -110,12 +110,12 @@ class Initiative:
         sup.record("request-accepted", agent=agent, name=task, goal=goal.id)
 
     def _ask_which(self, agent: str, task: str, args: dict[str, Any], param: str,
-                   found: list[str]) -> None:
+                   found: list[str], description: dict[str, Any]) -> None:
         def then(q: Question) -> None:
             if q.chosen is not None:
                 self._resolve(agent, task, {**args, param: q.chosen})
 
-        q = Question(f"q{next(self._ids)}", agent, param, found, then)
+        q = Question(f"q{next(self._ids)}", agent, param, found, description, then)
         self.questions[q.id] = q
         self.sup.start_task(DISAMBIGUATE_TASK, {"partner": agent, "question": q.id},
                             on_finish=lambda run: self._answered(q))
