@@ -27,7 +27,7 @@ things per landmark), and describing an object is a few set intersections.
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from shary.dialogue.verbalize import humanize
 
@@ -69,6 +69,8 @@ class Description:
     relations: tuple[tuple[str, str, Description], ...] = ()
     pointing: bool = False
     name: str | None = None
+    given: tuple[tuple[str, str], ...] = ()
+    """Attributes the listener already said: left out after "one" ("the one on the shelf")."""
 
     @property
     def gesture(self) -> tuple[str, str] | None:
@@ -87,12 +89,10 @@ class Description:
             return self.name
         if self.pointing:
             return f"this {self.noun}"
-        if head is not None:
-            words = [head]
-        else:
-            adjectives = sorted((a for a in self.attributes if a[0] != "type"),
-                                key=lambda a: _ADJECTIVE_ORDER.get(a[0], 1))
-            words = [humanize(v) for _, v in adjectives] + [self.noun]
+        adjectives = sorted((a for a in self.attributes if a[0] != "type"
+                             and (head is None or a not in self.given)),
+                            key=lambda a: _ADJECTIVE_ORDER.get(a[0], 1))
+        words = [humanize(v) for _, v in adjectives] + [head or self.noun]
         for _, preposition, landmark in self.relations:
             words += [preposition, landmark.text()]
         return "the " + " ".join(words)
@@ -208,9 +208,11 @@ class Referrer:
             return Description(target, self.noun(target),
                                name=index.labels.get(target) or humanize(target).title())
         scope = None if context is None else set(context)
-        found = self._describe(target, scope, dict(given), self.depth, frozenset({target}))
+        said = dict(given)
+        found = self._describe(target, scope, said, self.depth, frozenset({target}))
         if found is not None and self.denotes(found, scope) == {target}:
-            return found
+            return replace(found, given=tuple(a for a in found.attributes
+                                              if said.get(a[0]) == a[1]))
         return Description(target, self.noun(target), pointing=True)
 
     def _describe(self, target: str, scope: set[str] | None, given: dict[str, str],
