@@ -53,6 +53,9 @@ class Answer:
     after: tuple[float, float] = (1.0, 1.0)
     choose: dict[str, Any] | None = None
     """For a question (ASK-WHICH): the description of the thing meant (``{isOn: shelf}``)."""
+    words: str | None = None
+    """What the person says as the answer ("The one on the store table."): the robot
+    hears the sentence (instead of a description)."""
 
 
 @dataclass(frozen=True)
@@ -78,7 +81,8 @@ class ScriptStep:
     take: str | None = None
     look: str | None = None
     act: str | None = None
-    """A communication act the person starts (ASK-TASK, CANCEL) about ``task``."""
+    """A communication act the person starts (ASK-TASK, CANCEL) about ``task``; without
+    one, what the person says (``words``) is heard by the robot as a sentence."""
     task: str | None = None
     args: dict[str, Any] = field(default_factory=dict)
     """The act's task arguments: names, or descriptions (``{type: Cube, color: green}``)."""
@@ -113,7 +117,7 @@ def profile_from(name: str, data: dict[str, Any]) -> Profile:
     answers = {}
     for act, spec in (data.get("answers") or {}).items():
         answers[act] = Answer(spec.get("reply"), parse_range(spec.get("after", "1s")),
-                              spec.get("choose"))
+                              spec.get("choose"), spec.get("say"))
     distractions = []
     for spec in data.get("distractions") or []:
         when = spec.get("when", {})

@@ -165,14 +165,18 @@ class Person:
         if run.ended:
             return
         reply = answer.reply
-        if answer.choose is not None:
-            self.say(self.name, "The one " + " and ".join(
-                f"{'on' if p == 'isOn' else 'in'} the {str(v).replace('-', ' ')}"
-                if p in ("isOn", "isIn") else str(v) for p, v in answer.choose.items()) + ".")
+        data: dict[str, Any] | None = None
+        if answer.words is not None:
+            self.say(self.name, answer.words)
+            data = {"text": answer.words}
+        elif answer.choose is not None:
+            self.say(self.name, "(points at the " + " and ".join(
+                f"{'one on' if p == 'isOn' else 'one in'} the {str(v).replace('-', ' ')}"
+                if p in ("isOn", "isIn") else str(v) for p, v in answer.choose.items()) + ")")
+            data = {"choice": dict(answer.choose)}
         else:
             self.say(self.name, {"H-AGREE": "Yes.", "H-DISAGREE": "No, thanks."}.get(reply,
                                                                                    reply))
-        data = {"choice": dict(answer.choose)} if answer.choose is not None else None
         self.sup.receive_act(self.name, reply, data, task=run.node)
         if act == "ASK-HELP" and reply == "H-AGREE" and self.profile.helps:
             obj = run.env.get("object")
@@ -334,7 +338,7 @@ class Person:
         self._current_step = step
         if step.look is not None:
             self.look(step.look)
-        if step.act is not None:
+        if step.act is not None or step.words is not None:
             self.tell(step.act, step.task, step.args, step.words)
         activity: Activity | None = None
         if step.walk is not None:
@@ -372,11 +376,16 @@ class Person:
                                       self._reach(None)], f"put {obj} on {furniture}"),
                             "place", object=obj, on=furniture)
 
-    def tell(self, act: str, task: str | None, args: dict[str, Any],
+    def tell(self, act: str | None, task: str | None, args: dict[str, Any],
              words: str | None) -> None:
-        """Start a communication act (a request, a cancellation), saying ``words``."""
+        """Start a communication act (a request, a cancellation), saying ``words``; or,
+        without an act, say ``words`` to the robot, which reads them as a request."""
         if words:
             self.say(self.name, words)
+        if act is None:
+            if words:
+                self.sup.dialogue.hear(self.name, words)
+            return
         data: dict[str, Any] = {"with": dict(args)} if args else {}
         if task is not None:
             data["task"] = task

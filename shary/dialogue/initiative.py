@@ -25,10 +25,13 @@ disambiguation's ``ask-which``, ``understand-which``).
 from __future__ import annotations
 
 import itertools
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 from shary.dialogue import attention, disambiguation, say
 from shary.dialogue.disambiguation import Question
+from shary.dialogue.reg import PerspectiveIndex
+from shary.dialogue.requests import Grammar, Query, Request, Resolution, resolve
 from shary.recipes import ROBOT_PARAM, Recipe, Step, Term
 
 if TYPE_CHECKING:
@@ -49,11 +52,42 @@ class Initiative:
         self.questions: dict[str, Question] = {}
         self._ids = itertools.count(1)
         self._requested: Scheme | None = None
+        self._grammar: Grammar | None = None
         sup.initiative.append(self.handle)
         sup.functions.setdefault("reply-task", reply_task)
         sup.functions.setdefault("stop-task", stop_task)
         sup.functions.setdefault("ask-which", disambiguation.ask_which)
         sup.functions.setdefault("understand-which", disambiguation.understand_which)
+
+    # -- what people say -------------------------------------------------------------
+
+    def grammar(self) -> Grammar:
+        """The requests' grammar, from the action ontology (read once, on first use)."""
+        if self._grammar is None:
+            from shary.facts import FactDatabase
+            from shary.recognition.ontology import load_action_ontology
+
+            self._grammar = Grammar.from_ontology(load_action_ontology(FactDatabase()))
+        return self._grammar
+
+    def hear(self, agent: str, sentence: str) -> None:
+        """A person said ``sentence`` to the robot: a request becomes their ASK-TASK, a
+        sentence the robot cannot read is answered with what it did not understand."""
+        sup = self.sup
+        sup.record("heard", agent=agent, text=sentence)
+        words = sentence.strip()
+        robot = sup.robot.lower()
+        if words.lower().startswith(robot) and words[len(robot):len(robot) + 1] in ",!:":
+            words = words[len(robot) + 1:].strip()  # "Jido, could you …": said to it
+        index = PerspectiveIndex.from_facts(sup.facts, "robot")
+        understood = self.grammar().parse(words, index, speaker=agent, addressee=sup.robot)
+        if understood.request is None:
+            attention.tell(sup, agent, understood.problem or "Sorry, I did not understand.")
+            return
+        request = understood.request
+        act = "ASK-TASK" if request.kind == "request" else "MODIFY-PLAN"
+        sup.receive_act(agent, act, {"task": request.action, "request": request,
+                                     "text": sentence})
 
     # -- acts ----------------------------------------------------------------------
 
@@ -61,7 +95,13 @@ class Initiative:
         """Take a person's act that no task expects; False when it is not one of ours."""
         data = data if isinstance(data, dict) else {}
         if act == "ASK-TASK":
-            self.ask(agent, str(data.get("task", "")), dict(data.get("with") or {}))
+            request = data.get("request")
+            if not isinstance(request, Request):
+                params = dict(data.get("with") or {})
+                request = Request("request", str(data.get("task", "")), self.sup.robot,
+                                  tuple(params), {p: disambiguation.query_of(v)
+                                                  for p, v in params.items()}, "", "")
+            self.pursue(agent, request)
             return True
         if act == "CANCEL":
             return self.cancel(agent, data.get("task"))
@@ -75,47 +115,54 @@ class Initiative:
             self._requested = load_scheme(REQUESTED_SCHEME, acts=self.sup.library.acts)
         return self._requested
 
-    def ask(self, agent: str, task: str, args: dict[str, Any]) -> None:
-        """A person asked for ``task``: resolve what they described, then agenda it."""
+    def pursue(self, agent: str, request: Request) -> None:
+        """A person asked for a task: resolve what they described; none -> say so,
+        several -> ask which, one -> put the task on the agenda, H-initiated."""
         sup = self.sup
-        task_type = sup.library.tasks.get(task)
+        task_type = sup.library.tasks.get(request.action)
         if task_type is None:
-            sup.record("request-refused", agent=agent, name=task, reason="unknown task")
-            attention.tell(sup, agent, "Sorry, I do not know how to do that.")
+            sup.record("request-refused", agent=agent, name=request.action,
+                       reason="not a task of the library")
+            attention.tell(sup, agent, "Sorry, I cannot do that on its own.")
             return
+        resolution = resolve(request, PerspectiveIndex.from_facts(sup.facts, "robot"))
+        sup.record("request-resolved", agent=agent, name=request.action,
+                   status=resolution.status,
+                   matches={r: list(m) for r, m in resolution.matches.items()})
+        if resolution.status == "none":
+            attention.tell(sup, agent, f"Sorry, {_lower_first(str(resolution.message))}")
+            return
+        if resolution.status == "several":
+            self._ask_which(agent, request, resolution)
+            return
+        args = {}
+        for role, thing in resolution.bindings.items():
+            param = role.lower()
+            if param in task_type.params:
+                args[param] = thing
         for role, term in task_type.roles.items():
             if (term.kind == "param" and term.value not in args and role != ROBOT_PARAM
                     and term.value in task_type.params):
-                args[term.value] = agent
-        self._resolve(agent, task, args)
-
-    def _resolve(self, agent: str, task: str, args: dict[str, Any]) -> None:
-        sup = self.sup
-        for param, value in args.items():
-            if not isinstance(value, dict):
-                continue
-            found = disambiguation.matches(sup.facts, value)
-            sup.record("request-resolved", agent=agent, name=task, param=param,
-                       description=value, matches=found)
-            if not found:
-                attention.tell(sup, agent, f"Sorry, I found no "
-                               f"{disambiguation.described(value)}.")
-                return
-            if len(found) > 1:
-                self._ask_which(agent, task, args, param, found, value)
-                return
-            args[param] = found[0]
-        goal = sup.agenda.add(task, args, source=f"request:{agent}",
+                args[term.value] = agent  # "give me …": the asker is the partner
+        missing = [p for p in task_type.params if p not in args]
+        if missing:
+            sup.record("request-refused", agent=agent, name=request.action,
+                       reason=f"missing {', '.join(missing)}")
+            attention.tell(sup, agent, "Sorry, I did not understand all of it.")
+            return
+        goal = sup.agenda.add(request.action, args, source=f"request:{agent}",
                               scheme=self.requested_scheme(), initiator=agent)
-        sup.record("request-accepted", agent=agent, name=task, goal=goal.id)
+        sup.record("request-accepted", agent=agent, name=request.action, goal=goal.id)
 
-    def _ask_which(self, agent: str, task: str, args: dict[str, Any], param: str,
-                   found: list[str], description: dict[str, Any]) -> None:
+    def _ask_which(self, agent: str, request: Request, resolution: Resolution) -> None:
+        role = str(resolution.role)
+
         def then(q: Question) -> None:
             if q.chosen is not None:
-                self._resolve(agent, task, {**args, param: q.chosen})
+                params = {**request.params, role: Query(name=q.chosen, words=q.chosen)}
+                self.pursue(agent, replace(request, params=params))
 
-        q = Question(f"q{next(self._ids)}", agent, param, found, description, then)
+        q = Question(f"q{next(self._ids)}", agent, resolution, then)
         self.questions[q.id] = q
         self.sup.start_task(DISAMBIGUATE_TASK, {"partner": agent, "question": q.id},
                             on_finish=lambda run: self._answered(q))
@@ -123,7 +170,7 @@ class Initiative:
     def _answered(self, q: Question) -> None:
         self.questions.pop(q.id, None)
         self.sup.record("question-over", agent=q.partner, question=q.id, chosen=q.chosen,
-                        candidates=q.candidates)
+                        candidates=list(q.resolution.candidates))
         q.then(q)
 
     def cancel(self, agent: str, task: Any) -> bool:
@@ -142,6 +189,10 @@ class Initiative:
         else:
             sup.agenda.cancel(goal, f"cancelled by {agent}")
         return True
+
+
+def _lower_first(text: str) -> str:
+    return text[:1].lower() + text[1:] if text[:2] != "I " else text
 
 
 # -- the robot's side: recipe functions -------------------------------------------

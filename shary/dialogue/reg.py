@@ -180,7 +180,9 @@ class Referrer:
 
     def noun(self, thing: str) -> str:
         """The head noun: the type's label, or the type's name in words ("coffee table")."""
-        types = sorted(self.index.values.get(thing, {}).get("type", ()))
+        having = self.index.having.get("type", {})
+        types = sorted(self.index.values.get(thing, {}).get("type", ()),
+                       key=lambda t: (len(having.get(t, ())), t))  # the most specific first
         if not types:
             return "thing"
         return self.index.labels.get(types[0], humanize(types[0]))
@@ -222,7 +224,7 @@ class Referrer:
         types = values.get("type")
         if not types:
             return None
-        kind = min(types)
+        kind = min(types, key=lambda t: (len(index.having["type"][t]), t))  # most specific
         distractors = set(index.having["type"][kind])
         if scope is not None:
             distractors &= scope
