@@ -71,6 +71,9 @@ class TaskAgenda:
         """Gates a goal must pass to start (``gate(goal) -> bool``): the interaction
         sessions' (:mod:`shary.dialogue.sessions`): no task with a person outside
         a session with them.  A gate that changes its mind calls :meth:`reconsider`."""
+        self.watchers: list[Any] = []
+        """Told ``(what, goal)`` when a goal's task starts (``"started"``) and when the
+        goal is over (``"over"``): a session is busy while a task with its person runs."""
 
     def todo(self, name: str = "default") -> list[Goal]:
         """The goals of one TODO list that are not over, in the order they were added."""
@@ -118,6 +121,7 @@ class TaskAgenda:
             goal.run.cancel(reason)
         self.sup.record("goal-over", task=goal.run.node if goal.run else None, goal=goal.id,
                         name=goal.task, outcome=CANCELLED, reason=reason)
+        self._tell("over", goal)
         self.sup.loop.call_soon(self._schedule)
 
     def _admitted(self, goal: Goal) -> bool:
@@ -153,6 +157,11 @@ class TaskAgenda:
         best.run = self.sup.start_task(best.task, best.args,
                                        on_finish=lambda run, g=best: self._finished(g, run),
                                        scheme=best.scheme, initiator=best.initiator)
+        self._tell("started", best)
+
+    def _tell(self, what: str, goal: Goal) -> None:
+        for watcher in self.watchers:
+            watcher(what, goal)
 
     def _finished(self, goal: Goal, run: TaskRun) -> None:
         if goal.state in OVER:
@@ -160,6 +169,7 @@ class TaskAgenda:
         goal.state = DONE if run.outcome == "done" else FAILED
         self.sup.record("goal-over", task=run.node, goal=goal.id, name=goal.task,
                         outcome=run.outcome)
+        self._tell("over", goal)
         self._schedule()
 
 

@@ -27,6 +27,7 @@ from typing import Any
 
 import planner
 from shary.agenda import OVER, ChronicleRecognizer
+from shary.dialogue.sessions import Sessions
 from shary.executors import ExecutorRegistry
 from shary.facts import FactDatabase
 from shary.log import ContextLog, read_events
@@ -227,6 +228,7 @@ class _Run:
             noise=Noise(dict(scenario.flicker), list(scenario.lost)), rng=self.loop.random)
         self.sim.observers.append(self.perception.update)
         self.chronicles = ChronicleRecognizer(self.sup) if library.chronicles else None
+        self.sessions = Sessions(self.sup)
 
     # -- setting up ----------------------------------------------------------------
 
@@ -335,6 +337,7 @@ class _Run:
         for person in self.people.values():
             person.begin()
         self.perception.start()
+        self.sessions.start()  # the interaction is going on with whoever attends already
         start = time.perf_counter()
         while self.loop.now() < self.scenario.timeout - 1e-9:
             self.loop.advance(min(CHUNK, self.scenario.timeout - self.loop.now()))

@@ -28,7 +28,7 @@ import itertools
 from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
-from shary.dialogue import attention, disambiguation, say
+from shary.dialogue import attention, disambiguation, say, sessions
 from shary.dialogue.disambiguation import Question
 from shary.dialogue.reg import PerspectiveIndex
 from shary.dialogue.requests import Grammar, Query, Request, Resolution, resolve
@@ -53,11 +53,15 @@ class Initiative:
         self._ids = itertools.count(1)
         self._requested: Scheme | None = None
         self._grammar: Grammar | None = None
+        self.sessions: Any = None
+        """The interaction sessions, when the robot keeps them
+        (:class:`~shary.dialogue.sessions.Sessions`)."""
         sup.initiative.append(self.handle)
         sup.functions.setdefault("reply-task", reply_task)
         sup.functions.setdefault("stop-task", stop_task)
         sup.functions.setdefault("ask-which", disambiguation.ask_which)
         sup.functions.setdefault("understand-which", disambiguation.understand_which)
+        sup.functions.setdefault("farewell", sessions.farewell)
 
     # -- what people say -------------------------------------------------------------
 

@@ -1,0 +1,181 @@
+"""Interaction sessions: greeting, tasks, idle, farewell; no task with a stranger.
+
+A session with a person is a ``session`` task (``schemes/session.yaml``) run
+in the background (:attr:`shary.supervisor.Supervisor.background`: it lasts
+as long as the interaction, and is not work left to do).  :class:`Sessions`
+opens and closes them from the robot's perception:
+
+- **the will to interact** opens one: the person comes near the robot
+  (``PERSON isNear ROBOT``) and looks at it (``PERSON looksAt ROBOT``), both
+  facts holding, added in either order within :attr:`Sessions.within`
+  seconds of each other (a partially ordered conjunction of two events, not
+  a sequence); the robot greets them;
+- **leaving** closes it: the person is neither near the robot nor looking at
+  it, for :attr:`Sessions.leave_after` seconds; the robot says goodbye;
+- :meth:`Sessions.start` opens, without a greeting, a session with every
+  person already attending to the robot when the robot starts (a scenario
+  begins with the interaction going on, as SHARY's do).
+
+The agenda runs a goal that involves a person (one of its arguments, or who
+asked for it) only inside a session with that person (:meth:`Sessions.admits`,
+one of the agenda's gates); a goal of the robot alone (exploring a place) is
+not an interaction and is not held.  A session is ``busy`` while a task with
+its person runs and ``idle`` otherwise (the agenda's watchers tell it).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from shary.dialogue import say
+from shary.dialogue.attention import ATTENDS, attending
+from shary.dialogue.verbalize import humanize
+from shary.recipes import Recipe, Step
+
+if TYPE_CHECKING:
+    from shary.agenda import Goal
+    from shary.supervisor import Supervisor, TaskRun
+
+SESSION_TASK = "session"
+NEAR = "isNear"
+
+
+def proper(name: str) -> str:
+    """A person's name as said: ``alice`` -> "Alice"."""
+    return humanize(name).title()
+
+
+class Sessions:
+    """Opens and closes interaction sessions (see the module's docstring)."""
+
+    def __init__(self, sup: Supervisor, *, within: float = 10.0, leave_after: float = 3.0,
+                 perspective: str = "robot"):
+        self.sup = sup
+        self.within = within
+        self.leave_after = leave_after
+        self.perspective = perspective
+        self.open: dict[str, TaskRun] = {}
+        """Person -> their session's task run, while it is open (farewell included)."""
+        self._since: dict[tuple[str, str], float] = {}
+        """(person, near|looks) -> when that fact was last added (while it holds)."""
+        self._leaving: dict[str, Any] = {}
+        self.started = False
+        """Sessions open on the will to interact only once :meth:`start` has run."""
+        self.subscriptions = [
+            sup.facts.subscribe(self._on_fact, predicate=p, object=sup.robot,
+                                perspective=perspective) for p in (NEAR, ATTENDS)]
+        sup.agenda.admits.append(self.admits)
+        sup.agenda.watchers.append(self._goal)
+        sup.dialogue.sessions = self
+
+    def close(self) -> None:
+        """Stop watching (sessions that are open stay open)."""
+        for subscription in self.subscriptions:
+            self.sup.facts.unsubscribe(subscription)
+        for timer in self._leaving.values():
+            timer.cancel()
+        self._leaving.clear()
+
+    # -- who is a person ----------------------------------------------------------------
+
+    def is_person(self, thing: Any) -> bool:
+        """Whether the robot believes ``thing`` is a person (text, a number: no)."""
+        try:
+            return self.sup.facts.holds(str(thing), "type", "Human", self.perspective)
+        except ValueError:  # not a name at all (the words of an inform task)
+            return False
+
+    def people(self) -> list[str]:
+        return sorted(str(s) for s, p, o in self.sup.facts.triples(self.perspective)
+                      if str(p) == "type" and str(o) == "Human")
+
+    # -- opening and closing ------------------------------------------------------------
+
+    def start(self) -> None:
+        """Open, silently, a session with every person attending to the robot now."""
+        self.started = True
+        for person in self.people():
+            if person not in self.open and attending(self.sup.facts, person, self.sup.robot,
+                                                     self.perspective):
+                self.begin(person, greet=False)
+
+    def begin(self, person: str, greet: bool = True) -> TaskRun:
+        """Open a session with ``person`` (greeting them unless told not to)."""
+        greeting = f"Hello, {proper(person)}." if greet else ""
+        self.sup.record("session-open", agent=person, greeted=greet)
+        run = self.sup.start_task(SESSION_TASK, {"partner": person, "greeting": greeting},
+                                  background=True, on_finish=lambda r: self._over(person, r))
+        run.deliver("arrived" if greet else "engaged")
+        self.open[person] = run
+        self.sup.agenda.reconsider()
+        return run
+
+    def _over(self, person: str, run: TaskRun) -> None:
+        if self.open.get(person) is run:
+            del self.open[person]
+        self.sup.record("session-close", agent=person)
+
+    def _holds(self, person: str, predicate: str) -> bool:
+        return self.sup.facts.holds(person, predicate, self.sup.robot, self.perspective)
+
+    def _on_fact(self, event: Any) -> None:
+        person, predicate = str(event.subject), str(event.predicate)
+        if not self.is_person(person):
+            return
+        now = self.sup.loop.now()
+        key = (person, predicate)
+        if event.kind == "added":
+            self._since[key] = now
+        else:
+            self._since.pop(key, None)
+        near, looks = self._holds(person, NEAR), self._holds(person, ATTENDS)
+        session = self.open.get(person)
+        if session is None:
+            if not self.started:
+                return
+            other = (person, ATTENDS if predicate == NEAR else NEAR)
+            if (event.kind == "added" and near and looks
+                    and now - self._since.get(other, now) <= self.within):
+                self.sup.record("chronicle", chronicle="will-to-interact",
+                                bindings={"person": person})
+                self.begin(person)
+            return
+        timer = self._leaving.pop(person, None)
+        if timer is not None:
+            timer.cancel()
+        if not near and not looks:
+            self._leaving[person] = self.sup.loop.call_later(self.leave_after, self._left,
+                                                             person, session)
+
+    def _left(self, person: str, session: TaskRun) -> None:
+        self._leaving.pop(person, None)
+        if self.open.get(person) is session and not session.ended:
+            self.sup.record("chronicle", chronicle="leaving", bindings={"person": person})
+            session.deliver("left")
+
+    # -- the agenda ------------------------------------------------------------------------
+
+    def involved(self, goal: Goal) -> set[str]:
+        """The people a goal is with: its arguments that are people, and who asked."""
+        people = {str(v) for v in goal.args.values() if self.is_person(v)}
+        if goal.initiator is not None:
+            people.add(goal.initiator)
+        return people
+
+    def admits(self, goal: Goal) -> bool:
+        """The agenda's gate: every person of the goal is in an open session."""
+        return all(p in self.open and not self.open[p].ended for p in self.involved(goal))
+
+    def _goal(self, what: str, goal: Goal) -> None:
+        event = "task-started" if what == "started" else "task-over"
+        for person in self.involved(goal):
+            session = self.open.get(person)
+            if session is not None and session.expects(event):
+                session.deliver(event)
+
+
+# -- the session's recipes ----------------------------------------------------------------
+
+def farewell(run: TaskRun, recipe: Recipe) -> list[Step]:
+    """FAREWELL: say goodbye to the partner by name."""
+    return [say("goodbye", f"Goodbye, {proper(str(run.env['partner']))}.")]
