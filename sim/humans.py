@@ -88,6 +88,8 @@ class ScriptStep:
     """The act's task arguments: names, or descriptions (``{type: Cube, color: green}``)."""
     words: str | None = None
     """What the person says aloud with the act."""
+    leave: bool = False
+    """Walk out of the room by the door: the robot perceives them no more."""
 
 
 @dataclass(frozen=True)
@@ -135,7 +137,7 @@ def profile_from(name: str, data: dict[str, Any]) -> Profile:
                                  spec.get("walk"), spec.get("put"), spec.get("on"),
                                  spec.get("take"), spec.get("look"), spec.get("act"),
                                  spec.get("task"), dict(spec.get("with") or {}),
-                                 spec.get("say")))
+                                 spec.get("say"), bool(spec.get("leave", False))))
     return Profile(name, answers, str(data.get("attention", "robot")), tuple(distractions),
                    None if takes is None else parse_range(takes.get("after", "1s")),
                    bool(data.get("helps", True)), float(data.get("speed", WALK_SPEED)),

@@ -23,6 +23,9 @@ from .simulation import Simulation, Walk, standing_height
 
 AWAY = "away"
 """Attention on nothing in the room (a phone call)."""
+OUTSIDE = (2.55, -3.4)
+"""Where a person who left the room is: beyond the door, facing away (out of sight: too
+far from the robot's places to be at one, looking at nothing in the room)."""
 UNSPOKEN_ANSWER = 5.0
 """Seconds after an act begins by which a person answers even if the robot said nothing."""
 
@@ -348,6 +351,8 @@ class Person:
                                 f"take {step.take}")
         elif step.put is not None:
             activity = self._put(step.put, step.on or "coffee-table")
+        elif step.leave:
+            activity = Sequence([self.walk_to("door"), Instant(self._exit, "leave")], "leave")
         if activity is None:
             self._current_step = None
             self._next_script_step()
@@ -375,6 +380,15 @@ class Person:
         return self._logged(Sequence([self._reach(spot), Instant(let_go, f"put {obj}"),
                                       self._reach(None)], f"put {obj} on {furniture}"),
                             "place", object=obj, on=furniture)
+
+    def _exit(self) -> None:
+        """Out of the door: out of the room and of the robot's perception."""
+        self.avatar.x, self.avatar.y = OUTSIDE
+        self.avatar.yaw = -math.pi / 2
+        self.attention = self.default_attention = AWAY
+        self.avatar.place()
+        self.refresh()
+        self.sim.observe()
 
     def tell(self, act: str | None, task: str | None, args: dict[str, Any],
              words: str | None) -> None:

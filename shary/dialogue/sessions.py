@@ -10,8 +10,10 @@ opens and closes them from the robot's perception:
   facts holding, added in either order within :attr:`Sessions.within`
   seconds of each other (a partially ordered conjunction of two events, not
   a sequence); the robot greets them;
-- **leaving** closes it: the person is neither near the robot nor looking at
-  it, for :attr:`Sessions.leave_after` seconds; the robot says goodbye;
+- **leaving** closes it: the robot perceives the person no more (no fact of
+  where they are, ``isAt``, nor of where they look, ``looksAt``) for
+  :attr:`Sessions.leave_after` seconds; the robot says goodbye.  Looking away,
+  on the phone, is not leaving: the person is still there;
 - :meth:`Sessions.start` opens, without a greeting, a session with every
   person already attending to the robot when the robot starts (a scenario
   begins with the interaction going on, as SHARY's do).
@@ -38,6 +40,7 @@ if TYPE_CHECKING:
 
 SESSION_TASK = "session"
 NEAR = "isNear"
+AT = "isAt"
 
 
 def proper(name: str) -> str:
@@ -48,7 +51,7 @@ def proper(name: str) -> str:
 class Sessions:
     """Opens and closes interaction sessions (see the module's docstring)."""
 
-    def __init__(self, sup: Supervisor, *, within: float = 10.0, leave_after: float = 3.0,
+    def __init__(self, sup: Supervisor, *, within: float = 10.0, leave_after: float = 2.0,
                  perspective: str = "robot"):
         self.sup = sup
         self.within = within
@@ -62,8 +65,8 @@ class Sessions:
         self.started = False
         """Sessions open on the will to interact only once :meth:`start` has run."""
         self.subscriptions = [
-            sup.facts.subscribe(self._on_fact, predicate=p, object=sup.robot,
-                                perspective=perspective) for p in (NEAR, ATTENDS)]
+            sup.facts.subscribe(self._on_fact, predicate=p, perspective=perspective)
+            for p in (NEAR, ATTENDS, AT)]
         sup.agenda.admits.append(self.admits)
         sup.agenda.watchers.append(self._goal)
         sup.dialogue.sessions = self
@@ -118,9 +121,21 @@ class Sessions:
     def _holds(self, person: str, predicate: str) -> bool:
         return self.sup.facts.holds(person, predicate, self.sup.robot, self.perspective)
 
+    def tracked(self, person: str) -> bool:
+        """Whether the robot perceives the person: where they are, or where they look."""
+        facts = self.sup.facts
+        return bool(facts.objects(person, AT, self.perspective)
+                    or facts.objects(person, ATTENDS, self.perspective))
+
     def _on_fact(self, event: Any) -> None:
         person, predicate = str(event.subject), str(event.predicate)
         if not self.is_person(person):
+            return
+        session = self.open.get(person)
+        if session is not None:
+            self._watch_leaving(person, session)
+            return
+        if not self.started or str(event.object) != self.sup.robot or predicate == AT:
             return
         now = self.sup.loop.now()
         key = (person, predicate)
@@ -128,28 +143,25 @@ class Sessions:
             self._since[key] = now
         else:
             self._since.pop(key, None)
-        near, looks = self._holds(person, NEAR), self._holds(person, ATTENDS)
-        session = self.open.get(person)
-        if session is None:
-            if not self.started:
-                return
-            other = (person, ATTENDS if predicate == NEAR else NEAR)
-            if (event.kind == "added" and near and looks
-                    and now - self._since.get(other, now) <= self.within):
-                self.sup.record("chronicle", chronicle="will-to-interact",
-                                bindings={"person": person})
-                self.begin(person)
-            return
+        other = (person, ATTENDS if predicate == NEAR else NEAR)
+        if (event.kind == "added" and self._holds(person, NEAR) and self._holds(person, ATTENDS)
+                and now - self._since.get(other, now) <= self.within):
+            self.sup.record("chronicle", chronicle="will-to-interact",
+                            bindings={"person": person})
+            self.begin(person)
+
+    def _watch_leaving(self, person: str, session: TaskRun) -> None:
         timer = self._leaving.pop(person, None)
         if timer is not None:
             timer.cancel()
-        if not near and not looks:
+        if not self.tracked(person):
             self._leaving[person] = self.sup.loop.call_later(self.leave_after, self._left,
                                                              person, session)
 
     def _left(self, person: str, session: TaskRun) -> None:
         self._leaving.pop(person, None)
-        if self.open.get(person) is session and not session.ended:
+        if self.open.get(person) is session and not session.ended \
+                and not self.tracked(person):
             self.sup.record("chronicle", chronicle="leaving", bindings={"person": person})
             session.deliver("left")
 
