@@ -209,6 +209,22 @@ class SelectedRule:
         return table.get("default", 1.0)
 
 
+@dataclass(frozen=True)
+class Assignment:
+    """"This agent does this step": every ``action`` whose arguments include all of
+    ``things`` is performed by ``agent`` (a person said "I'll take the bottle myself":
+    ``Assignment("Pick", ("bottle",), "alice")``).  The search never applies an action
+    that breaks one."""
+
+    action: str
+    things: tuple[str, ...]
+    agent: str
+
+    def breaks(self, action: str, args: tuple[Any, ...], performer: str) -> bool:
+        return (action == self.action and performer != self.agent
+                and all(thing in args for thing in self.things))
+
+
 @dataclass
 class Problem:
     name: str
@@ -223,6 +239,8 @@ class Problem:
     budget_ms: int = 1000
     doc: str = ""
     file: str = ""
+    assigned: tuple[Assignment, ...] = ()
+    """Steps given to an agent (:class:`Assignment`): a plan honours every one."""
 
     def select_rules(self, names: list[str]) -> None:
         """Keep only these social rules: the problem's settings for those it selected,

@@ -52,6 +52,9 @@ class Planner(Protocol):
 
     def plan_steps(self, spec: PlanSpec, args: dict[str, Any], facts: Any) -> list[Step]: ...
 
+    # A planner that honours plan negotiation also takes ``assigned=`` (the steps people
+    # took on: shary.dialogue.negotiation.Taken); it is passed only when there are some.
+
 
 RecipeFunction = Callable[["TaskRun", Recipe], list[Step]]
 """A Python recipe: returns the steps of an act x task, given its task run."""
@@ -185,8 +188,9 @@ class Supervisor:
                 raise LookupError(f"recipe {recipe.name!r} needs a planner for domain "
                                   f"{recipe.plan.domain!r}; none is registered")
             args = {k: t.resolve(run.env) for k, t in recipe.plan.args.items()}
+            more = {"assigned": tuple(run.assigned)} if run.assigned else {}
             try:
-                steps = planner.plan_steps(recipe.plan, args, self.facts)
+                steps = planner.plan_steps(recipe.plan, args, self.facts, **more)
             except RuntimeError as err:
                 raise LookupError(str(err)) from err
             steps = [s if s.atomic is None or s.atomic in self.library.atomic
@@ -296,6 +300,9 @@ class TaskRun(SchemeListener):
         """Act -> the event (as the scheme writes it) that last entered a state carrying it."""
         self.entered_data: dict[str, Any] = {}
         """Act -> the data of that event (what a person's answer said)."""
+        self.assigned: list[Any] = []
+        """Steps people took on in negotiating this task's plan
+        (:class:`shary.dialogue.negotiation.Taken`): its planner-backed recipes plan with them."""
         self.instance: SchemeInstance | None = None
         self.ended = False
         self.paused = False

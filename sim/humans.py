@@ -47,7 +47,8 @@ WAYPOINTS: list[tuple[float, float]] = [
 
 @dataclass(frozen=True)
 class Answer:
-    """How a person answers one act: the act they reply with (None: silence), when."""
+    """How a person answers one act: the act they reply with, when; or words alone (the
+    robot hears a sentence: "I'll take the bottle myself"); neither: silence."""
 
     reply: str | None
     after: tuple[float, float] = (1.0, 1.0)
@@ -97,7 +98,8 @@ class Profile:
     """A person's behaviour (see the module's docstring)."""
 
     name: str
-    answers: dict[str, Answer] = field(default_factory=dict)
+    answers: dict[str, tuple[Answer, ...]] = field(default_factory=dict)
+    """Act -> the answers to it, the first time, the second …; the last one repeats."""
     attention: str = "robot"
     distractions: tuple[Distraction, ...] = ()
     takes: tuple[float, float] | None = (1.0, 1.0)
@@ -117,9 +119,10 @@ def parse_range(value: Any) -> tuple[float, float]:
 def profile_from(name: str, data: dict[str, Any]) -> Profile:
     """A :class:`Profile` from checked YAML data (see sim/schemas/profile.schema.json)."""
     answers = {}
-    for act, spec in (data.get("answers") or {}).items():
-        answers[act] = Answer(spec.get("reply"), parse_range(spec.get("after", "1s")),
-                              spec.get("choose"), spec.get("say"))
+    for act, given in (data.get("answers") or {}).items():
+        answers[act] = tuple(Answer(spec.get("reply"), parse_range(spec.get("after", "1s")),
+                                    spec.get("choose"), spec.get("say"))
+                             for spec in (given if isinstance(given, list) else [given]))
     distractions = []
     for spec in data.get("distractions") or []:
         when = spec.get("when", {})

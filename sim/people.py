@@ -74,6 +74,8 @@ class Person:
         self._pending: list[tuple[Any, str, Any]] = []
         self._current_step: Any = None
         self._open: list[_Logged] = []
+        self._answered: dict[str, int] = {}
+        """Act -> how many times the person was asked it (which answer comes next)."""
         self._action_ids = 0
 
     # -- start -------------------------------------------------------------------
@@ -139,8 +141,12 @@ class Person:
         """An act began in a task; answer it once the robot has said it (or soon)."""
         if agent == self.name or self.name not in run.roles.values():
             return
-        answer = self.profile.answers.get(state.act)
-        if answer is None or answer.reply is None:
+        answers = self.profile.answers.get(state.act)
+        if not answers:
+            return
+        count = self._answered[state.act] = self._answered.get(state.act, 0) + 1
+        answer = answers[min(count, len(answers)) - 1]
+        if answer.reply is None and answer.words is None:
             return
         pending = (run, state.act, answer)
         self._pending.append(pending)
@@ -169,6 +175,9 @@ class Person:
             return
         reply = answer.reply
         data: dict[str, Any] | None = None
+        if reply is None:  # words alone: a sentence the robot reads
+            self.tell(None, None, {}, answer.words)
+            return
         if answer.words is not None:
             self.say(self.name, answer.words)
             data = {"text": answer.words}

@@ -257,7 +257,8 @@ class _Run:
             # its own kind too ("coffee-table" is a CoffeeTable): what people call it
             facts.add(furniture, "type", "".join(
                 w.title() for w in furniture.split("-") if not w.isdigit()))
-            facts.add(furniture, "place", MANIPULATION_PLACES.get(furniture, "base"))
+            if furniture in MANIPULATION_PLACES:  # the others the robot cannot reach
+                facts.add(furniture, "place", MANIPULATION_PLACES[furniture])
             facts.add(furniture, "container", furniture in CONTAINERS)
             facts.add(furniture, "seat", furniture in SEATS)
         for obj in BOTTLES:

@@ -28,7 +28,7 @@ import itertools
 from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
-from shary.dialogue import attention, disambiguation, say, sessions
+from shary.dialogue import attention, disambiguation, negotiation, say, sessions
 from shary.dialogue.disambiguation import Question
 from shary.dialogue.reg import PerspectiveIndex
 from shary.dialogue.requests import Grammar, Query, Request, Resolution, resolve
@@ -40,7 +40,9 @@ if TYPE_CHECKING:
     from shary.supervisor import Supervisor, TaskRun
 
 REQUESTED_SCHEME = "task-requested"
-"""The H-initiated variant every task runs with when a person asked for it."""
+"""The H-initiated variant a task runs with when a person asked for it."""
+PLAN_REQUESTED_SCHEME = "plan-requested"
+"""The H-initiated variant with plan negotiation, for a task planned by the planner."""
 DISAMBIGUATE_TASK = "disambiguate"
 
 
@@ -51,8 +53,9 @@ class Initiative:
         self.sup = sup
         self.questions: dict[str, Question] = {}
         self._ids = itertools.count(1)
-        self._requested: Scheme | None = None
+        self._requested: dict[str, Scheme] = {}
         self._grammar: Grammar | None = None
+        self._ontology: Any = None
         self.sessions: Any = None
         """The interaction sessions, when the robot keeps them
         (:class:`~shary.dialogue.sessions.Sessions`)."""
@@ -62,16 +65,24 @@ class Initiative:
         sup.functions.setdefault("ask-which", disambiguation.ask_which)
         sup.functions.setdefault("understand-which", disambiguation.understand_which)
         sup.functions.setdefault("farewell", sessions.farewell)
+        sup.functions.setdefault("propose-plan", negotiation.propose_plan)
+        sup.functions.setdefault("modify-plan", negotiation.modify_plan)
 
     # -- what people say -------------------------------------------------------------
 
-    def grammar(self) -> Grammar:
-        """The requests' grammar, from the action ontology (read once, on first use)."""
-        if self._grammar is None:
+    def ontology(self) -> Any:
+        """The action ontology (its labels say actions in words; read once, on first use)."""
+        if self._ontology is None:
             from shary.facts import FactDatabase
             from shary.recognition.ontology import load_action_ontology
 
-            self._grammar = Grammar.from_ontology(load_action_ontology(FactDatabase()))
+            self._ontology = load_action_ontology(FactDatabase())
+        return self._ontology
+
+    def grammar(self) -> Grammar:
+        """The requests' grammar, from the action ontology's labels."""
+        if self._grammar is None:
+            self._grammar = Grammar.from_ontology(self.ontology())
         return self._grammar
 
     def hear(self, agent: str, sentence: str) -> None:
@@ -89,9 +100,12 @@ class Initiative:
             attention.tell(sup, agent, understood.problem or "Sorry, I did not understand.")
             return
         request = understood.request
-        act = "ASK-TASK" if request.kind == "request" else "MODIFY-PLAN"
-        sup.receive_act(agent, act, {"task": request.action, "request": request,
-                                     "text": sentence})
+        if request.kind == "request":
+            sup.receive_act(agent, "ASK-TASK", {"task": request.action, "request": request,
+                                                "text": sentence})
+        else:  # "I'll take the bottle myself": a step of a plan taken on
+            sup.receive_act(agent, "MODIFY-PLAN", {"step": request.action, "request": request,
+                                                   "text": sentence})
 
     # -- acts ----------------------------------------------------------------------
 
@@ -109,15 +123,21 @@ class Initiative:
             return True
         if act == "CANCEL":
             return self.cancel(agent, data.get("task"))
+        if act == "MODIFY-PLAN":
+            return self.modify(agent, data)
         return False
 
-    def requested_scheme(self) -> Scheme:
-        """The H-initiated variant (loaded once, with the library's acts)."""
-        if self._requested is None:
+    def requested_scheme(self, task: str) -> Scheme:
+        """The H-initiated variant of ``task``: with plan negotiation when the task's
+        plan comes from the planner (``plan-requested``), else ``task-requested``."""
+        planned = any(r.plan is not None
+                      for r in self.sup.library.recipes_for(task, negotiation.REALIZE))
+        name = PLAN_REQUESTED_SCHEME if planned else REQUESTED_SCHEME
+        if name not in self._requested:
             from shary.io.schemes import load_scheme
 
-            self._requested = load_scheme(REQUESTED_SCHEME, acts=self.sup.library.acts)
-        return self._requested
+            self._requested[name] = load_scheme(name, acts=self.sup.library.acts)
+        return self._requested[name]
 
     def pursue(self, agent: str, request: Request) -> None:
         """A person asked for a task: resolve what they described; none -> say so,
@@ -141,8 +161,8 @@ class Initiative:
             return
         args = {}
         for role, thing in resolution.bindings.items():
-            param = role.lower()
-            if param in task_type.params:
+            param = self._param(request.action, role, task_type.params)
+            if param is not None:
                 args[param] = thing
         for role, term in task_type.roles.items():
             if (term.kind == "param" and term.value not in args and role != ROBOT_PARAM
@@ -155,8 +175,22 @@ class Initiative:
             attention.tell(sup, agent, "Sorry, I did not understand all of it.")
             return
         goal = sup.agenda.add(request.action, args, source=f"request:{agent}",
-                              scheme=self.requested_scheme(), initiator=agent)
+                              scheme=self.requested_scheme(request.action), initiator=agent)
         sup.record("request-accepted", agent=agent, name=request.action, goal=goal.id)
+
+    def _param(self, action: str, role: str, params: tuple[str, ...]) -> str | None:
+        """The task parameter a role of a request fills: the same name, else the one at
+        the role's place in the action ontology (``{Agent} @Clean up {Place}``: the
+        first parameter); None for the agent."""
+        if role.lower() in params:
+            return role.lower()
+        if role != "Agent":
+            ontology = self.ontology()
+            cls = ontology.action_class(action)
+            for parameter in ontology.parameters(cls) if cls else ():
+                if parameter.role == role and parameter.position - 1 < len(params):
+                    return params[parameter.position - 1]
+        return None
 
     def _ask_which(self, agent: str, request: Request, resolution: Resolution) -> None:
         role = str(resolution.role)
@@ -177,16 +211,33 @@ class Initiative:
                         candidates=list(q.resolution.candidates))
         q.then(q)
 
+    def _goal_of(self, agent: str, task: Any) -> Goal | None:
+        """The person's goal (the named task, or their latest) that is not over."""
+        return next((g for g in reversed(self.sup.agenda.goals)
+                     if g.state in ("pending", "active", "suspended")
+                     and (task is None or g.task == task)
+                     and (g.initiator == agent or agent in map(str, g.args.values()))), None)
+
+    def modify(self, agent: str, data: dict[str, Any]) -> bool:
+        """A step taken on while no proposal is pending: the running task plans again."""
+        goal = self._goal_of(agent, None)
+        run = goal.run if goal is not None else None
+        if run is None or run.ended:
+            attention.tell(self.sup, agent, "Sorry, I am not doing anything I could change.")
+            return True
+        assignment = negotiation.assignment_of(run, {"agent": agent, "data": data})
+        if assignment is None:
+            attention.tell(self.sup, agent, "Sorry, I did not understand what to change.")
+            return True
+        negotiation.constrain_running(run, assignment)
+        return True
+
     def cancel(self, agent: str, task: Any) -> bool:
         """Stop the person's task (the named one, or their latest)."""
         sup = self.sup
-        goals = [g for g in reversed(sup.agenda.goals)
-                 if g.state in ("pending", "active", "suspended")
-                 and (task is None or g.task == task)
-                 and (g.initiator == agent or agent in map(str, g.args.values()))]
-        if not goals:
+        goal = self._goal_of(agent, task)
+        if goal is None:
             return False
-        goal: Goal = goals[0]
         run = goal.run
         if run is not None and not run.ended and run.expects("CANCEL"):
             run.deliver("CANCEL", {"agent": agent})
