@@ -69,6 +69,7 @@ class Sessions:
             for p in (NEAR, ATTENDS, AT)]
         sup.agenda.admits.append(self.admits)
         sup.agenda.watchers.append(self._goal)
+        sup.act_listeners.append(self._act)
         sup.dialogue.sessions = self
 
     def close(self) -> None:
@@ -174,9 +175,19 @@ class Sessions:
             people.add(goal.initiator)
         return people
 
+    def is_open(self, person: str) -> bool:
+        """Whether a session with ``person`` is open and past its greeting."""
+        run = self.open.get(person)
+        return run is not None and not run.ended and run.instance is not None \
+            and run.instance.is_active("open")
+
     def admits(self, goal: Goal) -> bool:
         """The agenda's gate: every person of the goal is in an open session."""
-        return all(p in self.open and not self.open[p].ended for p in self.involved(goal))
+        return all(self.is_open(p) for p in self.involved(goal))
+
+    def _act(self, run: TaskRun, state: Any, agent: str) -> None:
+        if run.type.name == SESSION_TASK and state.act == "INTERACT":
+            self.sup.agenda.reconsider()  # greeted: what waited for the session may start
 
     def _goal(self, what: str, goal: Goal) -> None:
         event = "task-started" if what == "started" else "task-over"
