@@ -87,3 +87,13 @@ def test_unbound_parameters_and_unknown_acts_are_refused():
     with pytest.raises(ValueError, match="unknown communicative act 'boast'"):
         verbalize(PLACE, {"Agent": "jido", "Pickable": "c", "Support": "s"}, "boast",
                   speaker="jido")
+
+
+def test_a_pronoun_recipient_comes_first():
+    label = "{Agent} @Give {Object} to {Partner}"
+    assert say("propose", label=label, Object="yellow-bottle", Partner="alice") == \
+        "Shall I give you the yellow bottle?"
+    assert say("question", "alice", label=label, Object="cup", Partner="jido") == \
+        "Can you give me the cup?"
+    assert say("inform-done", label=label, Object="cup", Partner="bob") == \
+        "I gave the cup to Bob."

@@ -55,7 +55,6 @@ class Initiative:
         self._ids = itertools.count(1)
         self._requested: dict[str, Scheme] = {}
         self._grammar: Grammar | None = None
-        self._ontology: Any = None
         self.sessions: Any = None
         """The interaction sessions, when the robot keeps them
         (:class:`~shary.dialogue.sessions.Sessions`)."""
@@ -71,13 +70,10 @@ class Initiative:
     # -- what people say -------------------------------------------------------------
 
     def ontology(self) -> Any:
-        """The action ontology (its labels say actions in words; read once, on first use)."""
-        if self._ontology is None:
-            from shary.facts import FactDatabase
-            from shary.recognition.ontology import load_action_ontology
+        """The action ontology: the one the robot's speech uses (read once)."""
+        from shary.dialogue.speech import _ontology
 
-            self._ontology = load_action_ontology(FactDatabase())
-        return self._ontology
+        return self.sup.speech.ontology or _ontology()
 
     def grammar(self) -> Grammar:
         """The requests' grammar, from the action ontology's labels."""

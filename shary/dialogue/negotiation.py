@@ -22,8 +22,6 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 from shary.dialogue import say
-from shary.dialogue.reg import Referrer
-from shary.dialogue.verbalize import humanize, verbalize
 from shary.recipes import Recipe, Step
 
 if TYPE_CHECKING:
@@ -46,35 +44,28 @@ def _ontology(run: TaskRun) -> Any:
 
 
 def _phrases(run: TaskRun, steps: list[Step], partner: str | None) -> list[tuple[str, str]]:
-    """(performer, sentence) per step, in the partner's words ("I will pick …")."""
+    """(performer, sentence) per step, in the partner's words ("I will pick …"): each
+    step's action or task with its arguments in the ontology's order of parameters, said
+    by the robot's speech (:mod:`shary.dialogue.speech`)."""
     sup, ontology = run.sup, _ontology(run)
-    referrer = Referrer.for_perspective(sup.facts, "robot")
-
-    def refer(thing: str) -> str:
-        # a place of the robot's roadmap has a name of its own: "the coffee area"
-        if sup.facts.holds(thing, "type", "Place"):
-            return "the " + humanize(thing)
-        return referrer.text(thing)
-    people = {str(s) for s, p, o in sup.facts.triples("robot")
-              if str(p) == "type" and str(o) in ("Human", "Robot")}
     said = []
     for step in steps:
         name = step.atomic or step.task or step.name
         cls = ontology.action_class(name)
-        label = ontology.label(cls) if cls else None
-        performer = str(step.by.resolve(run.env)) if step.by is not None else run.robot
         kind = sup.library.atomic.get(name) or sup.library.tasks.get(name)
-        if not label or kind is None:
+        if cls is None or kind is None:
             continue
-        params = [p for p in kind.params]
-        bindings: dict[str, Any] = {"Agent": performer}
+        performer = str(step.by.resolve(run.env)) if step.by is not None else run.robot
+        values = [performer]
         for parameter in ontology.parameters(cls):
-            if parameter.position - 1 < len(params):
-                value = step.args.get(params[parameter.position - 1])
-                bindings[parameter.role] = value.resolve(run.env) if value is not None else None
+            position = parameter.position - 1
+            term = step.args.get(kind.params[position]) if position < len(kind.params) else None
+            values.append(str(term.resolve(run.env)) if term is not None else "")
+        if "" in values:
+            continue
         try:
-            sentence = verbalize(label, bindings, "inform-planned", speaker=run.robot,
-                                 addressee=partner, agents=people, refer=refer)
+            sentence = sup.speech.say({"act": "inform-planned", "to": partner or "_",
+                                       "about": f"{name}({', '.join(values)})"}, run.robot)
         except ValueError:
             continue
         said.append((performer, sentence))

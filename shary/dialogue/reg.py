@@ -178,14 +178,19 @@ class Referrer:
 
     # -- words -----------------------------------------------------------------------------------
 
+    def _kind(self, types: set[str]) -> str:
+        """The most specific of a thing's types: the one fewest things have (a Bottle
+        rather than an Object)."""
+        having = self.index.having["type"]
+        return min(types, key=lambda t: (len(having[t]), t))
+
     def noun(self, thing: str) -> str:
         """The head noun: the type's label, or the type's name in words ("coffee table")."""
-        having = self.index.having.get("type", {})
-        types = sorted(self.index.values.get(thing, {}).get("type", ()),
-                       key=lambda t: (len(having.get(t, ())), t))  # the most specific first
+        types = self.index.values.get(thing, {}).get("type")
         if not types:
             return "thing"
-        return self.index.labels.get(types[0], humanize(types[0]))
+        kind = self._kind(types)
+        return self.index.labels.get(kind, humanize(kind))
 
     def is_agent(self, thing: str) -> bool:
         return bool(self.index.values.get(thing, {}).get("type", set()) & AGENT_TYPES)
@@ -197,13 +202,16 @@ class Referrer:
     # -- the algorithm ---------------------------------------------------------------------------
 
     def describe(self, target: str, context: Iterable[str] | None = None,
-                 given: Iterable[tuple[str, str]] = ()) -> Description:
+                 given: Iterable[tuple[str, str]] = (), by_name: bool = False) -> Description:
         """The description of ``target`` that rules out every other thing of ``context``
         (every entity of the perspective, unless given).
 
         ``given`` are (attribute, value) pairs to say anyway (what the person
         already said: "the green cube on the table" rather than "the cube on
-        the table").  Returns a pointing description when nothing else works.
+        the table").  Returns a pointing description when nothing else works,
+        or, with ``by_name``, the thing's identifier in words ("the coffee
+        table" for ``coffee-table``), unique as identifiers are, for a speaker
+        who cannot point.
         """
         index = self.index
         if self.is_agent(target):
@@ -215,6 +223,8 @@ class Referrer:
         if found is not None and self.denotes(found, scope) == {target}:
             return replace(found, given=tuple(a for a in found.attributes
                                               if said.get(a[0]) == a[1]))
+        if by_name:
+            return Description(target, self.noun(target), name="the " + humanize(target))
         return Description(target, self.noun(target), pointing=True)
 
     def _describe(self, target: str, scope: set[str] | None, given: dict[str, str],
@@ -224,7 +234,7 @@ class Referrer:
         types = values.get("type")
         if not types:
             return None
-        kind = min(types, key=lambda t: (len(index.having["type"][t]), t))  # most specific
+        kind = self._kind(types)
         distractors = set(index.having["type"][kind])
         if scope is not None:
             distractors &= scope

@@ -13,6 +13,7 @@ act                sentence (the robot speaks to Alice)
 ``inform-ongoing`` I am placing the blue cube on the stick.
 ``inform-planned`` I will place … / You will place …
 ``inform-failed``  I could not place …
+``inform-dropped`` I will not place … (a task given up or refused)
 ``request``        Please place the blue cube on the stick.
 ``question``       Can you place the blue cube on the stick?
 ``ask-done``       Did you place the blue cube on the stick?
@@ -40,11 +41,9 @@ import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
-from lemminflect import getInflection
-
 __all__ = ["ACTS", "Label", "Verbalizer", "conjugate", "humanize", "verbalize"]
 
-ACTS = ("inform-done", "inform-ongoing", "inform-planned", "inform-failed",
+ACTS = ("inform-done", "inform-ongoing", "inform-planned", "inform-failed", "inform-dropped",
         "request", "question", "ask-done", "propose")
 """The communicative acts a sentence can carry out (see the module's table)."""
 
@@ -119,6 +118,10 @@ def conjugate(verb: str, form: str, person: int = 3) -> str:
     elif form == "VB":
         word = head
     else:
+        # Imported when first needed: lemminflect costs about 0.2 s to import and
+        # 0.6 s to load its tables, which a run that never speaks need not pay.
+        from lemminflect import getInflection
+
         found = getInflection(head, form)
         # lemminflect lists the regular form last for verbs with two ("lay", "lied"):
         # its first is the usual one.
@@ -177,8 +180,9 @@ def verbalize(label: str | Label, bindings: Mapping[str, object], act: str, *,
     person = 1 if agent == speaker else 2 if agent == addressee else 3
     subject = name(agent, True)
     verb = next(v for k, v in parsed.parts if k == "verb")
-    tail = " ".join(name(values[v.lower()], False) if k == "slot" else v
-                    for k, v in parsed.parts if k != "verb")
+    rest = [(k, name(values[v.lower()], False) if k == "slot" else v)
+            for k, v in parsed.parts if k != "verb"]
+    tail = " ".join(_dative_shift(verb, rest))
 
     def phrase(form: str) -> str:
         return " ".join(w for w in (conjugate(verb, form, person), tail) if w)
@@ -191,6 +195,8 @@ def verbalize(label: str | Label, bindings: Mapping[str, object], act: str, *,
         sentence = f"{subject} will {phrase('VB')}."
     elif act == "inform-failed":
         sentence = f"{subject} could not {phrase('VB')}."
+    elif act == "inform-dropped":
+        sentence = f"{subject} will not {phrase('VB')}."
     elif act == "request":
         sentence = f"Please {phrase('VB')}." if person == 2 else \
             f"Please let {name(agent, False)} {phrase('VB')}."
@@ -203,6 +209,18 @@ def verbalize(label: str | Label, bindings: Mapping[str, object], act: str, *,
     else:
         sentence = f"Shall {subject} {phrase('VB')}?"
     return sentence[:1].upper() + sentence[1:]
+
+
+_DATIVE_VERBS = frozenset({"give", "hand", "bring", "pass", "show", "send", "offer", "lend"})
+
+
+def _dative_shift(verb: str, rest: list[tuple[str, str]]) -> list[str]:
+    """English puts a pronoun recipient first: "give you the bottle", not "give the bottle
+    to you" (the label's "@Give {Object} to {Partner}" reads both ways)."""
+    if verb in _DATIVE_VERBS and len(rest) == 3 and rest[0][0] == "slot" \
+            and rest[1] == ("word", "to") and rest[2][1] in ("me", "you"):
+        return [rest[2][1], rest[0][1]]
+    return [text for _, text in rest]
 
 
 class Verbalizer:
