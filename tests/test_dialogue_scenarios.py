@@ -24,7 +24,7 @@ def test_shary_run_request_ambiguous_cube_tells_the_question_and_the_hand_over(t
     assert story.index(question) < story.index("The one on the store table.")
     assert "All right, the green cube on the store table." in story
     assert "give green-cube to alice" in story
-    assert "Here is the green cube." in story
+    assert "I gave you the green cube." in story
     assert "PASSED request-ambiguous-cube" in story
 
 

@@ -216,16 +216,16 @@ class Initiative:
 
     def modify(self, agent: str, data: dict[str, Any]) -> bool:
         """A step taken on while no proposal is pending: the running task plans again."""
-        goal = self._goal_of(agent, None)
+        goal = self._goal_of(agent, None) or self.sup.agenda.active  # or the robot's own
         run = goal.run if goal is not None else None
         if run is None or run.ended:
             attention.tell(self.sup, agent, "Sorry, I am not doing anything I could change.")
             return True
-        assignment = negotiation.assignment_of(run, {"agent": agent, "data": data})
-        if assignment is None:
+        found = negotiation.assignment_of(run, {"agent": agent, "data": data})
+        if found is None:
             attention.tell(self.sup, agent, "Sorry, I did not understand what to change.")
             return True
-        negotiation.constrain_running(run, assignment)
+        negotiation.constrain_running(run, found[0])
         return True
 
     def cancel(self, agent: str, task: Any) -> bool:

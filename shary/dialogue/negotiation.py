@@ -116,9 +116,11 @@ def propose_plan(run: TaskRun, recipe: Recipe) -> list[Step]:
                 else "I have a plan. Is that all right?")]
 
 
-def assignment_of(run: TaskRun, heard: Any) -> Any:
-    """The assignment a person's MODIFY-PLAN carries (a constraint
-    :class:`~shary.dialogue.requests.Request`, resolved), or None."""
+def assignment_of(run: TaskRun, heard: Any) -> tuple[Taken, str] | None:
+    """The step a person's MODIFY-PLAN takes on (a constraint
+    :class:`~shary.dialogue.requests.Request`, resolved), and that step in words
+    ("you will pick the orange bottle"); None when it names nothing or no action of
+    the task's planning domain."""
     from shary.dialogue.reg import PerspectiveIndex
     from shary.dialogue.requests import Request, resolve
 
@@ -129,10 +131,18 @@ def assignment_of(run: TaskRun, heard: Any) -> Any:
     resolution = resolve(request, PerspectiveIndex.from_facts(run.sup.facts, "robot"))
     if resolution.status != "one":
         return None
-    agent = resolution.bindings.get("Agent", request.agent)
-    things = tuple(sorted(v for r, v in resolution.bindings.items() if r != "Agent"))
+    agent = str(resolution.bindings.get("Agent", request.agent))
+    values = [str(resolution.bindings[r]) for r in request.roles if r != "Agent"]
     action = _domain_action(run, request.action)
-    return Taken(action, things, str(agent)) if action else None
+    if action is None:
+        return None
+    try:
+        words = run.sup.speech.say({"act": "inform-planned", "to": agent,
+                                    "about": f"{request.action}({agent}, {', '.join(values)})"},
+                                   run.robot)
+    except ValueError:
+        words = ""
+    return Taken(action, tuple(sorted(values)), agent), words
 
 
 def _domain_action(run: TaskRun, name: str) -> str | None:
@@ -149,14 +159,15 @@ def _domain_action(run: TaskRun, name: str) -> str | None:
 
 def modify_plan(run: TaskRun, recipe: Recipe) -> list[Step]:
     """MODIFY-PLAN: keep the person's step as an assignment, and say so."""
-    heard = run.entered_data.get("MODIFY-PLAN")
-    assignment = assignment_of(run, heard)
-    if assignment is None:
+    found = assignment_of(run, run.entered_data.get("MODIFY-PLAN"))
+    if found is None:
         return [say("unclear", "Sorry, I did not understand what you want to change.")]
+    assignment, words = found
     run.assigned.append(assignment)
     run.sup.record("plan-assigned", task=run.node, agent=assignment.agent,
                    action=assignment.action, things=list(assignment.things))
-    return [say("noted", "All right, I will plan with that.")]
+    return [say("noted", f"All right: {words[:1].lower()}{words[1:]} I will plan again."
+                if words else "All right, I will plan again.")]
 
 
 def constrain_running(run: TaskRun, assignment: Any) -> None:
