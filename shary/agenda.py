@@ -24,7 +24,7 @@ import itertools
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from shary.recipes import Chronicle, ChronicleEvent
+from shary.recipes import Chronicle, ChronicleAll, ChronicleEvent
 
 if TYPE_CHECKING:
     from shary.supervisor import Supervisor, TaskRun
@@ -175,17 +175,32 @@ class TaskAgenda:
 
 @dataclass(eq=False)
 class _Partial:
-    """A chronicle recognized up to some event, with its variable bindings."""
+    """A chronicle recognized up to some step, with its variable bindings.
+
+    ``index`` is the step waited for; ``time`` when the step before it was over.
+    In a step of several events (:class:`~shary.recipes.ChronicleAll`), ``done``
+    are the events of it seen so far, the first of them at ``first``.
+    """
 
     chronicle: Chronicle
     index: int
     bindings: dict[str, Any]
     time: float
     timer: Any = None
+    done: frozenset[int] = frozenset()
+    first: float | None = None
+
+
+def _members(step: ChronicleEvent | ChronicleAll) -> tuple[ChronicleEvent, ...]:
+    return step.events if isinstance(step, ChronicleAll) else (step,)
 
 
 class ChronicleRecognizer:
-    """Recognizes the library's chronicles in fact events and adds their goals."""
+    """Recognizes the library's chronicles in fact events and adds their goals.
+
+    A chronicle is a sequence of steps; a step is one fact event, or several in
+    any order (``all:``, a partially ordered conjunction: "comes near the robot"
+    and "looks at it", whichever first)."""
 
     def __init__(self, sup: Supervisor, perspective: str = "robot"):
         self.sup = sup
@@ -193,7 +208,8 @@ class ChronicleRecognizer:
         self.partials: list[_Partial] = []
         self.fired: set[tuple] = set()
         predicates = sorted({str(e.pattern.predicate.value)
-                             for c in sup.library.chronicles.values() for e in c.events})
+                             for c in sup.library.chronicles.values() for step in c.events
+                             for e in _members(step)})
         self.subscriptions = [sup.facts.subscribe(self._on_fact, predicate=p,
                                                   perspective=perspective)
                               for p in predicates]
@@ -213,34 +229,75 @@ class ChronicleRecognizer:
         for partial in list(self.partials):
             if partial.timer is not None:
                 stayed = partial.chronicle.events[partial.index - 1]
+                assert isinstance(stayed, ChronicleEvent)
                 if self._breaks(stayed, partial.bindings, event.kind, fact):
                     partial.timer.cancel()
                     self.partials.remove(partial)
                 continue
-            expected = partial.chronicle.events[partial.index]
-            bindings = self._match(expected, event.kind, fact, partial.bindings)
+            step = partial.chronicle.events[partial.index]
+            if isinstance(step, ChronicleAll):
+                if (step.within is not None and partial.first is not None
+                        and now - partial.first > step.within):
+                    self.partials.remove(partial)  # the rest came too late
+                    continue
+                found = self._member(step, partial, event.kind, fact, now)
+                if found is not None:
+                    self.partials.remove(partial)
+                    advanced.append(found)
+                continue
+            bindings = self._match(step, event.kind, fact, partial.bindings)
             if bindings is None:
                 continue
             elapsed = now - partial.time
-            if expected.within is not None and elapsed > expected.within:
+            if step.within is not None and elapsed > step.within:
                 self.partials.remove(partial)
                 continue
-            if expected.after is not None and elapsed < expected.after:
+            if step.after is not None and elapsed < step.after:
                 continue
             self.partials.remove(partial)
             advanced.append(_Partial(partial.chronicle, partial.index + 1, bindings, now))
         for chronicle in self.sup.library.chronicles.values():
-            bindings = self._match(chronicle.events[0], event.kind, fact, {})
+            first = chronicle.events[0]
+            if isinstance(first, ChronicleAll):
+                found = self._member(first, _Partial(chronicle, 0, {}, now), event.kind, fact,
+                                     now)
+                if found is not None:
+                    advanced.append(found)
+                continue
+            bindings = self._match(first, event.kind, fact, {})
             if bindings is not None:
                 advanced.append(_Partial(chronicle, 1, bindings, now))
         for partial in advanced:
             self._progress(partial)
 
+    def _member(self, step: ChronicleAll, partial: _Partial, kind: str, fact: tuple,
+                now: float) -> _Partial | None:
+        """The partial once one more event of ``step`` is seen (None: none fits); when
+        it is the last, the next step is waited for."""
+        if partial.first is None and step.after is not None and now - partial.time < step.after:
+            return None
+        for i, member in enumerate(step.events):
+            if i in partial.done:
+                continue
+            bindings = self._match(member, kind, fact, partial.bindings)
+            if bindings is None:
+                continue
+            done = partial.done | {i}
+            if len(done) == len(step.events):
+                return _Partial(partial.chronicle, partial.index + 1, bindings, now)
+            return _Partial(partial.chronicle, partial.index, bindings, partial.time,
+                            done=done, first=partial.first if partial.first is not None
+                            else now)
+        return None
+
     def _progress(self, partial: _Partial) -> None:
-        done_event = partial.chronicle.events[partial.index - 1]
-        if done_event.stays is not None:
+        if partial.done:  # a step of several events, some still to come
             self.partials.append(partial)
-            partial.timer = self.sup.loop.call_later(done_event.stays, self._stayed, partial)
+            return
+        done_step = partial.chronicle.events[partial.index - 1]
+        if isinstance(done_step, ChronicleEvent) and done_step.stays is not None:
+            self.partials.append(partial)
+            partial.timer = self.sup.loop.call_later(done_step.stays, self._stayed, partial)
             return
         if partial.index == len(partial.chronicle.events):
             self._fire(partial)
