@@ -21,6 +21,7 @@ their goals on the agenda, as the robot's own initiative.
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -202,13 +203,20 @@ class ChronicleRecognizer:
     any order (``all:``, a partially ordered conjunction: "comes near the robot"
     and "looks at it", whichever first)."""
 
-    def __init__(self, sup: Supervisor, perspective: str = "robot"):
+    def __init__(self, sup: Supervisor, perspective: str = "robot",
+                 chronicles: dict[str, Chronicle] | None = None,
+                 recognized: Callable[[Chronicle, dict[str, Any]], Any] | None = None):
+        """``chronicles`` default to the library's; ``recognized(chronicle, args)``,
+        when given, is called instead of adding the chronicle's goal (the sessions
+        open a session on the will to interact)."""
         self.sup = sup
         self.perspective = perspective
+        self.chronicles = sup.library.chronicles if chronicles is None else chronicles
+        self.recognized = recognized
         self.partials: list[_Partial] = []
         self.fired: set[tuple] = set()
         predicates = sorted({str(e.pattern.predicate.value)
-                             for c in sup.library.chronicles.values() for step in c.events
+                             for c in self.chronicles.values() for step in c.events
                              for e in _members(step)})
         self.subscriptions = [sup.facts.subscribe(self._on_fact, predicate=p,
                                                   perspective=perspective)
@@ -256,7 +264,7 @@ class ChronicleRecognizer:
                 continue
             self.partials.remove(partial)
             advanced.append(_Partial(partial.chronicle, partial.index + 1, bindings, now))
-        for chronicle in self.sup.library.chronicles.values():
+        for chronicle in self.chronicles.values():
             first = chronicle.events[0]
             if isinstance(first, ChronicleAll):
                 found = self._member(first, _Partial(chronicle, 0, {}, now), event.kind, fact,
@@ -318,6 +326,9 @@ class ChronicleRecognizer:
         args = {k: t.resolve(partial.bindings) for k, t in chronicle.args.items()}
         key = (chronicle.name, tuple(sorted((k, str(v)) for k, v in partial.bindings.items())))
         self.sup.record("chronicle", chronicle=chronicle.name, bindings=partial.bindings)
+        if self.recognized is not None:
+            self.recognized(chronicle, args)
+            return
         if key in self.fired and any(g.state not in OVER and g.key == _key(
                 chronicle.task, args) for g in self.sup.agenda.goals):
             return

@@ -6,10 +6,11 @@ as long as the interaction, and is not work left to do).  :class:`Sessions`
 opens and closes them from the robot's perception:
 
 - **the will to interact** opens one: the person comes near the robot
-  (``PERSON isNear ROBOT``) and looks at it (``PERSON looksAt ROBOT``), both
-  facts holding, added in either order within :attr:`Sessions.within`
-  seconds of each other (a partially ordered conjunction of two events, not
-  a sequence); the robot greets them;
+  (``PERSON isNear ROBOT``) and looks at it (``PERSON looksAt ROBOT``), the
+  two added in either order within :attr:`Sessions.within` seconds (the
+  chronicle :func:`will_to_interact`, a partially ordered conjunction,
+  recognized by a :class:`~shary.agenda.ChronicleRecognizer` of its own);
+  the robot greets them;
 - **leaving** closes it: the robot perceives the person no more (no fact of
   where they are, ``isAt``, nor of where they look, ``looksAt``) for
   :attr:`Sessions.leave_after` seconds; the robot says goodbye.  Looking away,
@@ -29,10 +30,11 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+from shary.agenda import ChronicleRecognizer
 from shary.dialogue import say
 from shary.dialogue.attention import ATTENDS, attending
 from shary.dialogue.verbalize import humanize
-from shary.recipes import Recipe, Step
+from shary.recipes import Chronicle, ChronicleAll, ChronicleEvent, Pattern, Recipe, Step, Term
 
 if TYPE_CHECKING:
     from shary.agenda import Goal
@@ -41,6 +43,20 @@ if TYPE_CHECKING:
 SESSION_TASK = "session"
 NEAR = "isNear"
 AT = "isAt"
+
+
+def will_to_interact(robot: str, within: float) -> Chronicle:
+    """The chronicle of the will to interact: a person comes near ``robot`` and looks at
+    it, in either order, within ``within`` seconds (a partially ordered conjunction)."""
+    def added(predicate: str) -> ChronicleEvent:
+        return ChronicleEvent("added", Pattern(Term("param", "person"),
+                                               Term("const", predicate),
+                                               Term("const", robot)))
+
+    return Chronicle("will-to-interact", (ChronicleAll((added(NEAR), added(ATTENDS)),
+                                                      within),),
+                     SESSION_TASK, {"partner": Term("param", "person")},
+                     doc="a person comes near the robot and looks at it, in either order")
 
 
 def proper(name: str) -> str:
@@ -59,14 +75,12 @@ class Sessions:
         self.perspective = perspective
         self.open: dict[str, TaskRun] = {}
         """Person -> their session's task run, while it is open (farewell included)."""
-        self._since: dict[tuple[str, str], float] = {}
-        """(person, near|looks) -> when that fact was last added (while it holds)."""
         self._leaving: dict[str, Any] = {}
-        self.started = False
-        """Sessions open on the will to interact only once :meth:`start` has run."""
         self.subscriptions = [
             sup.facts.subscribe(self._on_fact, predicate=p, perspective=perspective)
-            for p in (NEAR, ATTENDS, AT)]
+            for p in (ATTENDS, AT)]
+        self.chronicle = will_to_interact(sup.robot, within)
+        self.recognizer: ChronicleRecognizer | None = None
         sup.agenda.admits.append(self.admits)
         sup.agenda.watchers.append(self._goal)
         sup.act_listeners.append(self._act)
@@ -76,6 +90,8 @@ class Sessions:
         """Stop watching (sessions that are open stay open)."""
         for subscription in self.subscriptions:
             self.sup.facts.unsubscribe(subscription)
+        if self.recognizer is not None:
+            self.recognizer.close()
         for timer in self._leaving.values():
             timer.cancel()
         self._leaving.clear()
@@ -96,8 +112,12 @@ class Sessions:
     # -- opening and closing ------------------------------------------------------------
 
     def start(self) -> None:
-        """Open, silently, a session with every person attending to the robot now."""
-        self.started = True
+        """Open, silently, a session with every person attending to the robot now, and
+        watch for the will to interact from now on."""
+        if self.recognizer is None:
+            self.recognizer = ChronicleRecognizer(
+                self.sup, self.perspective, {self.chronicle.name: self.chronicle},
+                self._willing)
         for person in self.people():
             if person not in self.open and attending(self.sup.facts, person, self.sup.robot,
                                                      self.perspective):
@@ -119,9 +139,6 @@ class Sessions:
             del self.open[person]
         self.sup.record("session-close", agent=person)
 
-    def _holds(self, person: str, predicate: str) -> bool:
-        return self.sup.facts.holds(person, predicate, self.sup.robot, self.perspective)
-
     def tracked(self, person: str) -> bool:
         """Whether the robot perceives the person: where they are, or where they look."""
         facts = self.sup.facts
@@ -129,26 +146,17 @@ class Sessions:
                     or facts.objects(person, ATTENDS, self.perspective))
 
     def _on_fact(self, event: Any) -> None:
-        person, predicate = str(event.subject), str(event.predicate)
-        if not self.is_person(person):
-            return
+        person = str(event.subject)
         session = self.open.get(person)
-        if session is not None:
+        if session is not None and self.is_person(person):
             self._watch_leaving(person, session)
-            return
-        if not self.started or str(event.object) != self.sup.robot or predicate == AT:
-            return
-        now = self.sup.loop.now()
-        key = (person, predicate)
-        if event.kind == "added":
-            self._since[key] = now
-        else:
-            self._since.pop(key, None)
-        other = (person, ATTENDS if predicate == NEAR else NEAR)
-        if (event.kind == "added" and self._holds(person, NEAR) and self._holds(person, ATTENDS)
-                and now - self._since.get(other, now) <= self.within):
-            self.sup.record("chronicle", chronicle="will-to-interact",
-                            bindings={"person": person})
+
+    def _willing(self, chronicle: Chronicle, args: dict[str, Any]) -> None:
+        """The will to interact was recognized: open a session, with a greeting."""
+        person, facts, robot = str(args["partner"]), self.sup.facts, self.sup.robot
+        still = (facts.holds(person, NEAR, robot, self.perspective)
+                 and facts.holds(person, ATTENDS, robot, self.perspective))
+        if still and self.is_person(person) and person not in self.open:
             self.begin(person)
 
     def _watch_leaving(self, person: str, session: TaskRun) -> None:
