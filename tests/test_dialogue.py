@@ -197,3 +197,27 @@ def test_taken_steps_reach_the_planner(world):
     for act in run.acts.values():
         act.replan("alice takes on Pick")
     assert seen[-1] == (Taken("Pick", ("bottle",), "alice"),)
+
+
+def test_a_step_taken_on_while_the_task_runs_replans_it(world):
+    from shary.recipes import Step, Term
+
+    seen = []
+
+    class Planner:
+        domain = planner.load_domain("living-room")
+
+        def plan_steps(self, spec, args, facts, assigned=()):
+            seen.append(tuple(assigned))
+            return [Step("go", "navigate", None, {"place": Term("const", "table")}, None, ())]
+
+    world.sup.planners["*"] = Planner()
+    world.executor.durations["navigate"] = 10.0
+    goal = world.sup.agenda.add("clean-up", {"object": "bottle"})
+    world.run(1)
+    world.sup.dialogue.hear("alice", "I'll take the yellow bottle myself")
+    world.run(1)
+    assert seen == [(), (Taken("Pick", ("bottle",), "alice"),)]
+    assert goal.run.assigned == [Taken("Pick", ("bottle",), "alice")]
+    assert ("navigate" in world.executor.names()
+            and world.executor.cancelled[0][1] == "navigate")  # the old plan's step stopped

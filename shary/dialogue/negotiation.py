@@ -148,7 +148,8 @@ def assignment_of(run: TaskRun, heard: Any) -> tuple[Taken, str] | None:
 def _domain_action(run: TaskRun, name: str) -> str | None:
     """The planning domain's action that the ontology calls ``name`` (pick -> Pick)."""
     planned = _planned_recipe(run)
-    planner = run.sup.planners.get(planned.plan.domain) if planned and planned.plan else None
+    planner = (run.sup.planners.get(planned.plan.domain) or run.sup.planners.get("*")
+               if planned and planned.plan else None)
     domain = getattr(planner, "domain", None)
     if domain is None:
         return None
