@@ -84,7 +84,9 @@ def test_the_reading_that_finds_things_wins(grammar, index):
     ("take the unicorn", "I did not understand 'unicorn'."),
     ("the cube", "I did not understand what to do in 'the cube'."),
     ("", "I did not hear a request."),
-    ("take take take", "I did not understand 'take take take'"),
+    ("take take take", "I did not understand what to take in 'take take take'."),
+    ("take the", "I did not understand what to take in 'take the'."),
+    ("put it on the stick", "I do not know what 'it' is"),
 ])
 def test_what_is_not_understood_is_said(grammar, index, sentence, problem):
     found = grammar.parse(sentence, index, speaker="alice", addressee="jido")

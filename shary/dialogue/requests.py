@@ -255,6 +255,11 @@ class Grammar:
         unknown = next((w for w in words if not self._known(w, nps)), None)
         if unknown is not None:
             return Understanding(problem=f"I did not understand '{unknown}'.")
+        if "it" in words and it is None:
+            return Understanding(problem="I do not know what 'it' is; please name the object.")
+        if words[0] in self.verbs:
+            return Understanding(problem=f"I did not understand what to {words[0]} in "
+                                         f"'{sentence.strip()}'.")
         if not any(w in self.verbs or conjugate(w, "VB") in self.verbs for w in words[:2]):
             return Understanding(problem=f"I did not understand what to do in "
                                          f"'{sentence.strip()}'.")
