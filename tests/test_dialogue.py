@@ -63,7 +63,7 @@ def test_inform_calls_the_partner_then_gives_up_without_telling(world):
     world.facts.remove("alice", "looksAt", "jido")
     run = tell(world.sup, "alice", "The bottle is in the trash.")
     world.run(40)
-    assert said(world) == ["Excuse me, alice."]
+    assert said(world) == ["Excuse me, Alice."]
     assert run.outcome == "failed"
 
 
@@ -84,7 +84,7 @@ def test_the_robot_refuses_when_its_hand_is_busy(world):
     world.sup.receive_act("alice", "ASK-TASK", {"task": "give-object",
                                                 "with": {"object": "bottle"}})
     world.run(5)
-    assert said(world) == ["Sorry, I cannot: my hand is busy with the cube-c."]
+    assert said(world) == ["Sorry, I cannot: my hand is busy with the red cube."]
     assert world.sup.agenda.goals[0].run.outcome == "failed"
     assert "pick" not in world.executor.names()
 

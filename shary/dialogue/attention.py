@@ -19,6 +19,9 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
+from shary.dialogue import look, say
+from shary.recipes import Recipe, Step
+
 if TYPE_CHECKING:
     from shary.supervisor import Supervisor, TaskRun
 
@@ -29,6 +32,16 @@ ATTENDS = "looksAt"
 def attending(facts: Any, person: str, robot: str, perspective: str = "robot") -> bool:
     """Whether the robot perceives ``person`` attending to it now."""
     return facts.holds(person, ATTENDS, robot, perspective)
+
+
+def call_attention(run: TaskRun, recipe: Recipe) -> list[Step]:
+    """CALL-ATTENTION: another modality than waiting for a glance: look at the partner
+    and call them by name ("Excuse me, Alice.")."""
+    from shary.dialogue.sessions import proper
+
+    partner = str(run.env["partner"])
+    return [look("look", partner), say("call", f"Excuse me, {proper(partner)}.",
+                                       after=("look",))]
 
 
 def tell(sup: Supervisor, partner: str, text: str,

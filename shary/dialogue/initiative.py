@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Any
 
 from shary.dialogue import attention, disambiguation, negotiation, say, sessions
 from shary.dialogue.disambiguation import Question
-from shary.dialogue.reg import PerspectiveIndex
+from shary.dialogue.reg import PerspectiveIndex, Referrer
 from shary.dialogue.requests import Grammar, Query, Request, Resolution, resolve
 from shary.recipes import ROBOT_PARAM, Recipe, Step, Term
 
@@ -64,6 +64,7 @@ class Initiative:
         sup.functions.setdefault("ask-which", disambiguation.ask_which)
         sup.functions.setdefault("understand-which", disambiguation.understand_which)
         sup.functions.setdefault("farewell", sessions.farewell)
+        sup.functions.setdefault("call-attention", attention.call_attention)
         sup.functions.setdefault("propose-plan", negotiation.propose_plan)
         sup.functions.setdefault("modify-plan", negotiation.modify_plan)
 
@@ -261,7 +262,8 @@ def reply_task(run: TaskRun, recipe: Recipe) -> list[Step]:
     wanted = _task_object(run)
     busy = [o for o in held if o != wanted]
     if busy:
-        return [say("refuse", f"Sorry, I cannot: my hand is busy with the {busy[0]}.",
+        held = Referrer.for_perspective(facts, "robot").describe(busy[0], by_name=True).text()
+        return [say("refuse", f"Sorry, I cannot: my hand is busy with {held}.",
                     emit="R-DISAGREE")]
     return [say("agree", "Yes, I will do that.")]
 
