@@ -68,13 +68,17 @@ class TaskAgenda:
         self.sup = sup
         self.goals: list[Goal] = []
         self._ids = itertools.count(1)
-        self.admits: list[Any] = []
-        """Gates a goal must pass to start (``gate(goal) -> bool``): the interaction
-        sessions' (:mod:`shary.dialogue.sessions`): no task with a person outside
-        a session with them.  A gate that changes its mind calls :meth:`reconsider`."""
-        self.watchers: list[Any] = []
-        """Told ``(what, goal)`` when a goal's task starts (``"started"``) and when the
-        goal is over (``"over"``): a session is busy while a task with its person runs."""
+        self.holds: dict[str, int] = {}
+        """Holder -> priority: while held, goals of lower priority do not run (a robot
+        associated with a person serves only that person's requests, HRI/OS Fig. 7)."""
+        self.listeners: list[Callable[[Goal], Any]] = []
+        """Told when a goal is over (done, failed or cancelled): who delegated it hears
+        back; a session is idle again."""
+        self.admits: list[Callable[[Goal], bool]] = []
+        """Gates a pending goal must pass to start (``gate(goal) -> bool``): the
+        interaction sessions' (:mod:`shary.dialogue.sessions`): no task with a person
+        outside a session with them.  A gate that changes its mind calls
+        :meth:`reconsider`."""
 
     def todo(self, name: str = "default") -> list[Goal]:
         """The goals of one TODO list that are not over, in the order they were added."""
@@ -122,15 +126,33 @@ class TaskAgenda:
             goal.run.cancel(reason)
         self.sup.record("goal-over", task=goal.run.node if goal.run else None, goal=goal.id,
                         name=goal.task, outcome=CANCELLED, reason=reason)
-        self._tell("over", goal)
+        for listener in self.listeners:
+            listener(goal)
         self.sup.loop.call_soon(self._schedule)
 
     def _admitted(self, goal: Goal) -> bool:
         return goal.state != PENDING or all(gate(goal) for gate in self.admits)
 
+    def hold(self, holder: str, priority: int) -> None:
+        """Run only goals of ``priority`` or more until :meth:`release` (the running goal,
+        if lower, is suspended at once)."""
+        self.holds[holder] = priority
+        self.sup.record("agenda-hold", holder=holder, priority=priority)
+        self.sup.loop.call_soon(self._schedule)
+
+    def release(self, holder: str) -> None:
+        """End a :meth:`hold`; the goals it kept waiting go on."""
+        if self.holds.pop(holder, None) is not None:
+            self.sup.record("agenda-release", holder=holder)
+            self.sup.loop.call_soon(self._schedule)
+
+    def _floor(self) -> int | None:
+        return max(self.holds.values()) if self.holds else None
+
     def _best(self) -> Goal | None:
+        floor = self._floor()
         waiting = [g for g in self.goals if g.state in (PENDING, SUSPENDED, ACTIVE)
-                   and self._admitted(g)]
+                   and (floor is None or g.priority >= floor) and self._admitted(g)]
         if not waiting:
             return None
         return max(waiting, key=lambda g: (g.priority, -g.id))
@@ -138,16 +160,23 @@ class TaskAgenda:
     def _schedule(self) -> None:
         best = self._best()
         current = self.active
-        if best is None or best is current:
+        if best is current:
             return
         if current is not None:
-            if current.priority >= best.priority:
+            floor = self._floor()
+            held = floor is not None and current.priority < floor
+            if not held and best is not None and current.priority >= best.priority:
                 return
             current.state = SUSPENDED
+            why = (f"held by {_holder(self.holds)}" if held or best is None
+                   else f"goal {best.id} ({best.task}) is more urgent")
             self.sup.record("goal-suspended", task=current.run.node if current.run else None,
-                            goal=current.id, name=current.task, by=best.id)
+                            goal=current.id, name=current.task,
+                            by=best.id if best is not None else None, reason=why)
             if current.run is not None:
-                current.run.suspend(f"goal {best.id} ({best.task}) is more urgent")
+                current.run.suspend(why)
+        if best is None:
+            return
         if best.state == SUSPENDED and best.run is not None:
             best.state = ACTIVE
             self.sup.record("goal-resumed", task=best.run.node, goal=best.id, name=best.task)
@@ -158,11 +187,6 @@ class TaskAgenda:
         best.run = self.sup.start_task(best.task, best.args,
                                        on_finish=lambda run, g=best: self._finished(g, run),
                                        scheme=best.scheme, initiator=best.initiator)
-        self._tell("started", best)
-
-    def _tell(self, what: str, goal: Goal) -> None:
-        for watcher in self.watchers:
-            watcher(what, goal)
 
     def _finished(self, goal: Goal, run: TaskRun) -> None:
         if goal.state in OVER:
@@ -170,8 +194,14 @@ class TaskAgenda:
         goal.state = DONE if run.outcome == "done" else FAILED
         self.sup.record("goal-over", task=run.node, goal=goal.id, name=goal.task,
                         outcome=run.outcome)
-        self._tell("over", goal)
+        for listener in self.listeners:
+            listener(goal)
         self._schedule()
+
+
+def _holder(holds: dict[str, int]) -> str:
+    """Who holds the agenda at the highest priority."""
+    return max(holds.items(), key=lambda item: item[1])[0]
 
 
 @dataclass(eq=False)

@@ -23,7 +23,8 @@ The agenda runs a goal that involves a person (one of its arguments, or who
 asked for it) only inside a session with that person (:meth:`Sessions.admits`,
 one of the agenda's gates); a goal of the robot alone (exploring a place) is
 not an interaction and is not held.  A session is ``busy`` while a task with
-its person runs and ``idle`` otherwise (the agenda's watchers tell it).
+its person runs and ``idle`` otherwise (its first act starting; the agenda's
+listeners told when the goal is over).
 """
 
 from __future__ import annotations
@@ -82,7 +83,7 @@ class Sessions:
         self.chronicle = will_to_interact(sup.robot, within)
         self.recognizer: ChronicleRecognizer | None = None
         sup.agenda.admits.append(self.admits)
-        sup.agenda.watchers.append(self._goal)
+        sup.agenda.listeners.append(self._goal_over)
         sup.act_listeners.append(self._act)
         sup.dialogue.sessions = self
 
@@ -194,11 +195,18 @@ class Sessions:
         return all(self.is_open(p) for p in self.involved(goal))
 
     def _act(self, run: TaskRun, state: Any, agent: str) -> None:
-        if run.type.name == SESSION_TASK and state.act == "INTERACT":
-            self.sup.agenda.reconsider()  # greeted: what waited for the session may start
+        if run.type.name == SESSION_TASK:
+            if state.act == "INTERACT":
+                self.sup.agenda.reconsider()  # greeted: what waited for the session may go
+            return
+        goal = next((g for g in self.sup.agenda.goals if g.run is run), None)
+        if goal is not None:  # a goal's task begins (its first act): its sessions are busy
+            self._tell(goal, "task-started")
 
-    def _goal(self, what: str, goal: Goal) -> None:
-        event = "task-started" if what == "started" else "task-over"
+    def _goal_over(self, goal: Goal) -> None:
+        self._tell(goal, "task-over")
+
+    def _tell(self, goal: Goal, event: str) -> None:
         for person in self.involved(goal):
             session = self.open.get(person)
             if session is not None and session.expects(event):
