@@ -199,8 +199,10 @@ class Sessions:
             if state.act == "INTERACT":
                 self.sup.agenda.reconsider()  # greeted: what waited for the session may go
             return
-        goal = next((g for g in self.sup.agenda.goals if g.run is run), None)
-        if goal is not None:  # a goal's task begins (its first act): its sessions are busy
+        goal = self.sup.agenda.active
+        # a goal's task begins (its first act, as the agenda starts it): its sessions are busy
+        if goal is not None and run.parent is None and goal.task == run.type.name \
+                and goal.run in (None, run) and not run.acts:
             self._tell(goal, "task-started")
 
     def _goal_over(self, goal: Goal) -> None:
