@@ -26,7 +26,8 @@ from pathlib import Path
 from typing import Any
 
 import planner
-from shary.agenda import ChronicleRecognizer
+from shary.agenda import OVER, ChronicleRecognizer
+from shary.dialogue.sessions import Sessions
 from shary.executors import ExecutorRegistry
 from shary.facts import FactDatabase
 from shary.log import ContextLog, read_events
@@ -238,6 +239,7 @@ class _Run:
         self.action_models = (load_action_models(scenario.action_models, self.facts,
                                                  atomic=library.atomic)
                               if scenario.action_models else None)
+        self.sessions = Sessions(self.sup)
 
     # -- setting up ----------------------------------------------------------------
 
@@ -264,7 +266,11 @@ class _Run:
             facts.add(place, "type", "Place")
         for furniture in FURNITURE:
             facts.add(furniture, "type", "Furniture")
-            facts.add(furniture, "place", MANIPULATION_PLACES.get(furniture, "base"))
+            # its own kind too ("coffee-table" is a CoffeeTable): what people call it
+            facts.add(furniture, "type", "".join(
+                w.title() for w in furniture.split("-") if not w.isdigit()))
+            if furniture in MANIPULATION_PLACES:  # the others the robot cannot reach
+                facts.add(furniture, "place", MANIPULATION_PLACES[furniture])
             facts.add(furniture, "container", furniture in CONTAINERS)
             facts.add(furniture, "seat", furniture in SEATS)
         for obj in BOTTLES:
@@ -352,6 +358,7 @@ class _Run:
             spec = self.scenario.shared_plan or {}
             self.stack.start(self.sup, self.people[self.stack.partner_name],
                              float(str(spec.get("decision-wait", "6")).rstrip("s")))
+        self.sessions.start()  # the interaction is going on with whoever attends already
         start = time.perf_counter()
         while self.loop.now() < self.scenario.timeout - 1e-9:
             self.loop.advance(min(CHUNK, self.scenario.timeout - self.loop.now()))
@@ -368,7 +375,7 @@ class _Run:
 
     def _quiet(self) -> bool:
         return (not self.sup.runs and self.sup.agenda.active is None
-                and not any(g.state not in ("done", "failed") for g in self.sup.agenda.goals)
+                and not any(g.state not in OVER for g in self.sup.agenda.goals)
                 and not self.sim.busy and self.loop.clock.next_due() is None
                 and not any(p.pending for p in self.people.values())
                 and not (self.stack is not None and self.stack.busy))

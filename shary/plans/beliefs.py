@@ -8,9 +8,11 @@ action done while the human was not looking at the robot or at what it acted
 on (``looksAt`` facts from perception) becomes NOT_SEEN in that view; the
 robot then informs them with a generated sentence ("I placed the green cube
 on the blue cube") when they look back, or before their own next action needs
-it, and the task becomes EXECUTED in their view.  Before speaking the robot
-waits for their attention: an inform is only said while they look at the
-robot or at what the task is about.
+it, and the task becomes EXECUTED in their view.  The inform is an ``inform``
+task (:mod:`shary.dialogue.attention`): the robot speaks only once the human
+attends to it, calls them by name if they do not, and gives up without
+speaking if they still do not (the task stays NOT_SEEN, told at their next
+glance).
 """
 
 from __future__ import annotations
@@ -62,9 +64,9 @@ class HumanBeliefs:
 
     def needs(self, human: str) -> None:
         """``human``'s own action is next, or the plan is over: what they missed they
-        should know now (said once they attend to the robot or the task, as JAHRVIS's
-        Communication Manager perceives the human before speaking)."""
-        self._inform(human, attentive=True)
+        should know now (said once they attend, as JAHRVIS's Communication Manager
+        perceives the human before speaking)."""
+        self._inform(human, attentive=False)
 
     def _looks(self, event: Any) -> None:
         if str(event.predicate).rsplit("#", 1)[-1] != "looksAt" or event.kind != "added":
@@ -74,8 +76,12 @@ class HumanBeliefs:
             self.sup.loop.call_soon(self._inform, human, True)
 
     def _inform(self, human: str, attentive: bool) -> None:
-        """Tell ``human`` the oldest task they missed (one sentence at a time), if they
-        attend to it (``attentive``)."""
+        """Tell ``human`` the oldest task they missed, one sentence at a time.  On a
+        glance (``attentive``) only if they look at the robot or the task; otherwise
+        through an ``inform`` task (:func:`shary.dialogue.attention.tell`), which waits
+        for their attention, calls them by name, or gives up without speaking."""
+        from shary.dialogue.attention import tell
+
         pending = self.unseen.get(human)
         if not pending or human in self._speaking:
             return
@@ -96,14 +102,14 @@ class HumanBeliefs:
         self._speaking.add(human)
         self.sup.record("inform", task=follower.states.fact_name(task), agent=human, text=text)
 
-        def said(outcome: Any) -> None:
+        def said(run: Any) -> None:
             self._speaking.discard(human)
-            if outcome.status != "done":
-                return
+            if run.outcome != "done":
+                return  # not heard: it stays NOT_SEEN, to be said when they look back
             if task in pending:
                 pending.remove(task)
             follower.states.send(task, "seen", [human], reason="informed")
             if pending:
-                self._inform(human, True)
+                self._inform(human, False)
 
-        follower.robot.request("speak", {"text": text}, follower.node(task), said)
+        tell(self.sup, human, text, on_finish=said)
