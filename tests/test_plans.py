@@ -128,7 +128,8 @@ class Table:
     """The StackBuildingTask's facts, a supervisor with the stack action models, a
     scripted robot and human, and a plan follower."""
 
-    def __init__(self, choices: list[str] | None = None, replan: bool = True):
+    def __init__(self, choices: list[str] | None = None, replan: bool = True,
+                 problem: str = "stack"):
         self.loop = EventLoop()
         self.facts = FactDatabase()
         self.log = Log()
@@ -154,7 +155,7 @@ class Table:
         self.log.listeners.append(self.human.on)
         self.outcome: list[str] = []
         self.agendas: list[dict[str, list[str]]] = []
-        self.follower = PlanFollower(self.sup, stack_plan(), humans=["human"],
+        self.follower = PlanFollower(self.sup, stack_plan(problem), humans=["human"],
                                      replan=self.replan if replan else None,
                                      done=self.outcome.append)
 
@@ -285,3 +286,18 @@ def test_an_action_the_plan_does_not_expect_makes_it_replan():
     harmful = [d for _, d in table.log.of("plan-match") if d["match"] == "harmful"]
     assert harmful and harmful[0]["action"] == "place"
     assert table.follower.replans >= 1
+
+
+def test_an_agentx_plan_chooses_its_actor_and_its_cube_when_the_step_starts():
+    table = Table(problem="stack-agentx")
+    for cube in ("blue_cube_1", "blue_cube_2"):
+        table.facts.add(cube, "type", "BlueCube")
+    table.facts.remove("blue_cube_1", "isReachableBy", "robot")  # the human's side only
+    table.facts.add("green_cube", "isOn", "placement_1")
+    table.run(30)
+    assert table.outcome == ["achieved"]
+    resolved = [(agent, d["params"]) for agent, d in table.log.of("plan-resolve")]
+    assert resolved[0] == ("robot", ["robot", "blue_cube_2"])
+    queries = [d for _, d in table.log.of("plan-query")]
+    assert queries[0]["answers"] == ["blue_cube_2"] and queries[0]["bound"] == "robot"
+    assert table.facts.holds("blue_cube_2", "isOn", "green_cube")

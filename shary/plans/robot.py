@@ -72,18 +72,24 @@ class RobotPlanManager:
         return free[0]
 
     def _answer(self, value: dict[str, Any], agent: str) -> Any:
-        """The first answer of a query parameter (its candidates if it has none)."""
+        """The first answer of a query parameter (its candidates if it has none).
+
+        The planner writes queries as Ontologenius is asked: ``:`` names the world's
+        entities, ``a`` is its class relation (the fact base's ``type``); the query's
+        other variable is the AgentX actor, chosen before it and bound here."""
         var = value.get("var", "x")
-        # the query's other variable is the AgentX actor, chosen before it
-        pattern = re.sub(r"\?(\w+)", lambda m: m.group(0) if m.group(1) == var
-                         else f":{agent}", str(value.get("query", "")))
+        query = re.sub(r"(?<=\s)a(?=\s)", ":type", str(value.get("query", "")))
+        others = sorted(set(re.findall(r"\?(\w+)", query)) - {var})
+        namespace = str(self.sup.facts.term("type"))[:-len("type")]
         try:
-            rows = self.sup.facts.select(f"SELECT ?{var} WHERE {{ {pattern} }}")
-        except Exception as err:  # a query the fact base refuses is said, not raised
-            self.sup.record("plan-query", agent=self.sup.robot, query=pattern, error=str(err))
+            rows = self.sup.facts.select(f"PREFIX : <{namespace}> SELECT ?{var} WHERE "
+                                         f"{{ {query} }}", **dict.fromkeys(others, agent))
+        except ValueError as err:  # a query the fact base refuses is said, not raised
+            self.sup.record("plan-query", agent=self.sup.robot, query=query, error=str(err))
             rows = []
-        answers = sorted(str(row[0]) for row in rows)
-        self.sup.record("plan-query", agent=self.sup.robot, query=pattern, answers=answers)
+        answers = sorted(str(row[var]) for row in rows if row.get(var) is not None)
+        self.sup.record("plan-query", agent=self.sup.robot, query=query, bound=agent,
+                        answers=answers)
         candidates = answers or [str(c) for c in value.get("candidates", ())]
         return candidates[0] if candidates else None
 
