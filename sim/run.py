@@ -355,9 +355,8 @@ class _Run:
         if self.action_models is not None:  # what is there at the start was not done by anyone
             self.sup.recognize(self.action_models)
         if self.stack is not None:
-            spec = self.scenario.shared_plan or {}
             self.stack.start(self.sup, self.people[self.stack.partner_name],
-                             float(str(spec.get("decision-wait", "6")).rstrip("s")))
+                             self.scenario.shared_plan["decision-wait"])
         self.sessions.start()  # the interaction is going on with whoever attends already
         start = time.perf_counter()
         while self.loop.now() < self.scenario.timeout - 1e-9:

@@ -21,6 +21,7 @@ from typing import Any
 
 from jsonschema import Draft202012Validator
 
+from planner import builtin_problems
 from shary.acts import ActRegistry, builtin_acts
 from shary.io.recipes import load_library
 from shary.recipes import RecipeLibrary
@@ -334,12 +335,25 @@ class _Reading:
             tuple(tuple(t) for t in raw_expect.get("task-states") or ()),
             tuple(tuple(t) for t in raw_expect.get("recognized") or ()))
         shared = data.get("shared-plan")
-        if shared is not None:
+        if shared is not None:  # a shared plan of the stack domain (sim/stack)
+            shared = dict(shared)
             if shared.get("partner") not in {p.name for p in people if p is not None}:
                 problem(("shared-plan", "partner"), f"the partner {shared.get('partner')!r} "
                         "is not one of the scenario's people")
-            if self.action_models(library) == ():
+            if not data.get("action-models"):
                 problem(("shared-plan",), "a shared plan needs action-models (e.g. [stack])")
+            stack = sorted(p.stem for p in builtin_problems() if p.stem.startswith("stack"))
+            name = str(shared.get("problem"))
+            if name not in stack and not (Path(reader.file).parent / name).is_file():
+                problem(("shared-plan", "problem"), f"no planner problem {name!r}"
+                        f"{did_you_mean(name, stack)}: a file next to this one, or one of "
+                        f"{', '.join(stack)}")
+            elif name not in stack:
+                full = reader.confined_path(("shared-plan", "problem"), name)
+                if full is not None:
+                    shared["problem"] = str(full)
+            shared["decision-wait"] = reader.duration(("shared-plan", "decision-wait"),
+                                                      shared.get("decision-wait", 6.0))
         return Scenario(
             data["scenario"], Path(reader.file), str(data.get("doc", "")).strip(), robot_name,
             robot.get("model", "jido"), robot_at, tuple(p for p in people if p is not None),

@@ -38,3 +38,15 @@ def test_not_seen_is_told_and_the_timeline_shows_the_plan(tmp_path):
     assert missed and told and missed[0] < told[0]
     assert (tmp_path / "timeline.svg").stat().st_size > 0
     assert (tmp_path / "tree.svg").read_text().count("StackBuildingTask") >= 1
+
+
+def test_a_shared_plan_section_with_mistakes_is_refused_at_its_lines(tmp_path):
+    from tests.hostile import assert_refused, run_inprocess
+
+    path = tmp_path / "bad.yaml"
+    path.write_text((SCENARIOS_DIR / "stack-nominal.yaml").read_text()
+                    .replace("problem: stack\n", "problem: stak\n")
+                    .replace("partner: alice\n", "partner: bob\n"))
+    outcome = run_inprocess("validate", path)
+    assert_refused(outcome, path, message="no planner problem 'stak'")
+    assert "the partner 'bob' is not one of the scenario's people" in outcome.err
