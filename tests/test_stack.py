@@ -50,3 +50,15 @@ def test_a_shared_plan_section_with_mistakes_is_refused_at_its_lines(tmp_path):
     outcome = run_inprocess("validate", path)
     assert_refused(outcome, path, message="no planner problem 'stak'")
     assert "the partner 'bob' is not one of the scenario's people" in outcome.err
+
+
+def test_a_partner_who_leaves_is_asked_for_their_task_and_the_plan_fails(tmp_path):
+    path = tmp_path / "stack-leaves.yaml"
+    path.write_text((SCENARIOS_DIR / "stack-nominal.yaml").read_text()
+                    .replace("scenario: stack-nominal", "scenario: stack-leaves")
+                    .replace("delay: 1}", 'delay: 1, leave: {after: "Place(alice, red_cube_2"}}')
+                    .split("expect:")[0] + "expect:\n  plan: [started, failed]\n"
+                    "  task-states: [[pr2, \"Pick(alice, stick)\", NOT_STARTING]]\n"
+                    "  said: [\"Excuse me, Alice\"]\n")
+    result = run_scenario(path)
+    assert result.passed, result.differences

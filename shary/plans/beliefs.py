@@ -40,9 +40,9 @@ class HumanBeliefs:
         self._subscriptions = []
 
     @property
-    def pending(self) -> bool:
-        """Whether a human has still to be told something they missed."""
-        return any(self.unseen.values()) or bool(self._speaking)
+    def speaking(self) -> bool:
+        """Whether an inform is under way (waiting for attention, or said)."""
+        return bool(self._speaking)
 
     def watching(self, human: str, task: int) -> bool:
         """Whether ``human`` looks at the robot or at something the task is about."""

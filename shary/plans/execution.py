@@ -103,6 +103,7 @@ class PlanFollower:
             return
         self.finished = outcome
         self.hpm.stop()
+        self._close_abstract("done" if outcome == "achieved" else "failed", reason)
         for human in self.humans:  # the end of the task: what they missed, they need now
             self.beliefs.needs(human)
         self.sup.tree.set_state(self.root, "done" if outcome == "achieved" else "failed",
@@ -303,6 +304,7 @@ class PlanFollower:
         self.hpm.stop()
         self.beliefs.stop()
         self.states.stop()
+        self._close_abstract("cancelled", "replanned")
         self._load(new)
         self.hpm.listen()
         self.sup.loop.call_soon(self._advance, None)
@@ -326,6 +328,19 @@ class PlanFollower:
                                                           agent=str(spec.agent))
         return found
 
+    def _close_abstract(self, state: str, reason: str) -> None:
+        """The plan's abstract tasks end with it (done, failed, or replaced)."""
+        for node in self._abstract_nodes.values():
+            self.sup.tree.set_state(node, state, reason or None)
+
     def _changed(self, task: int, view: str, state: str) -> None:
         if view == self.sup.robot and task in self._nodes:
             self.sup.tree.set_state(self._nodes[task], _TREE_STATE[state], state)
+        if view == self.sup.robot and state == "NOT_STARTING" and \
+                self.agents.get(task) in self.humans:
+            self.sup.loop.call_soon(self.hpm.late, task)
+
+    def partner_absent(self, task: int, human: str) -> None:
+        """Asked for their task, ``human`` never attended: the shared plan fails."""
+        self._finish("failed", f"{human} is not there to do "
+                               f"{self.plan.primitive[task].label()}")

@@ -18,6 +18,11 @@ what each one means for the plan:
 A human's wait (``WaitForCube``) is no movement and no effect: when nothing
 of theirs starts within ``decision_wait`` seconds of it being due, it is
 taken as done (the leave-it-to-the-robot branch of a decision).
+
+A human's task that becomes NOT_STARTING (due too long) is asked for ("Can
+you pick the stick?") through an ``inform`` task, which waits for their
+attention; if they never attend (they left), the plan fails: its partner is
+not there to do their part.
 """
 
 from __future__ import annotations
@@ -71,6 +76,30 @@ class HumanPlanManager:
         cls = self.ontology.action_class(name)
         wait = self.ontology.action_class("wait")
         return cls is not None and wait is not None and self.ontology.is_a(cls, wait)
+
+    def late(self, task: int) -> None:
+        """The human's task is NOT_STARTING: ask them for it (see the module)."""
+        from shary.dialogue.attention import tell
+
+        follower = self.follower
+        spec = follower.plan.primitive[task]
+        human = str(follower.agents.get(task, spec.agent))
+        values = [human, *map(str, follower.objects_of(task))]
+        try:
+            text = self.sup.speech.say({"act": "request", "about":
+                                        f"{spec.name}({', '.join(values)})", "to": human},
+                                       self.sup.robot)
+        except (ValueError, KeyError):
+            text = f"{human}, it is your turn."
+        self.sup.record("plan-ask", task=follower.states.fact_name(task), agent=human, text=text)
+        generation = follower.generation
+
+        def asked(run: Any) -> None:
+            if run.outcome != "done" and generation == follower.generation \
+                    and task in follower.current and not follower.finished:
+                follower.partner_absent(task, human)
+
+        tell(self.sup, human, text, on_finish=asked)
 
     # -- recognitions -------------------------------------------------------------------
 

@@ -13,7 +13,6 @@ to do).  Its profile (a scenario's ``shared-plan: partner:``) says:
 * ``before``: ``{TASK: [[Pick, obj], [Place, obj, support]]}``, actions of their
   own they do when the task TASK is due, before it (the robot's turn taken, an
   unexpected action);
-* ``skip``: the labels of their tasks they never do (they leave them);
 * ``leave``: ``{after: TASK}``, walk to the door once that task is done.
 """
 
@@ -41,7 +40,6 @@ class StackPartner:
         self.look_away = profile.get("look-away")
         self.before = {str(k): [list(map(str, a)) for a in v]
                        for k, v in (profile.get("before") or {}).items()}
-        self.skip = [str(s) for s in profile.get("skip", ())]
         self.leave = (profile.get("leave") or {}).get("after")
         self.queue: list[list[str]] = []
         self.handled: set[int] = set()
@@ -85,8 +83,7 @@ class StackPartner:
             chosen = next((label for label in labels if choice in label
                            and not label.startswith("WaitForCube")), labels[0])
             self._act(chosen)
-        elif not labels[0].startswith("WaitForCube") and \
-                not any(labels[0].startswith(s) for s in self.skip):
+        elif not labels[0].startswith("WaitForCube"):
             self._act(labels[0])
 
     def _act(self, label: str) -> None:
@@ -126,4 +123,6 @@ class StackPartner:
                               "place", object=obj, on=support)
 
     def _leave(self) -> None:
+        self.handled.update(self.follower.plan.primitive)  # gone: they do nothing more
+        self.person.look("away")
         self.person._run(self.person.walk_to("door"))

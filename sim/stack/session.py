@@ -59,4 +59,4 @@ class StackSession:
     @property
     def busy(self) -> bool:
         follower = self.follower
-        return follower is not None and (follower.finished is None or follower.beliefs.pending)
+        return follower is not None and (follower.finished is None or follower.beliefs.speaking)
