@@ -89,7 +89,7 @@ RECOGNIZED_STYLES = {  # a recognized human action's state: (fill, stroke, text)
     "rec-achieved": ("#59a14f", "#2f6b2a", "#ffffff"),
     "rec-abandoned": ("#eeeeee", "#9a9a9a", "#666666"),
 }
-ROWS = ("act", "action", "plan", "recognized", "team", "look")
+ROWS = ("act", "action", "plan-task", "recognized", "team", "look")
 """The rows of a lane, top to bottom (all but acts and actions only when the log has them)."""
 _NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ufffe\uffff\ud800-\udfff]")
 
@@ -132,9 +132,9 @@ def render_timeline(events: Iterable[LogEvent], title: str = "", *, robot: str |
     y = band_top + max(1, _rows(band_rows)) * BAND_ROW + 22
     out.append(_axis(t0, end, step, x, y, above=True))
     lanes_top = y = y + 6
-    heights = {"act": ROW, "action": ROW, "plan": ROW, "recognized": ROW, "team": ROW,
+    heights = {"act": ROW, "action": ROW, "plan-task": ROW, "recognized": ROW, "team": ROW,
                "look": LOOK_ROW}
-    captions = {"act": "acts", "action": "actions", "plan": "plan tasks",
+    captions = {"act": "acts", "action": "actions", "plan-task": "plan tasks",
                 "recognized": "recognized", "team": "team", "look": "looks at"}
     for index, (agent, rows) in enumerate(lanes):
         counts = {kind: max(kind in ("act", "action"), _rows(rows[kind])) for kind in rows}

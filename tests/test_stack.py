@@ -36,7 +36,8 @@ def test_not_seen_is_told_and_the_timeline_shows_the_plan(tmp_path):
     told = [i for i, (kind, agent, data) in enumerate(rows)
             if kind == "speech" and "placed the green cube" in data["text"]]
     assert missed and told and missed[0] < told[0]
-    assert (tmp_path / "timeline.svg").stat().st_size > 0
+    timeline = (tmp_path / "timeline.svg").read_text()
+    assert 'class="plan-task plan-NOT_SEEN"' in timeline and "plan-ONGOING" in timeline
     assert (tmp_path / "tree.svg").read_text().count("StackBuildingTask") >= 1
 
 

@@ -33,7 +33,7 @@ def plan_task(e: Any, open_items: dict[tuple[str, str | None], Any], items: list
         return
     if d.get("estimate") and state != "NOT_SEEN":
         return  # a human's view says the same as the robot's
-    item = item_type(e.agent if state == "NOT_SEEN" else doer, "plan", e.time, None,
+    item = item_type(e.agent if state == "NOT_SEEN" else doer, "plan-task", e.time, None,
                      f"{name} {state}",
                      f"{name}: {state} in {e.agent}'s view from {shown_time(e.time)} s"
                      + (f" ({d['reason']})" if d.get("reason") else ""), f"plan-{state}",
