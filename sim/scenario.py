@@ -21,7 +21,6 @@ from typing import Any
 
 from jsonschema import Draft202012Validator
 
-from planner import builtin_problems
 from shary.acts import ActRegistry, builtin_acts
 from shary.io.recipes import load_library
 from shary.recipes import RecipeLibrary
@@ -336,6 +335,8 @@ class _Reading:
             tuple(tuple(t) for t in raw_expect.get("recognized") or ()))
         shared = data.get("shared-plan")
         if shared is not None:  # a shared plan of the stack domain (sim/stack)
+            from planner import builtin_problems  # (only then: the planner loads numpy)
+
             shared = dict(shared)
             if shared.get("partner") not in {p.name for p in people if p is not None}:
                 problem(("shared-plan", "partner"), f"the partner {shared.get('partner')!r} "
