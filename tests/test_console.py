@@ -21,7 +21,7 @@ from hostile import HOSTILE, assert_refused, run_inprocess
 from PIL import Image
 from websockets.sync.client import connect
 
-from shary.console.export import SCHEMAS, export_mcap
+from shary.console.export import SCHEMAS
 from shary.console.operator import Refused, parse
 from shary.console.replay import Replay, named_schemes
 from shary.console.server import serving

@@ -66,7 +66,7 @@ function task(node, who, name, scheme, roles) {
   const diagram = el("div", "diagram"), config = el("div", "config");
   box.append(h, diagram, config);
   a.tasks.append(box);
-  const t = { box, diagram, config, scheme, active: [], marks: null };
+  const t = { box, diagram, config, scheme, agent: who, name, active: [], marks: null };
   st.tasks.set(node, t);
   drawInto(t);
 }
@@ -208,9 +208,10 @@ function itemEnd(id, t1, cls) {
 }
 
 function widen(t) {
+  // in steps of 600 px: a width changed at every update would lay the page out again each time
   const svg = $("timeline");
   const w = x(t) + 120;
-  if (w > Number(svg.getAttribute("width"))) svg.setAttribute("width", w);
+  if (w > Number(svg.getAttribute("width"))) svg.setAttribute("width", Math.ceil(w / 600) * 600);
 }
 
 function clock(t) {
@@ -280,9 +281,8 @@ function question(node, act, people, answers, image) {
   const box = el("div", "question");
   box.dataset.node = node;
   const t = st.tasks.get(node);
-  const taskName = t ? t.box.querySelector("h3").firstChild.textContent.trim() : node;
-  box.append(el("div", null, "The robot asks (" + act + ", task " + taskName + ", " + node +
-    "). Answer for:"));
+  box.append(el("div", null, (t ? t.agent : "The robot") + " asks (" + act + ", task " +
+    (t ? t.name : "?") + ", " + node + "). Answer for:"));
   if (image) {
     const img = el("img");
     img.src = "/run/" + encodeURIComponent(image);
@@ -398,7 +398,7 @@ function receive(message) {
       break;
     }
   }
-  if (bench && message.sent) st.latencies.push(performance.timeOrigin + performance.now() - message.sent);
+  if (bench && message.sent && message.type === "changes") st.latencies.push(performance.timeOrigin + performance.now() - message.sent);
 }
 
 function connect() {
