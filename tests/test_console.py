@@ -247,7 +247,7 @@ def test_the_mcap_file_reads_back(run_dir: Path, tmp_path: Path):
     assert got["/actions"][1][1]["status"] == "done" and got["/actions"][1][0] == 2_000_000_000
 
 
-@pytest.mark.parametrize("log", sorted(LOGS.glob("*.sqlite"))[:4], ids=lambda p: p.stem)
+@pytest.mark.parametrize("log", sorted(LOGS.glob("*.sqlite")), ids=lambda p: p.stem)
 def test_export_and_replay_refuse_a_hostile_log(log: Path, tmp_path: Path):
     out = tmp_path / "x.mcap"
     assert_refused(run_inprocess("export", log, "--mcap", out), log)
@@ -260,3 +260,51 @@ def test_serve_refuses_bad_arguments():
                  ("serve", "give-bottle", "--port", "70000")):
         outcome = run_inprocess(*argv)
         assert outcome.status == 2 and "Traceback" not in outcome.err, argv
+
+
+# -- a live run steered over the WebSocket (the page's own tests: test_console_browser.py) --
+
+
+def test_a_live_run_logs_refusals_and_cancels_a_task(tmp_path: Path):
+    from sim.cli import live_run
+    from sim.scenario import find_scenario
+
+    live = live_run(find_scenario("give-bottle"), out=tmp_path, speed=0, paused=True)
+    with serving(live) as url, connect(url.replace("http", "ws") + "/ws") as ws:
+        got = messages(ws, "status", limit=500)
+        while not any(c[0] == "question" for m in got if m["type"] == "changes"
+                      for c in m["changes"]):
+            got.append(json.loads(ws.recv(timeout=30)))
+        hostile = sorted(MESSAGES.glob("*.json"))
+        for path in hostile:
+            ws.send(path.read_bytes().decode("utf-8", "replace"))
+        refusals = {
+            "answer": {"task": "n1", "agent": "alice", "act": "H-MAYBE"},
+            "take-control": {"agent": "jido"},
+            "seek": {"time": 2.0},
+            "cancel": {"task": "n77"},
+        }
+        for kind, fields in refusals.items():
+            ws.send(json.dumps({"kind": kind, "by": "ann", **fields}))
+        ws.send(json.dumps({"kind": "cancel", "by": "ann", "task": "n1", "id": 7}))
+        ws.send(json.dumps({"kind": "resume", "by": "ann"}))
+        replies = []
+        while len(replies) < len(hostile) + len(refusals) + 2:
+            message = json.loads(ws.recv(timeout=30))
+            if message["type"] == "reply":
+                replies.append(message)
+        assert [r["ok"] for r in replies] == [False] * (len(hostile) + len(refusals)) + [True] * 2
+        assert "waits for H-AGREE or H-DISAGREE, not H-MAYBE" in replies[len(hostile)]["error"]
+        assert "control-authority" in replies[len(hostile) + 1]["error"]
+        while live.state != "ended":
+            ws.recv(timeout=30)
+    events = read_events(tmp_path / "log.sqlite")
+    refused = [e for e in events if e.kind == "operator-refused"]
+    assert len(refused) == len(hostile) + len(refusals)
+    assert {e.agent for e in refused} == {"unknown", "ann"}
+    done = [(e.agent, e.data["action"]) for e in events if e.kind == "operator"]
+    assert done == [("ann", "cancel"), ("ann", "resume")]
+    ends = {e.data["name"]: e.data["outcome"] for e in events if e.kind == "task-end"}
+    assert ends == {"give-object": "cancelled"}
+    assert [e.data["outcome"] for e in events if e.kind == "goal-over"] == ["cancelled"]
+    assert live.verdict is not None and live.verdict["passed"] is False

@@ -31,10 +31,9 @@ from selenium.webdriver.common.by import By  # noqa: E402
 
 from shary.console.replay import Replay, named_schemes  # noqa: E402
 from shary.console.server import serving  # noqa: E402
+from shary.log import read_events  # noqa: E402
 from sim.cli import live_run  # noqa: E402
 from sim.scenario import find_scenario  # noqa: E402
-
-SHOTS = Path(__file__).resolve().parent.parent / "docs"
 
 
 @pytest.fixture(scope="module")
@@ -105,6 +104,9 @@ def test_the_page_shows_the_states_in_order(browser: Any, watched: Path):
     assert browser.find_element(By.ID, "verdict").text.startswith("PASSED")
     lines = browser.find_element(By.ID, "lines").text
     assert "breakpoint" in lines and "resume" in lines  # the operator's actions, logged
+    done = [(e.agent, e.data["action"]) for e in read_events(watched / "log.sqlite")
+            if e.kind == "operator"]
+    assert done == [("operator", "breakpoint"), ("operator", "resume"), ("operator", "resume")]
 
 
 def test_a_screenshot_at_the_breakpoint_shows_the_key_elements(browser: Any, watched: Path):

@@ -246,16 +246,31 @@ def serving(port: RunPort, *, host: str = "127.0.0.1", stamp: bool = False) -> I
 
 
 def serve(port: RunPort, host: str = "127.0.0.1", port_number: int = 8765) -> int:
-    """Serve the console until interrupted (Ctrl-C); the address is printed first."""
+    """Serve the console until interrupted (Ctrl-C); the address is printed first.
+
+    The socket is bound here, before the server starts, so that an address in use
+    is one clear line (exit status 2) and the address printed is one that listens.
+    """
+    import socket
+
     import uvicorn
 
+    from shary.terminal import error
+
+    try:
+        family = socket.AF_INET6 if ":" in host else socket.AF_INET
+        listening = socket.socket(family, socket.SOCK_STREAM)
+        listening.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        listening.bind((host, port_number))
+    except OSError as err:
+        return error(f"cannot listen on {host} port {port_number}: {err.strerror or err} "
+                     "(another server there? choose one with --port N)")
     app = make_app(port)
-    config = uvicorn.Config(app, host=host, port=port_number, log_level="warning",
-                            ws_max_size=MAX_MESSAGE_BYTES * 4, timeout_graceful_shutdown=2,
-                            lifespan="on")
+    config = uvicorn.Config(app, log_level="warning", ws_max_size=MAX_MESSAGE_BYTES * 4,
+                            timeout_graceful_shutdown=2, lifespan="on")
     server = uvicorn.Server(config)
     shown = f"[{host}]" if ":" in host else host
     print(f"shary console: http://{shown}:{port_number}/  ({port.title}; Ctrl-C to stop)",
           flush=True)
-    server.run()
+    server.run(sockets=[listening])
     return 0
