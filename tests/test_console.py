@@ -308,3 +308,17 @@ def test_a_live_run_logs_refusals_and_cancels_a_task(tmp_path: Path):
     assert ends == {"give-object": "cancelled"}
     assert [e.data["outcome"] for e in events if e.kind == "goal-over"] == ["cancelled"]
     assert live.verdict is not None and live.verdict["passed"] is False
+
+
+def test_pages_of_other_sites_and_other_host_names_are_refused(replay_server: str):
+    from websockets.exceptions import InvalidStatus
+
+    with pytest.raises(InvalidStatus, match="403"):
+        connect(replay_server.replace("http", "ws") + "/ws", origin="http://evil.example")
+    request = urllib.request.Request(replay_server + "/", headers={"Host": "evil.example"})
+    with pytest.raises(urllib.error.HTTPError) as refused:
+        urllib.request.urlopen(request, timeout=10)
+    assert refused.value.code == 400
+    with pytest.raises(InvalidStatus, match="400"):
+        connect(replay_server.replace("http", "ws") + "/ws",
+                additional_headers={"Host": "evil.example"})

@@ -63,9 +63,10 @@ class Attachment:
     def observe(self, t: float, kind: str, task: str | None, agent: str | None,
                 data: dict[str, Any]) -> None:
         live = self.live
-        if kind == "act" and data.get("act") in live.breakpoints and not live.paused:
-            live.paused = True
-            live.stopped_at = f"breakpoint {data.get('act')} at {t:.1f} s"
+        if kind == "act" and data.get("act") in live.breakpoints:
+            with live.lock:
+                live.paused = True
+                live.stopped_at = f"breakpoint {data.get('act')} at {t:.1f} s"
         live.post(live.feed, LogEvent(next(self._seq), t, kind, task, agent, dict(data)))
 
     def between(self, now: float) -> None:
@@ -96,6 +97,8 @@ class LiveRun:
         self._closing = threading.Event()
         self._pace: tuple[float, float] | None = None  # (wall, simulated) at the last change
         self._thread: threading.Thread | None = None
+        self.lock = threading.Lock()
+        """Guards pause, step and speed, set from the server's thread and read by the run's."""
         self._loop: asyncio.AbstractEventLoop | None = None
         self.attachment = Attachment(self)
         self.feed: Feed = lambda event: None
@@ -121,7 +124,7 @@ class LiveRun:
         state = "paused" if self.paused and self.state == "running" else self.state
         return {"mode": self.mode, "state": state, "speed": self.speed,
                 "breakpoints": sorted(self.breakpoints), "why": self.stopped_at,
-                "verdict": self.verdict, "controls": [*RUN_CONTROLS, "answer", "act", "cancel"]}
+                "verdict": self.verdict}
 
     def tell(self) -> None:
         self.post(self._status, self.status())
@@ -200,7 +203,7 @@ class LiveRun:
         return None
 
     def _control(self, kind: str, message: dict[str, Any]) -> None:
-        with _LOCK:
+        with self.lock:
             if kind == "pause":
                 self.paused, self.stopped_at = True, "paused by the operator"
             elif kind == "resume":
@@ -244,7 +247,7 @@ class LiveRun:
         while True:
             if self._closing.is_set():
                 raise StopRun
-            with _LOCK:
+            with self.lock:
                 if self._step:
                     self._step, stepped = False, True
                     break
@@ -279,5 +282,3 @@ class LiveRun:
             except (KeyError, ValueError) as err:  # e.g. the task ended meanwhile
                 print(f"console: an operator's command failed: {err}", file=sys.stderr)
 
-
-_LOCK = threading.Lock()

@@ -21,8 +21,6 @@ from jsonschema.exceptions import best_match
 MAX_MESSAGE_BYTES = 4096
 """Longer messages are refused unread: no operator action needs more."""
 RUN_CONTROLS = ("pause", "resume", "step", "speed", "breakpoint", "clear-breakpoint")
-ACTIONS = ("answer", "act", "cancel", "take-control", "hand-back")
-REPLAY_CONTROLS = ("seek",)
 
 
 @dataclass(frozen=True)

@@ -59,7 +59,7 @@ class Replay:
         status(self.status())
 
     def status(self) -> dict[str, Any]:
-        return {"mode": self.mode, "state": "replay", "end": self.end, "controls": ["seek"]}
+        return {"mode": self.mode, "state": "replay", "end": self.end}
 
     def view_at(self, t: float) -> View:
         """The view as it stood at time ``t`` (every event up to ``t`` included)."""

@@ -27,8 +27,11 @@ import time
 from collections.abc import Iterator
 from importlib import resources
 from typing import Any
+from urllib.parse import urlsplit
 
 from starlette.applications import Starlette
+from starlette.middleware import Middleware
+from starlette.middleware.trustedhost import TrustedHostMiddleware
 from starlette.requests import Request
 from starlette.responses import FileResponse, HTMLResponse, PlainTextResponse, Response
 from starlette.routing import Mount, Route, WebSocketRoute
@@ -45,6 +48,7 @@ QUEUE_LIMIT = 10_000
 """Messages waiting for one page; a page that falls this far behind is dropped
 (it can reload), rather than letting the server's memory grow without end."""
 
+LOOPBACK = ("127.0.0.1", "::1")
 _encode = json.JSONEncoder(separators=(",", ":"), ensure_ascii=False).encode
 
 
@@ -122,6 +126,12 @@ class Hub:
     # -- the pages ------------------------------------------------------------------------
 
     async def connect(self, ws: WebSocket) -> None:
+        origin = ws.headers.get("origin")
+        if origin is not None and urlsplit(origin).netloc != ws.headers.get("host"):
+            # a page from another site, in the operator's browser, must not steer the robot
+            self.port.refused("unknown", "connect", f"a page from {origin[:100]!r}")
+            await ws.close(code=1008)
+            return
         await ws.accept()
         out: asyncio.Queue[str] = asyncio.Queue()
         hello = {"type": "hello", "title": self.port.title, "mode": self.port.mode}
@@ -182,8 +192,13 @@ class Hub:
                                 "error": why}))
 
 
-def make_app(port: RunPort, *, stamp: bool = False) -> Starlette:
-    """The console's ASGI application for one run."""
+def make_app(port: RunPort, *, stamp: bool = False, host: str = "127.0.0.1") -> Starlette:
+    """The console's ASGI application for one run.
+
+    Served on this machine only (the default), it answers only requests that name
+    this machine (``Host``), so that a web page elsewhere cannot reach it through
+    DNS rebinding; WebSockets from a page of another origin are refused too.
+    """
     hub = Hub(port, stamp=stamp)
     static = resources.files("shary.console").joinpath("static")
 
@@ -212,7 +227,8 @@ def make_app(port: RunPort, *, stamp: bool = False) -> Starlette:
         Route("/run/{name:path}", snapshot),
         WebSocketRoute("/ws", socket),
         Mount("/static", StaticFiles(directory=str(static)), name="static"),
-    ], lifespan=lifespan)
+    ], lifespan=lifespan, middleware=[Middleware(TrustedHostMiddleware, allowed_hosts=[
+        *LOOPBACK, "localhost"])] if host in LOOPBACK else [])
     app.state.hub = hub
     return app
 
@@ -226,9 +242,9 @@ def serving(port: RunPort, *, host: str = "127.0.0.1", stamp: bool = False) -> I
     """
     import uvicorn
 
-    config = uvicorn.Config(make_app(port, stamp=stamp), host=host, port=0, log_level="warning",
-                            ws_max_size=MAX_MESSAGE_BYTES * 4, timeout_graceful_shutdown=2,
-                            lifespan="on")
+    config = uvicorn.Config(make_app(port, stamp=stamp, host=host), host=host, port=0,
+                            log_level="warning", ws_max_size=MAX_MESSAGE_BYTES * 4,
+                            timeout_graceful_shutdown=2, lifespan="on")
     server = uvicorn.Server(config)
     thread = threading.Thread(target=server.run, name="shary-console", daemon=True)
     thread.start()
@@ -265,7 +281,7 @@ def serve(port: RunPort, host: str = "127.0.0.1", port_number: int = 8765) -> in
     except OSError as err:
         return error(f"cannot listen on {host} port {port_number}: {err.strerror or err} "
                      "(another server there? choose one with --port N)")
-    app = make_app(port)
+    app = make_app(port, host=host)
     config = uvicorn.Config(app, log_level="warning", ws_max_size=MAX_MESSAGE_BYTES * 4,
                             timeout_graceful_shutdown=2, lifespan="on")
     server = uvicorn.Server(config)

@@ -290,7 +290,8 @@ class View:
         if e.kind == "fact-added":
             facts[key] = None
             out.append(["fact", perspective, *key, True])
-        elif e.kind == "fact-removed" and facts.pop(key, 1) is None:
+        elif e.kind == "fact-removed" and key in facts:
+            del facts[key]
             out.append(["fact", perspective, *key, False])
 
     def _speech(self, e: LogEvent, out: list[Change]) -> None:
