@@ -137,6 +137,10 @@ def test_an_answer_from_the_page_changes_the_outcome(browser: Any, tmp_path: Pat
         no[0].click()
         wait(lambda: "H-DISAGREE" in browser.find_element(By.ID, "lines").text,
              message="the answer logged")
+        browser.find_element(
+            By.CSS_SELECTOR, 'button.agent-act[data-agent="jido"]').click()  # take-control
+        wait(lambda: "control-authority" in browser.find_element(By.ID, "reply").text,
+             message="take-control refused, and said so")
         browser.find_element(By.ID, "resume").click()
         wait(lambda: status(browser) == "ended", message="the end of the run")
         lines = browser.find_element(By.ID, "lines").text

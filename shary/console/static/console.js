@@ -42,11 +42,29 @@ function agent(name, kind) {
     h.append(small);
     box.append(h, el("div", "tasks"));
     $("agents").append(box);
-    a = { box, small, tasks: box.lastChild };
+    a = { box, small, tasks: box.lastChild, kind: "agent" };
     st.agents.set(name, a);
   }
-  a.small.textContent = kind === "agent" ? "" : "(" + kind + ")";
+  if (kind !== "agent" && a.kind !== kind) {
+    a.kind = kind;
+    a.small.textContent = "(" + kind + ")";
+    if (st.mode === "live") agentButtons(a, name, kind);
+  }
   return a;
+}
+
+function agentButtons(a, name, kind) {
+  // a person's acts sent on their behalf; a robot's control authority (refused by a
+  // simulated SHARY robot: the page says why)
+  const acts = kind === "human" ? ["H-AGREE", "H-DISAGREE"] : ["take-control", "hand-back"];
+  for (const act of acts) {
+    const b = el("button", "agent-act", act);
+    b.dataset.agent = name;
+    b.title = kind === "human" ? "send " + act + " for " + name : act + " of " + name;
+    b.onclick = () => send(kind === "human" ? { kind: "act", agent: name, act }
+      : { kind: act, agent: name });
+    a.small.parentNode.append(b);
+  }
 }
 
 function task(node, who, name, scheme, roles) {
