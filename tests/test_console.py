@@ -286,14 +286,16 @@ def test_a_live_run_logs_refusals_and_cancels_a_task(tmp_path: Path):
         }
         for kind, fields in refusals.items():
             ws.send(json.dumps({"kind": kind, "by": "ann", **fields}))
+        ws.send(json.dumps({"kind": "step", "by": "ann"}))
+        ws.send(json.dumps({"kind": "speed", "by": "ann", "value": 0}))
         ws.send(json.dumps({"kind": "cancel", "by": "ann", "task": "n1", "id": 7}))
         ws.send(json.dumps({"kind": "resume", "by": "ann"}))
         replies = []
-        while len(replies) < len(hostile) + len(refusals) + 2:
+        while len(replies) < len(hostile) + len(refusals) + 4:
             message = json.loads(ws.recv(timeout=30))
             if message["type"] == "reply":
                 replies.append(message)
-        assert [r["ok"] for r in replies] == [False] * (len(hostile) + len(refusals)) + [True] * 2
+        assert [r["ok"] for r in replies] == [False] * (len(hostile) + len(refusals)) + [True] * 4
         assert "waits for H-AGREE or H-DISAGREE, not H-MAYBE" in replies[len(hostile)]["error"]
         assert "control-authority" in replies[len(hostile) + 1]["error"]
         while live.state != "ended":
@@ -303,7 +305,7 @@ def test_a_live_run_logs_refusals_and_cancels_a_task(tmp_path: Path):
     assert len(refused) == len(hostile) + len(refusals)
     assert {e.agent for e in refused} == {"unknown", "ann"}
     done = [(e.agent, e.data["action"]) for e in events if e.kind == "operator"]
-    assert done == [("ann", "cancel"), ("ann", "resume")]
+    assert done == [("ann", "step"), ("ann", "speed"), ("ann", "cancel"), ("ann", "resume")]
     ends = {e.data["name"]: e.data["outcome"] for e in events if e.kind == "task-end"}
     assert ends == {"give-object": "cancelled"}
     assert [e.data["outcome"] for e in events if e.kind == "goal-over"] == ["cancelled"]
