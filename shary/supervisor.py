@@ -89,6 +89,10 @@ class Supervisor:
         from shary.agenda import TaskAgenda
 
         self.agenda = TaskAgenda(self)
+        from shary.dialogue.speech import Speech
+
+        self.speech = Speech(facts)
+        """Makes the sentences of ``say`` steps (shary/dialogue/speech.py)."""
 
     # -- the context log -------------------------------------------------------
 
@@ -213,13 +217,21 @@ class Supervisor:
 
     def execute(self, atomic: str, args: dict[str, Any], agent: str, node: str,
                 act: ActTask) -> Request:
+        problem = None
+        if atomic == "say":  # a generated sentence, said by the speak executor
+            try:
+                atomic, args = "speak", {"text": self.speech.say(args, agent)}
+            except ValueError as err:
+                problem = str(err)
         request = Request(f"r{next(self._request_ids)}", atomic, args, agent, node)
         run = next(r for r in act.steps.values() if r.node == node)
         self._requests[request.id] = (run, act)
         self.record("exec-request", task=node, agent=agent, atomic=atomic, request=request.id,
                     args=args)
         executor = self.executors.get(atomic)
-        if executor is None:
+        if problem is not None:
+            self.reporter.failed(request, problem)
+        elif executor is None:
             self.reporter.failed(request, f"no executor is registered for {atomic!r}")
         else:
             executor.start(request, self.reporter)
