@@ -161,8 +161,12 @@ def test_replay_slider_shows_the_tree_at_a_chosen_time(browser: Any, watched: Pa
         wait(lambda: status(browser) == "replay", message="the replay")
         tree = lambda: browser.find_element(By.ID, "tree").text  # noqa: E731
         assert "pick" in tree()  # at the end
-        for at, present, absent in ((3.0, "ASK-TASK", "fetch"),
-                                    (12.0, "pick", "REALIZE-TASK x go-to-person")):
+        # two moments read from the log: while asking, and while fetching the bottle
+        starts = {e.data["name"]: e.time for e in read_events(watched / "log.sqlite")
+                  if e.kind == "task-start"}
+        fetching = round((starts["fetch"] + starts["go-to-person"]) / 2, 1)
+        for at, present, absent in ((round(starts["fetch"] / 2, 1), "ASK-TASK", "fetch"),
+                                    (fetching, "pick", "REALIZE-TASK x go-to-person")):
             browser.execute_script(
                 "const s = document.getElementById('slider'); s.value = arguments[0];"
                 "s.dispatchEvent(new Event('input'));", at)

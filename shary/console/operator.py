@@ -46,7 +46,7 @@ def parse(text: str | bytes) -> dict[str, Any]:
         raise Refused(f"message of {len(raw)} characters (at most {MAX_MESSAGE_BYTES} bytes)",
                       raw=shown)
     try:
-        message = json.loads(raw, parse_constant=_no_constant)
+        message = json.loads(raw, parse_constant=_no_constant, object_pairs_hook=_once)
     except (ValueError, RecursionError) as err:
         raise Refused(f"not JSON: {err}", raw=shown) from None
     by = message.get("by") if isinstance(message, dict) else None
@@ -61,3 +61,14 @@ def parse(text: str | bytes) -> dict[str, Any]:
 
 def _no_constant(name: str) -> float:
     raise ValueError(f"{name} is not a number")
+
+
+def _once(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """An object whose keys are all different: ``{"kind": "pause", "kind": "resume"}``
+    would otherwise mean whatever the last one says."""
+    found: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in found:
+            raise ValueError(f"the key {key!r} is given twice")
+        found[key] = value
+    return found
