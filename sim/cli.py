@@ -134,12 +134,15 @@ def cmd_serve(args: argparse.Namespace) -> int:
         from shary.console.replay import Replay, named_schemes
 
         return serve(Replay(args.replay, named_schemes()), args.host, args.port)
-    from sim.scenario import find_scenario
+    from sim.scenario import find_scenario, is_team_scenario
 
     try:
         path = find_scenario(args.scenario)
     except KeyError as err:
         return error(err.args[0])
+    if is_team_scenario(path):
+        return error(f"{args.scenario}: a team scenario; the console shows one SHARY robot's "
+                     "run for now (teams come with HRI/OS's views): 'shary run' runs it")
     live = live_run(path, out=args.out, seed=args.seed, snapshots=args.snapshots,
                     speed=args.speed, paused=args.paused)
     return serve(live, args.host, args.port)
