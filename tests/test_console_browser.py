@@ -86,7 +86,7 @@ def watched(browser: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[
         browser.find_element(By.ID, "resume").click()
         wait(lambda: "breakpoint WAIT-ATTENTION" in status(browser), message="the breakpoint")
         wait(lambda: browser.find_elements(
-            By.CSS_SELECTOR, '.task[data-node="n1"] g.active[data-state="suspended"]'),
+            By.CSS_SELECTOR, '.task g.active[data-state="suspended"]'),
             message="the diagram's highlight")
         browser.save_screenshot(str(out / "at-wait-attention.png"))
         browser.execute_script("window.atBreakpoint = document.getElementById('lines')"
