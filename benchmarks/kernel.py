@@ -46,6 +46,8 @@ from shary.io.recipes import load_library
 from shary.loop import EventLoop
 from shary.supervisor import Supervisor
 
+DEFAULT_GC = gc.get_threshold()
+
 
 class Endless:
     """An executor whose tasks run until cancelled; records when cancels arrive."""
@@ -124,10 +126,11 @@ def measure(tasks: int, changes: int, repeat: int) -> dict:
         if run == 0:
             plain_rates.append(churn(loop, facts, arm, people, rng, away, changes))
             continue
-        gc.freeze()  # the world set up above is long-lived: keep the collector off it
+        loop.settle()  # the world set up above is long-lived: what a robot's main does
         rates.append(churn(loop, facts, arm, people, rng, away, changes))
         latencies = reactions(loop, facts, arm, people, rng, away, changes)
         gc.unfreeze()
+        gc.set_threshold(*DEFAULT_GC)
         suspended = sum(1 for r in runs if r.configuration == ("suspended",))
         assert suspended == len(away), (suspended, len(away))
         latencies.sort()
