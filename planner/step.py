@@ -225,12 +225,12 @@ class Stepper:
             for key in read:  # what it read, and now when (same keys: no resizing)
                 mark = read[key] = tget(key)
                 if mark is not None:
-                    writer = mark[0]
+                    writer, written_at, _ = mark
                     if writer is not None and writer != agent:
                         for term in links:
                             added += term
-                    if mark[1] > start:
-                        start = mark[1]
+                    if written_at > start:
+                        start = written_at
             free = tget(agent)
             if free is not None:
                 if free > start:
@@ -240,9 +240,10 @@ class Stepper:
                     if gap > longest:
                         added += penalty * (gap - longest) * wait_rate
             end = start + length
+            unread = (None, 0.0, end)
             for key, mark in read.items():
                 if mark is None:
-                    new[key] = (None, 0.0, end)
+                    new[key] = unread
                 elif mark[2] < end:
                     new[key] = (mark[0], mark[1], end)
             mark = (agent, end, 0.0)
