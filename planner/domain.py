@@ -59,6 +59,9 @@ class Action:
     deletes: tuple[tuple[str, Callable[[dict[str, Any]], tuple]], ...] = ()
     """HDDL: the goal facts it deletes whatever the state, as a predicate and a function
     of the arguments giving the fact's arguments (for the search's goal protection)."""
+    assigns: tuple[tuple[str, tuple[Subtask, ...]], ...] = ()
+    """Conditional plans: tasks this action puts at the head of another agent's agenda
+    (by the parameter naming that agent) -- asking someone for help gives them a task."""
     names: tuple[str, ...] = field(init=False, repr=False, compare=False)
     """The parameters' names, in order (the search zips them with arguments)."""
 
@@ -111,6 +114,30 @@ class Decomposition:
     subtasks: tuple[Subtask, ...]
     doc: str = ""
     bind: Binder | None = None
+    weight: float = 1.0
+    """How likely an uncontrolled agent (a human) is to take this decomposition, relative
+    to the others open at that point (conditional plans: :mod:`planner.conditional`)."""
+    open: tuple[OpenVar, ...] = ()
+    """The variables left open to execution time (AgentX, query parameters)."""
+    abandon: str | None = None
+    """Conditional plans: taking this decomposition drops what is left of the nearest
+    enclosing task of this method from the agenda (its subtasks replace it): giving up
+    the current way of doing it, as when the robot asks for help and plans again."""
+
+
+@dataclass(frozen=True)
+class OpenVar:
+    """A decomposition variable bound at execution time, not by the search: an AgentX
+    (``any-of``: whichever capable agent does it) or a SPARQL query parameter (``query``:
+    what the query returns when the step starts).  The search plans over every candidate
+    -- the entities of the variable's type (those ``any-of`` names, if given) for which
+    the decomposition's precondition holds -- so that the plan holds whichever one it is."""
+
+    var: str
+    kind: str
+    """``agentx`` or ``query``."""
+    any_of: tuple[str, ...] = ()
+    query: str = ""
 
 
 @dataclass(frozen=True)
@@ -121,6 +148,9 @@ class Method:
     params: tuple[tuple[str, str], ...]
     decompositions: tuple[Decomposition, ...]
     doc: str = ""
+    first: bool = False
+    """Conditional plans: only the first decomposition and binding (in file, then name
+    order) whose precondition holds is used -- a rule, not a choice (``choose: first``)."""
 
 
 @dataclass(frozen=True)
@@ -163,6 +193,10 @@ class Domain:
     """HDDL: for each task, by predicate, the facts its decompositions may add, lifted:
     each argument is the index of a task parameter (int), a constant (str), or None
     (any value).  A task absent from it adds nothing."""
+
+    uncontrolled: tuple[str, ...] = ("human",)
+    """The agent kinds whose choices the robot does not control: in conditional plans
+    their options are branches (AND nodes), the others' are the planner's (OR nodes)."""
 
     def task(self, name: str) -> Action | Method | None:
         return self.actions.get(name) or self.methods.get(name)
@@ -223,6 +257,12 @@ class Problem:
     budget_ms: int = 1000
     doc: str = ""
     file: str = ""
+    agendas: tuple[tuple[str, tuple[tuple[str, tuple[Any, ...]], ...]], ...] = ()
+    """Conditional problems: each agent's own tasks, in turn order (HATP/EHDA's agents
+    each with an agenda); empty for the total-order planner's ``tasks``."""
+    policy: dict[str, Any] = field(default_factory=dict)
+    """Conditional problems: ``mode`` (expected or worst), ``idle_cost``, ``wait_cost``,
+    ``max_steps``."""
 
     def select_rules(self, names: list[str]) -> None:
         """Keep only these social rules: the problem's settings for those it selected,

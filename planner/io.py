@@ -18,6 +18,7 @@ from typing import Any
 
 from jsonschema import Draft202012Validator
 
+from planner.agendas import open_vars, read_agendas, read_assigns
 from planner.ahp import AHPError, priority_vector
 from planner.domain import (
     AGENT_KINDS,
@@ -141,10 +142,14 @@ class _DomainBuilder(_Builder):
                                                       spec.get("params"))
         methods = {n: self._method(n, s) for n, s in _items(data.get("methods"))
                    if isinstance(s, dict)}
+        actions = read_assigns(self, actions, methods)
         rules = {n: self._rule(n, s, actions, methods) for n, s in _items(data.get("rules"))
                  if isinstance(s, dict)}
-        return Domain(str(data.get("domain", "domain")), self.types, actions, methods, rules,
-                      data.get("doc", "") or "", self.located.file)
+        domain = Domain(str(data.get("domain", "domain")), self.types, actions, methods, rules,
+                        data.get("doc", "") or "", self.located.file)
+        if isinstance(data.get("uncontrolled"), list):
+            domain.uncontrolled = tuple(str(k) for k in data["uncontrolled"])
+        return domain
 
     def _params(self, path: tuple, raw: Any) -> tuple[tuple[str, str], ...]:
         out = []
@@ -248,9 +253,12 @@ class _DomainBuilder(_Builder):
                 sub = self._subtask(where + ("subtasks", j), str(text), variables)
                 if sub is not None:
                     subtasks.append(sub)
-            decompositions.append(Decomposition(dec_name, vars_, pre, tuple(subtasks),
-                                                dec.get("doc", "") or ""))
-        return Method(name, params, tuple(decompositions), spec.get("doc", "") or "")
+            decompositions.append(Decomposition(
+                dec_name, vars_, pre, tuple(subtasks), dec.get("doc", "") or "",
+                weight=float(dec.get("weight", 1.0)), abandon=dec.get("abandon"),
+                open=open_vars(self, where, dec.get("open"), dict(vars_))))
+        return Method(name, params, tuple(decompositions), spec.get("doc", "") or "",
+                      first=spec.get("choose") == "first")
 
     def _subtask(self, path: tuple, text: str, variables: dict[str, str]) -> Subtask | None:
         match = _CALL.match(text)
@@ -397,10 +405,11 @@ class _ProblemBuilder(_Builder):
             rules[name] = SelectedRule(rule, {k: float(v) for k, v in table.items()},
                                        float(spec.get("weight", 1.0)))
         weights, scale = self._criteria(rules)
+        agendas = read_agendas(self, entities)
         return Problem(str(data.get("problem", "problem")), domain, entities, initial,
                        tuple(tasks), goals, rules, weights, scale,
                        int(data.get("budget_ms", 1000)), data.get("doc", "") or "",
-                       self.located.file)
+                       self.located.file, agendas, dict(data.get("policy") or {}))
 
     def _check_value(self, path: tuple, kind: str, value: Any, entities: dict[str, str]) -> None:
         if value is None or kind == "any":

@@ -12,6 +12,7 @@ through it.
 
 from __future__ import annotations
 
+import itertools
 from typing import Any
 
 from planner.domain import Problem
@@ -94,3 +95,156 @@ def validate(problem: Problem, plan: Plan) -> list[str]:
             errors.append(f"goal {fact_text(entity, attribute)} == {wanted!r} does not hold at "
                           f"the end ({values.get((entity, attribute))!r})")
     return errors
+
+
+def validate_conditional(problem: Problem, policy: Any) -> list[str]:
+    """Every way a conditional plan (a :class:`~planner.policy.Policy`) fails: each branch
+    is replayed from the initial state, with each agent's agenda, for **every** assignment
+    of its open values (each AgentX candidate, each query candidate) -- the turns in
+    order, each decomposition against the agenda's head (its precondition, its bindings,
+    its subtasks), each action's precondition, the end of the controlled agendas and the
+    goals at each leaf."""
+    from planner.policy import walk
+
+    if policy.root is None:
+        return ["there is no conditional plan to check"]
+    errors: list[str] = []
+    for number, branch in enumerate(walk(policy.root), start=1):
+        tokens = list(dict.fromkeys(_open_values([step for step, _ in branch])))
+        for combo in itertools.product(*(t.candidates for t in tokens)):
+            assignment = dict(zip(tokens, combo, strict=True))
+            where = f"branch {number}" + (", " + ", ".join(
+                f"{t}={v}" for t, v in assignment.items()) if assignment else "")
+            for error in _replay_branch(problem, policy, [s for s, _ in branch], assignment):
+                errors.append(f"{where}: {error}")
+                break
+    return errors
+
+
+def _open_values(steps: list) -> list:
+    from planner.conditional import OpenValue
+
+    found = []
+    for step in steps:
+        for value in step.args:
+            if isinstance(value, OpenValue):
+                found.append(value)
+        for exp in step.expansions:
+            found.extend(v for _, v in exp.bindings if isinstance(v, OpenValue))
+    return found
+
+
+def _replay_branch(problem: Problem, policy: Any, steps: list, assignment: dict) -> list[str]:
+    from planner.conditional import DONE, IDLE, MARK, WAIT, OpenValue, marked_methods
+
+    domain = problem.domain
+    marked = marked_methods(problem)
+    values: dict[tuple[str, str], Any] = dict(problem.initial)
+    order = [agent for agent, _ in problem.agendas]
+    controlled = policy.exploration.controlled
+    agendas = {agent: list(tasks) for agent, tasks in problem.agendas}
+
+    def get(entity: str, attribute: str) -> Any:
+        return values.get((entity, attribute))
+
+    def resolve(env: dict) -> dict:
+        return {k: assignment.get(v, v) if isinstance(v, OpenValue) else v
+                for k, v in env.items()}
+
+    for turn, step in enumerate(steps):
+        label = f"step {turn + 1} {step} by {step.agent}"
+        if step.agent != order[turn % len(order)]:
+            return [f"{label}: it is {order[turn % len(order)]}'s turn"]
+        agenda = agendas[step.agent]
+        for exp in step.expansions:
+            if exp.method.startswith(MARK) and agenda and agenda[0] == (exp.method, ()):
+                del agenda[0]
+                continue
+            if not agenda or agenda[0] != (exp.method, tuple(exp.args)):
+                return [f"{label}: {exp.method}{tuple(exp.args)} is not at the head of "
+                        f"{step.agent}'s agenda"]
+            method = domain.methods.get(exp.method)
+            dec = next((d for d in method.decompositions if d.name == exp.decomposition),
+                       None) if method else None
+            if dec is None:
+                return [f"{label}: {exp.method} has no decomposition {exp.decomposition!r}"]
+            env = dict(zip((p for p, _ in method.params), exp.args, strict=True))
+            env.update(exp.bindings)
+            for var, kind in dec.vars:
+                value = env.get(var)
+                value = assignment.get(value, value) if isinstance(value, OpenValue) else value
+                if not problem.is_a(value, kind):
+                    return [f"{label}: {exp.method}[{dec.name}] binds {var} to {value!r}, "
+                            f"not a {kind}"]
+            if dec.pre is not None and not dec.pre(resolve(env), get):
+                return [f"{label}: {exp.method}[{dec.name}] used while its precondition is "
+                        f"false: {dec.pre.text}"]
+            if method.first:
+                first = _first_choice(problem, method, env, resolve, get)
+                if first != (dec.name, exp.bindings):
+                    return [f"{label}: {exp.method} chooses its first applicable "
+                            f"decomposition, {first}, not {dec.name}"]
+            subtasks = [(s.task, tuple(a(env, get) for a in s.args)) for s in dec.subtasks]
+            if method.name in marked:
+                subtasks.append((MARK + method.name, ()))
+            if len(subtasks) != exp.subtasks:
+                return [f"{label}: {exp.method}[{dec.name}] has {len(subtasks)} subtasks, "
+                        f"the plan says {exp.subtasks}"]
+            rest = agenda[1:]
+            if dec.abandon is not None:
+                end = (MARK + dec.abandon, ())
+                if end not in rest:
+                    return [f"{label}: {exp.method}[{dec.name}] abandons {dec.abandon}, "
+                            "which it is not part of"]
+                rest = rest[rest.index(end) + 1:]
+            if len(agenda) - 1 - len(rest) != exp.dropped:
+                return [f"{label}: {exp.method}[{dec.name}] drops {len(agenda) - 1 - len(rest)}"
+                        f" tasks, the plan says {exp.dropped}"]
+            agenda[:] = subtasks + rest
+        if step.name in (IDLE, DONE):
+            if agenda:
+                return [f"{label}: {step.agent}'s agenda is not empty"]
+            if step.name == DONE and any(agendas[a] for a in order if a in controlled):
+                return [f"{label}: a controlled agent's agenda is not empty"]
+            continue
+        if step.name == WAIT:
+            if step.agent in controlled or not agenda:
+                return [f"{label}: only a human with tasks left waits"]
+            continue
+        action = domain.actions.get(step.name)
+        if action is None or not agenda or agenda[0] != (step.name, tuple(step.args)):
+            return [f"{label}: not the head of {step.agent}'s agenda"]
+        env = resolve(dict(zip(action.names, step.args, strict=True)))
+        if action.pre is not None and not action.pre(env, get):
+            return [f"{label}: precondition false when its turn comes: {action.pre.text}"]
+        writes: list[tuple[tuple[str, str], Any]] = []
+        action.apply(env, get, lambda e, a, v, _w=writes: _w.append(((e, a), v)))
+        values.update(writes)
+        del agenda[0]
+        for param, subtasks in action.assigns:
+            target = env[param]
+            if target not in agendas:
+                return [f"{label}: gives tasks to {target}, who has no agenda"]
+            agendas[target][:0] = [(s.task, tuple(a(env, get) for a in s.args))
+                                   for s in subtasks]
+    if any(agendas[a] for a in order if a in controlled):
+        return ["the branch ends before every controlled agenda is done"]
+    for (entity, attribute), wanted in problem.goals.items():
+        if values.get((entity, attribute)) != wanted:
+            return [f"goal {fact_text(entity, attribute)} == {wanted!r} does not hold at the "
+                    f"leaf ({values.get((entity, attribute))!r})"]
+    return []
+
+
+def _first_choice(problem: Problem, method: Any, env: dict, resolve: Any, get: Any
+                  ) -> tuple[str, tuple] | None:
+    """A ``choose: first`` method's choice: its first decomposition and binding (closed
+    variables, in name order) whose precondition holds."""
+    for dec in method.decompositions:
+        opened = {o.var for o in dec.open}
+        closed = [(v, k) for v, k in dec.vars if v not in opened]
+        for values in itertools.product(*(problem.of_type(k) for _, k in closed)):
+            trial = {**env, **dict(zip((v for v, _ in closed), values, strict=True))}
+            if dec.pre is None or dec.pre(resolve(trial), get):
+                return dec.name, tuple((v, trial[v]) for v, _ in dec.vars)
+    return None

@@ -21,6 +21,7 @@ their goals on the agenda, as the robot's own initiative.
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -61,6 +62,11 @@ class TaskAgenda:
         self.sup = sup
         self.goals: list[Goal] = []
         self._ids = itertools.count(1)
+        self.holds: dict[str, int] = {}
+        """Holder -> priority: while held, goals of lower priority do not run (a robot
+        associated with a person serves only that person's requests, HRI/OS Fig. 7)."""
+        self.listeners: list[Callable[[Goal], Any]] = []
+        """Told when a goal is over (done or failed): who delegated it hears back."""
 
     def todo(self, name: str = "default") -> list[Goal]:
         """The goals of one TODO list that are not over, in the order they were added."""
@@ -92,8 +98,26 @@ class TaskAgenda:
         self.sup.loop.call_soon(self._schedule)
         return goal
 
+    def hold(self, holder: str, priority: int) -> None:
+        """Run only goals of ``priority`` or more until :meth:`release` (the running goal,
+        if lower, is suspended at once)."""
+        self.holds[holder] = priority
+        self.sup.record("agenda-hold", holder=holder, priority=priority)
+        self.sup.loop.call_soon(self._schedule)
+
+    def release(self, holder: str) -> None:
+        """End a :meth:`hold`; the goals it kept waiting go on."""
+        if self.holds.pop(holder, None) is not None:
+            self.sup.record("agenda-release", holder=holder)
+            self.sup.loop.call_soon(self._schedule)
+
+    def _floor(self) -> int | None:
+        return max(self.holds.values()) if self.holds else None
+
     def _best(self) -> Goal | None:
-        waiting = [g for g in self.goals if g.state in (PENDING, SUSPENDED, ACTIVE)]
+        floor = self._floor()
+        waiting = [g for g in self.goals if g.state in (PENDING, SUSPENDED, ACTIVE)
+                   and (floor is None or g.priority >= floor)]
         if not waiting:
             return None
         return max(waiting, key=lambda g: (g.priority, -g.id))
@@ -101,16 +125,23 @@ class TaskAgenda:
     def _schedule(self) -> None:
         best = self._best()
         current = self.active
-        if best is None or best is current:
+        if best is current:
             return
         if current is not None:
-            if current.priority >= best.priority:
+            floor = self._floor()
+            held = floor is not None and current.priority < floor
+            if not held and best is not None and current.priority >= best.priority:
                 return
             current.state = SUSPENDED
+            why = (f"held by {_holder(self.holds)}" if held or best is None
+                   else f"goal {best.id} ({best.task}) is more urgent")
             self.sup.record("goal-suspended", task=current.run.node if current.run else None,
-                            goal=current.id, name=current.task, by=best.id)
+                            goal=current.id, name=current.task,
+                            by=best.id if best is not None else None, reason=why)
             if current.run is not None:
-                current.run.suspend(f"goal {best.id} ({best.task}) is more urgent")
+                current.run.suspend(why)
+        if best is None:
+            return
         if best.state == SUSPENDED and best.run is not None:
             best.state = ACTIVE
             self.sup.record("goal-resumed", task=best.run.node, goal=best.id, name=best.task)
@@ -125,7 +156,14 @@ class TaskAgenda:
         goal.state = DONE if run.outcome == "done" else FAILED
         self.sup.record("goal-over", task=run.node, goal=goal.id, name=goal.task,
                         outcome=run.outcome)
+        for listener in self.listeners:
+            listener(goal)
         self._schedule()
+
+
+def _holder(holds: dict[str, int]) -> str:
+    """Who holds the agenda at the highest priority."""
+    return max(holds.items(), key=lambda item: item[1])[0]
 
 
 @dataclass(eq=False)

@@ -298,6 +298,18 @@ def _check_turtle(files: list[Path], context: Context) -> list[Problem]:
     return problems
 
 
+def _check_teams(files: list[Path], context: Context) -> list[Problem]:
+    from shary.team.teamfile import load_team
+
+    problems: list[Problem] = []
+    for path in files:
+        try:
+            load_team(path)
+        except FileError as err:
+            problems.extend(err.problems)
+    return problems
+
+
 def _shipped_recipes() -> list[Path]:
     from shary.io.recipes import builtin_library_files
 
@@ -323,12 +335,14 @@ for _kind in (
     FileKind("recipes", _check_recipes, 2, keys="tasks:/recipes:/atomic:/predicates:",
              detect=lambda d: bool(set(d) & {"predicates", "atomic", "tasks", "recipes",
                                             "chronicles"})
-             and not set(d) & {"scenario", "profile", "problem", "scheme"},
+             and not set(d) & {"scenario", "profile", "problem", "scheme", "team"},
              shipped=_shipped_recipes),
     FileKind("domain", _check_domains, 3, detect=lambda d: "domain" in d and "types" in d,
              keys="domain:", shipped=_shipped_domains),
     FileKind("problem", _check_problems, 4, detect=lambda d: "problem" in d,
              keys="problem:", shipped=_shipped_problems),
     FileKind("turtle", _check_turtle, 5, suffixes=(".ttl",)),
+    FileKind("team", _check_teams, 6, detect=lambda d: "team" in d and "agents" in d,
+             keys="team:"),
 ):
     register(_kind)

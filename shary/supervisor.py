@@ -64,7 +64,8 @@ class Supervisor:
                  loop: EventLoop | None = None, executors: ExecutorRegistry | None = None,
                  log: Any = None, conditions: ConditionRegistry | None = None,
                  planners: dict[str, Planner] | None = None,
-                 functions: dict[str, RecipeFunction] | None = None):
+                 functions: dict[str, RecipeFunction] | None = None,
+                 ids: str = ""):
         self.library = library
         self.facts = facts
         self.robot = robot
@@ -74,7 +75,9 @@ class Supervisor:
         self.conditions = conditions or ConditionRegistry()
         self.planners = dict(planners or {})
         self.functions = dict(functions or {})
-        self.tree = TaskTree(self.record if log is not None else None)
+        self.tree = TaskTree(self.record if log is not None else None, prefix=f"{ids}n")
+        self.ids = ids
+        """A prefix of node and request ids (``K-10/``): a team's robots share one log."""
         self.runs: dict[str, TaskRun] = {}
         self._by_agent: dict[str, dict[str, TaskRun]] = {}
         self._compiled: dict[int, CompiledScheme] = {}
@@ -89,6 +92,10 @@ class Supervisor:
         from shary.agenda import TaskAgenda
 
         self.agenda = TaskAgenda(self)
+        from shary.dialogue.speech import Speech
+
+        self.speech = Speech(facts)
+        """Makes the sentences of ``say`` steps (shary/dialogue/speech.py)."""
 
     # -- the context log -------------------------------------------------------
 
@@ -206,13 +213,21 @@ class Supervisor:
 
     def execute(self, atomic: str, args: dict[str, Any], agent: str, node: str,
                 act: ActTask) -> Request:
-        request = Request(f"r{next(self._request_ids)}", atomic, args, agent, node)
+        problem = None
+        if atomic == "say":  # a generated sentence, said by the speak executor
+            try:
+                atomic, args = "speak", {"text": self.speech.say(args, agent)}
+            except ValueError as err:
+                problem = str(err)
+        request = Request(f"{self.ids}r{next(self._request_ids)}", atomic, args, agent, node)
         run = next(r for r in act.steps.values() if r.node == node)
         self._requests[request.id] = (run, act)
         self.record("exec-request", task=node, agent=agent, atomic=atomic, request=request.id,
                     args=args)
         executor = self.executors.get(atomic)
-        if executor is None:
+        if problem is not None:
+            self.reporter.failed(request, problem)
+        elif executor is None:
             self.reporter.failed(request, f"no executor is registered for {atomic!r}")
         else:
             executor.start(request, self.reporter)

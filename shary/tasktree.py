@@ -44,8 +44,11 @@ class TaskTree:
     networkx graph for drawing and analysis.
     """
 
-    def __init__(self, recorder: Recorder | None = None):
+    def __init__(self, recorder: Recorder | None = None, *, prefix: str = "n"):
         self._record = recorder
+        self._prefix = prefix
+        """Node ids are PREFIX + a number: a team's robots share one log, so each tree
+        has its own prefix (``K-10/n3``)."""
         self._next = 0
         self._attrs: dict[str, dict[str, Any]] = {}
         self._parent: dict[str, str | None] = {}
@@ -55,7 +58,7 @@ class TaskTree:
             **attrs: Any) -> str:
         """Add a node (under ``parent``) and return its id."""
         self._next += 1
-        node = f"n{self._next}"
+        node = f"{self._prefix}{self._next}"
         self._insert(node, parent, {"kind": kind, "name": name, "state": state, **attrs})
         if self._record is not None:
             self._record("node", task=node, parent=parent, node_kind=kind, name=name,

@@ -17,7 +17,12 @@ common time axis in engine seconds. Inside a lane:
   are bars coloured by how they ended: done, failed, cancelled, or still
   running when the log ends (hatched, up to the end of the log);
 * **attention** (``fact-added`` / ``fact-removed`` of ``AGENT looksAt X``) is
-  a thin row, drawn only when the log holds such facts.
+  a thin row, drawn only when the log holds such facts;
+* a **team**'s rows (:mod:`shary.team`): each agent's team tasks, associations
+  and user-mode control as bars in a ``team`` row, questions, help requests
+  and answers as points among the acts, respawns in the task band.
+
+:mod:`shary.lanes` reads the log into these items; this module draws them.
 
 Top-level tasks get dotted vertical lines at their start and end, labelled in
 a band above the lanes, where the planner's plans are marked too. Items that
@@ -34,17 +39,25 @@ dependency. Every item's exact times are also in ``data-start`` /
 from __future__ import annotations
 
 import bisect
-import json
 import math
 import re
-import zlib
 from collections.abc import Iterable
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 from xml.sax.saxutils import escape, quoteattr
 
 from planner.display import text_width
+from shary.lanes import (
+    ACTION_STYLES,
+    LOOK_COLOUR,
+    POINT_COLOURS,
+    TEAM_COLOURS,
+    Item,
+    TaskSpan,
+    Timeline,
+    collect,
+    shown_time,
+)
 from shary.log import LogEvent, stream_events
 from userfiles.outputs import write_output
 
@@ -64,263 +77,7 @@ SMALL = 9
 MIN_LABEL_INSIDE = 36  # a bar narrower than this has its label beside it
 LABEL_ROWS = 3         # a label beside a bar never opens a sub-row past this many
 FONT_FAMILY = "DejaVu Sans, Helvetica, Arial, sans-serif"
-
-ACT_COLOURS = {
-    "ASK-TASK": "#4e79a7", "ASK-HELP": "#3f8fbf", "REALIZE-TASK": "#59a14f",
-    "WAIT-ATTENTION": "#f28e2b", "END-TASK": "#b07aa1", "GIVE-UP": "#9c2f2f",
-    "CANCEL-TASK": "#7f7f7f",
-}
-_PALETTE = ("#4f8f8a", "#b8860b", "#c0587e", "#8c6d4f", "#6b6ecf", "#637939", "#a55194")
-"""For other acts, picked by a checksum of the name: stable across runs, dark under white."""
-ACTION_STYLES = {  # status: (fill, stroke, text)
-    "done": ("#cfe0f1", "#3b6fa0", "#1d3550"),
-    "failed": ("#e15759", "#a12b2d", "#ffffff"),
-    "cancelled": ("#d3d3d3", "#8c8c8c", "#4d4d4d"),
-    "running": ("url(#hatch)", "#3b6fa0", "#1d3550"),
-}
-LOOK_COLOUR = "#8fc7c2"
-MAIN_ARGS = ("object", "target", "place", "to", "into", "text")
 _NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ufffe\uffff\ud800-\udfff]")
-
-
-# -- what the log says -----------------------------------------------------------
-
-
-@dataclass
-class Item:
-    """One thing drawn in a lane: a bar (``end`` None: still going) or a point (``point``)."""
-
-    agent: str
-    row: str              # "act", "action" or "look"
-    start: float
-    end: float | None
-    label: str
-    tooltip: str
-    kind: str             # its css class: act, received, unexpected, an action status, look …
-    colour: str = ""
-    point: bool = False
-    attrs: dict[str, str] = field(default_factory=dict)
-    suspended: list[tuple[float, float | None]] = field(default_factory=list)
-    beside: bool = False  # the label goes beside the bar (decided when packing)
-
-
-@dataclass
-class TaskSpan:
-    """A top-level task, from its ``task-start`` to its ``task-end``."""
-
-    node: str
-    name: str
-    start: float
-    end: float | None = None
-    outcome: str | None = None
-
-
-@dataclass
-class Timeline:
-    """The drawable content of a log: agents in lane order, items, top-level tasks."""
-
-    agents: list[str]
-    items: list[Item]
-    tasks: list[TaskSpan]
-    plans: list[Item]
-    robot: str | None
-    t_min: float
-    t_max: float
-
-
-def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
-    """Pair the log's events into drawable items.
-
-    The ``act`` record carries no state name: it is the one that follows the
-    ``enter`` of its state in the same task, so the last state entered per
-    task is kept to pair it with its ``exit``.
-    """
-    seen: list[str] = []
-    items: list[Item] = []
-    tasks: dict[str, TaskSpan] = {}
-    names: dict[str, str] = {}
-    subtasks: set[str] = set()
-    last_entered: dict[str, str] = {}
-    open_acts: dict[tuple[str, str | None], Item] = {}
-    act_nodes: dict[str, Item] = {}  # the act x task node of each act bar
-    open_actions: dict[str, Item] = {}
-    cancels: dict[str, str] = {}
-    looks: dict[tuple[str, str], Item] = {}
-    received: list[tuple[LogEvent, Item]] = []
-    plans: list[Item] = []
-    replan: str | None = None
-    first_robot: str | None = None
-    times: list[float] = []
-
-    def meet(agent: Any) -> None:
-        if isinstance(agent, str) and agent and agent not in seen:
-            seen.append(agent)
-
-    for e in events:
-        times.append(e.time)
-        meet(e.agent)
-        d = e.data
-        if e.kind == "node" and d.get("parent") is not None and e.task:
-            subtasks.add(e.task)
-            act = open_acts.get((str(d["parent"]), d.get("scheme_state")))
-            if d.get("node_kind") == "act" and act is not None:
-                act_nodes[e.task] = act
-        elif e.kind == "task-state" and e.task in act_nodes:
-            _suspension(act_nodes[e.task], e.time, d.get("state") == "suspended")
-        elif e.kind == "task-start" and e.task:
-            names[e.task] = str(d.get("name", e.task))
-            if first_robot is None and e.agent:
-                first_robot = e.agent
-            roles = d.get("roles")
-            for agent in roles.values() if isinstance(roles, dict) else ():
-                meet(agent)
-            if e.task not in subtasks:
-                tasks[e.task] = TaskSpan(e.task, names[e.task], e.time)
-        elif e.kind == "task-end" and e.task:
-            for key in [k for k in open_acts if k[0] == e.task]:
-                _close(open_acts.pop(key), e.time, "task ended")
-            if e.task in tasks:
-                tasks[e.task].end = e.time
-                tasks[e.task].outcome = d.get("outcome")
-        elif e.kind == "enter" and e.task:
-            last_entered[e.task] = str(d.get("state"))
-        elif e.kind == "exit" and e.task:
-            act = open_acts.pop((e.task, str(d.get("state"))), None)
-            if act is not None:
-                _close(act, e.time, f"left on {d['event']}" if d.get("event") else "left")
-        elif e.kind == "act" and e.agent:
-            state = last_entered.pop(e.task, None) if e.task else None
-            item = _act_item(e, state, names.get(e.task or "", ""))
-            previous = open_acts.pop((e.task or "", state), None)
-            if previous is not None:
-                _close(previous, e.time, "superseded")
-            open_acts[(e.task or "", state)] = item
-            items.append(item)
-        elif e.kind == "act-received" and e.agent:
-            item = _received_item(e)
-            received.append((e, item))
-            items.append(item)
-        elif e.kind == "act-unexpected" and e.agent:
-            for event, item in reversed(received):
-                if (event.agent, event.data.get("act"), event.task) == (
-                        e.agent, d.get("act"), e.task):
-                    item.kind = "unexpected"
-                    item.tooltip += "\nexpected by no task"
-                    break
-        elif (e.kind in ("exec-request", "person-action") and e.agent
-              and isinstance(d.get("request"), str)):
-            item = _action_item(e)
-            open_actions[d["request"]] = item
-            items.append(item)
-        elif e.kind == "exec-cancel" and isinstance(d.get("request"), str):
-            cancels[d["request"]] = f"cancel asked at {_t(e.time)} s: {d.get('reason', '')}"
-        elif (e.kind in ("exec-result", "person-action-end")
-              and isinstance(d.get("request"), str)):
-            item = open_actions.pop(d["request"], None)
-            if item is not None:
-                status = str(d.get("status", "done"))
-                item.kind = status if status in ACTION_STYLES else "done"
-                item.attrs["data-status"] = status
-                note = f"{status}" + (f": {d['reason']}" if d.get("reason") else "")
-                _close(item, e.time, note)
-        elif e.kind == "replan":
-            replan = str(d.get("reason", ""))
-        elif e.kind == "plan":
-            steps = d.get("steps") if isinstance(d.get("steps"), list) else []
-            label = (f"{'new plan' if replan is not None else 'plan'}: {len(steps)} "
-                     f"{'step' if len(steps) == 1 else 'steps'}")
-            tooltip = (f"plan for {names.get(e.task or '', e.task)} [{e.task}] at {_t(e.time)} s"
-                       + (f"\nreplanned because {replan}" if replan else "")
-                       + "".join(f"\n  {step}" for step in steps))
-            plans.append(Item("", "plan", e.time, e.time, label, tooltip, "plan", point=True,
-                              attrs={"data-task": e.task or "", "data-start": repr(e.time)}))
-            replan = None
-        elif e.kind in ("fact-added", "fact-removed"):
-            _attention(e, looks, items)
-
-    for request, item in open_actions.items():
-        item.kind = "running"
-        item.attrs["data-status"] = "running"
-        item.tooltip += "\nstill running when the log ends"
-        if request in cancels:
-            item.tooltip += f"\n{cancels[request]}"
-    for item in [*open_acts.values(), *looks.values()]:
-        item.tooltip += "\nstill going when the log ends"
-
-    robot = robot or first_robot or next(
-        (i.agent for i in items if i.row == "act" and not i.point), None)
-    agents = ([robot] if robot else []) + [a for a in seen if a != robot]
-    agents += [a for a in dict.fromkeys(i.agent for i in items) if a not in agents]
-    t_min, t_max = (min(times), max(times)) if times else (0.0, 0.0)
-    return Timeline(agents, items, list(tasks.values()), plans, robot, t_min, t_max)
-
-
-def _suspension(item: Item, time: float, suspended: bool) -> None:
-    """An act x task node suspended (an inner act, WAIT-ATTENTION …) or going on again."""
-    going = bool(item.suspended) and item.suspended[-1][1] is None
-    if suspended and not going:
-        item.suspended.append((time, None))
-    elif not suspended and going:
-        item.suspended[-1] = (item.suspended[-1][0], time)
-        item.tooltip += f"\nsuspended {_t(item.suspended[-1][0])} – {_t(time)} s"
-
-
-def _close(item: Item, time: float, note: str) -> None:
-    _suspension(item, time, False)
-    item.end = time
-    item.attrs["data-end"] = repr(time)
-    item.tooltip += f"\n{_t(item.start)} – {_t(time)} s ({_t(time - item.start)} s), {note}"
-
-
-def _act_item(e: LogEvent, state: str | None, task_name: str) -> Item:
-    act = str(e.data.get("act", "?"))
-    kind = f" ({e.data['act_type']})" if e.data.get("act_type") else ""
-    where = f" in state {state}" if state else ""
-    tooltip = f"{e.agent}: {act}{kind} of {task_name or e.task} [{e.task}]{where}"
-    label = f"{act} · {task_name}" if task_name else act
-    return Item(str(e.agent), "act", e.time, None, label, tooltip, "act",
-                ACT_COLOURS.get(act) or _PALETTE[zlib.crc32(act.encode()) % len(_PALETTE)],
-                attrs={"data-act": act, "data-task": e.task or "", "data-start": repr(e.time)})
-
-
-def _received_item(e: LogEvent) -> Item:
-    act = str(e.data.get("act", "?"))
-    tooltip = f"{e.agent} → {act} at {_t(e.time)} s" + (f" [{e.task}]" if e.task else "")
-    return Item(str(e.agent), "act", e.time, e.time, act, tooltip, "received", point=True,
-                attrs={"data-act": act, "data-start": repr(e.time)})
-
-
-def _action_item(e: LogEvent) -> Item:
-    d = e.data
-    atomic = str(d.get("atomic", "?"))
-    args = d.get("args") if isinstance(d.get("args"), dict) else {}
-    main = next((k for k in MAIN_ARGS if k in args), next(iter(sorted(args)), None))
-    label = f"{atomic} {_value(args[main])}" if main is not None else atomic
-    call = ", ".join(f"{k}={_value(v)}" for k, v in args.items())
-    tooltip = f"{e.agent}: {atomic}({call}) [{d['request']}, task {e.task}]"
-    return Item(str(e.agent), "action", e.time, None, label, tooltip, "running",
-                attrs={"data-atomic": atomic, "data-request": d["request"],
-                       "data-start": repr(e.time)})
-
-
-def _attention(e: LogEvent, looks: dict[tuple[str, str], Item], items: list[Item]) -> None:
-    """``s looksAt o`` facts, written ``{s, p, o}`` or ``{subject, predicate, object}``."""
-    d = e.data
-    subject, predicate, target = (d.get(k) if k in d else d.get(long) for k, long in
-                                  (("s", "subject"), ("p", "predicate"), ("o", "object")))
-    if predicate != "looksAt" or not isinstance(subject, str) or not subject:
-        return
-    key = (subject, _value(target))
-    if e.kind == "fact-removed":
-        item = looks.pop(key, None)
-        if item is not None:
-            _close(item, e.time, "looked away")
-    elif key not in looks:
-        item = Item(subject, "look", e.time, None, key[1], f"{subject} looks at {key[1]}",
-                    "look", LOOK_COLOUR, attrs={"data-start": repr(e.time)})
-        looks[key] = item
-        items.append(item)
-
 
 # -- drawing ---------------------------------------------------------------------
 
@@ -347,7 +104,7 @@ def render_timeline(events: Iterable[LogEvent], title: str = "", *, robot: str |
     lanes: list[tuple[str, dict[str, list[tuple[Item, int]]]]] = []
     for agent in tl.agents:
         rows = {}
-        for kind in ("act", "action", "look"):
+        for kind in ("act", "action", "team", "look"):
             rows[kind], r = _pack([i for i in tl.items if i.agent == agent and i.row == kind],
                                   x, tl.t_max, FONT - 1 if kind == "look" else FONT)
             right = max(right, r)
@@ -361,10 +118,10 @@ def render_timeline(events: Iterable[LogEvent], title: str = "", *, robot: str |
     y = band_top + max(1, _rows(band_rows)) * BAND_ROW + 22
     out.append(_axis(t0, end, step, x, y, above=True))
     lanes_top = y = y + 6
-    heights = {"act": ROW, "action": ROW, "look": LOOK_ROW}
-    captions = {"act": "acts", "action": "actions", "look": "looks at"}
+    heights = {"act": ROW, "action": ROW, "team": ROW, "look": LOOK_ROW}
+    captions = {"act": "acts", "action": "actions", "team": "team", "look": "looks at"}
     for index, (agent, rows) in enumerate(lanes):
-        counts = {kind: max(kind != "look", _rows(rows[kind])) for kind in rows}
+        counts = {kind: max(kind in ("act", "action"), _rows(rows[kind])) for kind in rows}
         lane_h = 2 * LANE_PAD + sum(counts[k] * heights[k] for k in counts)
         parts = [f'<rect class="lane-bg" x="{MARGIN}" y="{_n(y)}" '
                  f'width="{_n(width - 2 * MARGIN)}" height="{_n(lane_h)}" '
@@ -420,8 +177,8 @@ def _task_item(s: TaskSpan, t_end: float) -> Item:
     over = s.end is not None
     return Item("", "task", s.start, s.end if over else t_end,
                 f"{s.name}: {s.outcome}" if over else f"{s.name}: still running",
-                f"task {s.name} [{s.node}] {_t(s.start)} – "
-                + (f"{_t(s.end)} s, {s.outcome}" if s.end is not None else "…"), "task",
+                f"task {s.name} [{s.node}] {shown_time(s.start)} – "
+                + (f"{shown_time(s.end)} s, {s.outcome}" if s.end is not None else "…"), "task",
                 attrs={"data-task": s.node, "data-start": repr(s.start)}
                 | ({"data-end": repr(s.end)} if s.end is not None else {}))
 
@@ -498,7 +255,7 @@ def _item(item: Item, top: float, height: float, x: Any, t_end: float) -> str:
     if item.point:
         cx = x(item.start)
         r = height / 2 - 4
-        fill = "#ffffff" if item.kind == "unexpected" else "#e15f99"
+        fill = POINT_COLOURS.get(item.kind, POINT_COLOURS["received"])
         shape = (f'<polygon points="{_n(cx)},{_n(mid - r)} {_n(cx + r)},{_n(mid)} '
                  f'{_n(cx)},{_n(mid + r)} {_n(cx - r)},{_n(mid)}" fill="{fill}" '
                  'stroke="#9e2a63" stroke-width="1.5"/>')
@@ -551,10 +308,12 @@ def _band(item: Item, top: float, x: Any, t_end: float) -> str:
     right = x(item.end if item.end is not None else t_end)
     mid = top + BAND_ROW / 2
     if item.point:
-        return (f'<g class="plan"{attrs}><title>{_esc(item.tooltip)}</title>'
+        fill, stroke = ("#e15759", "#7a1f20") if item.kind == "respawn" else ("#edc948",
+                                                                               "#8a6d00")
+        return (f'<g class="{item.kind}"{attrs}><title>{_esc(item.tooltip)}</title>'
                 f'<polygon points="{_n(left)},{_n(mid - 5)} {_n(left + 5)},{_n(mid + 5)} '
-                f'{_n(left - 5)},{_n(mid + 5)}" fill="#edc948" stroke="#8a6d00"/>'
-                + _text(left + 8, mid + 4, item.label, "label", fill="#5c4a00") + "</g>")
+                f'{_n(left - 5)},{_n(mid + 5)}" fill="{fill}" stroke="{stroke}"/>'
+                + _text(left + 8, mid + 4, item.label, "label", fill=stroke) + "</g>")
     return (f'<g class="task"{attrs}><title>{_esc(item.tooltip)}</title>'
             f'<line x1="{_n(left)}" y1="{_n(mid + 5)}" x2="{_n(right)}" y2="{_n(mid + 5)}" '
             'stroke="#555" stroke-width="2"/>'
@@ -571,7 +330,7 @@ def _axis(t0: float, end: float, step: float, x: Any, y: float, *, above: bool) 
         tick = -4 if above else 4
         parts.append(f'<line x1="{_n(x(t))}" y1="{_n(y)}" x2="{_n(x(t))}" y2="{_n(y + tick)}" '
                      'stroke="#555" stroke-width="1"/>')
-        parts.append(_text(x(t), y - 7 if above else y + 15, f"{_t(t)} s", "tick",
+        parts.append(_text(x(t), y - 7 if above else y + 15, f"{shown_time(t)} s", "tick",
                            size=SMALL + 1, fill="#444", anchor="middle"))
     return f'<g class="axis">{"".join(parts)}</g>'
 
@@ -604,9 +363,28 @@ def _legend(tl: Timeline, left: float, top: float, width: float) -> tuple[str, f
     if any(i.row == "look" for i in tl.items):
         entries.append((f'<rect width="18" height="6" y="-7" fill="{LOOK_COLOUR}"/>',
                         "looks at"))
-    if tl.plans:
+    for kind, text in (("question", "question or help request"), ("answer", "answer"),
+                       ("expired", "question expired"), ("breakpoint", "breakpoint")):
+        if kind in kinds:
+            entries.append((diamond.format(POINT_COLOURS[kind]), text))
+    team = [i for i in tl.items if i.row == "team"]
+    for colour, text, shown in (
+            ("done", "team task done", any(i.attrs.get("data-status") == "done" for i in team)),
+            ("failed", "team task failed",
+             any(i.attrs.get("data-status") == "failed" for i in team)),
+            ("team-task", "team task under way",
+             any(i.kind == "team-task" and i.end is None for i in team)),
+            ("associated", "associated with a person", "associated" in kinds),
+            ("user-mode", "user mode (a person drives)", "user-mode" in kinds)):
+        if shown:
+            entries.append((f'<rect width="18" height="10" y="-9" '
+                            f'fill="{TEAM_COLOURS[colour]}"/>', text))
+    if any(p.kind == "plan" for p in tl.plans):
         entries.append(('<polygon points="9,-9 14,1 4,1" fill="#edc948" stroke="#8a6d00"/>',
                         "plan from the planner"))
+    if any(p.kind == "respawn" for p in tl.plans):
+        entries.append(('<polygon points="9,-9 14,1 4,1" fill="#e15759" stroke="#7a1f20"/>',
+                        "task respawned"))
     entries.append(('<line x1="9" y1="-12" x2="9" y2="4" stroke="#555" stroke-dasharray="2,3"/>',
                     "task start / end"))
     parts, cx, cy = [], left, top
@@ -662,17 +440,6 @@ def _fit(text: str, room: float, size: float) -> str:
         if text_width(short, size) <= room:
             return short
     return ""
-
-
-def _value(value: Any) -> str:
-    if isinstance(value, str):
-        return value if value and not re.search(r"\s", value) else json.dumps(value)
-    return json.dumps(value, ensure_ascii=False, separators=(",", ":"), sort_keys=True)
-
-
-def _t(t: float) -> str:
-    return f"{t:.3f}".rstrip("0").rstrip(".") if math.isfinite(t) else str(t)
-
 
 def _n(v: float) -> str:
     return f"{v:.2f}".rstrip("0").rstrip(".")

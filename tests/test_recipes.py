@@ -94,9 +94,9 @@ def test_the_event_that_entered_the_act_chooses_its_recipe():
         world.run(40)
         speech[name] = [a.get("text") for _, n, a in world.executor.started if n == "speak"]
         assert run.ended
-    assert speech["no"][-1] == "All right, I won't give you the bottle."
+    assert speech["no"][-1] == "I will not give you the bottle."
     assert speech["silence"][-1] == "You did not answer, so I will not give you the bottle."
-    assert speech["yes"][-1] == "Here is the bottle."
+    assert speech["yes"][-1] == "I gave you the bottle."
 
 
 def test_cyclic_ordering(shary, write):
@@ -135,8 +135,8 @@ def test_malformed_turtle(shary, write):
 
 def test_unknown_file_kind(shary, write):
     ((_, _, msg),) = _problems(shary, write("what.yaml", "hello: world\n"))
-    assert "not a known kind of file (acts, scheme, recipes, domain, problem, profile or " \
-           "scenario)" in msg
+    assert "not a known kind of file (acts, scheme, recipes, domain, problem, profile, " \
+           "scenario or team)" in msg
 
 
 def test_chronicle_goal_needs_bound_variables(shary, write):

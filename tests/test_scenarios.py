@@ -70,14 +70,14 @@ def test_end_task_says_what_happened(runs):
     def said(name):
         return _told(name, "speech", "jido")
 
-    assert said("give-bottle")[-1] == "Here is the yellow bottle."
-    assert said("give-bottle-refused")[-1] == "All right, I won't give you the yellow bottle."
+    assert said("give-bottle")[-1] == "I gave you the yellow bottle."
+    assert said("give-bottle-refused")[-1] == "I will not give you the yellow bottle."
     assert "I have finished." not in said("give-bottle-refused")
     assert said("give-bottle-abandoned")[-1].startswith("You are busy, so I will not give you")
     assert said("give-bottle-unanswered")[-1] == ("You did not answer, so I will not give you "
                                                   "the yellow bottle.")
     assert "Thank you for the yellow bottle." in said("clean-up-unreachable")
-    assert said("explore-new-objects")[-1] == "I have looked at the coffee area."
+    assert said("explore-new-objects")[-1] == "I explored the coffee area."
 
 
 @pytest.mark.parametrize("name", SCENARIOS)
@@ -138,7 +138,7 @@ def test_unreachable_pick_fails_with_its_reason_and_the_plan_asks_alice(runs):
     plans = _events(runs, "clean-up-unreachable", "plan")
     assert any(step.endswith("askhelp") for step in plans[-1].data["steps"])
     speech = [e.data["text"] for e in _events(runs, "clean-up-unreachable", "speech")]
-    assert any("Could you give it to me?" in text for text in speech)
+    assert "Can you give me the yellow bottle?" in speech
     # Alice's own stream, as in Fig. 10: she fetches the bottle and hands it over
     alice = [e.data["atomic"] for e in _events(runs, "clean-up-unreachable", "person-action")]
     assert alice == ["walk", "pick", "walk", "give"]
@@ -409,7 +409,7 @@ def test_a_new_object_is_built_seen_and_handed_over(runs):
     result, out = runs["give-red-cup"]
     assert result.passed, result.differences
     said = _told("give-red-cup", "speech", "jido")
-    assert "Here is the red cup." in said
+    assert "I gave you the red cup." in said
     failed = _told("give-red-cup", "failed", "jido")
     assert any("wooden-box is too big to grasp: 15 cm wide, the gripper opens to 8 cm" in f
                for f in failed)

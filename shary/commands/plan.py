@@ -33,8 +33,16 @@ def add_plan(sub: argparse._SubParsersAction) -> None:
                    help="the social rules to apply (default: the problem's selection; "
                    "'none' for none)")
     add_json_flag(p, "the plan, its score and its validation")
-    p.add_argument("--render", choices=("tree", "streams"),
-                   help="draw the decomposition tree or the per-agent streams")
+    p.add_argument("--render", choices=("tree", "streams", "policy"),
+                   help="draw the decomposition tree or the per-agent streams; for a "
+                   "conditional problem (with agendas), tree is the explored options, streams "
+                   "each branch's, policy the branches and the human decisions")
+    p.add_argument("--mode", choices=("expected", "worst"), default=None,
+                   help="conditional problems: a human decision costs its options' expected "
+                   "cost or the worst (default: the problem's policy, else expected)")
+    p.add_argument("--yaml", action="store_true",
+                   help="conditional problems: print the plan (abstract and primitive tasks, "
+                   "decisions, branches) as YAML")
     p.add_argument("-o", "--output", type=Path, metavar="OUT",
                    help="where --render draws (.svg, .png, .dot)")
     p.add_argument("--hddl", action="store_true",
@@ -60,6 +68,13 @@ def cmd_plan(args: argparse.Namespace) -> int:
     else:
         domain = planner.load_domain(args.domain)
         problem = planner.load_problem(args.problem, domain)
+    if problem.agendas:
+        from shary.commands.conditional import plan_conditional
+
+        return plan_conditional(args, problem)
+    if args.render == "policy" or args.yaml:
+        return error(f"{'--render policy' if args.render == 'policy' else '--yaml'} is for "
+                     "conditional problems (with agendas)", json_mode=args.json)
     if args.rules is not None:
         try:
             problem.select_rules([] if args.rules == "none" else

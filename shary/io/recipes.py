@@ -18,6 +18,7 @@ import networkx as nx
 
 from shary import builtin
 from shary.acts import ACT_TYPES, ActRegistry, acts_from_data, builtin_acts
+from shary.dialogue.speech import check_say
 from shary.io import schema
 from shary.io.schemes import load_scheme
 from shary.model import Scheme
@@ -300,6 +301,9 @@ class _Builder:
                 self._check_call(reader, where, "atomic task", atomic, self.library.atomic,
                                  self.library.atomic.get(atomic) and
                                  self.library.atomic[atomic].params, args)
+            if atomic == "say":  # a generated sentence: its act and action are checked now
+                for key, message in check_say(dict(_items(spec.get("with"))), env):
+                    reader.problem(where + ("with", key), message)
             if isinstance(task, str):
                 self._check_call(reader, where, "task", task, self.library.tasks,
                                  self.library.tasks.get(task) and

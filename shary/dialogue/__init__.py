@@ -1,0 +1,1 @@
+"""The communication manager's language: verbalization, referring expressions, requests."""

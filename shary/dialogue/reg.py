@@ -1,0 +1,298 @@
+"""Referring expressions: a description that singles an object out for one listener.
+
+"If the robot wants to talk about a green cube on a table but another green
+one is on a close shelf and a red cube is on the table, how can it do?"
+(JAHRVIS, Section VI-E).  It says "the green cube on the table": the fewest
+properties that tell the target from everything else *the listener* knows
+of, read from the listener's perspective of the fact base.
+
+The algorithm is Dale & Reiter's incremental algorithm (1995), extended with
+relations as Dale & Haddock (1991) and Krahmer & van Deemter's survey (2012)
+describe: the attributes are tried in a preference order (type, colour, size
+by default; :class:`Referrer` takes another order), each kept when it rules
+out a distractor; the type is always kept, as the head noun.  When the
+attributes leave distractors, the target's relations (on, in, near, left of
+…) to landmarks are tried, each landmark described in turn by the same
+algorithm (to a bounded depth, never through the target again).  The result
+is checked by evaluating it again over the whole perspective; a description
+that does not denote exactly the target is never returned: the referrer then
+says so (:attr:`Description.pointing`) and the speaker points at the object
+("this cube", with a ``point-at`` gesture).
+
+Nothing here runs SPARQL: a :class:`PerspectiveIndex` is built once from the
+perspective's triples (each attribute value's set of things, each relation's
+things per landmark), and describing an object is a few set intersections.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
+
+from shary.dialogue.verbalize import humanize
+
+__all__ = ["AGENT_TYPES", "ATTRIBUTES", "RELATIONS", "Description", "PerspectiveIndex",
+           "Referrer"]
+
+ATTRIBUTES = ("type", "color", "size")
+"""The attributes tried, in Dale & Reiter's preference order, unless told otherwise."""
+
+RELATIONS: Mapping[str, str] = {
+    "isOn": "on", "isIn": "in", "isUnder": "under", "isNear": "near",
+    "leftOf": "to the left of", "rightOf": "to the right of",
+    "behind": "behind", "inFrontOf": "in front of",
+}
+"""Spatial relations (predicate -> preposition), in the order they are tried."""
+
+AGENT_TYPES = frozenset({"Human", "Robot", "Agent", "Person"})
+"""Types of agents: an agent is named ("Alice"), never described."""
+
+_ADJECTIVE_ORDER = {"size": 0, "color": 2}
+"""English puts size before colour ("the small green cube"); other attributes in between."""
+
+_LABEL = "rdfs:label"
+
+
+@dataclass(frozen=True)
+class Description:
+    """What is said to pick out ``target``: its head noun, attributes and relations.
+
+    ``attributes`` are (predicate, value) pairs; ``relations`` are
+    (predicate, preposition, landmark's description); ``pointing`` is True
+    when no description singles the target out (say "this …" and point).
+    ``name`` is set for things referred to by a proper name (agents).
+    """
+
+    target: str
+    noun: str
+    attributes: tuple[tuple[str, str], ...] = ()
+    relations: tuple[tuple[str, str, Description], ...] = ()
+    pointing: bool = False
+    name: str | None = None
+    given: tuple[tuple[str, str], ...] = ()
+    """Attributes the listener already said: left out after "one" ("the one on the shelf")."""
+
+    @property
+    def gesture(self) -> tuple[str, str] | None:
+        """The gesture that goes with the words: ``("point-at", target)`` or None."""
+        return ("point-at", self.target) if self.pointing else None
+
+    @property
+    def relation_count(self) -> int:
+        """Relations used, the landmarks' own included (what the benchmark reports)."""
+        return sum(1 + d.relation_count for _, _, d in self.relations)
+
+    def text(self, head: str | None = None) -> str:
+        """The noun phrase: "the small green cube on the table" (``head="one"`` gives
+        "the one on the table", as the second half of a disambiguation question)."""
+        if self.name is not None:
+            return self.name
+        if self.pointing:
+            return f"this {self.noun}"
+        adjectives = sorted((a for a in self.attributes if a[0] != "type"
+                             and (head is None or a not in self.given)),
+                            key=lambda a: _ADJECTIVE_ORDER.get(a[0], 1))
+        words = [humanize(v) for _, v in adjectives] + [head or self.noun]
+        for _, preposition, landmark in self.relations:
+            words += [preposition, landmark.text()]
+        return "the " + " ".join(words)
+
+    def __str__(self) -> str:
+        return self.text()
+
+
+@dataclass
+class PerspectiveIndex:
+    """One perspective's facts indexed for describing things (see the module's docstring).
+
+    ``entities`` are the things with a type; ``values[thing][attribute]``
+    their attribute values; ``having[attribute][value]`` the things with that
+    value; ``related[predicate][landmark]`` the things in that relation to
+    the landmark; ``relations[thing]`` its (predicate, landmark) pairs in the
+    order relations are tried; ``labels`` the rdfs:label of classes and things.
+    """
+
+    entities: set[str] = field(default_factory=set)
+    values: dict[str, dict[str, set[str]]] = field(default_factory=dict)
+    having: dict[str, dict[str, set[str]]] = field(default_factory=dict)
+    related: dict[str, dict[str, set[str]]] = field(default_factory=dict)
+    relations: dict[str, list[tuple[str, str]]] = field(default_factory=dict)
+    labels: dict[str, str] = field(default_factory=dict)
+
+    @classmethod
+    def from_triples(cls, triples: Iterable[tuple[object, object, object]],
+                     attributes: Sequence[str] = ATTRIBUTES,
+                     relations: Mapping[str, str] = RELATIONS) -> PerspectiveIndex:
+        """Index (subject, predicate, object) names: what :meth:`FactDatabase.triples` gives."""
+        index = cls()
+        wanted = set(attributes) | {"type"}
+        rank = {p: i for i, p in enumerate(relations)}
+        for s, p, o in triples:
+            s, p = str(s), str(p)
+            if p in wanted:
+                o = str(o)
+                index.values.setdefault(s, {}).setdefault(p, set()).add(o)
+                index.having.setdefault(p, {}).setdefault(o, set()).add(s)
+                if p == "type":
+                    index.entities.add(s)
+            elif p in rank:
+                o = str(o)
+                index.related.setdefault(p, {}).setdefault(o, set()).add(s)
+                index.relations.setdefault(s, []).append((p, o))
+            elif p == _LABEL:
+                index.labels[s] = str(o)
+        for pairs in index.relations.values():
+            pairs.sort(key=lambda pair: (rank[pair[0]], pair[1]))
+        return index
+
+    @classmethod
+    def from_facts(cls, facts: object, perspective: str,
+                   attributes: Sequence[str] = ATTRIBUTES,
+                   relations: Mapping[str, str] = RELATIONS) -> PerspectiveIndex:
+        """Index one perspective of a :class:`shary.facts.FactDatabase`."""
+        return cls.from_triples(facts.triples(perspective), attributes, relations)  # type: ignore[attr-defined]
+
+
+class Referrer:
+    """Describes things for one listener, from an index of the listener's perspective.
+
+    ``attributes`` is the preference order of the incremental algorithm;
+    ``relations`` the spatial relations tried (predicate -> preposition),
+    in order; ``depth`` how deep landmarks may be described in turn.
+    """
+
+    def __init__(self, index: PerspectiveIndex, attributes: Sequence[str] = ATTRIBUTES,
+                 relations: Mapping[str, str] = RELATIONS, depth: int = 2):
+        self.index = index
+        self.attributes = tuple(a for a in attributes if a != "type")
+        self.relations = dict(relations)
+        self.depth = depth
+
+    @classmethod
+    def for_perspective(cls, facts: object, perspective: str,
+                        attributes: Sequence[str] = ATTRIBUTES,
+                        relations: Mapping[str, str] = RELATIONS) -> Referrer:
+        """A referrer over one perspective of a fact database (indexed once, now)."""
+        return cls(PerspectiveIndex.from_facts(facts, perspective, attributes, relations),
+                   attributes, relations)
+
+    # -- words -----------------------------------------------------------------------------------
+
+    def _kind(self, types: set[str]) -> str:
+        """The most specific of a thing's types: the one fewest things have (a Bottle
+        rather than an Object)."""
+        having = self.index.having["type"]
+        return min(types, key=lambda t: (len(having[t]), t))
+
+    def noun(self, thing: str) -> str:
+        """The head noun: the type's label, or the type's name in words ("coffee table")."""
+        types = self.index.values.get(thing, {}).get("type")
+        if not types:
+            return "thing"
+        kind = self._kind(types)
+        return self.index.labels.get(kind, humanize(kind))
+
+    def is_agent(self, thing: str) -> bool:
+        return bool(self.index.values.get(thing, {}).get("type", set()) & AGENT_TYPES)
+
+    def text(self, thing: str) -> str:
+        """The noun phrase for ``thing`` (what a :class:`Verbalizer` calls ``refer``)."""
+        return self.describe(thing).text()
+
+    # -- the algorithm ---------------------------------------------------------------------------
+
+    def describe(self, target: str, context: Iterable[str] | None = None,
+                 given: Iterable[tuple[str, str]] = (), by_name: bool = False) -> Description:
+        """The description of ``target`` that rules out every other thing of ``context``
+        (every entity of the perspective, unless given).
+
+        ``given`` are (attribute, value) pairs to say anyway (what the person
+        already said: "the green cube on the table" rather than "the cube on
+        the table").  Returns a pointing description when nothing else works,
+        or, with ``by_name``, the thing's identifier in words ("the coffee
+        table" for ``coffee-table``), unique as identifiers are, for a speaker
+        who cannot point.
+        """
+        index = self.index
+        if self.is_agent(target):
+            return Description(target, self.noun(target),
+                               name=index.labels.get(target) or humanize(target).title())
+        scope = None if context is None else set(context)
+        said = dict(given)
+        found = self._describe(target, scope, said, self.depth, frozenset({target}))
+        if found is not None and self.denotes(found, scope) == {target}:
+            return replace(found, given=tuple(a for a in found.attributes
+                                              if said.get(a[0]) == a[1]))
+        if by_name:
+            return Description(target, self.noun(target), name="the " + humanize(target))
+        return Description(target, self.noun(target), pointing=True)
+
+    def _describe(self, target: str, scope: set[str] | None, given: dict[str, str],
+                  depth: int, visited: frozenset[str]) -> Description | None:
+        index = self.index
+        values = index.values.get(target, {})
+        types = values.get("type")
+        if not types:
+            return None
+        kind = self._kind(types)
+        distractors = set(index.having["type"][kind])
+        if scope is not None:
+            distractors &= scope
+        distractors.discard(target)
+        chosen: list[tuple[str, str]] = [("type", kind)]
+        for attribute in self.attributes:
+            have = values.get(attribute)
+            if not have:
+                continue
+            value = given.get(attribute)
+            if value not in have:
+                # The value that rules out the most distractors (Dale & Reiter's
+                # "FindBestValue" for an attribute with several values).
+                value = min(have, key=lambda v: (len(distractors & index.having[attribute][v]), v))
+            left = distractors & index.having[attribute][value]
+            if len(left) < len(distractors) or attribute in given:
+                chosen.append((attribute, value))
+                distractors = left
+        relations: list[tuple[str, str, Description]] = []
+        if distractors and depth > 0:
+            for predicate, landmark in index.relations.get(target, ()):
+                if landmark in visited:
+                    continue
+                left = distractors & index.related[predicate][landmark]
+                if len(left) == len(distractors):
+                    continue
+                described = self._landmark(landmark, depth - 1, visited | {target})
+                if described is None:
+                    continue
+                relations.append((predicate, self.relations[predicate], described))
+                distractors = left
+                if not distractors:
+                    break
+        if distractors:
+            return None
+        return Description(target, self.noun(target), tuple(chosen), tuple(relations))
+
+    def _landmark(self, landmark: str, depth: int, visited: frozenset[str]) -> Description | None:
+        if self.is_agent(landmark):
+            return Description(landmark, self.noun(landmark),
+                               name=self.index.labels.get(landmark) or humanize(landmark).title())
+        return self._describe(landmark, None, {}, depth, visited)
+
+    def denotes(self, description: Description, scope: set[str] | None = None) -> set[str]:
+        """The things of ``scope`` (every entity if None) that fit the description: the
+        check that a description is never ambiguous."""
+        if description.name is not None:
+            return {description.target}
+        if description.pointing:
+            return {description.target}
+        index = self.index
+        found: set[str] | None = set(scope) if scope is not None else None
+        for attribute, value in description.attributes:
+            have = index.having.get(attribute, {}).get(value, set())
+            found = set(have) if found is None else found & have
+        for predicate, _, landmark in description.relations:
+            near: set[str] = set()
+            for thing in self.denotes(landmark):
+                near |= index.related.get(predicate, {}).get(thing, set())
+            found = near if found is None else found & near
+        return found if found is not None else set(index.entities)
