@@ -5,10 +5,16 @@ second): check the precondition, make the child state, run the effects, price
 the action, and -- when a rule scores the plan's relations (crossed links,
 waits, makespan) -- time it against the actions before it.  :class:`Stepper`
 turns each action into one closure that does all of that with what it needs
-already looked up: the effects as a flat tuple, the cost and duration as a
-closure or a constant, the agent's rates by agent.  The state is read through
-its two dicts directly (one call per read, not two), and the values the action
-reads are recorded only when a rule needs them.
+already looked up: the effects as a flat tuple (``param.attr = <constant or
+param>`` effects written by the step itself, from the argument tuple), the
+cost and duration as a closure or a constant (cached by arguments with the
+agent's rates when they read only static attributes), the variables bound by a
+dict display (:func:`binder`).  The closures the expressions call back (the
+state's ``get`` and ``put``) are made once per action, not per call: a step is
+never re-entered, so one call's reads and writes live in containers cleared at
+each call.  The state is read through its two dicts directly (one call per
+read, not two), and the values the action reads are recorded only when a rule
+needs them.
 
 The relations are kept as the plan grows, in one small dict per state (under
 :data:`TIMES_KEY`, copied from its parent's: one lookup a read, where entries
