@@ -115,6 +115,9 @@ class ActTask:
         self.sup.tree.set_state(self.node, ONGOING, reason)
         for run in self.steps.values():
             if run.child is not None and not run.child.ended:
+                if run.state == SUSPENDED:  # the subtask goes on: so does its step
+                    run.state = ONGOING
+                    self.sup.tree.set_state(run.node, ONGOING, reason)
                 run.child.resume(reason)
             elif run.state == SUSPENDED:
                 self.sup.tree.set_state(run.node, TODO, reason)

@@ -41,7 +41,7 @@ from .narration import Narrator, Report
 from .objects import is_new, new_object
 from .people import Person
 from .perception import Noise, Perception
-from .scenario import Happened, Scenario, judge, load_scenario
+from .scenario import Happened, Scenario, is_team_scenario, judge, load_scenario
 from .simulation import Simulation, standing_height
 from .world import (
     BOTTLES,
@@ -108,7 +108,12 @@ def run_scenario(path: str | Path, *, seed: int = 0, out: str | Path | None = No
                  snapshots: bool = False, gui: bool = False,
                  report: Report | None = None) -> RunResult:
     """Run one scenario (see the module's docstring); ``report`` is told the story as it
-    happens (see :mod:`sim.narration`; :class:`sim.narration.ConsoleReport` prints it)."""
+    happens (see :mod:`sim.narration`; :class:`sim.narration.ConsoleReport` prints it).
+    A team scenario (``site: seam-welding``) runs on its site (:mod:`sim.weld.run`)."""
+    if is_team_scenario(path):
+        from .weld.run import run_weld
+
+        return run_weld(path, seed=seed, out=out, snapshots=snapshots, gui=gui, report=report)
     scenario, library, domain = load(path)
     out_dir = Path(out) if out is not None else None
     if out_dir is not None:

@@ -25,6 +25,7 @@ from shary.acts import ActRegistry, builtin_acts
 from shary.io.recipes import load_library
 from shary.recipes import RecipeLibrary
 from shary.recognition.models import builtin_models, load_action_models
+from userfiles import yamlsafe
 from userfiles.errors import FileError
 from userfiles.reader import Reader, read, spelled
 from userfiles.schema import did_you_mean, validator
@@ -167,7 +168,21 @@ def load_scenario(path: str | Path, *, acts: ActRegistry | None = None) -> Scena
     ``shary validate`` with the scenario).
     """
     path = Path(path)
+    if is_team_scenario(path):
+        from .weld.scenario import load_weld_scenario
+
+        return load_weld_scenario(path)  # type: ignore[return-value]
     return read(path, _schema("scenario"), lambda reader: _Reading(reader, acts).scenario())
+
+
+def is_team_scenario(path: str | Path) -> bool:
+    """Whether a scenario file runs a team on a site (``site: seam-welding``, see
+    :mod:`sim.weld.scenario`) rather than one robot in the living room."""
+    try:
+        data = yamlsafe.load_file(path).data
+    except (FileError, OSError):
+        return False  # the scenario reader reports what is wrong with it
+    return isinstance(data, dict) and "site" in data
 
 
 class _Reading:

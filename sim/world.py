@@ -97,6 +97,7 @@ MODELS: dict[str, ModelSpec] = {
         "r_forearm_roll_joint": -1.42, "r_wrist_flex_joint": -1.84, "r_wrist_roll_joint": 0.21,
         "head_tilt_joint": 0.6,
     }),
+    "k10": ModelSpec("k10.urdf"),  # the seam-welding case's inspection rover (sim/weld)
 }
 
 
@@ -313,12 +314,7 @@ class LivingRoom:
                 self.call(pb.resetDebugVisualizerCamera, math.hypot(dx, dy, dz),
                           math.degrees(math.atan2(dy, dx)) + 90,
                           -math.degrees(math.atan2(dz, math.hypot(dx, dy))), cam.target)
-            self._build_room()
-            for name, (x, y, yaw, parts) in FURNITURE.items():
-                self._add_static(name, x, y, yaw, parts)
-            for name, (x, y, rgba) in BOTTLES.items():
-                self.add_bottle(name, x, y, self.top("coffee-table"), rgba)
-            self.roadmap = self.build_roadmap()
+            self._furnish()
             if robot is not None:
                 self.add_robot(robot, robot, "base")
         except BaseException:
@@ -344,6 +340,16 @@ class LivingRoom:
         self.close()
 
     # ----------------------------------------------------------------- building
+
+    def _furnish(self) -> None:
+        """Build the scene: the room, its furniture and bottles, the roadmap (another
+        site, such as :class:`sim.weld.site.WeldSite`, builds its own here)."""
+        self._build_room()
+        for name, (x, y, yaw, parts) in FURNITURE.items():
+            self._add_static(name, x, y, yaw, parts)
+        for name, (x, y, rgba) in BOTTLES.items():
+            self.add_bottle(name, x, y, self.top("coffee-table"), rgba)
+        self.roadmap = self.build_roadmap()
 
     def _add_static(self, name: str, x: float, y: float, yaw: float,
                     parts: Sequence[Part]) -> int:
