@@ -246,10 +246,10 @@ class _Run:
             noise=Noise(dict(scenario.flicker), list(scenario.lost)), rng=self.loop.random)
         self.sim.observers.append(self.perception.update)
         self.chronicles = ChronicleRecognizer(self.sup) if library.chronicles else None
+        self.sessions = Sessions(self.sup)
         self.action_models = (load_action_models(scenario.action_models, self.facts,
                                                  atomic=library.atomic)
                               if scenario.action_models else None)
-        self.sessions = Sessions(self.sup)
 
     # -- setting up ----------------------------------------------------------------
 
@@ -363,12 +363,12 @@ class _Run:
         for person in self.people.values():
             person.begin()
         self.perception.start()
+        self.sessions.start()  # the interaction is going on with whoever attends already
         if self.action_models is not None:  # what is there at the start was not done by anyone
             self.sup.recognize(self.action_models)
         if self.stack is not None:
             self.stack.start(self.sup, self.people[self.stack.partner_name],
                              self.scenario.shared_plan["decision-wait"])
-        self.sessions.start()  # the interaction is going on with whoever attends already
         start = time.perf_counter()
         while self.loop.now() < self.scenario.timeout - 1e-9:
             self.loop.advance(min(CHUNK, self.scenario.timeout - self.loop.now()))
