@@ -57,13 +57,19 @@ def key(team: str, address: str, kind: str) -> str:
 
 def encode(message: Message) -> bytes:
     """The message's bytes on the wire."""
-    return json.dumps({"v": VERSION, **message.as_dict()}, separators=(",", ":"),
-                      ensure_ascii=False).encode()
+    data = message.as_dict()
+    data["v"] = VERSION
+    return _ENCODE(data).encode()
 
 
 def _not_json(constant: str) -> Any:
     """NaN and Infinity: Python's json reads them, JSON has no such thing."""
     raise ValueError(f"{constant} is not a JSON number")
+
+
+_ENCODE = json.JSONEncoder(separators=(",", ":"), ensure_ascii=False).encode
+_DECODE = json.JSONDecoder(parse_constant=_not_json).decode
+"""Made once: ``json.dumps``/``loads`` with options build a new coder on every call."""
 
 
 def _is_str(v: Any) -> bool:
@@ -129,7 +135,7 @@ def decode(payload: bytes, *, key_expr: str | None = None) -> Message:
     if len(payload) > MAX_BYTES:
         raise WireError(f"message of {len(payload)} bytes (at most {MAX_BYTES})")
     try:
-        data = json.loads(payload, parse_constant=_not_json)
+        data = _DECODE(payload.decode())
     except (ValueError, RecursionError) as exc:
         raise WireError(f"not JSON: {str(exc)[:80]}") from None
     if not isinstance(data, dict):

@@ -77,7 +77,7 @@ class ZenohPort(MessagePort):
         self.on_clock: Callable[[Clock], Any] | None = None
         self.on_presence: Callable[[str, bool], Any] | None = None
         """Told ``(name, joined)`` when a process of the team joins or leaves."""
-        self._publishers: dict[str, Any] = {}
+        self._publishers: dict[tuple[str, str], Any] = {}
         self.session = zenoh.open(config)
         try:
             self._subscribers = [
@@ -123,11 +123,12 @@ class ZenohPort(MessagePort):
 
     def publish(self, message: Message) -> None:
         """Put ``message`` on the wire now (the clock's messages do not wait for idle)."""
-        expr = key(self.team, message.to, message.kind)
-        publisher = self._publishers.get(expr)
+        route = (message.to, message.kind)
+        publisher = self._publishers.get(route)
         if publisher is None:
-            publisher = self._publishers[expr] = self.session.declare_publisher(
-                expr, congestion_control=zenoh.CongestionControl.BLOCK)
+            publisher = self._publishers[route] = self.session.declare_publisher(
+                key(self.team, message.to, message.kind),
+                congestion_control=zenoh.CongestionControl.BLOCK)
         publisher.put(encode(message))
         if message.kind != Clock.kind:
             self.wire_sent[message.to] = self.wire_sent.get(message.to, 0) + 1
