@@ -194,7 +194,7 @@ def test_zenoh_delivers_refuses_and_notices_a_leaving_peer() -> None:
         a.send(Act("A", "B", act="PONG"))
         a.flush()
         _wait(lambda: got, 5.0, b)
-        assert got == [Act("A", "B", act="PONG")] and a.wire_sent == {"B": 1}
+        assert got == [Act("A", "B", act="PONG")] and a.wire_sent == {"A>B": 1}
         b.close()
         _wait(lambda: ("agent-left", {"agent": "B"}) in rows, 1.0, a)
     finally:

@@ -79,9 +79,14 @@ class Member:
         self.team.loop.random.seed(seed)
         self.port = ports[0]
         self.port.on_clock = self._clock
+        self.port.on_presence = self._presence
         self.at: float | None = None
         """The time of the last step (None before the first)."""
         self.stopped: str | None = None
+
+    def _presence(self, name: str, joined: bool) -> None:
+        if name == CONDUCTOR and not joined:
+            self.stopped = "the managers left"
 
     def _clock(self, message: Clock) -> None:
         if message.state == "stop":
@@ -195,7 +200,8 @@ class Conductor:
         self.port.publish(Clock(CLOCK, name, state="step", time=at))
 
     def _balanced(self, at: float) -> bool:
-        """Every live member idle at ``at``, every message to a live address received."""
+        """Every live member idle at ``at``, every message between live addresses received
+        (counted per link: what a lost member sent, or was sent, is not waited for)."""
         if self.port.outbox or self.port.inbox.qsize():
             return False
         reports = [self.reports.get(m) for m in self.live]
@@ -209,8 +215,12 @@ class Conductor:
                 sent[address] = sent.get(address, 0) + n
             for address, n in report.received.items():
                 received[address] = received.get(address, 0) + n
-        alive = self.live | set(self.port.local)
-        return all(sent.get(a, 0) == received.get(a, 0) for a in alive)
+        alive = self.live | self.port.local
+        for link in sent.keys() | received.keys():
+            source, _, target = link.partition(">")
+            if source in alive and target in alive and sent.get(link) != received.get(link):
+                return False
+        return True
 
     # -- running --------------------------------------------------------------------
 
@@ -244,9 +254,9 @@ class Conductor:
                     dues.append(own)
                 if not dues or min(dues) > limit:
                     break
+                if self.pace and self._paced(start + min(dues) * self.pace):
+                    continue  # something happened meanwhile (a member left …): look again
                 at = min(dues)
-                if self.pace:
-                    time.sleep(max(0.0, start + at * self.pace - time.monotonic()))
                 for name in self.live:  # the step first: what we send at ``at`` comes after
                     self._tell(name, at)
                 loop.advance(at - loop.now())
@@ -256,6 +266,17 @@ class Conductor:
             for name in self.members:
                 port.publish(Clock(CLOCK, name, state="stop",
                                    reason=team.tasks.outcome or "time is up"))
+
+    def _paced(self, deadline: float) -> bool:
+        """Wait for the wall clock to reach ``deadline``, handling what arrives meanwhile
+        (a member that leaves is noticed at once, not after the wait); True if the wait
+        was cut short by work."""
+        port, loop = self.port, self.team.loop
+        while (left := deadline - time.monotonic()) > 0:
+            if port.pump(min(left, WAIT)) and loop.run_until_idle():
+                port.flush()
+                return True
+        return False
 
     def close(self) -> None:
         try:

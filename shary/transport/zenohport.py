@@ -71,7 +71,7 @@ class ZenohPort(MessagePort):
         self.inbox: queue.SimpleQueue[tuple[str, str, bytes]] = queue.SimpleQueue()
         self.outbox: list[Message] = []
         self.wire_sent: dict[str, int] = {}
-        """Messages published, per address (the shared clock's accounting)."""
+        """Messages published, per link ``"SENDER>TO"`` (the shared clock's accounting)."""
         self.wire_received: dict[str, int] = {}
         self.refused = 0
         self.on_clock: Callable[[Clock], Any] | None = None
@@ -131,7 +131,8 @@ class ZenohPort(MessagePort):
                 congestion_control=zenoh.CongestionControl.BLOCK)
         publisher.put(encode(message))
         if message.kind != Clock.kind:
-            self.wire_sent[message.to] = self.wire_sent.get(message.to, 0) + 1
+            link = f"{message.sender}>{message.to}"
+            self.wire_sent[link] = self.wire_sent.get(link, 0) + 1
 
     def flush(self) -> None:
         """Publish what the loop sent (an idle hook: after the log's commit)."""
@@ -176,7 +177,8 @@ class ZenohPort(MessagePort):
             if self.on_clock is not None:
                 self.loop.call_soon(self.on_clock, message)
             return
-        self.wire_received[message.to] = self.wire_received.get(message.to, 0) + 1
+        link = f"{message.sender}>{message.to}"
+        self.wire_received[link] = self.wire_received.get(link, 0) + 1
         self.deliver(message)
 
     def close(self) -> None:
