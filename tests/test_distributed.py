@@ -48,7 +48,7 @@ def _done(path: Path) -> list[tuple[str, str, float]]:
     return [(e.task, e.agent, e.time) for e in read_events(path) if e.kind == "task-done"]
 
 
-def test_team_up_runs_the_goal_as_in_process(tmp_path: Path) -> None:
+def test_team_up_runs_the_goal_as_in_process(tmp_path: Path, shary) -> None:
     process = _up(tmp_path / "logs", "--json")
     try:
         out, err = process.communicate(timeout=180)
@@ -72,6 +72,12 @@ def test_team_up_runs_the_goal_as_in_process(tmp_path: Path) -> None:
     # each person's own log holds what that person did
     heard = [e for e in read_events(logs / "EVA1.sqlite") if e.kind == "message"]
     assert [e.data["status"] for e in heard] == ["accepted", "done"]
+    # shary log merges the four logs into one view ordered by time
+    status, out, _ = shary("log", *sorted(map(str, logs.glob("*.sqlite"))), "--json")
+    rows = [json.loads(line) for line in out.splitlines()]
+    assert status == 0 and [r["time"] for r in rows] == sorted(r["time"] for r in rows)
+    assert {r["agent"] for r in rows if r["kind"] == "message"} >= {"EVA1", "EVA2", "IVA",
+                                                                      "tasks"}
 
 
 def test_a_member_killed_mid_task_is_noticed_and_its_task_goes_to_another(
