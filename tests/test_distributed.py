@@ -1,7 +1,8 @@
 """A team spread over processes over Zenoh on loopback: ``shary team up`` runs the
 managers and starts every person as ``shary agent``; the outcome and the times are the
 in-process run's; a member killed with SIGKILL mid-task is noticed within a second, its
-task goes to another, the goal is still met, and its log up to its last commit is there.
+task goes to another, the goal is still met, its log up to its last commit is there, and
+the member restarted joins the running team.
 
 Two runs of a few processes each (slow on a loaded machine: keep it to these)."""
 
@@ -29,9 +30,10 @@ def _endpoint() -> str:
         return f"tcp/127.0.0.1:{s.getsockname()[1]}"
 
 
-def _up(logdir: Path, *extra: str) -> subprocess.Popen[str]:
+def _up(logdir: Path, *extra: str, endpoint: str | None = None) -> subprocess.Popen[str]:
     return subprocess.Popen(
-        [sys.executable, "-u", "-m", "shary", "team", "up", str(TEAM), "--listen", _endpoint(),
+        [sys.executable, "-u", "-m", "shary", "team", "up", str(TEAM), "--listen",
+         endpoint or _endpoint(),
          "--log-dir", str(logdir), *extra],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
         env={**os.environ, "COLUMNS": "200"}, start_new_session=True)
@@ -82,8 +84,10 @@ def test_team_up_runs_the_goal_as_in_process(tmp_path: Path, shary) -> None:
 
 def test_a_member_killed_mid_task_is_noticed_and_its_task_goes_to_another(
         tmp_path: Path) -> None:
-    process = _up(tmp_path / "logs", "--pace", "0.1")
+    endpoint = _endpoint()
+    process = _up(tmp_path / "logs", "--pace", "0.2", endpoint=endpoint)
     assert process.stdout is not None
+    restart = None
     lines: list[tuple[float, str]] = []
     pids: dict[str, int] = {}
     killed_at = None
@@ -96,9 +100,21 @@ def test_a_member_killed_mid_task_is_noticed_and_its_task_goes_to_another(
             if killed_at is None and re.search(r"mount-P\d running: EVA1", line):
                 os.kill(pids["EVA1"], signal.SIGKILL)
                 killed_at = time.monotonic()
+            if line.strip() == "- EVA1 left":  # restarted: it joins the running team
+                restart = subprocess.Popen(
+                    [sys.executable, "-m", "shary", "agent", "EVA1", "--team", str(TEAM),
+                     "--connect", endpoint, "--log-dir", str(tmp_path / "logs")],
+                    stdin=subprocess.DEVNULL)
         process.wait(timeout=60)
     finally:
         _stop(process)
+        if restart is not None:
+            try:
+                restart.wait(timeout=10)  # it stops with the team
+            finally:
+                if restart.poll() is None:
+                    restart.kill()
+                    restart.wait()
     text = "\n".join(line for _, line in lines)
     assert killed_at is not None, text
     assert process.returncode == 0, text + process.stderr.read()
@@ -107,7 +123,10 @@ def test_a_member_killed_mid_task_is_noticed_and_its_task_goes_to_another(
     assert re.search(r"! EVA1 lost while running mount-P\d: offered again", text)
     logs = tmp_path / "logs"
     done = {task: agent for task, agent, _ in _done(logs / "managers.sqlite")}
-    assert done == {"mount-P1": "EVA2", "mount-P2": "EVA2", "check": "IVA"}
+    assert set(done) == {"mount-P1", "mount-P2", "check"} and done["check"] == "IVA"
+    # the restarted EVA1 joined the running team, in a log of its own
+    assert [line for _, line in lines if line.strip().startswith("+ EVA1 joined")][1:], text
+    assert (logs / "EVA1.1.sqlite").exists()
     # the killed member's log is readable up to its last commit, and everything the
     # managers acted on (its acceptance) is in it
     eva1 = [e for e in read_events(logs / "EVA1.sqlite") if e.kind == "message"]

@@ -53,7 +53,10 @@ def _log(logdir: Path | None, name: str, seed: int) -> Any:
     from shary.log import ContextLog
 
     logdir.mkdir(parents=True, exist_ok=True)
-    return ContextLog(logdir / f"{name}.sqlite", seed=seed, overwrite=True)
+    path, n = logdir / f"{name}.sqlite", 1
+    while path.exists():  # a restart keeps the log of the process that died
+        path, n = logdir / f"{name}.{n}.sqlite", n + 1
+    return ContextLog(path, seed=seed)
 
 
 class Member:
@@ -163,6 +166,8 @@ class Conductor:
         self.live: set[str] = set()
         self.reports: dict[str, Clock] = {}
         self.lost: list[str] = []
+        self.offsets: dict[str, int] = {}
+        """Per link, sent - received left over from a member's earlier life (a restart)."""
 
     def _record(self, record: Callable[..., None]) -> Callable[..., None]:
         """The team's record, shown on the display too (the rows worth a line)."""
@@ -182,7 +187,11 @@ class Conductor:
             return
         if joined:
             self.live.add(name)
-            if self.team.tasks.started:
+            if self.team.tasks.started:  # a restart: its counts start again from zero
+                sent, received = self._totals()
+                for link in sent.keys() | received.keys():
+                    if name in link.split(">"):
+                        self.offsets[link] = sent.get(link, 0) - received.get(link, 0)
                 self.team.tasks.agent_back(name)
                 self._tell(name, self.team.loop.now())
         else:
@@ -204,23 +213,29 @@ class Conductor:
         (counted per link: what a lost member sent, or was sent, is not waited for)."""
         if self.port.outbox or self.port.inbox.qsize():
             return False
-        reports = [self.reports.get(m) for m in self.live]
-        if any(r is None or r.time != at for r in reports):
+        if any(self.reports.get(m) is None or self.reports[m].time != at for m in self.live):
             return False
-        sent: dict[str, int] = dict(self.port.wire_sent)
-        received: dict[str, int] = dict(self.port.wire_received)
-        for report in reports:
-            assert report is not None
-            for address, n in report.sent.items():
-                sent[address] = sent.get(address, 0) + n
-            for address, n in report.received.items():
-                received[address] = received.get(address, 0) + n
+        sent, received = self._totals()
         alive = self.live | self.port.local
         for link in sent.keys() | received.keys():
             source, _, target = link.partition(">")
-            if source in alive and target in alive and sent.get(link) != received.get(link):
+            if (source in alive and target in alive
+                    and sent.get(link, 0) - received.get(link, 0) != self.offsets.get(link, 0)):
                 return False
         return True
+
+    def _totals(self) -> tuple[dict[str, int], dict[str, int]]:
+        """Messages sent and received per link, by everyone live, as last reported."""
+        sent: dict[str, int] = dict(self.port.wire_sent)
+        received: dict[str, int] = dict(self.port.wire_received)
+        for name in self.live:
+            report = self.reports.get(name)
+            if report is not None:
+                for link, n in report.sent.items():
+                    sent[link] = sent.get(link, 0) + n
+                for link, n in report.received.items():
+                    received[link] = received.get(link, 0) + n
+        return sent, received
 
     # -- running --------------------------------------------------------------------
 
