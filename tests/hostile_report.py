@@ -3,7 +3,7 @@
     python tests/hostile_report.py [--json]
 
 The tests assert the rule (exit 2 at a line of the file, no traceback, under
-10 s and 500 MB); this script says by how much each format stays inside it.
+10 s of CPU time and 500 MB); this script says by how much each format stays inside it.
 The figures come from the harness itself (``tests/hostile.py``), which notes
 every run it measures when ``SHARY_HOSTILE_REPORT`` names a file.
 """
