@@ -4,7 +4,7 @@ HRI/OS (Section 3.1) has agents talk through an agent framework (OAA) and a
 data channel.  Messages are plain frozen dataclasses of JSON-friendly fields:
 the in-process port hands the objects over, the Zenoh port encodes
 :meth:`Message.as_dict` with :mod:`shary.transport.wire` and decodes with
-:func:`message_from_dict` after checking them against the versioned schema.
+:func:`build` after checking every field against the versioned schema.
 
 The kinds between agents:
 
@@ -171,9 +171,14 @@ def _names(cls: type[Message]) -> tuple[str, ...]:
 
 def message_from_dict(data: dict[str, Any]) -> Message:
     """The message that :meth:`Message.as_dict` gave (KeyError/TypeError when it is not one)."""
-    cls = KINDS[data["kind"]]
-    names = _names(cls)
-    values = {k: v for k, v in data.items() if k in names}
+    kind = data["kind"]
+    names = _names(KINDS[kind])
+    return build(kind, {k: v for k, v in data.items() if k in names})
+
+
+def build(kind: str, values: dict[str, Any]) -> Message:
+    """The message of ``kind`` with these fields (JSON lists made tuples again)."""
+    cls = KINDS[kind]
     if "choices" in values:
         values["choices"] = tuple(values["choices"])
     for name in ("added", "removed"):

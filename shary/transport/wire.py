@@ -30,7 +30,7 @@ from shary.transport.messages import (
     QUESTION_TYPES,
     Message,
     Question,
-    message_from_dict,
+    build,
 )
 
 VERSION = 1
@@ -128,6 +128,8 @@ TYPES: dict[str, tuple[Any, dict[str, Any]]] = {
 CHECKS: dict[str, dict[str, Any]] = {
     kind: {f.name: TYPES[str(f.type)][0] for f in fields(cls)} for kind, cls in KINDS.items()}
 REQUIRED = ("sender", "to")
+_NAMES_SEEN: set[str] = set()
+"""Names already found good (a team has a few; a regex per message is not free)."""
 
 
 def decode(payload: bytes, *, key_expr: str | None = None) -> Message:
@@ -143,7 +145,7 @@ def decode(payload: bytes, *, key_expr: str | None = None) -> Message:
     version = data.pop("v", None)
     if version != VERSION:
         raise WireError(f"schema version {version!r} (this peer reads version {VERSION})")
-    kind = data.get("kind")
+    kind = data.pop("kind", None)
     checks = CHECKS.get(kind) if isinstance(kind, str) else None
     if checks is None:
         raise WireError(f"unknown kind {kind!r} (one of {', '.join(KINDS)})")
@@ -151,8 +153,6 @@ def decode(payload: bytes, *, key_expr: str | None = None) -> Message:
         if name not in data:
             raise WireError(f"a {kind} message needs {name!r}")
     for name, value in data.items():
-        if name == "kind":
-            continue
         check = checks.get(name)
         if check is None:
             raise WireError(f"a {kind} message has no field {name!r}")
@@ -160,8 +160,11 @@ def decode(payload: bytes, *, key_expr: str | None = None) -> Message:
             raise WireError(f"field {name!r} of a {kind} message: {json.dumps(value)[:60]} "
                             "has the wrong type")
     for name in REQUIRED:
-        if not NAME.match(data[name]):
-            raise WireError(f"field {name!r}: {data[name][:60]!r} is not an agent's name")
+        if data[name] not in _NAMES_SEEN:
+            if not NAME.match(data[name]):
+                raise WireError(f"field {name!r}: {data[name][:60]!r} is not an agent's name")
+            if len(_NAMES_SEEN) < 10_000:
+                _NAMES_SEEN.add(data[name])
     if kind == Question.kind and data.get("type", QUESTION_TYPES[0]) not in QUESTION_TYPES:
         raise WireError(f"question type {data['type']!r} (one of {', '.join(QUESTION_TYPES)})")
     if key_expr is not None:
@@ -169,7 +172,7 @@ def decode(payload: bytes, *, key_expr: str | None = None) -> Message:
         if len(parts) != 4 or parts[2] != data["to"] or parts[3] != kind:
             raise WireError(f"a {kind} message to {data['to']!r} published under "
                             f"{key_expr!r}")
-    return message_from_dict(data)
+    return build(kind, data)
 
 
 def json_schema() -> dict[str, Any]:
