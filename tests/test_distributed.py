@@ -134,3 +134,14 @@ def test_a_member_killed_mid_task_is_noticed_and_its_task_goes_to_another(
                if e.kind == "task-running" and e.agent == "EVA1"]
     assert running and all(any(m.task == r.task and m.data["status"] == "accepted"
                                for m in eva1) for r in running)
+
+
+def test_what_cannot_run_distributed_is_refused_plainly(shary) -> None:
+    nobody = _endpoint()
+    status, _, err = shary("agent", "EVA1", "--team", str(TEAM), "--connect", nobody)
+    assert status == 2 and f"cannot join the team at {nobody}" in err and ".rs:" not in err
+    seam = Path(__file__).parent / "data" / "team" / "seam-team.yaml"
+    status, _, err = shary("agent", "K-10", "--team", str(seam))
+    assert status == 2 and "K-10 is a robot" in err
+    status, _, err = shary("agent", "NOBODY", "--team", str(TEAM))
+    assert status == 2 and "no agent 'NOBODY' in team 'panels'" in err

@@ -11,6 +11,7 @@ docs/distributed.md.
 from __future__ import annotations
 
 import argparse
+import re
 import signal
 import subprocess
 import sys
@@ -94,6 +95,8 @@ def _robots(spec: Any, names: list[str]) -> list[str]:
 
 
 def cmd_agent(args: argparse.Namespace) -> int:
+    import zenoh
+
     from shary.team import load_team
     from shary.transport.distributed import Member
 
@@ -104,14 +107,20 @@ def cmd_agent(args: argparse.Namespace) -> int:
     if _robots(spec, [args.agent]):
         return error(f"{args.agent} is a robot: its executors come from a world, which does "
                      "not run as a separate process yet (docs/distributed.md)")
-    member = Member(spec, args.agent, connect=args.connect, logdir=args.log_dir,
-                    seed=args.seed)
+    try:
+        member = Member(spec, args.agent, connect=args.connect, logdir=args.log_dir,
+                        seed=args.seed)
+    except zenoh.ZError as exc:
+        return error(f"cannot join the team at {args.connect}: {_reason(exc)} (is "
+                     "`shary team up` running there?)")
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))  # close the session on a kill
     reason = member.run()
     return 0 if reason in ("done", "failed", "time is up", "stopped") else 1
 
 
 def cmd_team_up(args: argparse.Namespace) -> int:
+    import zenoh
+
     from shary.team import load_team
     from shary.transport.distributed import Conductor
 
@@ -128,8 +137,12 @@ def cmd_team_up(args: argparse.Namespace) -> int:
     def display(kind: str, data: dict[str, Any]) -> None:
         show(_line(kind, data, children))
 
-    conductor = Conductor(spec, listen=args.listen, logdir=logdir, seed=args.seed,
-                          pace=args.pace, display=display)
+    try:
+        conductor = Conductor(spec, listen=args.listen, logdir=logdir, seed=args.seed,
+                              pace=args.pace, display=display)
+    except zenoh.ZError as exc:
+        return error(f"cannot listen at {args.listen}: {_reason(exc)} (another team there? "
+                     "give --listen tcp/127.0.0.1:PORT)", json_mode=args.json)
     try:
         robots = _robots(spec, conductor.members)
         if robots:
@@ -167,6 +180,11 @@ def cmd_team_up(args: argparse.Namespace) -> int:
             except subprocess.TimeoutExpired:
                 child.kill()
                 child.wait()
+
+
+def _reason(exc: Exception) -> str:
+    """Zenoh's message without the Rust source location it ends with."""
+    return re.sub(r"\s+at /\S+?\.rs:\d+\.?", "", str(exc)).strip()
 
 
 def _line(kind: str, data: dict[str, Any], children: dict[str, Any]) -> str:
