@@ -243,6 +243,22 @@ class SelectedRule:
         return table.get("default", 1.0)
 
 
+@dataclass(frozen=True)
+class Assignment:
+    """"This agent does this step": every ``action`` whose arguments include all of
+    ``things`` is performed by ``agent`` (a person said "I'll take the bottle myself":
+    ``Assignment("Pick", ("bottle",), "alice")``).  The search never applies an action
+    that breaks one."""
+
+    action: str
+    things: tuple[str, ...]
+    agent: str
+
+    def breaks(self, action: str, args: tuple[Any, ...], performer: str) -> bool:
+        return (action == self.action and performer != self.agent
+                and all(thing in args for thing in self.things))
+
+
 @dataclass
 class Problem:
     name: str
@@ -263,6 +279,9 @@ class Problem:
     policy: dict[str, Any] = field(default_factory=dict)
     """Conditional problems: ``mode`` (expected or worst), ``idle_cost``, ``wait_cost``,
     ``max_steps``."""
+    assigned: tuple[Assignment, ...] = ()
+    """Steps given to an agent (:class:`Assignment`): a plan honours every one (the
+    total-order search; plan negotiation, docs/communication.md)."""
 
     def select_rules(self, names: list[str]) -> None:
         """Keep only these social rules: the problem's settings for those it selected,

@@ -357,6 +357,12 @@ class Search:
         """The search node after ``action``, or None when it cannot be done (or dooms
         the plan: goal protection).  ``floor`` is the partial plan's score so far: what
         no completion of it can go below."""
+        for assignment in self.problem.assigned:
+            performer = action.performer(dict(zip(action.names, args, strict=True)))
+            if assignment.breaks(action.name, args, performer):
+                self._fail(parent, _label(action.name, args),
+                           f"{assignment.agent} does it (an assignment)")
+                return None
         step = self.stepper.steps.get(action.name) or self.stepper.step(action)
         done = step(args, state, floor)
         if done is None:

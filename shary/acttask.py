@@ -206,7 +206,7 @@ class ActTask:
             return
         then = retry.then if retry is not None else "fail"
         if then == "replan" and self.replans < (retry.max_attempts if retry else 1):
-            self._replan(f"{run.step.name} failed: {reason}")
+            self.replan(f"{run.step.name} failed: {reason}")
             return
         if then == "skip":
             run.state = DONE
@@ -220,7 +220,7 @@ class ActTask:
         else:
             self._finish(FAILED, "failed", reason)
 
-    def _replan(self, reason: str) -> None:
+    def replan(self, reason: str) -> None:
         """Drop the steps not done yet and ask the recipe for new ones from the current facts
         (a planner-backed recipe plans again: "the bottle is not reachable" is a fact now)."""
         self.replans += 1

@@ -25,12 +25,14 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from shary.recipes import Chronicle, ChronicleEvent
+from shary.recipes import Chronicle, ChronicleAll, ChronicleEvent
 
 if TYPE_CHECKING:
     from shary.supervisor import Supervisor, TaskRun
 
 PENDING, ACTIVE, SUSPENDED, DONE, FAILED = "pending", "active", "suspended", "done", "failed"
+CANCELLED = "cancelled"
+OVER = (DONE, FAILED, CANCELLED)
 
 
 @dataclass(eq=False)
@@ -45,6 +47,10 @@ class Goal:
     sources: set[str] = field(default_factory=set)
     state: str = PENDING
     run: TaskRun | None = None
+    scheme: Any = None
+    """The scheme variant to run it with (None: the task's own choice)."""
+    initiator: str | None = None
+    """The person who asked for it (None: a goal of the robot's or of its operator)."""
 
     @property
     def key(self) -> tuple[str, tuple[tuple[str, str], ...]]:
@@ -66,37 +72,66 @@ class TaskAgenda:
         """Holder -> priority: while held, goals of lower priority do not run (a robot
         associated with a person serves only that person's requests, HRI/OS Fig. 7)."""
         self.listeners: list[Callable[[Goal], Any]] = []
-        """Told when a goal is over (done or failed): who delegated it hears back."""
+        """Told when a goal is over (done, failed or cancelled): who delegated it hears
+        back; a session is idle again."""
+        self.admits: list[Callable[[Goal], bool]] = []
+        """Gates a pending goal must pass to start (``gate(goal) -> bool``): the
+        interaction sessions' (:mod:`shary.dialogue.sessions`): no task with a person
+        outside a session with them.  A gate that changes its mind calls
+        :meth:`reconsider`."""
 
     def todo(self, name: str = "default") -> list[Goal]:
         """The goals of one TODO list that are not over, in the order they were added."""
-        return [g for g in self.goals if g.todo == name and g.state not in (DONE, FAILED)]
+        return [g for g in self.goals if g.todo == name and g.state not in OVER]
 
     @property
     def active(self) -> Goal | None:
         return next((g for g in self.goals if g.state == ACTIVE), None)
 
     def add(self, task: str, args: dict[str, Any] | None = None, *, priority: int = 0,
-            todo: str = "default", source: str = "request") -> Goal:
+            todo: str = "default", source: str = "request", scheme: Any = None,
+            initiator: str | None = None) -> Goal:
         """Add a goal unless the same one (task and arguments) is already there."""
         args = dict(args or {})
         if task not in self.sup.library.tasks:
             raise KeyError(f"unknown task {task!r}")
         key = _key(task, args)
         for goal in self.goals:
-            if goal.key == key and goal.state not in (DONE, FAILED):
+            if goal.key == key and goal.state not in OVER:
                 goal.sources.add(source)
                 if priority > goal.priority:
                     goal.priority = priority
                 self.sup.record("goal-merged", goal=goal.id, name=task, source=source)
                 self.sup.loop.call_soon(self._schedule)
                 return goal
-        goal = Goal(next(self._ids), task, args, priority, todo, {source})
+        goal = Goal(next(self._ids), task, args, priority, todo, {source}, scheme=scheme,
+                    initiator=initiator)
         self.goals.append(goal)
         self.sup.record("goal-added", goal=goal.id, name=task, args=args, priority=priority,
                         todo=todo, source=source)
         self.sup.loop.call_soon(self._schedule)
         return goal
+
+    def reconsider(self) -> None:
+        """Look again at which goal to run (a gate of :attr:`admits` changed its mind)."""
+        self.sup.loop.call_soon(self._schedule)
+
+    def cancel(self, goal: Goal, reason: str) -> None:
+        """Drop a goal: its task, if it runs, stops at once (everything it does is
+        cancelled), and the next goal starts."""
+        if goal.state in OVER:
+            return
+        goal.state = CANCELLED
+        if goal.run is not None:
+            goal.run.cancel(reason)
+        self.sup.record("goal-over", task=goal.run.node if goal.run else None, goal=goal.id,
+                        name=goal.task, outcome=CANCELLED, reason=reason)
+        for listener in self.listeners:
+            listener(goal)
+        self.sup.loop.call_soon(self._schedule)
+
+    def _admitted(self, goal: Goal) -> bool:
+        return goal.state != PENDING or all(gate(goal) for gate in self.admits)
 
     def hold(self, holder: str, priority: int) -> None:
         """Run only goals of ``priority`` or more until :meth:`release` (the running goal,
@@ -117,7 +152,7 @@ class TaskAgenda:
     def _best(self) -> Goal | None:
         floor = self._floor()
         waiting = [g for g in self.goals if g.state in (PENDING, SUSPENDED, ACTIVE)
-                   and (floor is None or g.priority >= floor)]
+                   and (floor is None or g.priority >= floor) and self._admitted(g)]
         if not waiting:
             return None
         return max(waiting, key=lambda g: (g.priority, -g.id))
@@ -150,9 +185,12 @@ class TaskAgenda:
         best.state = ACTIVE
         self.sup.record("goal-started", goal=best.id, name=best.task)
         best.run = self.sup.start_task(best.task, best.args,
-                                       on_finish=lambda run, g=best: self._finished(g, run))
+                                       on_finish=lambda run, g=best: self._finished(g, run),
+                                       scheme=best.scheme, initiator=best.initiator)
 
     def _finished(self, goal: Goal, run: TaskRun) -> None:
+        if goal.state in OVER:
+            return
         goal.state = DONE if run.outcome == "done" else FAILED
         self.sup.record("goal-over", task=run.node, goal=goal.id, name=goal.task,
                         outcome=run.outcome)
@@ -168,25 +206,48 @@ def _holder(holds: dict[str, int]) -> str:
 
 @dataclass(eq=False)
 class _Partial:
-    """A chronicle recognized up to some event, with its variable bindings."""
+    """A chronicle recognized up to some step, with its variable bindings.
+
+    ``index`` is the step waited for; ``time`` when the step before it was over.
+    In a step of several events (:class:`~shary.recipes.ChronicleAll`), ``done``
+    are the events of it seen so far, the first of them at ``first``.
+    """
 
     chronicle: Chronicle
     index: int
     bindings: dict[str, Any]
     time: float
     timer: Any = None
+    done: frozenset[int] = frozenset()
+    first: float | None = None
+
+
+def _members(step: ChronicleEvent | ChronicleAll) -> tuple[ChronicleEvent, ...]:
+    return step.events if isinstance(step, ChronicleAll) else (step,)
 
 
 class ChronicleRecognizer:
-    """Recognizes the library's chronicles in fact events and adds their goals."""
+    """Recognizes the library's chronicles in fact events and adds their goals.
 
-    def __init__(self, sup: Supervisor, perspective: str = "robot"):
+    A chronicle is a sequence of steps; a step is one fact event, or several in
+    any order (``all:``, a partially ordered conjunction: "comes near the robot"
+    and "looks at it", whichever first)."""
+
+    def __init__(self, sup: Supervisor, perspective: str = "robot",
+                 chronicles: dict[str, Chronicle] | None = None,
+                 recognized: Callable[[Chronicle, dict[str, Any]], Any] | None = None):
+        """``chronicles`` default to the library's; ``recognized(chronicle, args)``,
+        when given, is called instead of adding the chronicle's goal (the sessions
+        open a session on the will to interact)."""
         self.sup = sup
         self.perspective = perspective
+        self.chronicles = sup.library.chronicles if chronicles is None else chronicles
+        self.recognized = recognized
         self.partials: list[_Partial] = []
         self.fired: set[tuple] = set()
         predicates = sorted({str(e.pattern.predicate.value)
-                             for c in sup.library.chronicles.values() for e in c.events})
+                             for c in self.chronicles.values() for step in c.events
+                             for e in _members(step)})
         self.subscriptions = [sup.facts.subscribe(self._on_fact, predicate=p,
                                                   perspective=perspective)
                               for p in predicates]
@@ -206,34 +267,75 @@ class ChronicleRecognizer:
         for partial in list(self.partials):
             if partial.timer is not None:
                 stayed = partial.chronicle.events[partial.index - 1]
+                assert isinstance(stayed, ChronicleEvent)
                 if self._breaks(stayed, partial.bindings, event.kind, fact):
                     partial.timer.cancel()
                     self.partials.remove(partial)
                 continue
-            expected = partial.chronicle.events[partial.index]
-            bindings = self._match(expected, event.kind, fact, partial.bindings)
+            step = partial.chronicle.events[partial.index]
+            if isinstance(step, ChronicleAll):
+                if (step.within is not None and partial.first is not None
+                        and now - partial.first > step.within):
+                    self.partials.remove(partial)  # the rest came too late
+                    continue
+                found = self._member(step, partial, event.kind, fact, now)
+                if found is not None:
+                    self.partials.remove(partial)
+                    advanced.append(found)
+                continue
+            bindings = self._match(step, event.kind, fact, partial.bindings)
             if bindings is None:
                 continue
             elapsed = now - partial.time
-            if expected.within is not None and elapsed > expected.within:
+            if step.within is not None and elapsed > step.within:
                 self.partials.remove(partial)
                 continue
-            if expected.after is not None and elapsed < expected.after:
+            if step.after is not None and elapsed < step.after:
                 continue
             self.partials.remove(partial)
             advanced.append(_Partial(partial.chronicle, partial.index + 1, bindings, now))
-        for chronicle in self.sup.library.chronicles.values():
-            bindings = self._match(chronicle.events[0], event.kind, fact, {})
+        for chronicle in self.chronicles.values():
+            first = chronicle.events[0]
+            if isinstance(first, ChronicleAll):
+                found = self._member(first, _Partial(chronicle, 0, {}, now), event.kind, fact,
+                                     now)
+                if found is not None:
+                    advanced.append(found)
+                continue
+            bindings = self._match(first, event.kind, fact, {})
             if bindings is not None:
                 advanced.append(_Partial(chronicle, 1, bindings, now))
         for partial in advanced:
             self._progress(partial)
 
+    def _member(self, step: ChronicleAll, partial: _Partial, kind: str, fact: tuple,
+                now: float) -> _Partial | None:
+        """The partial once one more event of ``step`` is seen (None: none fits); when
+        it is the last, the next step is waited for."""
+        if partial.first is None and step.after is not None and now - partial.time < step.after:
+            return None
+        for i, member in enumerate(step.events):
+            if i in partial.done:
+                continue
+            bindings = self._match(member, kind, fact, partial.bindings)
+            if bindings is None:
+                continue
+            done = partial.done | {i}
+            if len(done) == len(step.events):
+                return _Partial(partial.chronicle, partial.index + 1, bindings, now)
+            return _Partial(partial.chronicle, partial.index, bindings, partial.time,
+                            done=done, first=partial.first if partial.first is not None
+                            else now)
+        return None
+
     def _progress(self, partial: _Partial) -> None:
-        done_event = partial.chronicle.events[partial.index - 1]
-        if done_event.stays is not None:
+        if partial.done:  # a step of several events, some still to come
             self.partials.append(partial)
-            partial.timer = self.sup.loop.call_later(done_event.stays, self._stayed, partial)
+            return
+        done_step = partial.chronicle.events[partial.index - 1]
+        if isinstance(done_step, ChronicleEvent) and done_step.stays is not None:
+            self.partials.append(partial)
+            partial.timer = self.sup.loop.call_later(done_step.stays, self._stayed, partial)
             return
         if partial.index == len(partial.chronicle.events):
             self._fire(partial)
@@ -254,7 +356,10 @@ class ChronicleRecognizer:
         args = {k: t.resolve(partial.bindings) for k, t in chronicle.args.items()}
         key = (chronicle.name, tuple(sorted((k, str(v)) for k, v in partial.bindings.items())))
         self.sup.record("chronicle", chronicle=chronicle.name, bindings=partial.bindings)
-        if key in self.fired and any(g.state not in (DONE, FAILED) and g.key == _key(
+        if self.recognized is not None:
+            self.recognized(chronicle, args)
+            return
+        if key in self.fired and any(g.state not in OVER and g.key == _key(
                 chronicle.task, args) for g in self.sup.agenda.goals):
             return
         self.fired.add(key)

@@ -27,7 +27,7 @@ from __future__ import annotations
 from typing import Any
 
 import planner
-from planner.domain import Domain, Problem, SelectedRule
+from planner.domain import Assignment, Domain, Problem, SelectedRule
 from shary.recipes import PlanSpec, Step, Term, parse_refinement
 
 
@@ -98,9 +98,14 @@ class HatpPlanner:
                 return values[0]
         return None
 
-    def plan_steps(self, spec: PlanSpec, args: dict[str, Any], facts: Any) -> list[Step]:
-        """The Planner port of :class:`shary.supervisor.Supervisor`."""
+    def plan_steps(self, spec: PlanSpec, args: dict[str, Any], facts: Any,
+                   assigned: tuple[Any, ...] = ()) -> list[Step]:
+        """The Planner port of :class:`shary.supervisor.Supervisor`; ``assigned`` are the
+        steps people took on (plan negotiation: ``action``, ``things``, ``agent``, as
+        :class:`shary.dialogue.negotiation.Taken`): the plan honours them."""
         problem = self.problem(facts, spec.task, args, spec.facts)
+        problem.assigned = tuple(Assignment(a.action, tuple(a.things), a.agent)
+                                 for a in assigned)
         result = planner.plan(problem, self.budget_ms)
         self.last = result
         if result.plan is None:

@@ -216,11 +216,23 @@ class ChronicleEvent:
 
 
 @dataclass(frozen=True)
+class ChronicleAll:
+    """A step of a chronicle made of several fact events in any order (a partially
+    ordered conjunction): all must happen, the first at least ``after`` the previous
+    step, and all of them within ``within`` of the first."""
+
+    events: tuple[ChronicleEvent, ...]
+    within: float | None = None
+    after: float | None = None
+
+
+@dataclass(frozen=True)
 class Chronicle:
-    """A pattern of fact events over time that puts a goal on the agenda."""
+    """A pattern of fact events over time that puts a goal on the agenda: a sequence of
+    steps, each one event or several in any order (:class:`ChronicleAll`)."""
 
     name: str
-    events: tuple[ChronicleEvent, ...]
+    events: tuple[ChronicleEvent | ChronicleAll, ...]
     task: str
     args: dict[str, Term]
     priority: int = 0

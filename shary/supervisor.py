@@ -52,6 +52,9 @@ class Planner(Protocol):
 
     def plan_steps(self, spec: PlanSpec, args: dict[str, Any], facts: Any) -> list[Step]: ...
 
+    # A planner that honours plan negotiation also takes ``assigned=`` (the steps people
+    # took on: shary.dialogue.negotiation.Taken); it is passed only when there are some.
+
 
 RecipeFunction = Callable[["TaskRun", Recipe], list[Step]]
 """A Python recipe: returns the steps of an act x task, given its task run."""
@@ -87,15 +90,25 @@ class Supervisor:
         self.act_listeners: list[Callable[[TaskRun, State, str], Any]] = []
         """Told when an act starts (task run, its state, the agent): what people around
         the robot see and hear it begin — simulated people answer from here."""
+        self.initiative: list[Callable[[str, str, Any], bool]] = []
+        """Told of an act that no task expects (agent, act, data), in order, until one
+        takes it (returns True): how a person starts, cancels or changes a task
+        (:mod:`shary.dialogue.initiative`)."""
+        self.background: dict[str, TaskRun] = {}
+        """Tasks that last as long as an interaction (sessions): they hear acts and
+        facts like the others, but do not count as work left (:attr:`runs`)."""
         if log is not None and hasattr(log, "flush"):
             self.loop.idle_hooks.append(log.flush)
         from shary.agenda import TaskAgenda
+        from shary.dialogue import install
 
         self.agenda = TaskAgenda(self)
         from shary.dialogue.speech import Speech
 
         self.speech = Speech(facts)
         """Makes the sentences of ``say`` steps (shary/dialogue/speech.py)."""
+        self.dialogue = install(self)
+        """Person-initiated acts, questions and sessions (:mod:`shary.dialogue`)."""
 
     # -- the context log -------------------------------------------------------
 
@@ -110,16 +123,24 @@ class Supervisor:
 
     def start_task(self, name: str, args: dict[str, Any], *, parent: ActTask | None = None,
                    parent_node: str | None = None, step: StepRun | None = None,
-                   on_finish: Callable[[TaskRun], None] | None = None) -> TaskRun:
-        """Create a task and start its scheme (raise KeyError/ValueError on a bad call)."""
+                   on_finish: Callable[[TaskRun], None] | None = None,
+                   scheme: Scheme | None = None, initiator: str | None = None,
+                   background: bool = False) -> TaskRun:
+        """Create a task and start its scheme (raise KeyError/ValueError on a bad call).
+
+        ``scheme`` replaces the one the task would choose (the variant of a task a
+        person asked for); ``initiator`` is the agent who asked, who plays the
+        scheme's roles the task does not fill; a ``background`` task is kept
+        apart from :attr:`runs` (see :attr:`background`)."""
         task_type = self.library.tasks[name]
         missing = [p for p in task_type.params if p not in args]
         extra = [a for a in args if a not in task_type.params and a != ROBOT_PARAM]
         if missing or extra:
             raise ValueError(f"task {name!r} takes {', '.join(task_type.params) or 'nothing'}; "
                              f"missing: {missing}, unknown: {extra}")
-        run = TaskRun(self, task_type, dict(args), parent, parent_node, step, on_finish)
-        self.runs[run.node] = run
+        run = TaskRun(self, task_type, dict(args), parent, parent_node, step, on_finish,
+                      scheme, initiator)
+        (self.background if background else self.runs)[run.node] = run
         for agent in set(run.roles.values()):
             self._by_agent.setdefault(agent, {})[run.node] = run
         run.start()
@@ -128,6 +149,7 @@ class Supervisor:
     def forget(self, run: TaskRun) -> None:
         """Drop an ended task from the live indexes (its tree and log stay)."""
         self.runs.pop(run.node, None)
+        self.background.pop(run.node, None)
         for agent in set(run.roles.values()):
             self._by_agent.get(agent, {}).pop(run.node, None)
 
@@ -173,8 +195,9 @@ class Supervisor:
                 raise LookupError(f"recipe {recipe.name!r} needs a planner for domain "
                                   f"{recipe.plan.domain!r}; none is registered")
             args = {k: t.resolve(run.env) for k, t in recipe.plan.args.items()}
+            more = {"assigned": tuple(run.assigned)} if run.assigned else {}
             try:
-                steps = planner.plan_steps(recipe.plan, args, self.facts)
+                steps = planner.plan_steps(recipe.plan, args, self.facts, **more)
             except RuntimeError as err:
                 raise LookupError(str(err)) from err
             steps = [s if s.atomic is None or s.atomic in self.library.atomic
@@ -198,7 +221,10 @@ class Supervisor:
         self.loop.call_soon(self._receive_act, agent, act, data, task)
 
     def _receive_act(self, agent: str, act: str, data: Any, task: str | None) -> None:
-        self.record("act-received", task=task, agent=agent, act=act)
+        about = data.get("task") if isinstance(data, dict) and task is None else None
+        self.record("act-received", task=task, agent=agent, act=act,
+                    name=about if isinstance(about, str) else None,
+                    initiated=True if task is None else None)
         taken = False
         for run in list(self._by_agent.get(agent, {}).values()):
             if run.ended or run.paused or (task is not None and run.node != task):
@@ -206,6 +232,8 @@ class Supervisor:
             if run.expects(act):
                 run.deliver(act, {"agent": agent, "data": data})
                 taken = True
+        if not taken and task is None:
+            taken = any(handler(agent, act, data) for handler in self.initiative)
         if not taken:
             self.record("act-unexpected", task=task, agent=agent, act=act)
 
@@ -259,7 +287,8 @@ class TaskRun(SchemeListener):
 
     def __init__(self, sup: Supervisor, task_type: TaskType, args: dict[str, Any],
                  parent: ActTask | None, parent_node: str | None, step: StepRun | None,
-                 on_finish: Callable[[TaskRun], None] | None):
+                 on_finish: Callable[[TaskRun], None] | None, scheme: Scheme | None = None,
+                 initiator: str | None = None):
         self.sup = sup
         self.type = task_type
         self.robot = str(args.get(ROBOT_PARAM, sup.robot))
@@ -273,13 +302,22 @@ class TaskRun(SchemeListener):
             sup.tree.node(self.node)["args"] = args or None
         else:
             self.node = sup.tree.add(TASK, task_type.name, parent_node, args=args or None)
-        self.scheme = sup.choose_scheme(task_type, self.env)
+        self.scheme = scheme or sup.choose_scheme(task_type, self.env)
+        self.initiator = initiator
         self.roles = {role: _role_agent(role, task_type.roles.get(role), self.env)
                       for role in self.scheme.roles}
+        if initiator is not None:  # the asker plays the human roles no parameter fills
+            self.roles.update({role: initiator for role, kind in self.scheme.roles.items()
+                               if kind == "human" and self.roles[role] == role})
         self.compiled = sup.compiled(self.scheme)
         self.acts: dict[str, ActTask] = {}
         self.entered_on: dict[str, str | None] = {}
         """Act -> the event (as the scheme writes it) that last entered a state carrying it."""
+        self.entered_data: dict[str, Any] = {}
+        """Act -> the data of that event (what a person's answer said)."""
+        self.assigned: list[Any] = []
+        """Steps people took on in negotiating this task's plan
+        (:class:`shary.dialogue.negotiation.Taken`): its planner-backed recipes plan with them."""
         self.instance: SchemeInstance | None = None
         self.ended = False
         self.paused = False
@@ -291,7 +329,7 @@ class TaskRun(SchemeListener):
     def start(self) -> None:
         self.sup.tree.set_state(self.node, ONGOING)
         self.sup.record("task-start", task=self.node, agent=self.robot, name=self.type.name,
-                        scheme=self.scheme.name, roles=self.roles)
+                        scheme=self.scheme.name, roles=self.roles, initiator=self.initiator)
         self.instance = self.compiled.start(clock=self.sup.loop.clock, listener=self,
                                             context=self)
 
@@ -323,6 +361,7 @@ class TaskRun(SchemeListener):
             return
         agent = self.roles.get(state.by or "", self.robot)
         self.entered_on[state.act] = event.name.split("@")[0] if event else None
+        self.entered_data[state.act] = event.data if event else None
         self.sup.record("act", task=self.node, agent=agent, act=state.act,
                         act_type=state.act_type.name if state.act_type else None)
         for listener in self.sup.act_listeners:

@@ -47,10 +47,16 @@ WAYPOINTS: list[tuple[float, float]] = [
 
 @dataclass(frozen=True)
 class Answer:
-    """How a person answers one act: the act they reply with (None: silence), when."""
+    """How a person answers one act: the act they reply with, when; or words alone (the
+    robot hears a sentence: "I'll take the bottle myself"); neither: silence."""
 
     reply: str | None
     after: tuple[float, float] = (1.0, 1.0)
+    choose: dict[str, Any] | None = None
+    """For a question (ASK-WHICH): the description of the thing meant (``{isOn: shelf}``)."""
+    words: str | None = None
+    """What the person says as the answer ("The one on the store table."): the robot
+    hears the sentence (instead of a description)."""
 
 
 @dataclass(frozen=True)
@@ -75,6 +81,16 @@ class ScriptStep:
     on: str | None = None
     take: str | None = None
     look: str | None = None
+    act: str | None = None
+    """A communication act the person starts (ASK-TASK, CANCEL) about ``task``; without
+    one, what the person says (``words``) is heard by the robot as a sentence."""
+    task: str | None = None
+    args: dict[str, Any] = field(default_factory=dict)
+    """The act's task arguments: names, or descriptions (``{type: Cube, color: green}``)."""
+    words: str | None = None
+    """What the person says aloud with the act."""
+    leave: bool = False
+    """Walk out of the room by the door: the robot perceives them no more."""
 
 
 @dataclass(frozen=True)
@@ -82,7 +98,8 @@ class Profile:
     """A person's behaviour (see the module's docstring)."""
 
     name: str
-    answers: dict[str, Answer] = field(default_factory=dict)
+    answers: dict[str, tuple[Answer, ...]] = field(default_factory=dict)
+    """Act -> the answers to it, the first time, the second …; the last one repeats."""
     attention: str = "robot"
     distractions: tuple[Distraction, ...] = ()
     takes: tuple[float, float] | None = (1.0, 1.0)
@@ -102,8 +119,10 @@ def parse_range(value: Any) -> tuple[float, float]:
 def profile_from(name: str, data: dict[str, Any]) -> Profile:
     """A :class:`Profile` from checked YAML data (see sim/schemas/profile.schema.json)."""
     answers = {}
-    for act, spec in (data.get("answers") or {}).items():
-        answers[act] = Answer(spec.get("reply"), parse_range(spec.get("after", "1s")))
+    for act, given in (data.get("answers") or {}).items():
+        answers[act] = tuple(Answer(spec.get("reply"), parse_range(spec.get("after", "1s")),
+                                    spec.get("choose"), spec.get("say"))
+                             for spec in (given if isinstance(given, list) else [given]))
     distractions = []
     for spec in data.get("distractions") or []:
         when = spec.get("when", {})
@@ -119,7 +138,9 @@ def profile_from(name: str, data: dict[str, Any]) -> Profile:
         script.append(ScriptStep(parse_range(spec.get("after", 0)),
                                  seconds(spec["at"]) if "at" in spec else None,
                                  spec.get("walk"), spec.get("put"), spec.get("on"),
-                                 spec.get("take"), spec.get("look")))
+                                 spec.get("take"), spec.get("look"), spec.get("act"),
+                                 spec.get("task"), dict(spec.get("with") or {}),
+                                 spec.get("say"), bool(spec.get("leave", False))))
     return Profile(name, answers, str(data.get("attention", "robot")), tuple(distractions),
                    None if takes is None else parse_range(takes.get("after", "1s")),
                    bool(data.get("helps", True)), float(data.get("speed", WALK_SPEED)),

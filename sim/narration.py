@@ -68,6 +68,9 @@ class Narrator:
             self._replan = str(data.get("reason", ""))
         elif kind == "plan":
             self._plan(t, list(data.get("steps", ())))
+        elif kind == "act-received" and agent and data.get("initiated") and data.get("name"):
+            # a person starts or stops a task (their other acts enter a task's state)
+            self.report(t, agent, "act", f"[{data.get('act')}] {data['name']}")
         elif kind == "person-action" and agent:
             self.report(t, agent, "person", action_text(str(data.get("atomic")),
                                                         dict(data.get("args") or {})))

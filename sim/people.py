@@ -23,6 +23,9 @@ from .simulation import Simulation, Walk, standing_height
 
 AWAY = "away"
 """Attention on nothing in the room (a phone call)."""
+OUTSIDE = (2.55, -3.4)
+"""Where a person who left the room is: beyond the door, facing away (out of sight: too
+far from the robot's places to be at one, looking at nothing in the room)."""
 UNSPOKEN_ANSWER = 5.0
 """Seconds after an act begins by which a person answers even if the robot said nothing."""
 
@@ -71,6 +74,8 @@ class Person:
         self._pending: list[tuple[Any, str, Any]] = []
         self._current_step: Any = None
         self._open: list[_Logged] = []
+        self._answered: dict[str, int] = {}
+        """Act -> how many times the person was asked it (which answer comes next)."""
         self._action_ids = 0
 
     # -- start -------------------------------------------------------------------
@@ -136,8 +141,12 @@ class Person:
         """An act began in a task; answer it once the robot has said it (or soon)."""
         if agent == self.name or self.name not in run.roles.values():
             return
-        answer = self.profile.answers.get(state.act)
-        if answer is None or answer.reply is None:
+        answers = self.profile.answers.get(state.act)
+        if not answers:
+            return
+        count = self._answered[state.act] = self._answered.get(state.act, 0) + 1
+        answer = answers[min(count, len(answers)) - 1]
+        if answer.reply is None and answer.words is None:
             return
         pending = (run, state.act, answer)
         self._pending.append(pending)
@@ -159,13 +168,28 @@ class Person:
             return
         self._pending.remove(pending)
         run, act, answer = pending
-        self.sim.loop.call_later(self._draw(answer.after), self._answer, run, act, answer.reply)
+        self.sim.loop.call_later(self._draw(answer.after), self._answer, run, act, answer)
 
-    def _answer(self, run: Any, act: str, reply: str) -> None:
+    def _answer(self, run: Any, act: str, answer: Any) -> None:
         if run.ended:
             return
-        self.say(self.name, {"H-AGREE": "Yes.", "H-DISAGREE": "No, thanks."}.get(reply, reply))
-        self.sup.receive_act(self.name, reply, task=run.node)
+        reply = answer.reply
+        data: dict[str, Any] | None = None
+        if reply is None:  # words alone: a sentence the robot reads
+            self.tell(None, None, {}, answer.words)
+            return
+        if answer.words is not None:
+            self.say(self.name, answer.words)
+            data = {"text": answer.words}
+        elif answer.choose is not None:
+            self.say(self.name, "(points at the " + " and ".join(
+                f"{'one on' if p == 'isOn' else 'one in'} the {str(v).replace('-', ' ')}"
+                if p in ("isOn", "isIn") else str(v) for p, v in answer.choose.items()) + ")")
+            data = {"choice": dict(answer.choose)}
+        else:
+            self.say(self.name, {"H-AGREE": "Yes.", "H-DISAGREE": "No, thanks."}.get(reply,
+                                                                                   reply))
+        self.sup.receive_act(self.name, reply, data, task=run.node)
         if act == "ASK-HELP" and reply == "H-AGREE" and self.profile.helps:
             obj = run.env.get("object")
             if obj is not None:
@@ -326,6 +350,8 @@ class Person:
         self._current_step = step
         if step.look is not None:
             self.look(step.look)
+        if step.act is not None or step.words is not None:
+            self.tell(step.act, step.task, step.args, step.words)
         activity: Activity | None = None
         if step.walk is not None:
             activity = self.walk_to(step.walk)
@@ -334,6 +360,8 @@ class Person:
                                 f"take {step.take}")
         elif step.put is not None:
             activity = self._put(step.put, step.on or "coffee-table")
+        elif step.leave:
+            activity = Sequence([self.walk_to("door"), Instant(self._exit, "leave")], "leave")
         if activity is None:
             self._current_step = None
             self._next_script_step()
@@ -361,6 +389,30 @@ class Person:
         return self._logged(Sequence([self._reach(spot), Instant(let_go, f"put {obj}"),
                                       self._reach(None)], f"put {obj} on {furniture}"),
                             "place", object=obj, on=furniture)
+
+    def _exit(self) -> None:
+        """Out of the door: out of the room and of the robot's perception."""
+        self.avatar.x, self.avatar.y = OUTSIDE
+        self.avatar.yaw = -math.pi / 2
+        self.attention = self.default_attention = AWAY
+        self.avatar.place()
+        self.refresh()
+        self.sim.observe()
+
+    def tell(self, act: str | None, task: str | None, args: dict[str, Any],
+             words: str | None) -> None:
+        """Start a communication act (a request, a cancellation), saying ``words``; or,
+        without an act, say ``words`` to the robot, which reads them as a request."""
+        if words:
+            self.say(self.name, words)
+        if act is None:
+            if words:
+                self.sup.dialogue.hear(self.name, words)
+            return
+        data: dict[str, Any] = {"with": dict(args)} if args else {}
+        if task is not None:
+            data["task"] = task
+        self.sup.receive_act(self.name, act, data or None)
 
     @property
     def pending(self) -> bool:

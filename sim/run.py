@@ -26,7 +26,8 @@ from pathlib import Path
 from typing import Any
 
 import planner
-from shary.agenda import ChronicleRecognizer
+from shary.agenda import OVER, ChronicleRecognizer
+from shary.dialogue.sessions import Sessions
 from shary.executors import ExecutorRegistry
 from shary.facts import FactDatabase
 from shary.log import ContextLog, read_events
@@ -232,6 +233,7 @@ class _Run:
             noise=Noise(dict(scenario.flicker), list(scenario.lost)), rng=self.loop.random)
         self.sim.observers.append(self.perception.update)
         self.chronicles = ChronicleRecognizer(self.sup) if library.chronicles else None
+        self.sessions = Sessions(self.sup)
 
     # -- setting up ----------------------------------------------------------------
 
@@ -257,7 +259,11 @@ class _Run:
             facts.add(place, "type", "Place")
         for furniture in FURNITURE:
             facts.add(furniture, "type", "Furniture")
-            facts.add(furniture, "place", MANIPULATION_PLACES.get(furniture, "base"))
+            # its own kind too ("coffee-table" is a CoffeeTable): what people call it
+            facts.add(furniture, "type", "".join(
+                w.title() for w in furniture.split("-") if not w.isdigit()))
+            if furniture in MANIPULATION_PLACES:  # the others the robot cannot reach
+                facts.add(furniture, "place", MANIPULATION_PLACES[furniture])
             facts.add(furniture, "container", furniture in CONTAINERS)
             facts.add(furniture, "seat", furniture in SEATS)
         for obj in BOTTLES:
@@ -337,6 +343,7 @@ class _Run:
         for person in self.people.values():
             person.begin()
         self.perception.start()
+        self.sessions.start()  # the interaction is going on with whoever attends already
         start = time.perf_counter()
         while self.loop.now() < self.scenario.timeout - 1e-9:
             self.loop.advance(min(CHUNK, self.scenario.timeout - self.loop.now()))
@@ -353,7 +360,7 @@ class _Run:
 
     def _quiet(self) -> bool:
         return (not self.sup.runs and self.sup.agenda.active is None
-                and not any(g.state not in ("done", "failed") for g in self.sup.agenda.goals)
+                and not any(g.state not in OVER for g in self.sup.agenda.goals)
                 and not self.sim.busy and self.loop.clock.next_due() is None
                 and not any(p.pending for p in self.people.values()))
 

@@ -123,6 +123,8 @@ def _schema(name: str) -> Draft202012Validator:
     return validator(SCHEMAS_DIR, name)
 
 
+_TEXT_PARAMS = frozenset({"text"})
+"""Task parameters whose value is words to say (the inform task's), not a thing."""
 _WORD_VALUED = frozenset({"type", "color"})
 """Predicates whose object is a word (a class, a colour), not a thing of the scenario."""
 
@@ -414,7 +416,8 @@ class _Reading:
                         f"{', '.join(task.params) or 'nothing'}; wrong: {', '.join(wrong)}")
             roles = {term.value for term in task.roles.values() if term.kind == "param"}
             for param, value in args.items():
-                if not isinstance(value, str) or param not in task.params:
+                if not isinstance(value, str) or param not in task.params \
+                        or param in _TEXT_PARAMS:
                     continue
                 if param in roles and value not in agents:
                     problem(where + ("with", param), f"{param} {value!r} is not a person of "
@@ -438,14 +441,19 @@ def _check_profile(reader: Reader, where: tuple, raw: dict[str, Any], things: se
     if things and attention not in looks:
         problem(where + ("attention",), f"nothing called {attention!r} to look at"
                 f"{did_you_mean(attention, looks)}")
-    for act, answer in (raw.get("answers") or {}).items():
+    for act, given in (raw.get("answers") or {}).items():
         if acts and act not in acts:
             problem(where + ("answers", act), f"unknown act {act!r}{did_you_mean(act, acts)}",
                     True)
-        reply = answer.get("reply")
-        if acts and reply is not None and reply not in acts:
-            problem(where + ("answers", act, "reply"), f"unknown act {reply!r}"
-                    f"{did_you_mean(reply, acts)}")
+        listed = isinstance(given, list)
+        for i, answer in enumerate(given if listed else [given]):
+            at = where + ("answers", act) + ((i,) if listed else ())
+            reply = answer.get("reply")
+            if acts and reply is not None and reply not in acts:
+                problem(at + ("reply",), f"unknown act {reply!r}{did_you_mean(reply, acts)}")
+            if "choose" in answer and "say" in answer:
+                problem(at, "an answer either says words ('say') or points at the thing "
+                        "meant ('choose'), not both", True)
     for i, distraction in enumerate(raw.get("distractions") or []):
         look = distraction.get("look", "away")
         if things and look not in looks:
@@ -457,6 +465,12 @@ def _check_profile(reader: Reader, where: tuple, raw: dict[str, Any], things: se
                     f"unknown atomic task {started!r}{did_you_mean(started, atomic)}")
     for i, step in enumerate(raw.get("script") or []):
         _check_step(problem, where + ("script", i), step)
+        if acts and "act" in step and step["act"] not in acts:
+            problem(where + ("script", i, "act"), f"unknown act {step['act']!r}"
+                    f"{did_you_mean(step['act'], acts)}")
+        if ("task" in step or "with" in step) and "act" not in step:
+            problem(where + ("script", i), "'task' and 'with' say what an act is about: "
+                    "give the act too (act: ASK-TASK)", True)
         if things and "look" in step and step["look"] not in looks:
             problem(where + ("script", i, "look"), f"nothing called {step['look']!r} to look "
                     f"at{did_you_mean(step['look'], looks)}")

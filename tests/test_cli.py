@@ -18,7 +18,9 @@ def test_schemes_lists_the_builtins(shary):
     status, out, _ = shary("schemes")
     assert status == 0
     names = [line.split()[0] for line in out.splitlines()]
-    assert names == ["ask-help", "give-object-attentive", "give-object", "perform", "robot-task"]
+    assert names == ["ask-help", "disambiguate", "give-object-attentive", "give-object",
+                     "inform", "perform", "plan-requested", "robot-task", "session",
+                     "task-requested"]
 
 
 def test_simulate_runs_a_script_of_events_and_waits(shary):
@@ -190,7 +192,8 @@ def _json(shary, *args, status=0):
 
 def test_json_schemes_and_scenarios(shary):
     schemes = _json(shary, "schemes", "--json")["schemes"]
-    assert [s["name"] for s in schemes][:2] == ["ask-help", "give-object-attentive"]
+    assert [s["name"] for s in schemes][:3] == ["ask-help", "disambiguate",
+                                                "give-object-attentive"]
     assert set(schemes[0]) == {"name", "summary", "doc", "file"}
     scenarios = _json(shary, "scenarios", "--json")["scenarios"]
     assert "give-bottle" in [s["name"] for s in scenarios]

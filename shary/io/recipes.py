@@ -27,6 +27,7 @@ from shary.recipes import (
     ROBOT_PARAM,
     AtomicTask,
     Chronicle,
+    ChronicleAll,
     ChronicleEvent,
     Condition,
     Monitor,
@@ -425,11 +426,26 @@ class _Builder:
         for index, raw in enumerate(spec.get("events") or []):
             if not isinstance(raw, dict):
                 continue
+            timing = {k: amount for k in ("within", "after", "stays")
+                      if (amount := _duration(raw.get(k))) is not None}
+            if "all" in raw:  # several events in any order
+                if "stays" in timing:
+                    reader.problem(path + ("events", index, "stays"), "'stays' follows one "
+                                   "event; give it to a step of its own after the 'all'",
+                                   key=True)
+                members = []
+                for i, member in enumerate(raw.get("all") or []):
+                    if isinstance(member, dict):
+                        change = "added" if "added" in member else "removed"
+                        members.append(ChronicleEvent(change, self._pattern(
+                            reader, path + ("events", index, "all", i, change),
+                            member.get(change), set(), variables)))
+                events.append(ChronicleAll(tuple(members), timing.get("within"),
+                                           timing.get("after")))
+                continue
             change = "added" if "added" in raw else "removed"
             pattern = self._pattern(reader, path + ("events", index, change), raw.get(change),
                                     set(), variables)
-            timing = {k: amount for k in ("within", "after", "stays")
-                      if (amount := _duration(raw.get(k))) is not None}
             events.append(ChronicleEvent(change, pattern, **timing))
         goal = spec.get("goal") if isinstance(spec.get("goal"), dict) else {}
         task_name = goal.get("task")
