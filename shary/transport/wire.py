@@ -151,13 +151,13 @@ def decode(payload: bytes, *, key_expr: str | None = None) -> Message:
         raise WireError(f"unknown kind {kind!r} (one of {', '.join(KINDS)})")
     for name in REQUIRED:
         if name not in data:
-            raise WireError(f"a {kind} message needs {name!r}")
+            raise WireError(f"{_a(kind)} message needs {name!r}")
     for name, value in data.items():
         check = checks.get(name)
         if check is None:
-            raise WireError(f"a {kind} message has no field {name!r}")
+            raise WireError(f"{_a(kind)} message has no field {name!r}")
         if not check(value):
-            raise WireError(f"field {name!r} of a {kind} message: {json.dumps(value)[:60]} "
+            raise WireError(f"field {name!r} of {_a(kind)} message: {json.dumps(value)[:60]} "
                             "has the wrong type")
     for name in REQUIRED:
         if data[name] not in _NAMES_SEEN:
@@ -170,9 +170,13 @@ def decode(payload: bytes, *, key_expr: str | None = None) -> Message:
     if key_expr is not None:
         parts = key_expr.split("/")
         if len(parts) != 4 or parts[2] != data["to"] or parts[3] != kind:
-            raise WireError(f"a {kind} message to {data['to']!r} published under "
+            raise WireError(f"{_a(kind)} message to {data['to']!r} published under "
                             f"{key_expr!r}")
     return build(kind, data)
+
+
+def _a(kind: str) -> str:
+    return f"an {kind}" if kind[0] in "aeiou" else f"a {kind}"
 
 
 def json_schema() -> dict[str, Any]:
