@@ -106,14 +106,19 @@ class Effect:
 
     ``target_attribute`` is the attribute it writes; ``variables`` and ``reads``
     are as for :class:`Expr` (reads include the attributes that lead to the target).
+    ``plain`` describes the commonest effect, ``var.attr = <constant or variable>``, as
+    (var, attr, the variable assigned or None, the constant), so that the search's step
+    can write it without calling anything (None: any other effect).
     """
 
-    __slots__ = ("text", "target_attribute", "variables", "reads", "fn")
+    __slots__ = ("text", "target_attribute", "variables", "reads", "fn", "plain")
 
     def __init__(self, text: str, fn: Callable[[dict[str, Any], Getter, Setter], None],
-                 target_attribute: str, variables: frozenset[str], reads: frozenset[str]):
+                 target_attribute: str, variables: frozenset[str], reads: frozenset[str],
+                 plain: tuple[str, str, str | None, Any] | None = None):
         self.text, self.fn, self.target_attribute, self.variables, self.reads = (
             text, fn, target_attribute, variables, reads)
+        self.plain = plain
 
     def __call__(self, env: dict[str, Any], get: Getter, set: Setter) -> None:
         self.fn(env, get, set)
@@ -160,8 +165,13 @@ def compile_effect(text: str, variables: dict[str, str | None],
     if not _comparable(target_type, value.type):
         p.fail(f"cannot assign {p.describe(value)} to {target} ({_a(target_type or '')})",
                value.pos)
+    plain = None
+    if owner.var is not None and value.var is not None:
+        plain = (owner.var, attr, value.var, None)
+    elif owner.var is not None and value.const is not build.NOT_CONSTANT:
+        plain = (owner.var, attr, None, value.const)
     return Effect(text, build.assign(owner, attr, value, text[pos:owner.end], target),
-                  attr, frozenset(p.used), frozenset(p.reads))
+                  attr, frozenset(p.used), frozenset(p.reads), plain)
 
 
 class _Parser:

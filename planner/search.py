@@ -51,7 +51,7 @@ from planner.domain import Action, Method, Problem
 from planner.evaluate import Evaluator
 from planner.plan import Plan, fact_text
 from planner.state import FactState, State
-from planner.step import Stepper
+from planner.step import Stepper, binder
 
 CHECK_EVERY = 256
 """Expansions between two looks at the clock."""
@@ -187,6 +187,8 @@ class Search:
         """The deepest failure under each top task: (depth, parent, label, reason), or a
         :class:`Failure` (the goals)."""
         self.typed: dict[str, list[str]] = {}
+        self.binders: dict[str, Callable[[tuple], dict]] = {}
+        """Each method's variables from its arguments (:func:`planner.step.binder`)."""
         self.repeats = 0
         self.pruned = False
 
@@ -421,7 +423,10 @@ class Search:
             if self.too_deep is None:
                 self.too_deep = _label(method.name, args)
             return
-        env = {p: a for (p, _), a in zip(method.params, args, strict=True)}
+        bind = self.binders.get(method.name)
+        if bind is None:
+            bind = self.binders[method.name] = binder(tuple(p for p, _ in method.params))
+        env = bind(args)
         get = state.get
         ids, parents = self.ids, self.parents
         root = parents[parent][2]
@@ -430,21 +435,25 @@ class Search:
         applied = False
         for dec in method.decompositions:
             penalty = self.decomposition_floor.get((method.name, dec.name), 0.0)
+            names = [v for v, _ in dec.vars]
+            pre = dec.pre.fn if dec.bind is None and dec.pre is not None else None
             if dec.bind is not None:
                 candidates: Any = dec.bind(env, state)
             else:
-                names = [v for v, _ in dec.vars]
-                choices = [self._of_type(t) for _, t in dec.vars]
-                candidates = (dict(zip(names, values, strict=True))
-                              for values in itertools.product(*choices))
+                candidates = itertools.product(*[self._of_type(t) for _, t in dec.vars])
             matched = False
             for binding in candidates:
                 self.nodes += 1
                 if self.nodes > max_nodes:
                     raise BudgetExhausted(self._nodes_out())
-                local = {**env, **binding}
-                if dec.bind is None and dec.pre is not None and not dec.pre(local, get):
-                    continue
+                local = env.copy()
+                if dec.bind is None:  # values, in the order of the variables
+                    local.update(zip(names, binding, strict=True))
+                    if pre is not None and not pre(local, get):
+                        continue
+                    binding = dict(zip(names, binding, strict=True))
+                else:
+                    local.update(binding)
                 matched = applied = True
                 node = next(ids)
                 parents[node] = (parent, (method.name, args, dec.name), root)

@@ -5,6 +5,11 @@ a :class:`Clock`.  Headless runs and tests use :class:`SimulatedClock`, which
 only moves when whoever drives the world calls :meth:`SimulatedClock.advance`,
 as fast as the CPU allows and in a deterministic order (due time, then the
 order timers were set).
+
+The heap holds ``(due, seq, timer)`` tuples: tuples compare in C, where a
+:class:`Timer` with ``__lt__`` cost a Python call (and two tuples) per
+comparison, and a supervisor with thousands of pending timeouts compares a lot
+(every push, every pop, and every rebuild that drops the cancelled ones).
 """
 
 from __future__ import annotations
@@ -35,9 +40,6 @@ class Timer:
             if self.clock is not None:
                 self.clock._forget(self)
 
-    def __lt__(self, other: Timer) -> bool:
-        return (self.due, self.seq) < (other.due, other.seq)
-
 
 class Clock(Protocol):
     """What the engine needs of a clock."""
@@ -52,7 +54,7 @@ class SimulatedClock:
 
     def __init__(self, start: float = 0.0):
         self._now = start
-        self._heap: list[Timer] = []
+        self._heap: list[tuple[float, int, Timer]] = []
         self._seq = itertools.count()
         self._cancelled = 0
 
@@ -60,8 +62,10 @@ class SimulatedClock:
         return self._now
 
     def call_later(self, delay: float, callback: Callable[..., Any], *args: Any) -> Timer:
-        timer = Timer(self._now + max(0.0, delay), next(self._seq), callback, args, self)
-        heapq.heappush(self._heap, timer)
+        due = self._now + delay if delay > 0.0 else self._now
+        seq = next(self._seq)
+        timer = Timer(due, seq, callback, args, self)
+        heapq.heappush(self._heap, (due, seq, timer))
         return timer
 
     def _forget(self, timer: Timer) -> None:
@@ -73,16 +77,18 @@ class SimulatedClock:
         """
         self._cancelled += 1
         if self._cancelled > 256 and self._cancelled * 2 > len(self._heap):
-            self._heap = [t for t in self._heap if not t.cancelled]
-            heapq.heapify(self._heap)
+            heap = self._heap  # in place: advance_to holds it while callbacks cancel
+            heap[:] = [entry for entry in heap if not entry[2].cancelled]
+            heapq.heapify(heap)
             self._cancelled = 0
 
     def next_due(self) -> float | None:
         """When the next live timer is due, or None when none is pending."""
-        while self._heap and self._heap[0].cancelled:
-            heapq.heappop(self._heap)
+        heap = self._heap
+        while heap and heap[0][2].cancelled:
+            heapq.heappop(heap)
             self._cancelled -= 1
-        return self._heap[0].due if self._heap else None
+        return heap[0][0] if heap else None
 
     def advance(self, seconds: float) -> int:
         """Move time forward by ``seconds``, firing every timer due meanwhile; return how many."""
@@ -91,8 +97,9 @@ class SimulatedClock:
     def advance_to(self, when: float) -> int:
         """Move time forward to ``when``, firing every timer due by then; return how many."""
         fired = 0
-        while self._heap and self._heap[0].due <= when:
-            timer = heapq.heappop(self._heap)
+        heap = self._heap
+        while heap and heap[0][0] <= when:
+            timer = heapq.heappop(heap)[2]
             if timer.cancelled:
                 self._cancelled -= 1
                 continue

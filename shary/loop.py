@@ -13,6 +13,7 @@ drives the world calls :meth:`EventLoop.advance`; with a :class:`WallClock`
 
 from __future__ import annotations
 
+import gc
 import random
 import time
 from collections import deque
@@ -23,6 +24,15 @@ from shary.clock import Clock, SimulatedClock, Timer
 
 MAX_CALLBACKS_PER_DRAIN = 1_000_000
 """Callbacks run without time passing before the loop declares a livelock."""
+
+STEADY_GC_THRESHOLDS = (2000, 100, 10)
+"""The cyclic collector's thresholds once a supervisor is settled (CPython's are
+(700, 10, 10)).  Each change a supervisor handles leaves a few dozen objects that live
+until a later change ends them (a suspended act, its monitor and timer); the collector
+scans each survivor in every generation it reaches, and the middle generation's scans
+are cache misses over the whole world.  Collecting it ten times less often lets most
+survivors die before it looks at them: 15 % of the kernel benchmark's time went to the
+collector, 10-11 % with these (docs/benchmarks.md)."""
 
 
 class WallClock(SimulatedClock):
@@ -48,11 +58,29 @@ class EventLoop:
         self.seed = seed
         self.random = random.Random(seed)
         self._ready: deque[tuple[Callable[..., Any], tuple]] = deque()
+        self._soon = self.call_soon  # one bound method for every timer, not one each
+        self._settled = False
         self.idle_hooks: list[Callable[[], Any]] = []
         """Called each time the loop becomes idle after work (the context log's flush)."""
 
     def now(self) -> float:
         return self.clock.now()
+
+    def settle(self) -> None:
+        """The world is loaded; what follows is the long run.  Freeze what exists now out
+        of the cyclic collector's sight (``gc.freeze()``: it would rescan every live task
+        at each full collection) and collect less often (:data:`STEADY_GC_THRESHOLDS`).
+
+        Process-wide, as garbage collection is, so never implicit: the program that owns
+        the process calls it once (a robot's main, after loading the world and before
+        :meth:`run_for`); a short headless run or a test need not.  Cyclic garbage among
+        the frozen objects is never collected: settle after set-up, not between runs."""
+        if self._settled:
+            return
+        self._settled = True
+        gc.collect()
+        gc.freeze()
+        gc.set_threshold(*STEADY_GC_THRESHOLDS)
 
     def call_soon(self, callback: Callable[..., Any], *args: Any) -> None:
         """Run ``callback(*args)`` after the current callback, in FIFO order."""
@@ -60,7 +88,7 @@ class EventLoop:
 
     def call_later(self, delay: float, callback: Callable[..., Any], *args: Any) -> Timer:
         """Run ``callback(*args)`` ``delay`` seconds from now (cancel with ``.cancel()``)."""
-        return self.clock.call_later(delay, self.call_soon, callback, *args)
+        return self.clock.call_later(delay, self._soon, callback, *args)
 
     def run_until_idle(self) -> int:
         """Run ready callbacks until none is left; return how many ran."""

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from shary.clock import SimulatedClock
-from shary.loop import EventLoop, WallClock
+from shary.loop import STEADY_GC_THRESHOLDS, EventLoop, WallClock
 
 
 def test_ready_work_runs_in_fifo_order_after_the_current_callback():
@@ -61,3 +61,38 @@ def test_wall_clock_runs_in_real_time():
     loop.run_for(0.1)
     assert seen == ["tick"] and loop.now() >= 0.1
 
+
+
+def test_timers_cancelled_by_a_firing_timer_are_dropped_mid_advance():
+    """A callback that cancels most pending timers makes the clock rebuild its heap while
+    it is firing: the timers left still fire, in order, and the cancelled ones never."""
+    clock = SimulatedClock()
+    fired = []
+    later = [clock.call_later(2 + i / 1000, fired.append, i) for i in range(1000)]
+
+    def cancel_most():
+        fired.append("cancel")
+        for timer in later[:900]:
+            timer.cancel()
+
+    clock.call_later(1, cancel_most)
+    clock.call_later(1, fired.append, "same time, set after")
+    assert clock.advance(10) == 102
+    assert fired == ["cancel", "same time, set after", *range(900, 1000)]
+    assert clock.next_due() is None
+
+
+def test_settle_freezes_the_loaded_world_once():
+    import gc
+
+    before = gc.get_threshold()
+    loop = EventLoop()
+    try:
+        loop.settle()
+        frozen = gc.get_freeze_count()
+        assert frozen > 0 and gc.get_threshold() == STEADY_GC_THRESHOLDS
+        loop.settle()  # once only: a second call freezes nothing more
+        assert gc.get_freeze_count() == frozen
+    finally:
+        gc.unfreeze()
+        gc.set_threshold(*before)
