@@ -146,6 +146,13 @@ class Supervisor:
         run.start()
         return run
 
+    def cancel_task(self, node: str, reason: str) -> None:
+        """Cancel a running task from outside (an operator): it stops, and its parent act or
+        its goal hears that it failed (raise KeyError when no such task runs)."""
+        run = self.runs[node]
+        run.cancel(reason)
+        self.loop.call_soon(run._report)
+
     def forget(self, run: TaskRun) -> None:
         """Drop an ended task from the live indexes (its tree and log stay)."""
         self.runs.pop(run.node, None)

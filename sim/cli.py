@@ -96,3 +96,69 @@ def cmd_run(args: argparse.Namespace) -> int:
                   if "snapshots" in result.outputs else "") + "[/dim]")
     return 0 if result.passed else 1
 
+
+
+def add_serve(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("serve", help="watch and steer a scenario, or replay a log, in the "
+                       "browser (the operator console)")
+    p.add_argument("scenario", nargs="?", metavar="NAME|FILE",
+                   help="a built-in scenario (see 'shary scenarios') or a scenario file, "
+                   "run live when the first page connects")
+    p.add_argument("--replay", type=Path, metavar="LOG",
+                   help="replay a recorded run (its log.sqlite) with a time slider instead")
+    p.add_argument("--host", default="127.0.0.1", metavar="ADDR",
+                   help="the address to listen on (default 127.0.0.1: this machine only)")
+    p.add_argument("--port", type=int, default=8765, metavar="N", help="default 8765")
+    p.add_argument("--speed", type=float, default=1.0, metavar="X",
+                   help="simulated seconds per wall second (default 1; 0: as fast as possible)")
+    p.add_argument("--paused", action="store_true",
+                   help="pause the run after its first step (set breakpoints, then Resume)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the people's random choices")
+    p.add_argument("--out", type=Path, metavar="DIR",
+                   help="where the live run writes its files (default: runs/SCENARIO)")
+    p.add_argument("--snapshots", action="store_true",
+                   help="also write PNG views at each act (shown with the robot's questions)")
+    p.set_defaults(func=cmd_serve)
+
+
+def cmd_serve(args: argparse.Namespace) -> int:
+    from shary.console.server import serve
+
+    if (args.scenario is None) == (args.replay is None):
+        return error("give a scenario to run, or --replay LOG (one of the two)")
+    if not 0 < args.port < 65536:
+        return error(f"--port {args.port}: a port is a number from 1 to 65535")
+    if not 0 <= args.speed <= 1000:
+        return error(f"--speed {args.speed:g}: from 0 (as fast as possible) to 1000")
+    if args.replay is not None:
+        from shary.console.replay import Replay, named_schemes
+
+        return serve(Replay(args.replay, named_schemes()), args.host, args.port)
+    from sim.scenario import find_scenario, is_team_scenario
+
+    try:
+        path = find_scenario(args.scenario)
+    except KeyError as err:
+        return error(err.args[0])
+    if is_team_scenario(path):
+        return error(f"{args.scenario}: a team scenario; the console shows one SHARY robot's "
+                     "run for now (teams come with HRI/OS's views): 'shary run' runs it")
+    live = live_run(path, out=args.out, seed=args.seed, snapshots=args.snapshots,
+                    speed=args.speed, paused=args.paused)
+    return serve(live, args.host, args.port)
+
+
+def live_run(path: Path, *, out: Path | None = None, seed: int = 0, snapshots: bool = False,
+             speed: float = 1.0, paused: bool = False) -> Any:
+    """A :class:`shary.console.live.LiveRun` of a scenario file (read and checked now; run
+    when the first page connects), writing its files to ``out`` (default runs/SCENARIO)."""
+    from shary.console.live import LiveRun
+    from sim.run import load, run_scenario
+
+    scenario, library, _ = load(path)  # a bad file is refused here, before serving
+    schemes = {choice.scheme.name: choice.scheme for task in library.tasks.values()
+               for choice in task.schemes}
+    out = out or Path("runs") / _name_of(path)
+    return LiveRun(scenario.name, lambda attachment: run_scenario(
+        path, seed=seed, out=out, snapshots=snapshots, console=attachment),
+        out, schemes=schemes.get, speed=speed, paused=paused)

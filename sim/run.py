@@ -106,10 +106,13 @@ def load(path: str | Path) -> tuple[Scenario, Any, Any]:
 
 def run_scenario(path: str | Path, *, seed: int = 0, out: str | Path | None = None,
                  snapshots: bool = False, gui: bool = False,
-                 report: Report | None = None) -> RunResult:
+                 report: Report | None = None, console: Any = None) -> RunResult:
     """Run one scenario (see the module's docstring); ``report`` is told the story as it
     happens (see :mod:`sim.narration`; :class:`sim.narration.ConsoleReport` prints it).
-    A team scenario (``site: seam-welding``) runs on its site (:mod:`sim.weld.run`)."""
+    ``console`` (a :class:`shary.console.live.Attachment`) is given the supervisor, sees
+    every logged event, and is called between two steps of the clock (pause, speed).
+    A team scenario (``site: seam-welding``) runs on its site (:mod:`sim.weld.run`),
+    without a console for now."""
     if is_team_scenario(path):
         from .weld.run import run_weld
 
@@ -127,7 +130,8 @@ def run_scenario(path: str | Path, *, seed: int = 0, out: str | Path | None = No
     with LivingRoom(gui=gui, robot=None) as world, \
             _log(log_path, seed) as log:
         run = _Run(scenario, library, domain, world, log, seed,
-                   report or (lambda t, who, kind, text: None), out_dir if snapshots else None)
+                   report or (lambda t, who, kind, text: None), out_dir if snapshots else None,
+                   console)
         setup = time.perf_counter() - wall
         wall = time.perf_counter()
         end = run.go()
@@ -169,14 +173,17 @@ class _MemoryLog:
 class _Told:
     """The context log, with each event also shown to the narrator of the run's story."""
 
-    def __init__(self, log: Any, narrator: Narrator):
+    def __init__(self, log: Any, narrator: Narrator, console: Any = None):
         self.log = log
         self.narrator = narrator
+        self.console = console
 
     def record(self, t: float, kind: str, *, task: str | None = None,
                agent: str | None = None, **data: Any) -> None:
         self.log.record(t, kind, task=task, agent=agent, **data)
         self.narrator.event(t, kind, agent, data)
+        if self.console is not None:
+            self.console.observe(t, kind, task, agent, data)
 
     def flush(self) -> None:
         self.log.flush()
@@ -191,7 +198,7 @@ class _Run:
 
     def __init__(self, scenario: Scenario, library: Any, domain: Any, world: LivingRoom,
                  log: Any, seed: int, report: Report,
-                 snapshot_dir: Path | None):
+                 snapshot_dir: Path | None, console: Any = None):
         self.scenario = scenario
         self.world = world
         self.log = log
@@ -211,8 +218,11 @@ class _Run:
         self.narrator = Narrator(report, robot, {p.name for p in scenario.people},
                                  last_plan=lambda: hatp.last.plan if hatp.last else None)
         self.sup = Supervisor(library, self.facts, robot=robot, loop=self.loop,
-                              executors=registry, log=_Told(log, self.narrator),
+                              executors=registry, log=_Told(log, self.narrator, console),
                               planners={"living-room": hatp})
+        self.console = console
+        if console is not None:
+            console.attach(self.sup)
         self.facts.subscribe(self._fact_logged)
         self.people: dict[str, Person] = {}
         for spec in scenario.people:
@@ -325,6 +335,7 @@ class _Run:
         self.world.snapshot(self.snapshot_dir / name, width, height,
                             framing(points, width / height), caption)
         self.snapshots.append(name)
+        self.sup.record("snapshot", file=name)
 
     def _gazes(self) -> str:
         """Who looks where, as the robot believes: an agent first if one is looked at."""
@@ -347,6 +358,8 @@ class _Run:
         start = time.perf_counter()
         while self.loop.now() < self.scenario.timeout - 1e-9:
             self.loop.advance(min(CHUNK, self.scenario.timeout - self.loop.now()))
+            if self.console is not None:  # pause, step, speed and the operator's commands
+                self.console.between(self.loop.now())
             if self.world.gui:  # someone is watching: no faster than real time
                 time.sleep(max(0.0, self.loop.now() - (time.perf_counter() - start)))
             if self._quiet():

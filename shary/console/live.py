@@ -1,0 +1,284 @@
+"""A live run behind the console: run in its own thread, steered between steps.
+
+The engine runs on one loop and one clock, with no threads in the core; the
+console does not change that.  The whole run (world, supervisor, loop) lives
+in one worker thread, started when the first page connects, and the server's
+asyncio loop lives in the main thread.  They meet at :class:`Attachment`,
+which the run's driver (``sim.run.run_scenario(console=…)``) calls:
+
+* ``attach(supervisor)`` once, to hand over the supervisor's ports
+  (``receive_act``, ``record``, ``cancel_task``, the library's schemes);
+* ``observe(...)`` for every event the run logs: forwarded to the server's
+  loop, and checked against the breakpoints;
+* ``between(now)`` after every step of the clock: where operator commands run
+  (on the run's own thread, so the engine is never touched from elsewhere),
+  where pause and step wait, and where the run is paced to the chosen speed.
+
+Operator commands are queued closures run at the next ``between``; so an
+answer sent while the run is paused is delivered as soon as it resumes, in
+the order it was sent, and is logged (with who sent it) at once.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import itertools
+import queue
+import sys
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from shary.acts import ACT_TYPES, builtin_acts
+from shary.console.operator import RUN_CONTROLS
+from shary.console.ports import Feed, StatusFeed
+from shary.console.view import View
+from shary.log import LogEvent
+from shary.model import Scheme
+
+Runner = Callable[["Attachment"], Any]
+"""Runs the scenario with the attachment (``run_scenario(path, console=attachment)``)
+and returns its result (an object with ``summary()``)."""
+POLL = 0.05
+"""Wall seconds between two looks at the command queue while paused."""
+
+
+class StopRun(Exception):
+    """Raised inside the run when the server stops: the run ends, its log is kept."""
+
+
+class Attachment:
+    """The run's side of the console (see the module's docstring)."""
+
+    def __init__(self, live: LiveRun):
+        self.live = live
+        self.sup: Any = None
+        self._seq = itertools.count(1)
+
+    def attach(self, supervisor: Any) -> None:
+        self.sup = supervisor
+
+    def observe(self, t: float, kind: str, task: str | None, agent: str | None,
+                data: dict[str, Any]) -> None:
+        live = self.live
+        if kind == "act" and data.get("act") in live.breakpoints:
+            with live.lock:
+                live.paused = True
+                live.stopped_at = f"breakpoint {data.get('act')} at {t:.1f} s"
+        live.post(live.feed, LogEvent(next(self._seq), t, kind, task, agent, dict(data)))
+
+    def between(self, now: float) -> None:
+        self.live.between(now)
+
+
+class LiveRun:
+    """A scenario run live under the console: the :class:`~shary.console.ports.RunPort`
+    of a simulated run (pause, step, speed, breakpoints, acts, cancel)."""
+
+    mode = "live"
+
+    def __init__(self, title: str, runner: Runner, folder: Path | None, *,
+                 schemes: Callable[[str], Scheme | None], speed: float = 1.0,
+                 paused: bool = False):
+        self.title = title
+        self.folder = folder
+        self._runner = runner
+        self._schemes = schemes
+        self.speed = speed
+        self.paused = paused
+        self.stopped_at = "paused at the start: press Resume" if paused else ""
+        self.breakpoints: set[str] = set()
+        self.state = "waiting"
+        self.verdict: dict[str, Any] | None = None
+        self._commands: queue.SimpleQueue[Callable[[], None]] = queue.SimpleQueue()
+        self._step = False
+        self._closing = threading.Event()
+        self._pace: tuple[float, float] | None = None  # (wall, simulated) at the last change
+        self._thread: threading.Thread | None = None
+        self.lock = threading.Lock()
+        """Guards pause, step and speed, set from the server's thread and read by the run's."""
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self.attachment = Attachment(self)
+        self.feed: Feed = lambda event: None
+        self._status: StatusFeed = lambda status: None
+
+    # -- the port ---------------------------------------------------------------------
+
+    def scheme(self, name: str) -> Scheme | None:
+        return self._schemes(name)
+
+    def start(self, feed: Feed, status: StatusFeed) -> None:
+        """Start the run's thread (the server calls this when the first page connects)."""
+        if self._thread is not None:
+            return
+        self._loop = asyncio.get_running_loop()
+        self.feed, self._status = feed, status
+        self.state = "running"
+        self._thread = threading.Thread(target=self._run, name="shary-run", daemon=True)
+        self._thread.start()
+        self.tell()
+
+    def status(self) -> dict[str, Any]:
+        state = "paused" if self.paused and self.state == "running" else self.state
+        return {"mode": self.mode, "state": state, "speed": self.speed,
+                "breakpoints": sorted(self.breakpoints), "why": self.stopped_at,
+                "verdict": self.verdict}
+
+    def tell(self) -> None:
+        self.post(self._status, self.status())
+
+    def post(self, fn: Callable[..., None], *args: Any) -> None:
+        """Call ``fn`` on the server's loop (from any thread)."""
+        if self._loop is not None and not self._loop.is_closed():
+            try:
+                self._loop.call_soon_threadsafe(fn, *args)
+            except RuntimeError:  # the loop closed meanwhile: nobody is watching
+                pass
+
+    def handle(self, message: dict[str, Any], view: View) -> str | None:
+        kind, by = message["kind"], message["by"]
+        if self.state in ("ended", "error"):
+            return "the run is over: nothing can be changed (open its log with --replay)"
+        if self.state == "waiting":
+            return "the run has not started yet"
+        refusal = self._check(message, view)
+        if refusal is not None:
+            return refusal
+        fields = {("for_agent" if k == "agent" else k): v for k, v in message.items()
+                  if k not in ("kind", "by", "id")}
+        self._submit(lambda: self.attachment.sup.record("operator", agent=by, action=kind,
+                                                        **fields))
+        if kind in RUN_CONTROLS:
+            self._control(kind, message)
+        elif kind in ("answer", "act"):
+            self._submit(lambda: self.attachment.sup.receive_act(
+                message["agent"], message["act"], task=message.get("task")))
+        elif kind == "cancel":
+            self._submit(lambda: self.attachment.sup.cancel_task(
+                message["task"], f"cancelled by the operator {by}"))
+        return None
+
+    def refused(self, by: str, action: str, reason: str) -> None:
+        if self.state == "running":
+            self._submit(lambda: self.attachment.sup.record(
+                "operator-refused", agent=by, action=action, reason=reason))
+        else:  # the log is closed (or not open yet): say it where the server's user sees
+            print(f"console: refused {action!r} from {by}: {reason}", file=sys.stderr)
+
+    def close(self) -> None:
+        self._closing.set()
+        if self._thread is not None:
+            self._thread.join(timeout=10)
+
+    # -- checks, against the console's picture of the run --------------------------------
+
+    def _check(self, message: dict[str, Any], view: View) -> str | None:
+        kind = message["kind"]
+        if kind == "answer":
+            question = view.questions.get(message["task"])
+            if question is None:
+                return f"task {message['task']} asks no question now"
+            if message["agent"] not in question[3]:
+                return (f"task {message['task']} asks {', '.join(question[3])}, "
+                        f"not {message['agent']}")
+            if message["act"] not in question[4]:
+                return (f"task {message['task']} waits for {' or '.join(question[4])}, "
+                        f"not {message['act']}")
+        elif kind == "act":
+            if view.agents.get(message["agent"]) != "human":
+                return f"{message['agent']} is not a person of this run"
+            if message["act"] not in ACT_TYPES and message["act"] not in builtin_acts():
+                return f"{message['act']} is not an act"
+        elif kind == "cancel":
+            task = view.tasks.get(message["task"])
+            if task is None or task["outcome"] is not None:
+                return f"task {message['task']} is not running"
+        elif kind in ("take-control", "hand-back"):
+            return ("this run has no control-authority port: a simulated SHARY robot answers "
+                    "to its own supervisor only (control authority comes with HRI/OS teams)")
+        elif kind == "seek":
+            return "a live run cannot seek: open its log with 'shary serve --replay'"
+        return None
+
+    def _control(self, kind: str, message: dict[str, Any]) -> None:
+        with self.lock:
+            if kind == "pause":
+                self.paused, self.stopped_at = True, "paused by the operator"
+            elif kind == "resume":
+                self.paused, self.stopped_at, self._pace = False, "", None
+            elif kind == "step":
+                self.paused, self._step, self.stopped_at = True, True, "stepping"
+            elif kind == "speed":
+                self.speed, self._pace = float(message["value"]), None
+            elif kind == "breakpoint":
+                self.breakpoints.add(message["act"])
+            elif kind == "clear-breakpoint":
+                self.breakpoints.discard(message["act"])
+        self.tell()
+
+    def _submit(self, command: Callable[[], None]) -> None:
+        self._commands.put(command)
+
+    # -- the run's thread ------------------------------------------------------------
+
+    def _run(self) -> None:
+        try:
+            result = self._runner(self.attachment)
+        except StopRun:
+            self.state = "ended"
+            self.verdict = {"passed": False, "differences": ["stopped with the server"]}
+        except Exception as err:  # noqa: BLE001 -- shown on the page and the terminal
+            self.state = "error"
+            self.verdict = {"passed": False, "differences": [f"{type(err).__name__}: {err}"]}
+            print(f"console: the run failed: {type(err).__name__}: {err}", file=sys.stderr)
+        else:
+            self.state = "ended"
+            summary = result.summary()
+            self.verdict = {"passed": summary.get("passed"),
+                            "differences": summary.get("differences", [])}
+        self.tell()
+
+    def between(self, now: float) -> None:
+        """Run queued commands; wait while paused; keep to the chosen speed."""
+        self._drain()
+        stepped = told = False
+        while True:
+            if self._closing.is_set():
+                raise StopRun
+            with self.lock:
+                if self._step:
+                    self._step, stepped = False, True
+                    break
+                if not self.paused:
+                    break
+            if not told:
+                self.tell()
+                told = True
+            time.sleep(POLL)
+            self._drain()
+        if stepped:
+            self.tell()
+            return
+        if self.speed > 0:
+            wall = time.perf_counter()
+            if self._pace is None:
+                self._pace = (wall, now)
+            due = self._pace[0] + (now - self._pace[1]) / self.speed
+            while wall < due and not self._closing.is_set() and not self.paused:
+                time.sleep(min(POLL, due - wall))
+                self._drain()
+                wall = time.perf_counter()
+
+    def _drain(self) -> None:
+        while True:
+            try:
+                command = self._commands.get_nowait()
+            except queue.Empty:
+                return
+            try:
+                command()
+            except (KeyError, ValueError) as err:  # e.g. the task ended meanwhile
+                print(f"console: an operator's command failed: {err}", file=sys.stderr)
+
