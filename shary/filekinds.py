@@ -310,6 +310,12 @@ def _check_teams(files: list[Path], context: Context) -> list[Problem]:
     return problems
 
 
+def _models() -> Any:
+    from shary.recognition import models
+
+    return models
+
+
 def _shipped_recipes() -> list[Path]:
     from shary.io.recipes import builtin_library_files
 
@@ -344,5 +350,8 @@ for _kind in (
     FileKind("turtle", _check_turtle, 5, suffixes=(".ttl",)),
     FileKind("team", _check_teams, 6, detect=lambda d: "team" in d and "agents" in d,
              keys="team:"),
+    FileKind("action-models", lambda files, context: _models().check_files(files), 6,
+             detect=lambda d: "action-models" in d, keys="action-models:",
+             shipped=lambda: _models().shipped_files()),
 ):
     register(_kind)

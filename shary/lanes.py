@@ -3,6 +3,7 @@
 :func:`collect` pairs the log's events into :class:`Item` s: acts (a scheme
 state's act, from its entry to its exit), acts sent by people (points),
 actions (``exec-request`` … ``exec-result``), attention (``looksAt`` facts),
+recognized human actions (``recognition``, :mod:`shary.recognition`),
 and a team's rows (:mod:`shary.team`): each agent's team tasks, questions and
 answers, associations and user-mode control, respawns in the task band.  The
 drawing is :mod:`shary.timeline`'s; this module only reads.
@@ -109,6 +110,7 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
     open_actions: dict[str, Item] = {}
     cancels: dict[str, str] = {}
     looks: dict[tuple[str, str], Item] = {}
+    recognized: dict[str, Item] = {}  # candidate -> its bar
     received: list[tuple[LogEvent, Item]] = []
     plans: list[Item] = []
     team = _Team()
@@ -203,6 +205,8 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
             replan = None
         elif e.kind in ("fact-added", "fact-removed"):
             _attention(e, looks, items)
+        elif e.kind == "recognition" and isinstance(d.get("candidate"), str):
+            _recognized(e, recognized, items)
         elif e.kind in TEAM_KINDS:
             team.take(e, items, plans)
 
@@ -212,7 +216,8 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
         item.tooltip += "\nstill running when the log ends"
         if request in cancels:
             item.tooltip += f"\n{cancels[request]}"
-    for item in [*open_acts.values(), *looks.values(), *team.open.values()]:
+    for item in [*open_acts.values(), *looks.values(), *team.open.values(),
+                 *recognized.values()]:
         item.tooltip += "\nstill going when the log ends"
 
     robot = robot or first_robot or next(
@@ -289,6 +294,48 @@ def _attention(e: LogEvent, looks: dict[tuple[str, str], Item], items: list[Item
                     "look", LOOK_COLOUR, attrs={"data-start": repr(e.time)})
         looks[key] = item
         items.append(item)
+
+
+NOBODY = "(nobody)"
+"""The lane of recognized effects that no human is known to have caused."""
+
+
+def _recognized(e: LogEvent, open_items: dict[str, Item], items: list[Item]) -> None:
+    """A human's recognized action (``recognition`` rows of one candidate): one bar from
+    *possibly started* to *possibly achieved* (or abandoned), its progressing part
+    marked by ``data-progressing``; an action achieved with no start seen is a point."""
+    d = e.data
+    candidate, state = d["candidate"], str(d.get("state"))
+    params = d.get("params") if isinstance(d.get("params"), dict) else {}
+    label = " ".join([str(d.get("action", "?")),
+                      *(_value(v) for v in params.values() if v is not None)])
+    cause = f", {d['cause']}" if d.get("cause") else ""
+    fact = f" ({d['fact']})" if d.get("fact") else ""
+    line = f"possibly {state} at {shown_time(e.time)} s{cause}{fact}"
+    item = open_items.get(candidate)
+    if item is None:
+        agent = e.agent or NOBODY
+        item = Item(agent, "recognized", e.time, None, label,
+                    f"{agent}: {d.get('action_class', d.get('action'))} {label} "
+                    f"[{candidate}]\n{line}", f"rec-{state}", point=state == "achieved",
+                    attrs={"data-candidate": candidate, "data-action": str(d.get("action")),
+                           "data-start": repr(e.time), "data-state": state})
+        items.append(item)
+        if state in ("started", "progressing"):
+            open_items[candidate] = item
+        else:
+            item.end = e.time
+        if state == "progressing":
+            item.attrs["data-progressing"] = repr(e.time)
+        return
+    item.label, item.kind, item.attrs["data-state"] = label, f"rec-{state}", state
+    item.tooltip += f"\n{line}"
+    if state == "progressing":
+        item.attrs["data-progressing"] = repr(e.time)
+    elif state in ("achieved", "abandoned"):
+        del open_items[candidate]
+        item.end = e.time
+        item.attrs["data-end"] = repr(e.time)
 
 
 def _value(value: Any) -> str:

@@ -48,6 +48,8 @@ KIND_SHAPES: dict[str, dict[str, str]] = {
              "parent": "text?", "args": "object?"},
     "task-state": {"task": "text", "state": "text", "reason": "text?"},
     "node-removed": {"task": "text", "nodes": "list of text"},
+    "recognition": {"candidate": "text", "state": "text", "action": "text",
+                    "params": "object"},
 }
 """Kind -> field -> what it must be: ``text``, ``object``, ``list of text`` (``?``: optional)."""
 

@@ -109,6 +109,29 @@ class Supervisor:
         """Makes the sentences of ``say`` steps (shary/dialogue/speech.py)."""
         self.dialogue = install(self)
         """Person-initiated acts, questions and sessions (:mod:`shary.dialogue`)."""
+        self.recognizer: Any = None
+        """Human action recognition, once :meth:`recognize` has loaded action models."""
+        self.robot_actions: Any = None
+        """The robot's actions from their models (look, act, retry, escalate)."""
+
+    def recognize(self, models: Any, perspective: str = "robot") -> Any:
+        """Follow what people do with these action models (:mod:`shary.recognition`) and
+        perform the robot's modelled actions; returns the started Recognizer.
+
+        Recognition runs inside fact delivery (it only updates its candidates and
+        logs ``recognition`` rows); whoever listens to it and acts should queue
+        its work on the loop, as monitors do.
+        """
+        from shary.recognition.execution import RobotActions
+        from shary.recognition.recognizer import Recognizer
+
+        if self.recognizer is not None:  # new models replace the old, never run beside them
+            self.recognizer.stop()
+        self.recognizer = Recognizer(models, self.facts, perspective=perspective,
+                                     clock=self.loop.now, record=self.record)
+        self.robot_actions = RobotActions(self, models)
+        self.recognizer.start()
+        return self.recognizer
 
     # -- the context log -------------------------------------------------------
 

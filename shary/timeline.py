@@ -16,6 +16,11 @@ common time axis in engine seconds. Inside a lane:
   simulated person's own actions, ``person-action`` … ``person-action-end``)
   are bars coloured by how they ended: done, failed, cancelled, or still
   running when the log ends (hatched, up to the end of the log);
+* **recognized actions** (``recognition`` events, :mod:`shary.recognition`)
+  are a row of a human's lane, drawn only when the log holds them: a light
+  bar while the action is possibly started, a darker one while possibly
+  progressing, a green diamond when possibly achieved, grey when abandoned;
+  effects nobody is known to have caused go to a lane of their own, (nobody);
 * **attention** (``fact-added`` / ``fact-removed`` of ``AGENT looksAt X``) is
   a thin row, drawn only when the log holds such facts;
 * a **team**'s rows (:mod:`shary.team`): each agent's team tasks, associations
@@ -77,6 +82,14 @@ SMALL = 9
 MIN_LABEL_INSIDE = 36  # a bar narrower than this has its label beside it
 LABEL_ROWS = 3         # a label beside a bar never opens a sub-row past this many
 FONT_FAMILY = "DejaVu Sans, Helvetica, Arial, sans-serif"
+RECOGNIZED_STYLES = {  # a recognized human action's state: (fill, stroke, text)
+    "rec-started": ("#fdebd0", "#c77c12", "#5c3a06"),
+    "rec-progressing": ("#f6b04d", "#c77c12", "#3d2604"),
+    "rec-achieved": ("#59a14f", "#2f6b2a", "#ffffff"),
+    "rec-abandoned": ("#eeeeee", "#9a9a9a", "#666666"),
+}
+ROWS = ("act", "action", "recognized", "team", "look")
+"""The rows of a lane, top to bottom (all but acts and actions only when the log has them)."""
 _NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ufffe\uffff\ud800-\udfff]")
 
 # -- drawing ---------------------------------------------------------------------
@@ -104,7 +117,7 @@ def render_timeline(events: Iterable[LogEvent], title: str = "", *, robot: str |
     lanes: list[tuple[str, dict[str, list[tuple[Item, int]]]]] = []
     for agent in tl.agents:
         rows = {}
-        for kind in ("act", "action", "team", "look"):
+        for kind in ROWS:
             rows[kind], r = _pack([i for i in tl.items if i.agent == agent and i.row == kind],
                                   x, tl.t_max, FONT - 1 if kind == "look" else FONT)
             right = max(right, r)
@@ -118,8 +131,9 @@ def render_timeline(events: Iterable[LogEvent], title: str = "", *, robot: str |
     y = band_top + max(1, _rows(band_rows)) * BAND_ROW + 22
     out.append(_axis(t0, end, step, x, y, above=True))
     lanes_top = y = y + 6
-    heights = {"act": ROW, "action": ROW, "team": ROW, "look": LOOK_ROW}
-    captions = {"act": "acts", "action": "actions", "team": "team", "look": "looks at"}
+    heights = {"act": ROW, "action": ROW, "recognized": ROW, "team": ROW, "look": LOOK_ROW}
+    captions = {"act": "acts", "action": "actions", "recognized": "recognized", "team": "team",
+                "look": "looks at"}
     for index, (agent, rows) in enumerate(lanes):
         counts = {kind: max(kind in ("act", "action"), _rows(rows[kind])) for kind in rows}
         lane_h = 2 * LANE_PAD + sum(counts[k] * heights[k] for k in counts)
@@ -255,10 +269,12 @@ def _item(item: Item, top: float, height: float, x: Any, t_end: float) -> str:
     if item.point:
         cx = x(item.start)
         r = height / 2 - 4
-        fill = POINT_COLOURS.get(item.kind, POINT_COLOURS["received"])
+        fill, stroke = (RECOGNIZED_STYLES["rec-achieved"][:2] if item.kind == "rec-achieved"
+                        else (POINT_COLOURS.get(item.kind, POINT_COLOURS["received"]),
+                              "#9e2a63"))
         shape = (f'<polygon points="{_n(cx)},{_n(mid - r)} {_n(cx + r)},{_n(mid)} '
                  f'{_n(cx)},{_n(mid + r)} {_n(cx - r)},{_n(mid)}" fill="{fill}" '
-                 'stroke="#9e2a63" stroke-width="1.5"/>')
+                 f'stroke="{stroke}" stroke-width="1.5"/>')
         text = _text(cx + r + 4, mid + 4, item.label, "label") if item.beside else ""
         return head + shape + text + "</g>"
     left = x(item.start)
@@ -267,6 +283,9 @@ def _item(item: Item, top: float, height: float, x: Any, t_end: float) -> str:
     y, h = top + pad, height - 2 * pad
     if item.row == "action":
         fill, stroke, ink = ACTION_STYLES[item.kind]
+    elif item.row == "recognized":
+        fill, stroke, ink = RECOGNIZED_STYLES[
+            "rec-abandoned" if item.kind == "rec-abandoned" else "rec-started"]
     elif item.row == "look":
         fill, stroke, ink = item.colour, "#4f8f8a", "#1f3f3c"
     else:
@@ -282,6 +301,8 @@ def _item(item: Item, top: float, height: float, x: Any, t_end: float) -> str:
         until = f' data-end="{stop!r}"' if stop is not None else ""
         body += (f'<rect class="suspended" data-start="{start!r}"{until} x="{_n(s_left)}" '
                  f'y="{_n(y)}" width="{_n(s_width)}" height="{_n(h)}" fill="url(#pause)"/>')
+    if item.row == "recognized":
+        body += _recognition_marks(item, x, y, h, mid)
     if width < 2:  # an instant: a visible tick, the bar itself keeping its exact extent
         body += (f'<rect class="instant" x="{_n(left - 1)}" y="{_n(y)}" width="2" '
                  f'height="{_n(h)}" fill="{stroke}"/>')
@@ -300,6 +321,25 @@ def _item(item: Item, top: float, height: float, x: Any, t_end: float) -> str:
         body += _text(beside, mid + size * 0.36, item.label, "label outside",
                       size=size, fill="#333")
     return head + body + "</g>"
+
+
+def _recognition_marks(item: Item, x: Any, y: float, h: float, mid: float) -> str:
+    """The progressing part of a recognized action's bar, and its achievement."""
+    marks = ""
+    if "data-progressing" in item.attrs:
+        since = x(float(item.attrs["data-progressing"]))
+        until = x(item.end) if item.end is not None else since + 6
+        fill, stroke, _ = RECOGNIZED_STYLES["rec-progressing"]
+        marks += (f'<rect class="progressing" x="{_n(since)}" y="{_n(y)}" '
+                  f'width="{_n(max(until - since, 2))}" height="{_n(h)}" fill="{fill}" '
+                  f'stroke="{stroke}" stroke-width="1"/>')
+    if item.kind == "rec-achieved" and item.end is not None:
+        fill, stroke, _ = RECOGNIZED_STYLES["rec-achieved"]
+        cx, r = x(item.end), h / 2 - 1
+        marks += (f'<polygon class="achieved" points="{_n(cx)},{_n(mid - r)} '
+                  f'{_n(cx + r)},{_n(mid)} {_n(cx)},{_n(mid + r)} {_n(cx - r)},{_n(mid)}" '
+                  f'fill="{fill}" stroke="{stroke}" stroke-width="1.5"/>')
+    return marks
 
 
 def _band(item: Item, top: float, x: Any, t_end: float) -> str:
@@ -359,6 +399,21 @@ def _legend(tl: Timeline, left: float, top: float, width: float) -> tuple[str, f
         if status in kinds or (status == "running" and any(i.end is None for i in tl.items)):
             fill, stroke, _ = ACTION_STYLES[status]
             entries.append((f'<rect width="18" height="10" y="-9" fill="{fill}" '
+                            f'stroke="{stroke}"/>', text))
+    recognized = [i for i in tl.items if i.row == "recognized"]
+    shown_states = {"rec-started": any(not i.point for i in recognized),
+                    "rec-progressing": any("data-progressing" in i.attrs for i in recognized),
+                    "rec-achieved": "rec-achieved" in kinds,
+                    "rec-abandoned": "rec-abandoned" in kinds}
+    for kind, text, point in (("rec-started", "possibly started", False),
+                              ("rec-progressing", "possibly progressing", False),
+                              ("rec-achieved", "possibly achieved", True),
+                              ("rec-abandoned", "abandoned", False)):
+        if shown_states[kind]:
+            fill, stroke, _ = RECOGNIZED_STYLES[kind]
+            entries.append((f'<polygon points="9,-10 15,-4 9,2 3,-4" fill="{fill}" '
+                            f'stroke="{stroke}"/>' if point else
+                            f'<rect width="18" height="10" y="-9" fill="{fill}" '
                             f'stroke="{stroke}"/>', text))
     if any(i.row == "look" for i in tl.items):
         entries.append((f'<rect width="18" height="6" y="-7" fill="{LOOK_COLOUR}"/>',

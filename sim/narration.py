@@ -74,6 +74,11 @@ class Narrator:
         elif kind == "person-action" and agent:
             self.report(t, agent, "person", action_text(str(data.get("atomic")),
                                                         dict(data.get("args") or {})))
+        elif kind == "recognition" and data.get("state") == "achieved":
+            params = data.get("params") if isinstance(data.get("params"), dict) else {}
+            self.report(t, self.robot, "recognized", f"recognized: {agent or 'nobody'} "
+                        + " ".join([str(data.get("action")),
+                                    *(str(v) for v in params.values() if v is not None)]))
         elif kind in ("fact-added", "fact-removed") and data.get("p") == "looksAt" \
                 and data.get("perspective", "robot") == "robot":
             self._attention(t, kind == "fact-added", str(data.get("s")), str(data.get("o")))
@@ -115,9 +120,9 @@ class Narrator:
 
 _AGENT_COLOURS = ("cyan", "magenta", "green", "yellow", "blue", "bright_red")
 _STYLES = {"act": "bold", "failed": "red", "attention": "italic", "plan": "dim",
-           "person": "", "action": "", "speech": ""}
+           "person": "", "action": "", "speech": "", "recognized": "italic"}
 _MARKS = {"act": "▶", "action": "·", "failed": "✗", "speech": "“", "person": "·",
-          "attention": "◉", "plan": "≡"}
+          "attention": "◉", "plan": "≡", "recognized": "✓"}
 
 
 class ConsoleReport:

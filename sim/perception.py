@@ -2,7 +2,8 @@
 
 After every tick (and every instant change) :class:`Perception` computes the
 facts the world makes true — ``isAt``, ``isOn``/``isIn``, ``isHolding``,
-``looksAt``, ``isNear``, ``isReachableBy``, ``isSeatedOn``, ``position`` —
+``looksAt``, ``handMovingToward`` (a person's reaching hand), ``isNear``,
+``isReachableBy``, ``isSeatedOn``, ``position`` —
 and publishes only the difference to the fact database, so monitors and
 chronicles hear of changes, not of ticks.
 
@@ -172,6 +173,10 @@ class Perception:
             looked = self._looked_at(avatar.eyes, avatar.gaze_direction(), name, names, points)
             if looked is not None:
                 yield (name, "looksAt", looked)
+            if avatar.hand_out is not None:  # a movement action recognition starts from
+                target = self._reached(avatar.hand_out, positions, name)
+                if target is not None:
+                    yield (name, "handMovingToward", target)
             for furniture in FURNITURE:
                 if world.footprints[furniture].contains(avatar.x, avatar.y, NEAR):
                     yield (name, "isNear", furniture)
@@ -185,6 +190,18 @@ class Perception:
                 if (obj not in sim.holder and not self._lost(obj, now)
                         and math.hypot(where[0] - avatar.x, where[1] - avatar.y) <= ARM_LENGTH):
                     yield (obj, "isReachableBy", name)
+
+    def _reached(self, hand: tuple[float, float, float],
+                 positions: dict[str, tuple[float, float, float]], person: str) -> str | None:
+        """What a reaching hand goes for: an object it is on (10 cm), else the furniture
+        whose top it is over, else nothing."""
+        for obj, where in positions.items():
+            if self.sim.holder.get(obj) != person and math.dist(where, hand) <= 0.1:
+                return obj
+        for furniture in FURNITURE:
+            if self.world.footprints[furniture].contains(hand[0], hand[1]):
+                return furniture
+        return None
 
     def _object_facts(self, obj: str, where: tuple[float, float, float]) -> Iterable[Fact]:
         """Where an object is, from its true pose (called when the robot sees it)."""

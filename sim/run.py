@@ -33,6 +33,7 @@ from shary.facts import FactDatabase
 from shary.log import ContextLog, read_events
 from shary.loop import EventLoop
 from shary.planning import HatpPlanner
+from shary.recognition.models import load_action_models
 from shary.supervisor import Supervisor
 from userfiles.outputs import output_folder, write_output
 
@@ -244,6 +245,9 @@ class _Run:
         self.sim.observers.append(self.perception.update)
         self.chronicles = ChronicleRecognizer(self.sup) if library.chronicles else None
         self.sessions = Sessions(self.sup)
+        self.action_models = (load_action_models(scenario.action_models, self.facts,
+                                                 atomic=library.atomic)
+                              if scenario.action_models else None)
 
     # -- setting up ----------------------------------------------------------------
 
@@ -355,6 +359,8 @@ class _Run:
             person.begin()
         self.perception.start()
         self.sessions.start()  # the interaction is going on with whoever attends already
+        if self.action_models is not None:  # what is there at the start was not done by anyone
+            self.sup.recognize(self.action_models)
         start = time.perf_counter()
         while self.loop.now() < self.scenario.timeout - 1e-9:
             self.loop.advance(min(CHUNK, self.scenario.timeout - self.loop.now()))

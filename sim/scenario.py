@@ -24,6 +24,7 @@ from jsonschema import Draft202012Validator
 from shary.acts import ActRegistry, builtin_acts
 from shary.io.recipes import load_library
 from shary.recipes import RecipeLibrary
+from shary.recognition.models import builtin_models, load_action_models
 from userfiles import yamlsafe
 from userfiles.errors import FileError
 from userfiles.reader import Reader, read, spelled
@@ -94,6 +95,8 @@ class Scenario:
     expect: Expect
     library: RecipeLibrary | None = None
     """The recipe library the scenario was checked against and runs with."""
+    action_models: tuple[Path, ...] = ()
+    """Action model files the robot recognizes people's actions with (shary.recognition)."""
 
 
 def builtin_profiles() -> list[Path]:
@@ -319,7 +322,29 @@ class _Reading:
             objects, tuple(recipes), tuple(goals), dict(noise.get("flicker") or {}),
             tuple(lost), reader.duration(("noise", "hold"), noise.get("hold", 0.5)),
             tuple(faults), timeout,
-            expect, library)
+            expect, library, self.action_models(library))
+
+    def action_models(self, library: RecipeLibrary | None) -> tuple[Path, ...]:
+        """The action model files named (built-in sets by name), checked together."""
+        reader, files = self.reader, []
+        for i, name in enumerate(reader.data.get("action-models") or []):
+            if name.endswith((".yaml", ".yml")):
+                full = reader.confined_path(("action-models", i), name)
+            else:
+                try:
+                    full = builtin_models(name)
+                except FileNotFoundError as err:
+                    reader.problem(("action-models", i), str(err).strip("'\""))
+                    full = None
+            if full is not None:
+                files.append(full)
+        if files and len(files) == len(reader.data.get("action-models") or []):
+            try:
+                load_action_models(files, atomic=None if library is None else library.atomic)
+            except FileError as err:
+                reader.problems.extend(err.problems)
+                reader.problem(("action-models",), "depends on action models with errors")
+        return tuple(files)
 
     def facts(self, expect: dict[str, Any], predicates: set[str], names: set[str],
               attributes: set[str]) -> None:
