@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import argparse
 import errno
+import heapq
 import json
 import math
 import os
@@ -47,7 +48,7 @@ import re
 import sqlite3
 import sys
 from collections.abc import Iterator, Sequence
-from contextlib import closing, contextmanager
+from contextlib import ExitStack, closing, contextmanager
 from dataclasses import dataclass
 from itertools import islice
 from pathlib import Path
@@ -477,7 +478,9 @@ def add_log_command(subparsers: argparse._SubParsersAction[argparse.ArgumentPars
         "log", help="list the events of a context log, filtered by task, agent, kind, time",
         description="List the events of a context log. Filters combine: an event is shown "
         "when it matches all of them.")
-    p.add_argument("file", type=Path, metavar="FILE", help="a context log (.sqlite) of a run")
+    p.add_argument("file", type=Path, nargs="+", metavar="FILE",
+                   help="a context log (.sqlite) of a run; several (one per agent of a "
+                   "distributed team) are merged into one view ordered by time")
     p.add_argument("--task", metavar="T", help="only the events of this task")
     p.add_argument("--agent", metavar="A", help="only the events of this agent")
     p.add_argument("--kind", metavar="K",
@@ -518,11 +521,12 @@ def cmd_log(args: argparse.Namespace) -> int:
                                "since": args.since, "until": args.until,
                                "limit": args.limit, "offset": args.offset}
     if args.jsonl is not None:
-        output_file(args.jsonl, inputs=[args.file])
-        count = export_jsonl(args.file, args.jsonl, **filters)
+        output_file(args.jsonl, inputs=args.file)
+        with merged_events(args.file, **filters) as events, open_output(args.jsonl) as stream:
+            count = _write_jsonl(events, stream)
         _out.print(f"wrote {count} event(s) to {escape(str(args.jsonl))}")
         return 0
-    with stream_events(args.file, **filters) as events:
+    with merged_events(args.file, **filters) as events:
         try:
             if args.json:
                 _write_jsonl(events, sys.stdout)
@@ -534,6 +538,22 @@ def cmd_log(args: argparse.Namespace) -> int:
             # again when it flushes stdout at exit, so point stdout at nothing.
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
     return 0
+
+
+@contextmanager
+def merged_events(paths: Sequence[str | Path], *, limit: int | None = None, offset: int = 0,
+                  **filters: Any) -> Iterator[Iterator[LogEvent]]:
+    """The matching events of several logs (one per agent of a distributed team) as one
+    stream ordered by time (each log is in time order: one loop, one clock), streamed;
+    ``limit`` and ``offset`` count in the merged stream."""
+    if len(paths) == 1:
+        with stream_events(paths[0], limit=limit, offset=offset, **filters) as events:
+            yield events
+        return
+    with ExitStack() as stack:
+        streams = [stack.enter_context(stream_events(path, **filters)) for path in paths]
+        merged = heapq.merge(*streams, key=lambda event: event.time)
+        yield islice(merged, offset, None if limit is None else offset + limit)
 
 
 def _print_table(events: Iterator[LogEvent]) -> None:

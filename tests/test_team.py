@@ -370,7 +370,7 @@ def test_weights_from_ahp_comparisons(tmp_path: Path) -> None:
 
 
 def test_a_software_agent_answers_queries_with_the_context(tmp_path: Path) -> None:
-    from shary.team.messages import Act
+    from shary.transport.messages import Act
 
     team, log, _ = build(tmp_path)
     replies: list = []
@@ -389,7 +389,7 @@ def test_a_software_agent_answers_queries_with_the_context(tmp_path: Path) -> No
 def test_messages_survive_a_round_trip_through_json() -> None:
     import json
 
-    from shary.team.messages import Answer, Assignment, Progress, Question, message_from_dict
+    from shary.transport.messages import Answer, Assignment, Progress, Question, message_from_dict
 
     for message in (Question("K-10", "IVA", id="q1", text="ok?", choices=("a", "b"),
                              data={"image": "seam.png"}),

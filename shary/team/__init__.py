@@ -4,7 +4,7 @@ The parts (docs/teams.md):
 
 - :mod:`shary.team.spec` and :mod:`shary.team.teamfile`: the team file
   (agents, skills, behaviours, questions, scoring, the goal's tasks);
-- :mod:`shary.team.messages`: the typed messages and the message port;
+- :mod:`shary.transport.messages`: the typed messages and the message port;
 - :mod:`shary.team.agents` (what every member has; software agents),
   :mod:`shary.team.robot` (robot agents: a supervisor each; breakpoints,
   association, control authority), :mod:`shary.team.proxy` (human proxies);

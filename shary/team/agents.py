@@ -2,7 +2,7 @@
 
 HRI/OS (Section 3): "each team agent (human, robot, or software) has a set of
 skills and resources that they contribute to the team".  Every agent
-receives messages from the :class:`~shary.team.messages.MessagePort` and
+receives messages from the :class:`~shary.transport.messages.MessagePort` and
 answers with messages; the managers never reach into an agent's insides
 beyond what the Resource Manager's criteria read (:meth:`Agent.availability`,
 :meth:`Agent.activity_score`, :meth:`Agent.track_record`, the position).
@@ -21,9 +21,9 @@ from collections import deque
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from shary.team.messages import Act, Message, Progress
 from shary.team.resources import HELP, QUESTION, TASK, Need
 from shary.team.spec import AgentSpec
+from shary.transport.messages import Act, Message, Progress
 
 if TYPE_CHECKING:
     from shary.team.team import Team

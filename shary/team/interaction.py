@@ -23,10 +23,10 @@ from typing import TYPE_CHECKING, Any
 from shary.clock import Timer
 from shary.executors import Reporter, Request
 from shary.team.agents import REQUEST_HELP
-from shary.team.messages import Act, Answer, Message, Progress, Question
 from shary.team.proxy import HumanProxy
 from shary.team.resources import HELP, QUESTION, Need
 from shary.team.spec import QuestionSpec
+from shary.transport.messages import Act, Answer, Message, Progress, Question
 
 if TYPE_CHECKING:
     from shary.team.robot import RobotAgent

@@ -17,9 +17,9 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from shary.team.agents import ANSWERING, IDLE, WORKING, Agent
-from shary.team.messages import Answer, Assignment, Message, Progress, Question
 from shary.team.resources import QUESTION, Need
 from shary.team.spec import ACCEPT, ANSWER, IGNORE, AgentSpec, Delay, HelpRequest
+from shary.transport.messages import Answer, Assignment, Message, Progress, Question
 
 if TYPE_CHECKING:
     from shary.team.team import Team

@@ -32,9 +32,9 @@ from shary.team.agents import (
     WORKING,
     Agent,
 )
-from shary.team.messages import Act, Answer, Assignment, Message, Progress
 from shary.team.resources import HELP, Need
 from shary.team.spec import AgentSpec
+from shary.transport.messages import Act, Answer, Assignment, Message, Progress
 
 if TYPE_CHECKING:
     from shary.agenda import Goal

@@ -8,7 +8,7 @@ mounted before the seam is welded, then inspected") are the team file's
 ``after`` lists: a task is ready when every task it comes after is done, and
 ready tasks with no constraint between them run in parallel.
 
-Each ready task is offered (an :class:`~shary.team.messages.Assignment`) to
+Each ready task is offered (an :class:`~shary.transport.messages.Assignment`) to
 the best free agent the Resource Manager finds; an agent that refuses, or
 does not reply within the task's ``reply-within``, is passed over for the
 next.  A task that fails is tried again (``attempts``); a task with
@@ -25,9 +25,9 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from shary.clock import Timer
-from shary.team.messages import Assignment, Message, Progress
 from shary.team.resources import TASK, Need
 from shary.team.spec import TaskSpec
+from shary.transport.messages import Assignment, Message, Progress
 
 if TYPE_CHECKING:
     from shary.team.agents import Agent
@@ -35,6 +35,8 @@ if TYPE_CHECKING:
 
 PENDING, READY, OFFERED, RUNNING, DONE, FAILED = (
     "pending", "ready", "offered", "running", "done", "failed")
+LOST = "(lost)"
+"""What a lost agent holds instead of a task, so that nothing is offered to it."""
 
 
 @dataclass(eq=False)
@@ -183,6 +185,26 @@ class TaskManager:
         if task.timer is not None:
             task.timer.cancel()
             task.timer = None
+
+    # -- members lost and back (a distributed team: their process died, or came back) ----
+
+    def agent_lost(self, name: str) -> None:
+        """``name`` is gone: the task it was offered or ran goes to another agent, and it
+        is offered nothing until it is back (not counted as an attempt: it did not fail)."""
+        member = self.team.agents[name]
+        for task in self.tasks.values():
+            if task.agent == name and task.state in (OFFERED, RUNNING):
+                self.team.record("agent-lost", task=task.name, agent=name,
+                                 state=task.state)
+                self._passed_over(task, name)
+        member.current = LOST
+
+    def agent_back(self, name: str) -> None:
+        """``name`` is back: it may be offered tasks again."""
+        member = self.team.agents[name]
+        if member.current == LOST:
+            member.current = None
+            self.team.loop.call_soon(self.dispatch)
 
     # -- progress ------------------------------------------------------------------
 

@@ -9,7 +9,7 @@
 - a :class:`~shary.team.agents.HumanProxy` per person, a
   :class:`~shary.team.agents.SoftwareAgent` per software agent;
 - the Task, Resource and Interaction Managers, talking to the agents through
-  one :class:`~shary.team.messages.MessagePort`.
+  one :class:`~shary.transport.messages.MessagePort`.
 
 Every row the team writes carries the agent's name (a robot's supervisor
 writes through :class:`AgentLog`, which names the robot when a row names no
@@ -27,12 +27,13 @@ from shary.loop import EventLoop
 from shary.recipes import RecipeLibrary
 from shary.team.agents import HAND_BACK, TAKE_CONTROL, Agent, SoftwareAgent
 from shary.team.interaction import AskExecutor, InteractionManager
-from shary.team.messages import Act, MessagePort
 from shary.team.proxy import HumanProxy
 from shary.team.resources import ResourceManager
 from shary.team.robot import RobotAgent
 from shary.team.spec import HUMAN, ROBOT, TeamSpec
 from shary.team.tasks import TaskManager
+from shary.transport.messages import Act
+from shary.transport.port import MessagePort
 
 if TYPE_CHECKING:
     from shary.team.context import ContextManager
@@ -60,13 +61,15 @@ class Team:
 
     def __init__(self, spec: TeamSpec, *, loop: EventLoop | None = None, log: Any = None,
                  facts: Any = None, executors: dict[str, ExecutorRegistry] | None = None,
-                 library: RecipeLibrary | None = None):
+                 library: RecipeLibrary | None = None,
+                 port: Callable[[EventLoop, Callable[..., None]], MessagePort] | None = None):
         self.spec = spec
         self.loop = loop or EventLoop()
         self.log = log
         if log is not None and hasattr(log, "flush"):
             self.loop.idle_hooks.append(log.flush)
-        self.port = MessagePort(self.loop, self.record)
+        self.port = (port or MessagePort)(self.loop, self.record)
+        """In process unless ``port`` makes another (a ZenohPort: a distributed team)."""
         self.resources = ResourceManager(spec.weights, self.loop.now, self.record)
         self.interaction = InteractionManager(self)
         self.tasks = TaskManager(self, spec.tasks)

@@ -34,9 +34,9 @@ from shary.log import ContextLog, read_events
 from shary.loop import EventLoop
 from shary.team import Team
 from shary.team.agents import INFORM, QUERY
-from shary.team.messages import Act, Answer, Assignment, Message, Question
 from shary.team.proxy import HumanProxy
 from shary.team.spatial import SpatialReasoner
+from shary.transport.messages import Act, Answer, Assignment, Message, Question
 from userfiles.outputs import output_folder, write_output
 
 from ..narration import Report

@@ -1,15 +1,12 @@
-"""The message port: typed messages between team agents, delivered on the team's loop.
+"""The typed messages between team agents (what a :mod:`~shary.transport.port` carries).
 
 HRI/OS (Section 3.1) has agents talk through an agent framework (OAA) and a
-data channel; here every message between agents and managers goes through
-one small :class:`MessagePort`.  It is in-process today: ``send`` queues the
-delivery on the event loop (so a reply never re-enters its sender in the
-middle of a step) and logs the message in the context log.  Messages are
-plain frozen dataclasses of JSON-friendly fields, so putting the port on a
-network later (Zenoh) only has to encode :meth:`Message.as_dict` and decode
-with :func:`message_from_dict`; nothing else changes.
+data channel.  Messages are plain frozen dataclasses of JSON-friendly fields:
+the in-process port hands the objects over, the Zenoh port encodes
+:meth:`Message.as_dict` with :mod:`shary.transport.wire` and decodes with
+:func:`build` after checking every field against the versioned schema.
 
-The five kinds:
+The kinds between agents:
 
 - :class:`Act`: a communication act between agents (``REQUEST-HELP``,
   ``RELEASE``, ``TAKE-CONTROL``, ``HAND-BACK`` …) with free data;
@@ -17,17 +14,20 @@ The five kinds:
 - :class:`Question`: a question with priority, expiration, type and data;
 - :class:`Answer`: the answer to a question (or its fallback when it expired);
 - :class:`Progress`: what became of an assignment or a request (accepted,
-  refused, started, step, done, failed …).
+  refused, started, step, done, failed …);
+- :class:`FactChange`: facts an agent shares (added or removed triples);
+- :class:`LogRecord`: a row of an agent's context log, for whoever gathers them.
+
+and one between the processes of a distributed team: :class:`Clock` (the
+shared simulated clock's steps and the agents' replies, see
+:mod:`shary.transport.distributed`).
 """
 
 from __future__ import annotations
 
-import itertools
-from collections.abc import Callable
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import dataclass, field, fields
+from functools import cache
 from typing import Any, ClassVar
-
-from shary.loop import EventLoop
 
 YES_NO, CHOICE, FREE_TEXT = "yes-no", "choice", "free-text"
 QUESTION_TYPES = (YES_NO, CHOICE, FREE_TEXT)
@@ -44,8 +44,14 @@ class Message:
     id: str = ""
 
     def as_dict(self) -> dict[str, Any]:
-        """The message as JSON-friendly data, with its kind (what a transport sends)."""
-        return {"kind": self.kind, **asdict(self)}
+        """The message as JSON-friendly data, with its kind (what a transport sends).
+
+        Shallow (the fields' values as they are): ``dataclasses.asdict`` deep-copies,
+        which costs more than the whole JSON encoding of a small message."""
+        data = {"kind": self.kind}
+        for name in _names(type(self)):
+            data[name] = getattr(self, name)
+        return data
 
 
 @dataclass(frozen=True)
@@ -111,57 +117,77 @@ class Progress(Message):
     data: dict[str, Any] = field(default_factory=dict)
 
 
+@dataclass(frozen=True)
+class FactChange(Message):
+    """Facts an agent shares: ``added`` and ``removed`` triples (subject, predicate, object)."""
+
+    kind: ClassVar[str] = "fact"
+    added: tuple[tuple[str, str, str], ...] = ()
+    removed: tuple[tuple[str, str, str], ...] = ()
+
+
+@dataclass(frozen=True)
+class LogRecord(Message):
+    """A row of an agent's context log: its time, kind, task and data."""
+
+    kind: ClassVar[str] = "log"
+    time: float = 0.0
+    event: str = ""
+    task: str | None = None
+    data: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Clock(Message):
+    """The shared simulated clock of a distributed team.
+
+    ``step``: the clock agent tells everyone to advance to ``time``; ``idle``:
+    an agent has run everything due by ``time``, says how many messages it has
+    ``sent`` to and ``received`` for each address so far, and when its next
+    timer is due (``next``; the clock moves on to the earliest one only when
+    every agent is idle at ``time`` and every message sent has been received);
+    ``stop``: the run is over (``reason``).
+    """
+
+    kind: ClassVar[str] = "clock"
+    state: str = ""
+    time: float = 0.0
+    sent: dict[str, Any] = field(default_factory=dict)
+    received: dict[str, Any] = field(default_factory=dict)
+    next: float | None = None
+    reason: str = ""
+
+
 KINDS: dict[str, type[Message]] = {c.kind: c for c in (Act, Assignment, Question, Answer,
-                                                         Progress)}
+                                                         Progress, FactChange, LogRecord,
+                                                         Clock)}
+
+
+@cache
+def _names(cls: type[Message]) -> tuple[str, ...]:
+    """A message class's field names, in order."""
+    return tuple(f.name for f in fields(cls))
 
 
 def message_from_dict(data: dict[str, Any]) -> Message:
     """The message that :meth:`Message.as_dict` gave (KeyError/TypeError when it is not one)."""
-    cls = KINDS[data["kind"]]
-    names = {f.name for f in fields(cls)}
-    values = {k: v for k, v in data.items() if k in names}
+    kind = data["kind"]
+    names = _names(KINDS[kind])
+    return build(kind, {k: v for k, v in data.items() if k in names})
+
+
+def build(kind: str, values: dict[str, Any]) -> Message:
+    """The message of ``kind`` with these fields (JSON lists made tuples again)."""
+    cls = KINDS[kind]
     if "choices" in values:
         values["choices"] = tuple(values["choices"])
+    for name in ("added", "removed"):
+        if name in values:
+            values[name] = tuple(tuple(triple) for triple in values[name])
     return cls(**values)
 
 
-Handler = Callable[[Message], Any]
-
-
-class MessagePort:
-    """In-process delivery of messages to the agents that subscribed, on the loop.
-
-    One handler per address (an agent's or a manager's name); a message to an
-    address nobody holds is logged as ``message-lost`` rather than raised:
-    on a network, the sender would not know either.
-    """
-
-    def __init__(self, loop: EventLoop, record: Callable[..., None] | None = None):
-        self.loop = loop
-        self._record = record
-        self._handlers: dict[str, Handler] = {}
-        self._ids = itertools.count(1)
-        self.sent = 0
-
-    def subscribe(self, address: str, handler: Handler) -> None:
-        self._handlers[address] = handler
-
-    def new_id(self, prefix: str) -> str:
-        return f"{prefix}{next(self._ids)}"
-
-    def send(self, message: Message) -> None:
-        """Deliver ``message`` to its addressee after the current callback."""
-        self.sent += 1
-        handler = self._handlers.get(message.to)
-        if self._record is not None:
-            self._record("message" if handler is not None else "message-lost",
-                         agent=message.sender, to=message.to, type=message.kind,
-                         id=message.id or None, **_summary(message))
-        if handler is not None:
-            self.loop.call_soon(handler, message)
-
-
-def _summary(message: Message) -> dict[str, Any]:
+def summary(message: Message) -> dict[str, Any]:
     """The fields worth a log line (not the whole payload: images stay paths)."""
     if isinstance(message, Act):
         return {"act": message.act, "task": message.task, "data": message.data or None}
@@ -178,4 +204,6 @@ def _summary(message: Message) -> dict[str, Any]:
     if isinstance(message, Progress):
         return {"task": message.task, "status": message.status,
                 "reason": message.reason or None}
+    if isinstance(message, FactChange):
+        return {"added": len(message.added), "removed": len(message.removed)}
     return {}

@@ -1,0 +1,212 @@
+"""``shary agent`` and ``shary team up``: a team spread over processes, over Zenoh.
+
+``shary team up TEAM.yaml`` runs the managers and the shared clock here and
+starts every other agent as its own process (``shary agent NAME``), on
+loopback, with a line for each member that joins or leaves and each task
+that runs or ends.  ``shary agent NAME --team TEAM.yaml --connect
+tcp/HOST:PORT`` runs one agent, here or on another machine.  See
+docs/distributed.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from shary.terminal import add_json_flag, emit_json, error, escape
+from shary.terminal import out as _out
+from userfiles.limits import seconds
+
+DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
+
+
+def _endpoint(text: str) -> str:
+    proto, _, rest = text.partition("/")
+    host, _, port = rest.rpartition(":")
+    if proto not in ("tcp", "udp", "tls", "quic") or not host or not port.isdigit():
+        raise argparse.ArgumentTypeError(f"{text!r} is not a Zenoh endpoint "
+                                         "(write tcp/HOST:PORT, e.g. tcp/127.0.0.1:7447)")
+    return text
+
+
+def _duration(text: str) -> float:
+    try:
+        return seconds(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a duration (10min, 90s …)") from None
+
+
+def _common(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--log-dir", type=Path, metavar="DIR",
+                   help="write one context log per agent here (NAME.sqlite)")
+    p.add_argument("--seed", type=int, default=0, help="the random seed (default 0)")
+
+
+def add_agent(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("agent", help="run one agent of a team as its own process (Zenoh)",
+                       description="Run one agent of a team file in this process; it joins "
+                       "the team whose managers listen at --connect (shary team up).")
+    p.add_argument("agent", metavar="AGENT", help="the agent's name in the team file")
+    p.add_argument("--team", type=Path, required=True, metavar="TEAM.yaml",
+                   help="the team file")
+    p.add_argument("--connect", type=_endpoint, default=DEFAULT_ENDPOINT,
+                   metavar="tcp/HOST:PORT",
+                   help=f"where the team's managers listen (default {DEFAULT_ENDPOINT})")
+    _common(p)
+    p.set_defaults(func=cmd_agent)
+
+
+def add_team(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("team", help="run a team: `shary team up TEAM.yaml` (every agent its "
+                       "own process)")
+    verbs = p.add_subparsers(dest="verb", metavar="VERB", required=True)
+    up = verbs.add_parser("up", help="start the managers here and every agent as its own "
+                          "process, on loopback, and run the goal",
+                          description="Run the team's managers and shared clock here, start "
+                          "each agent as `shary agent`, and run the goal until it is over.")
+    up.add_argument("team", type=Path, metavar="TEAM.yaml", help="the team file")
+    up.add_argument("--listen", type=_endpoint, default=DEFAULT_ENDPOINT,
+                    metavar="tcp/HOST:PORT",
+                    help=f"where the managers listen (default {DEFAULT_ENDPOINT}: loopback)")
+    up.add_argument("--limit", type=_duration, default=3600.0, metavar="DURATION",
+                    help="stop after this much simulated time (default 1h)")
+    up.add_argument("--pace", type=float, default=0.0, metavar="S",
+                    help="wall seconds per simulated second (default 0: as fast as it goes)")
+    up.add_argument("--remote", action="append", default=[], metavar="AGENT",
+                    help="do not start AGENT here: it joins from elsewhere (repeatable)")
+    up.add_argument("--wait", type=_duration, default=30.0, metavar="DURATION",
+                    help="how long to wait for every agent to join (default 30s)")
+    _common(up)
+    add_json_flag(up, "the outcome")
+    up.set_defaults(func=cmd_team_up)
+
+
+def _robots(spec: Any, names: list[str]) -> list[str]:
+    from shary.team.spec import ROBOT
+
+    return [n for n in names if spec.agents[n].kind == ROBOT]
+
+
+def cmd_agent(args: argparse.Namespace) -> int:
+    import zenoh
+
+    from shary.team import load_team
+    from shary.transport.distributed import Member
+
+    spec = load_team(args.team)
+    if args.agent not in spec.agents:
+        return error(f"{args.team}: no agent {args.agent!r} in team {spec.name!r} (its "
+                     f"agents: {', '.join(spec.agents)})")
+    if _robots(spec, [args.agent]):
+        return error(f"{args.agent} is a robot: its executors come from a world, which does "
+                     "not run as a separate process yet (docs/distributed.md)")
+    try:
+        member = Member(spec, args.agent, connect=args.connect, logdir=args.log_dir,
+                        seed=args.seed)
+    except zenoh.ZError as exc:
+        return error(f"cannot join the team at {args.connect}: {_reason(exc)} (is "
+                     "`shary team up` running there?)")
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))  # close the session on a kill
+    reason = member.run()
+    return 0 if reason in ("done", "failed", "time is up", "stopped") else 1
+
+
+def cmd_team_up(args: argparse.Namespace) -> int:
+    import zenoh
+
+    from shary.team import load_team
+    from shary.transport.distributed import Conductor
+
+    spec = load_team(args.team)
+    unknown = [n for n in args.remote if n not in spec.agents]
+    if unknown:
+        return error(f"--remote {unknown[0]}: no such agent in team {spec.name!r}",
+                     json_mode=args.json)
+    logdir = args.log_dir or Path(tempfile.mkdtemp(prefix=f"shary-{spec.name}-"))
+    show = (lambda line: None) if args.json else _out.print
+    children: dict[str, subprocess.Popen[bytes]] = {}
+    started = time.monotonic()
+
+    def display(kind: str, data: dict[str, Any]) -> None:
+        show(_line(kind, data, children))
+
+    try:
+        conductor = Conductor(spec, listen=args.listen, logdir=logdir, seed=args.seed,
+                              pace=args.pace, display=display)
+    except zenoh.ZError as exc:
+        return error(f"cannot listen at {args.listen}: {_reason(exc)} (another team there? "
+                     "give --listen tcp/127.0.0.1:PORT)", json_mode=args.json)
+    try:
+        robots = _robots(spec, conductor.members)
+        if robots:
+            return error(f"{robots[0]} is a robot: a robot's executors come from a world, "
+                         "which does not run as a separate process yet (docs/distributed.md)",
+                         json_mode=args.json)
+        for name in conductor.members:
+            if name not in args.remote:
+                children[name] = subprocess.Popen(
+                    [sys.executable, "-m", "shary", "agent", name, "--team", str(args.team),
+                     "--connect", args.listen, "--log-dir", str(logdir),
+                     "--seed", str(args.seed)], stdin=subprocess.DEVNULL)
+        show(f"team {escape(spec.name)}: managers at {args.listen}, "
+             f"{len(conductor.members)} agents, logs in {logdir}")
+        missing = conductor.wait_for_members(args.wait)
+        if missing:
+            return error(f"{', '.join(missing)} did not join within {args.wait:g} s",
+                         json_mode=args.json)
+        outcome = conductor.run(args.limit)
+        now = conductor.team.loop.now()
+        wall = time.monotonic() - started
+        if args.json:
+            emit_json({"team": spec.name, "outcome": outcome, "time": now,
+                       "wall_seconds": round(wall, 3), "lost": conductor.lost,
+                       "logs": str(logdir)})
+        else:
+            show(f"goal {outcome or 'not over'} at {now:g} s simulated "
+                 f"({wall:.1f} s wall); merged log: shary log {logdir}/*.sqlite")
+        return 0 if outcome == "done" else 1
+    finally:
+        conductor.close()
+        for child in children.values():
+            try:
+                child.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                child.kill()
+                child.wait()
+
+
+def _reason(exc: Exception) -> str:
+    """Zenoh's message without the Rust source location it ends with."""
+    return re.sub(r"\s+at /\S+?\.rs:\d+\.?", "", str(exc)).strip()
+
+
+def _line(kind: str, data: dict[str, Any], children: dict[str, Any]) -> str:
+    agent = escape(str(data.get("agent", "")))
+    task = escape(str(data.get("task", "")))
+    if kind == "agent-joined":
+        child = children.get(data.get("agent", ""))
+        pid = f" (pid {child.pid})" if child is not None else ""
+        return f"+ {agent} joined{pid}"
+    if kind == "agent-left":
+        return f"- {agent} left"
+    if kind == "agent-lost":
+        return f"! {agent} lost while {data.get('state')} {task}: offered again"
+    if kind == "task-running":
+        return f"  {task} running: {agent}"
+    if kind == "task-done":
+        return f"  {task} done by {agent}"
+    if kind == "task-failed":
+        return f"  {task} failed ({agent}): {escape(str(data.get('reason', '')))}"
+    if kind == "answer":
+        return f"  {agent} answered {escape(str(data.get('value')))}"
+    if kind == "message-refused":
+        return f"! refused a message on {escape(str(data.get('key')))}: " \
+               f"{escape(str(data.get('reason')))}"
+    return f"  goal over: {escape(str(data.get('outcome')))}"

@@ -1,0 +1,301 @@
+"""A team spread over processes: the conductor (managers and shared clock) and members.
+
+``shary team up`` runs the :class:`Conductor`: the Task, Resource and
+Interaction Managers, the software agents, and the team's simulated clock, in
+a Zenoh router listening on loopback.  ``shary agent NAME`` runs a
+:class:`Member`: one agent of the team file in its own process, with its own
+loop, clock and context log (``LOGDIR/NAME.sqlite``), a Zenoh client of the
+conductor.  Both build the same :class:`~shary.team.team.Team` from the team
+file; each process holds only its own addresses on the port, so the other
+members' objects are shadows (the Task Manager's view of who holds what).
+
+**The shared simulated clock** is a barrier: the conductor tells every member
+to advance to time *t* (``Clock`` ``step``); each member runs its timers up to
+*t* and everything that arrives, and reports ``idle`` with its message counts
+and its next timer.  The conductor moves on, to the earliest next timer of
+anyone, only when every live member is idle at *t* and every message sent to
+a live address has been received there.  So a message sent at *t* is handled
+at *t*, in whatever process, as in one process, and a run with fixed delays
+gives the in-process run's events at the same times.  ``pace`` makes a
+simulated second last that many wall seconds (``0``: as fast as possible).
+
+**Faults**: a member whose process dies leaves (its liveliness token goes
+within milliseconds of a kill -9, within the lease of a freeze); the Task
+Manager takes its task back (``agent-lost``) and offers it to another; the
+clock no longer waits for it.  A member that joins later (a restart) is
+given the current time and takes part from then on.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from shary.loop import EventLoop
+from shary.transport.messages import Clock
+from shary.transport.port import Faults
+from shary.transport.zenohport import LOOPBACK, ZenohPort, session_config
+
+CLOCK = "clock"
+"""The shared clock's address, in the conductor's process."""
+CONDUCTOR = "managers"
+"""The conductor's process name (its liveliness token, its log file)."""
+MANAGERS = ("tasks", "interaction", CLOCK)
+WAIT = 0.2
+"""Seconds a process waits for a message before looking around again."""
+
+
+def _log(logdir: Path | None, name: str, seed: int) -> Any:
+    if logdir is None:
+        return None
+    from shary.log import ContextLog
+
+    logdir.mkdir(parents=True, exist_ok=True)
+    path, n = logdir / f"{name}.sqlite", 1
+    while path.exists():  # a restart keeps the log of the process that died
+        path, n = logdir / f"{name}.{n}.sqlite", n + 1
+    return ContextLog(path, seed=seed)
+
+
+class Member:
+    """One agent of a team file in this process (see the module's docstring)."""
+
+    def __init__(self, spec: Any, name: str, *, connect: str = LOOPBACK,
+                 logdir: Path | None = None, seed: int = 0, faults: Faults | None = None):
+        from shary.team import Team
+
+        if name not in spec.agents:
+            raise KeyError(name)
+        self.name = name
+        self.log = _log(logdir, name, seed)
+        ports: list[ZenohPort] = []
+
+        def port(loop: EventLoop, record: Callable[..., None]) -> ZenohPort:
+            ports.append(ZenohPort(loop, record, team=spec.name, name=name, local=[name],
+                                   config=session_config(mode="client", connect=[connect]),
+                                   faults=faults))
+            return ports[0]
+
+        self.team = Team(spec, log=self.log, port=port)
+        self.team.loop.random.seed(seed)
+        self.port = ports[0]
+        self.port.on_clock = self._clock
+        self.port.on_presence = self._presence
+        self.at: float | None = None
+        """The time of the last step (None before the first)."""
+        self.stopped: str | None = None
+
+    def _presence(self, name: str, joined: bool) -> None:
+        if name == CONDUCTOR and not joined:
+            self.stopped = "the managers left"
+
+    def _clock(self, message: Clock) -> None:
+        if message.state == "stop":
+            self.stopped = message.reason or "stopped"
+            return
+        if message.state != "step":
+            return
+        loop = self.team.loop
+        if self.at is None:
+            loop.clock.advance_to(message.time)
+            starting = getattr(self.team.agents[self.name], "start_script", None)
+            if starting is not None:
+                starting()
+        elif message.time > loop.now():
+            loop.advance(message.time - loop.now())
+        self.at = message.time
+
+    def run(self) -> str:
+        """Take part until the conductor stops the run (or it vanishes); the reason."""
+        port, loop = self.port, self.team.loop
+        try:
+            while self.stopped is None:
+                took = port.pump(WAIT)
+                loop.run_until_idle()
+                port.flush()
+                if took and self.at is not None and self.stopped is None:
+                    port.publish(Clock(self.name, CLOCK, state="idle", time=self.at,
+                                       sent=dict(port.wire_sent),
+                                       received=dict(port.wire_received),
+                                       next=loop.clock.next_due()))
+            return self.stopped
+        finally:
+            self.close()
+
+    def close(self) -> None:
+        try:
+            self.port.close()
+        finally:
+            if self.log is not None:
+                self.log.close()
+
+
+class Conductor:
+    """The managers and the shared clock (see the module's docstring)."""
+
+    def __init__(self, spec: Any, *, listen: str = LOOPBACK, logdir: Path | None = None,
+                 seed: int = 0, members: list[str] | None = None, pace: float = 0.0,
+                 faults: Faults | None = None,
+                 display: Callable[[str, dict[str, Any]], Any] | None = None):
+        from shary.team import Team
+        from shary.team.spec import SOFTWARE
+
+        self.members = list(members if members is not None else
+                            [a.name for a in spec.agents.values() if a.kind != SOFTWARE])
+        local = [*MANAGERS, *(a for a in spec.agents if a not in self.members)]
+        self.log = _log(logdir, CONDUCTOR, seed)
+        self.display = display or (lambda what, data: None)
+        ports: list[ZenohPort] = []
+
+        def port(loop: EventLoop, record: Callable[..., None]) -> ZenohPort:
+            ports.append(ZenohPort(loop, self._record(record), team=spec.name,
+                                   name=CONDUCTOR, local=local,
+                                   config=session_config(mode="router", listen=[listen]),
+                                   faults=faults))
+            return ports[0]
+
+        self.team = Team(spec, log=self.log, port=port)
+        self.team.record = self._record(self.team.record)  # type: ignore[method-assign]
+        self.team.loop.random.seed(seed)
+        self.port = ports[0]
+        self.port.on_clock = self._idle
+        self.port.on_presence = self._presence
+        self.pace = pace
+        self.live: set[str] = set()
+        self.reports: dict[str, Clock] = {}
+        self.lost: list[str] = []
+        self.offsets: dict[str, int] = {}
+        """Per link, sent - received left over from a member's earlier life (a restart)."""
+
+    def _record(self, record: Callable[..., None]) -> Callable[..., None]:
+        """The team's record, shown on the display too (the rows worth a line)."""
+        shown = {"agent-joined", "agent-left", "agent-lost", "task-running", "task-done",
+                 "task-failed", "goal-over", "message-refused", "answer"}
+
+        def both(kind: str, **data: Any) -> None:
+            record(kind, **data)
+            if kind in shown and data.get("agent") != CONDUCTOR:
+                self.display(kind, {k: v for k, v in data.items() if v is not None})
+        return both
+
+    # -- members -------------------------------------------------------------------
+
+    def _presence(self, name: str, joined: bool) -> None:
+        if name not in self.members:
+            return
+        if joined:
+            self.live.add(name)
+            if self.team.tasks.started:  # a restart: its counts start again from zero
+                sent, received = self._totals()
+                for link in sent.keys() | received.keys():
+                    if name in link.split(">"):
+                        self.offsets[link] = sent.get(link, 0) - received.get(link, 0)
+                self.team.tasks.agent_back(name)
+                self._tell(name, self.team.loop.now())
+        else:
+            self.live.discard(name)
+            self.reports.pop(name, None)
+            self.lost.append(name)
+            if name in self.team.agents:
+                self.team.tasks.agent_lost(name)
+
+    def _idle(self, message: Clock) -> None:
+        if message.state == "idle" and message.sender in self.live:
+            self.reports[message.sender] = message
+
+    def _tell(self, name: str, at: float) -> None:
+        self.port.publish(Clock(CLOCK, name, state="step", time=at))
+
+    def _balanced(self, at: float) -> bool:
+        """Every live member idle at ``at``, every message between live addresses received
+        (counted per link: what a lost member sent, or was sent, is not waited for)."""
+        if self.port.outbox or self.port.inbox.qsize():
+            return False
+        if any(self.reports.get(m) is None or self.reports[m].time != at for m in self.live):
+            return False
+        sent, received = self._totals()
+        alive = self.live | self.port.local
+        for link in sent.keys() | received.keys():
+            source, _, target = link.partition(">")
+            if (source in alive and target in alive
+                    and sent.get(link, 0) - received.get(link, 0) != self.offsets.get(link, 0)):
+                return False
+        return True
+
+    def _totals(self) -> tuple[dict[str, int], dict[str, int]]:
+        """Messages sent and received per link, by everyone live, as last reported."""
+        sent: dict[str, int] = dict(self.port.wire_sent)
+        received: dict[str, int] = dict(self.port.wire_received)
+        for name in self.live:
+            report = self.reports.get(name)
+            if report is not None:
+                for link, n in report.sent.items():
+                    sent[link] = sent.get(link, 0) + n
+                for link, n in report.received.items():
+                    received[link] = received.get(link, 0) + n
+        return sent, received
+
+    # -- running --------------------------------------------------------------------
+
+    def wait_for_members(self, timeout: float) -> list[str]:
+        """Wait until every member has joined; the ones still missing after ``timeout``."""
+        end = time.monotonic() + timeout
+        while not self.live.issuperset(self.members) and time.monotonic() < end:
+            self.port.pump(WAIT)
+            self.team.loop.run_until_idle()
+        return sorted(set(self.members) - self.live)
+
+    def run(self, limit: float) -> str | None:
+        """Run the goal on the shared clock until it is over or ``limit`` simulated seconds
+        have passed; the goal's outcome ("done", "failed") or None."""
+        team, port, loop = self.team, self.port, self.team.loop
+        team.tasks.start()
+        start = time.monotonic()
+        at = loop.now()
+        for name in self.live:
+            self._tell(name, at)
+        try:
+            while team.tasks.outcome is None:
+                port.pump(WAIT if not self._balanced(at) else 0.0)
+                loop.run_until_idle()
+                port.flush()
+                if team.tasks.outcome is not None or not self._balanced(at):
+                    continue
+                dues = [r.next for r in self.reports.values() if r.next is not None]
+                own = loop.clock.next_due()
+                if own is not None:
+                    dues.append(own)
+                if not dues or min(dues) > limit:
+                    break
+                if self.pace and self._paced(start + min(dues) * self.pace):
+                    continue  # something happened meanwhile (a member left …): look again
+                at = min(dues)
+                for name in self.live:  # the step first: what we send at ``at`` comes after
+                    self._tell(name, at)
+                loop.advance(at - loop.now())
+                port.flush()
+            return team.tasks.outcome
+        finally:
+            for name in self.members:
+                port.publish(Clock(CLOCK, name, state="stop",
+                                   reason=team.tasks.outcome or "time is up"))
+
+    def _paced(self, deadline: float) -> bool:
+        """Wait for the wall clock to reach ``deadline``, handling what arrives meanwhile
+        (a member that leaves is noticed at once, not after the wait); True if the wait
+        was cut short by work."""
+        port, loop = self.port, self.team.loop
+        while (left := deadline - time.monotonic()) > 0:
+            if port.pump(min(left, WAIT)) and loop.run_until_idle():
+                port.flush()
+                return True
+        return False
+
+    def close(self) -> None:
+        try:
+            self.port.close()
+        finally:
+            if self.log is not None:
+                self.log.close()

@@ -1,0 +1,201 @@
+"""The transport port: the wire format and its refusals, faults injected at the port, and
+the Zenoh port between two sessions of this process (no child processes here: see
+tests/test_distributed.py)."""
+
+from __future__ import annotations
+
+import json
+import socket
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import jsonschema
+import pytest
+from scripted import ScriptedExecutor
+
+from shary.log import ContextLog, read_events
+from shary.loop import EventLoop
+from shary.team import Team, load_team
+from shary.team.spec import Reply
+from shary.transport.messages import (
+    KINDS,
+    Act,
+    Answer,
+    Assignment,
+    Clock,
+    FactChange,
+    LogRecord,
+    Progress,
+    Question,
+)
+from shary.transport.port import Faults, MessagePort
+from shary.transport.wire import WireError, _not_json, decode, encode, json_schema, key
+
+HOSTILE = sorted((Path(__file__).parent / "hostile" / "message").glob("*.json"))
+SCHEMA = Path(__file__).parent.parent / "shary" / "schemas" / "message.schema.json"
+TEAM = Path(__file__).parent / "data" / "team" / "seam-team.yaml"
+ATOMIC = ("drive", "weld", "scan", "aim-light")
+
+EXAMPLES = [
+    Act("K-10", "EVA1", id="m1", act="REQUEST-HELP", data={"skill": "point-light"}, task="t"),
+    Assignment("tasks", "EVA1", id="a1", task="mount-P1", skill="mount-panel",
+               args={"panel": "P1"}, attempt=2),
+    Question("interaction", "IVA", id="q1", text="Is this seam okay?", type="choice",
+             choices=("yes", "no"), priority=5, expires=60.0, fallback=None,
+             data={"image": "seam.png"}),
+    Answer("IVA", "interaction", question="q1", value="yes"),
+    Progress("EVA1", "tasks", task="mount-P1", status="done"),
+    FactChange("K-10", "CM", added=(("P1", "isOn", "frame"),), removed=(("P1", "isOn", "rack"),)),
+    LogRecord("EVA1", "CM", time=12.5, event="task-done", task="mount-P1", data={"n": 1}),
+    Clock("EVA1", "clock", state="idle", time=3.0, sent={"tasks": 2}, received={"EVA1": 1},
+          next=4.5),
+]
+
+
+def test_every_kind_travels_and_comes_back_equal() -> None:
+    assert {type(m) for m in EXAMPLES} == set(KINDS.values())
+    for message in EXAMPLES:
+        expr = key("seam", message.to, message.kind)
+        assert decode(encode(message), key_expr=expr) == message
+
+
+def test_the_shipped_schema_is_the_wire_checks_schema() -> None:
+    shipped = json.loads(SCHEMA.read_text())
+    assert shipped == json_schema()
+    validator = jsonschema.Draft202012Validator(shipped)
+    for message in EXAMPLES:
+        validator.validate(json.loads(encode(message)))
+
+
+@pytest.mark.parametrize("path", HOSTILE, ids=lambda p: p.stem)
+def test_a_hostile_message_is_refused(path: Path) -> None:
+    payload = path.read_bytes()
+    with pytest.raises(WireError):
+        decode(payload)
+    try:  # the JSON Schema that other peers use refuses it too
+        data = json.loads(payload, parse_constant=_not_json)  # NaN: not JSON
+    except ValueError:
+        return
+    assert not jsonschema.Draft202012Validator(json_schema()).is_valid(data)
+
+
+def test_huge_deep_and_misaddressed_messages_are_refused() -> None:
+    with pytest.raises(WireError, match="bytes"):
+        decode(b'{"v":1,"kind":"act","sender":"A","to":"B","act":"' + b"x" * (2 << 20) + b'"}')
+    with pytest.raises(WireError, match="not JSON"):
+        decode(b'{"v":1,"kind":"act","sender":"A","to":"B","data":' + b"[" * 100_000
+               + b"]" * 100_000 + b"}")
+    with pytest.raises(WireError, match="published under"):
+        decode(encode(Act("A", "B", act="PING")), key_expr="shary/t/C/act")
+    with pytest.raises(WireError, match="key expression"):
+        key("seam", "B/**", "act")
+
+
+# -- faults at the port (in process, simulated clock) -------------------------------------
+
+
+def _team(tmp_path: Path, faults: Faults, **question) -> tuple[Team, Path]:
+    spec = load_team(TEAM)
+    iva = spec.agents["IVA"]
+    spec = replace(spec, agents={**spec.agents, "IVA": replace(iva, behaviour=replace(
+        iva.behaviour, questions=Reply("answer", (3.0, 3.0))))})
+    spec = replace(spec, questions={**spec.questions, "seam-okay": replace(
+        spec.questions["seam-okay"], **question)})
+    path = tmp_path / "run.sqlite"
+    team = Team(spec, log=ContextLog(path),
+                port=lambda loop, record: MessagePort(loop, record, faults=faults))
+    for robot in spec.of_kind("robot"):
+        executor = ScriptedExecutor(team.loop, {"drive": 2.0, "weld": 10.0, "scan": 3.0,
+                                                "aim-light": 1.0})
+        for name in ATOMIC:
+            team.robot(robot.name).world.register(name, executor)
+    return team, path
+
+
+@pytest.mark.parametrize("faults", [Faults(loss=1.0, agents=frozenset({"IVA"})),
+                                    Faults(latency=40.0, agents=frozenset({"IVA"}))],
+                         ids=["dropped", "delayed"])
+def test_a_bad_link_makes_the_question_expire_and_fall_back(tmp_path: Path,
+                                                           faults: Faults) -> None:
+    team, path = _team(tmp_path, faults, fallback="yes", expires=30.0)
+    assert team.run(900) == "done"
+    team.log.close()
+    events = list(read_events(path))
+    (answer,) = [e for e in events if e.kind == "answer"]
+    assert answer.data["expired"] is True and answer.data["value"] == "yes"
+    if faults.loss:
+        assert any(e.kind == "message-dropped" and e.data["to"] == "IVA" for e in events)
+
+
+def test_a_good_link_is_unchanged_by_the_fault_machinery(tmp_path: Path) -> None:
+    team, path = _team(tmp_path, Faults(loss=1.0, agents=frozenset({"nobody"})),
+                       fallback="yes", expires=30.0)
+    assert team.run(900) == "done"
+    team.log.close()
+    (answer,) = [e for e in read_events(path) if e.kind == "answer"]
+    assert answer.data["value"] == "yes" and not answer.data.get("expired")
+
+
+def test_faults_are_checked() -> None:
+    with pytest.raises(ValueError, match="loss"):
+        Faults(loss=1.5)
+    with pytest.raises(ValueError, match="latency"):
+        Faults(latency=-1)
+
+
+# -- the Zenoh port, two sessions in this process ------------------------------------------
+
+
+def _wait(condition, seconds: float = 5.0, *ports) -> None:
+    end = time.monotonic() + seconds
+    while not condition():
+        assert time.monotonic() < end, "timed out"
+        for port in ports:
+            port.pump(0.01)
+            port.loop.run_until_idle()
+
+
+def free_port() -> int:
+    """A TCP port nobody listens on now (for one Zenoh listener)."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_zenoh_delivers_refuses_and_notices_a_leaving_peer() -> None:
+    from shary.transport.zenohport import ZenohPort, session_config
+
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    rows: list[tuple[str, dict]] = []
+
+    def record(kind: str, **data) -> None:
+        rows.append((kind, data))
+
+    a = ZenohPort(EventLoop(), record, team="t", name="A", local=["A"],
+                  config=session_config(mode="router", listen=[endpoint]))
+    try:
+        b = ZenohPort(EventLoop(), None, team="t", name="B", local=["B"],
+                      config=session_config(mode="client", connect=[endpoint]))
+        got: list = []
+        b.subscribe("B", got.append)
+        _wait(lambda: ("agent-joined", {"agent": "B"}) in rows, 5.0, a)
+        for path in HOSTILE:  # raw bytes straight onto A's key: refused, never delivered
+            b.session.put(key("t", "A", "act"), path.read_bytes())
+        handled: list = []
+        a.subscribe("A", handled.append)
+        b.send(Act("B", "A", act="PING"))
+        b.flush()
+        _wait(lambda: handled, 5.0, a)
+        _wait(lambda: a.refused == len(HOSTILE), 5.0, a)
+        assert handled == [Act("B", "A", act="PING")]
+        refusals = [d for k, d in rows if k == "message-refused"]
+        assert len(refusals) == len(HOSTILE) and all(d["reason"] for d in refusals)
+        a.send(Act("A", "B", act="PONG"))
+        a.flush()
+        _wait(lambda: got, 5.0, b)
+        assert got == [Act("A", "B", act="PONG")] and a.wire_sent == {"A>B": 1}
+        b.close()
+        _wait(lambda: ("agent-left", {"agent": "B"}) in rows, 1.0, a)
+    finally:
+        a.close()
