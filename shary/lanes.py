@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from shary.log import LogEvent
+from shary.plans.lane import plan_task
 
 ACT_COLOURS = {
     "ASK-TASK": "#4e79a7", "ASK-HELP": "#3f8fbf", "REALIZE-TASK": "#59a14f",
@@ -111,6 +112,7 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
     cancels: dict[str, str] = {}
     looks: dict[tuple[str, str], Item] = {}
     recognized: dict[str, Item] = {}  # candidate -> its bar
+    plan_tasks: dict[tuple[str, str | None], Item] = {}  # (task, view) -> its open state
     received: list[tuple[LogEvent, Item]] = []
     plans: list[Item] = []
     team = _Team()
@@ -207,6 +209,8 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
             _attention(e, looks, items)
         elif e.kind == "recognition" and isinstance(d.get("candidate"), str):
             _recognized(e, recognized, items)
+        elif e.kind == "plan-task" and isinstance(d.get("name"), str):
+            plan_task(e, plan_tasks, items, Item, shown_time)
         elif e.kind in TEAM_KINDS:
             team.take(e, items, plans)
 
@@ -217,7 +221,7 @@ def collect(events: Iterable[LogEvent], robot: str | None = None) -> Timeline:
         if request in cancels:
             item.tooltip += f"\n{cancels[request]}"
     for item in [*open_acts.values(), *looks.values(), *team.open.values(),
-                 *recognized.values()]:
+                 *recognized.values(), *plan_tasks.values()]:
         item.tooltip += "\nstill going when the log ends"
 
     robot = robot or first_robot or next(

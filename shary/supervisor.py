@@ -107,12 +107,12 @@ class Supervisor:
 
         self.speech = Speech(facts)
         """Makes the sentences of ``say`` steps (shary/dialogue/speech.py)."""
-        self.dialogue = install(self)
-        """Person-initiated acts, questions and sessions (:mod:`shary.dialogue`)."""
         self.recognizer: Any = None
         """Human action recognition, once :meth:`recognize` has loaded action models."""
         self.robot_actions: Any = None
         """The robot's actions from their models (look, act, retry, escalate)."""
+        self.dialogue = install(self)
+        """Person-initiated acts, questions and sessions (:mod:`shary.dialogue`)."""
 
     def recognize(self, models: Any, perspective: str = "robot") -> Any:
         """Follow what people do with these action models (:mod:`shary.recognition`) and

@@ -64,6 +64,7 @@ from shary.lanes import (
     shown_time,
 )
 from shary.log import LogEvent, stream_events
+from shary.plans.lane import PLAN_STATE_COLOURS
 from userfiles.outputs import write_output
 
 # -- geometry (pixels) ---------------------------------------------------------
@@ -88,7 +89,7 @@ RECOGNIZED_STYLES = {  # a recognized human action's state: (fill, stroke, text)
     "rec-achieved": ("#59a14f", "#2f6b2a", "#ffffff"),
     "rec-abandoned": ("#eeeeee", "#9a9a9a", "#666666"),
 }
-ROWS = ("act", "action", "recognized", "team", "look")
+ROWS = ("act", "action", "plan-task", "recognized", "team", "look")
 """The rows of a lane, top to bottom (all but acts and actions only when the log has them)."""
 _NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ufffe\uffff\ud800-\udfff]")
 
@@ -131,9 +132,10 @@ def render_timeline(events: Iterable[LogEvent], title: str = "", *, robot: str |
     y = band_top + max(1, _rows(band_rows)) * BAND_ROW + 22
     out.append(_axis(t0, end, step, x, y, above=True))
     lanes_top = y = y + 6
-    heights = {"act": ROW, "action": ROW, "recognized": ROW, "team": ROW, "look": LOOK_ROW}
-    captions = {"act": "acts", "action": "actions", "recognized": "recognized", "team": "team",
-                "look": "looks at"}
+    heights = {"act": ROW, "action": ROW, "plan-task": ROW, "recognized": ROW, "team": ROW,
+               "look": LOOK_ROW}
+    captions = {"act": "acts", "action": "actions", "plan-task": "plan tasks",
+                "recognized": "recognized", "team": "team", "look": "looks at"}
     for index, (agent, rows) in enumerate(lanes):
         counts = {kind: max(kind in ("act", "action"), _rows(rows[kind])) for kind in rows}
         lane_h = 2 * LANE_PAD + sum(counts[k] * heights[k] for k in counts)
@@ -415,6 +417,10 @@ def _legend(tl: Timeline, left: float, top: float, width: float) -> tuple[str, f
                             f'stroke="{stroke}"/>' if point else
                             f'<rect width="18" height="10" y="-9" fill="{fill}" '
                             f'stroke="{stroke}"/>', text))
+    for state, colour in PLAN_STATE_COLOURS.items():
+        if f"plan-{state}" in kinds:
+            entries.append((f'<rect width="18" height="10" y="-9" fill="{colour}"/>',
+                            f"task {state}"))
     if any(i.row == "look" for i in tl.items):
         entries.append((f'<rect width="18" height="6" y="-7" fill="{LOOK_COLOUR}"/>',
                         "looks at"))

@@ -44,6 +44,7 @@ from .people import Person
 from .perception import Noise, Perception
 from .scenario import Happened, Scenario, is_team_scenario, judge, load_scenario
 from .simulation import Simulation, standing_height
+from .stack.session import StackSession
 from .world import (
     BOTTLES,
     CONTAINERS,
@@ -211,7 +212,8 @@ class _Run:
         robot = scenario.robot
         world.add_robot(robot, scenario.model, scenario.robot_at)
         self.sim = Simulation(world, self.loop, robot)
-        self.executors = RobotExecutors(
+        self.stack = StackSession(scenario.shared_plan, robot) if scenario.shared_plan else None
+        self.executors = (self.stack.executors_class if self.stack else RobotExecutors)(
             self.sim, self.say, self.learned,
             lambda who, kind, text: report(self.loop.now(), who, kind, text))
         registry = ExecutorRegistry({name: self.executors for name in library.atomic})
@@ -239,7 +241,7 @@ class _Run:
         self.sup.act_listeners.append(self._act_started)
         self._arrange_objects()
         self._a_priori()
-        self.perception = Perception(
+        self.perception = (self.stack.perception_class if self.stack else Perception)(
             self.sim, self.facts, hold=scenario.hold,
             noise=Noise(dict(scenario.flicker), list(scenario.lost)), rng=self.loop.random)
         self.sim.observers.append(self.perception.update)
@@ -253,7 +255,8 @@ class _Run:
 
     def _arrange_objects(self) -> None:
         """Add the scenario's new objects to the room, and put every object in its place."""
-        for obj, spec in self.scenario.objects.items():
+        objects = {**(self.stack.objects() if self.stack else {}), **self.scenario.objects}
+        for obj, spec in objects.items():
             furniture = spec.get("on", "coffee-table")
             f = self.world.footprints[furniture]
             x, y = spec.get("at", (f.x, f.y))
@@ -297,6 +300,8 @@ class _Run:
         facts.add(robot, "type", "Robot")
         for attribute, value in ROBOT_ATTRIBUTES.items():
             facts.add(robot, attribute, value)
+        if self.stack is not None:
+            self.stack.a_priori(facts)
         for spec in self.scenario.people:
             facts.add(spec.name, "type", "Agent")
             facts.add(spec.name, "type", "Human")
@@ -361,6 +366,9 @@ class _Run:
         self.sessions.start()  # the interaction is going on with whoever attends already
         if self.action_models is not None:  # what is there at the start was not done by anyone
             self.sup.recognize(self.action_models)
+        if self.stack is not None:
+            self.stack.start(self.sup, self.people[self.stack.partner_name],
+                             self.scenario.shared_plan["decision-wait"])
         start = time.perf_counter()
         while self.loop.now() < self.scenario.timeout - 1e-9:
             self.loop.advance(min(CHUNK, self.scenario.timeout - self.loop.now()))
@@ -381,7 +389,8 @@ class _Run:
         return (not self.sup.runs and self.sup.agenda.active is None
                 and not any(g.state not in OVER for g in self.sup.agenda.goals)
                 and not self.sim.busy and self.loop.clock.next_due() is None
-                and not any(p.pending for p in self.people.values()))
+                and not any(p.pending for p in self.people.values())
+                and not (self.stack is not None and self.stack.busy))
 
     # -- after the run --------------------------------------------------------------
 
@@ -392,8 +401,17 @@ class _Run:
         else:
             events = self.log.events
         acts, actions, tasks = [], [], {}
+        plan, said, task_states, recognized = [], [], set(), []
         requests: dict[str, tuple[str, str]] = {}
         for t, kind, _, agent, data in events:
+            if kind == "shared-plan":
+                plan.append(data["state"])
+            elif kind == "speech" and agent == self.scenario.robot:
+                said.append(data["text"])
+            elif kind == "plan-task":
+                task_states.add((agent or "", data["name"], data["state"]))
+            elif kind == "recognition":
+                recognized.append((data["state"], data["action"], agent or ""))
             if kind == "act":
                 acts.append((t, agent or "", data["act"]))
             elif kind == "act-received":
@@ -407,7 +425,7 @@ class _Run:
             elif kind == "task-end":
                 tasks.setdefault(data["name"], []).append(data.get("outcome", "done"))
         facts = {(str(s), str(p), str(o)) for s, p, o in self.facts.triples("robot")}
-        return Happened(acts, actions, tasks, facts, end)
+        return Happened(acts, actions, tasks, facts, end, plan, said, task_states, recognized)
 
     def write(self, out_dir: Path, log_path: Path | None) -> dict[str, str]:
         from shary.display import render_tree

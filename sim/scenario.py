@@ -71,6 +71,14 @@ class Expect:
     no_facts: tuple[tuple[Any, Any, Any], ...] = ()
     tasks: dict[str, str] = field(default_factory=dict)
     within: float | None = None
+    plan: tuple[str, ...] = ()
+    """A shared plan's events, in order (started, replan, achieved, failed)."""
+    said: tuple[str, ...] = ()
+    """Words the robot must say, in order (each a part of one sentence)."""
+    task_states: tuple[tuple[str, str, str], ...] = ()
+    """(view, task label, state) a shared plan's task must enter, in any order."""
+    recognized: tuple[tuple[str, str, str], ...] = ()
+    """(state, action, agent) the recognizer must report, in order."""
 
 
 @dataclass(frozen=True)
@@ -97,6 +105,8 @@ class Scenario:
     """The recipe library the scenario was checked against and runs with."""
     action_models: tuple[Path, ...] = ()
     """Action model files the robot recognizes people's actions with (shary.recognition)."""
+    shared_plan: dict[str, Any] | None = None
+    """A shared plan to follow with a partner (``shared-plan:``, :mod:`sim.stack`)."""
 
 
 def builtin_profiles() -> list[Path]:
@@ -247,6 +257,10 @@ class _Reading:
         objects_spec = data.get("objects") or {}
         objects_known = set(BOTTLES) | set(objects_spec)
         things = everyone | objects_known | set(FURNITURE)
+        if data.get("shared-plan") is not None:  # the stack table's objects (sim/stack)
+            from .stack.table import LAYOUT
+
+            things |= set(LAYOUT)
         robot_at = robot.get("at", "base")
         if robot_at not in PLACES:
             problem(("robot", "at"), f"unknown place {robot_at!r}"
@@ -315,14 +329,39 @@ class _Reading:
             tuple(raw_expect.get("failed-actions") or ()),
             tuple(tuple(f) for f in raw_expect.get("facts") or ()),
             tuple(tuple(f) for f in raw_expect.get("no-facts") or ()),
-            dict(raw_expect.get("tasks") or {}), within)
+            dict(raw_expect.get("tasks") or {}), within,
+            tuple(raw_expect.get("plan") or ()), tuple(raw_expect.get("said") or ()),
+            tuple(tuple(t) for t in raw_expect.get("task-states") or ()),
+            tuple(tuple(t) for t in raw_expect.get("recognized") or ()))
+        shared = data.get("shared-plan")
+        if shared is not None:  # a shared plan of the stack domain (sim/stack)
+            from planner import builtin_problems  # (only then: the planner loads numpy)
+
+            shared = dict(shared)
+            if shared.get("partner") not in {p.name for p in people if p is not None}:
+                problem(("shared-plan", "partner"), f"the partner {shared.get('partner')!r} "
+                        "is not one of the scenario's people")
+            if not data.get("action-models"):
+                problem(("shared-plan",), "a shared plan needs action-models (e.g. [stack])")
+            stack = sorted(p.stem for p in builtin_problems() if p.stem.startswith("stack"))
+            name = str(shared.get("problem"))
+            if name not in stack and not (Path(reader.file).parent / name).is_file():
+                problem(("shared-plan", "problem"), f"no planner problem {name!r}"
+                        f"{did_you_mean(name, stack)}: a file next to this one, or one of "
+                        f"{', '.join(stack)}")
+            elif name not in stack:
+                full = reader.confined_path(("shared-plan", "problem"), name)
+                if full is not None:
+                    shared["problem"] = str(full)
+            shared["decision-wait"] = reader.duration(("shared-plan", "decision-wait"),
+                                                      shared.get("decision-wait", 6.0))
         return Scenario(
             data["scenario"], Path(reader.file), str(data.get("doc", "")).strip(), robot_name,
             robot.get("model", "jido"), robot_at, tuple(p for p in people if p is not None),
             objects, tuple(recipes), tuple(goals), dict(noise.get("flicker") or {}),
             tuple(lost), reader.duration(("noise", "hold"), noise.get("hold", 0.5)),
             tuple(faults), timeout,
-            expect, library, self.action_models(library))
+            expect, library, self.action_models(library), shared)
 
     def action_models(self, library: RecipeLibrary | None) -> tuple[Path, ...]:
         """The action model files named (built-in sets by name), checked together."""
@@ -525,6 +564,10 @@ class Happened:
     tasks: dict[str, list[str]]                 # task name -> outcomes of its runs
     facts: set[tuple[str, str, str]]
     end: float
+    plan: list[str] = field(default_factory=list)
+    said: list[str] = field(default_factory=list)
+    task_states: set[tuple[str, str, str]] = field(default_factory=set)
+    recognized: list[tuple[str, str, str]] = field(default_factory=list)
 
 
 def _in_order(wanted: Iterable[str], seen: list[str]) -> str | None:
@@ -576,6 +619,24 @@ def judge(expect: Expect, happened: Happened) -> list[str]:
         if outcome not in outcomes:
             out.append(f"expected task {task} to end {outcome}; "
                        f"{'it ended ' + ', '.join(outcomes) if outcomes else 'it never ended'}")
+    missing = _in_order(expect.plan, happened.plan)
+    if missing is not None:
+        out.append(f"expected the shared plan {missing} (in the order "
+                   f"{', '.join(expect.plan)}); it was: {', '.join(happened.plan) or 'none'}")
+    said = iter(happened.said)
+    for words in expect.said:
+        if not any(words in sentence for sentence in said):
+            out.append(f"expected the robot to say {words!r} (in order); it said: "
+                       f"{' / '.join(happened.said) or 'nothing'}")
+            break
+    for view, label, state in expect.task_states:
+        if (view, label, state) not in happened.task_states:
+            out.append(f"expected {label} to be {state} in {view}'s view; it never was")
+    recognized = [" ".join(r) for r in happened.recognized]
+    missing = _in_order([" ".join(r) for r in expect.recognized], recognized)
+    if missing is not None:
+        out.append(f"expected the recognition {missing} (in order); recognized: "
+                   f"{', '.join(recognized) or 'nothing'}")
     if expect.within is not None and happened.end > expect.within + 1e-9:
         out.append(f"expected the run to be over within {expect.within:g}s; "
                    f"it took {happened.end:.1f}s")

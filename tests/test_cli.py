@@ -20,7 +20,7 @@ def test_schemes_lists_the_builtins(shary):
     names = [line.split()[0] for line in out.splitlines()]
     assert names == ["ask-help", "disambiguate", "give-object-attentive", "give-object",
                      "inform", "perform", "plan-requested", "robot-task", "session",
-                     "task-requested"]
+                     "shared-plan-task", "task-requested"]
 
 
 def test_simulate_runs_a_script_of_events_and_waits(shary):

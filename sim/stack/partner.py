@@ -1,0 +1,128 @@
+"""The human partner of the StackBuildingTask: follows the shared plan as a profile says.
+
+The partner is one of the scenario's people (their avatar, their hands, their
+gaze); this controller decides what they do with the plan the robot follows,
+as a person would who knows their part (JAHRVIS assumes the human knows what
+to do).  Its profile (a scenario's ``shared-plan: partner:``) says:
+
+* ``choices``: at each human decision, in order, a word of the option to take
+  (``placement_2``, ``place``) or ``wait`` (leave it to the robot);
+* ``delay``: how long they take before acting on a task that is due;
+* ``look-away``: ``{during: TASK, for: SECONDS}``, look away when the robot's
+  task whose label starts with TASK begins, and look back after SECONDS;
+* ``before``: ``{TASK: [[Pick, obj], [Place, obj, support]]}``, actions of their
+  own they do when the task TASK is due, before it (the robot's turn taken, an
+  unexpected action);
+* ``leave``: ``{after: TASK}``, walk to the door once that task is done.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from sim.motion import Instant, Sequence
+from sim.simulation import standing_height
+
+from .world import top_of
+
+__all__ = ["StackPartner"]
+
+
+class StackPartner:
+    """Drives ``person`` (a :class:`sim.people.Person`) along ``follower``'s plan."""
+
+    def __init__(self, person: Any, follower: Any, profile: dict[str, Any]):
+        self.person = person
+        self.sim = person.sim
+        self.follower = follower
+        self.choices = [str(c) for c in profile.get("choices", ())]
+        self.delay = float(profile.get("delay", 1.0))
+        self.look_away = profile.get("look-away")
+        self.before = {str(k): [list(map(str, a)) for a in v]
+                       for k, v in (profile.get("before") or {}).items()}
+        self.leave = (profile.get("leave") or {}).get("after")
+        self.queue: list[list[str]] = []
+        self.handled: set[int] = set()
+        follower.watchers.append(self.plan_event)
+
+    @property
+    def name(self) -> str:
+        return self.person.name
+
+    def plan_event(self, event: str, task: int) -> None:
+        """The follower's news: a task ``due`` or ``started`` by the robot, ``done``."""
+        label = self.follower.plan.primitive[task].label()
+        if event == "started" and self.look_away and \
+                label.startswith(str(self.look_away.get("during"))):
+            self.person.look("away")
+            seconds = float(self.look_away.get("for", 5.0))
+            self.sim.loop.call_later(seconds, self.person.look, "robot")
+            self.look_away = None
+        elif event == "done" and self.leave and label.startswith(str(self.leave)):
+            self.sim.loop.call_later(self.delay, self._leave)
+        elif event == "due":
+            self.sim.loop.call_later(self.delay, self._consider)
+
+    def _consider(self) -> None:
+        follower = self.follower
+        due = [t for t in follower.current if t not in self.handled]
+        if not due or follower.finished:
+            return
+        labels = [follower.plan.primitive[t].label() for t in due]
+        for prefix in list(self.before):
+            if any(label.startswith(prefix) for label in labels):
+                self._do_all(self.before.pop(prefix))
+                return
+        if not labels[0].split("(")[1].startswith(self.name):
+            return
+        self.handled.update(due)
+        if len(due) > 1:
+            choice = self.choices.pop(0) if self.choices else labels[0]
+            if choice == "wait":
+                return
+            chosen = next((label for label in labels if choice in label
+                           and not label.startswith("WaitForCube")), labels[0])
+            self._act(chosen)
+        elif not labels[0].startswith("WaitForCube"):
+            self._act(labels[0])
+
+    def _act(self, label: str) -> None:
+        name, args = label.rstrip(")").split("(")
+        params = [a.strip() for a in args.split(",")][1:]
+        self._do_all([[name, *params]])
+
+    def _do_all(self, actions: list[list[str]]) -> None:
+        self.person._run(Sequence([self._activity(a) for a in actions], "stack part"))
+
+    def _activity(self, action: list[str]) -> Any:
+        name, *params = action
+        if name == "Pick":
+            return self.person._pick(params[0])
+        if name == "PlaceStick":
+            return self._put(params[0], params[1], params[2])
+        return self._put(params[0], params[1])
+
+    def _put(self, obj: str, support: str, other: str | None = None) -> Any:
+        """Put ``obj`` on ``support`` (across it and ``other`` for the stick)."""
+        person, world = self.person, self.sim.world
+
+        def spot() -> tuple[float, float, float]:
+            x, y, z = top_of(world, support)
+            if other is not None:
+                x2, y2, z2 = top_of(world, other)
+                x, y, z = (x + x2) / 2, (y + y2) / 2, max(z, z2)
+            return (x, y, standing_height(z, world.sizes[obj][0]))
+
+        def let_go() -> None:
+            if self.sim.held_by(self.name) == obj:
+                self.sim.settle(obj, spot())
+                self.sim.observe()
+
+        return person._logged(Sequence([person._reach(spot), Instant(let_go, f"put {obj}"),
+                                        person._reach(None)], f"put {obj} on {support}"),
+                              "place", object=obj, on=support)
+
+    def _leave(self) -> None:
+        self.handled.update(self.follower.plan.primitive)  # gone: they do nothing more
+        self.person.look("away")
+        self.person._run(self.person.walk_to("door"))

@@ -1,0 +1,62 @@
+"""A scenario's shared plan in a simulated run: the stack table, the follower, the partner.
+
+:class:`StackSession` is what :mod:`sim.run` adds to a run whose scenario has a
+``shared-plan:`` section: the stack table's objects and a-priori facts, the
+executors and perception that know stacking, and, once recognition has
+started, the plan follower (:class:`shary.plans.execution.PlanFollower`) with
+its replan port and the partner who follows the plan as their profile says.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from shary.plans.execution import PlanFollower
+
+from . import table
+from .partner import StackPartner
+from .planning import Replanner, first_plan
+from .world import StackExecutors, StackPerception
+
+__all__ = ["StackSession"]
+
+
+
+class StackSession:
+    """The shared plan of one run (see the module's documentation)."""
+
+    executors_class = StackExecutors
+    perception_class = StackPerception
+
+    def __init__(self, spec: dict[str, Any], robot: str):
+        self.spec = spec
+        self.robot = robot
+        self.partner_name = str(spec["partner"])
+        self.names = {"robot": robot, "human": self.partner_name}
+        self.follower: PlanFollower | None = None
+        self.partner: StackPartner | None = None
+
+    @staticmethod
+    def objects() -> dict[str, dict[str, Any]]:
+        return table.objects()
+
+    @staticmethod
+    def a_priori(facts: Any) -> None:
+        table.a_priori(facts)
+
+    def start(self, sup: Any, person: Any, decision_wait: float = 6.0) -> None:
+        """Plan, and follow the plan with ``person`` (recognition must be running)."""
+        problem = str(self.spec["problem"])
+        self.follower = PlanFollower(
+            sup, first_plan(problem, self.names), humans=[self.partner_name],
+            replan=Replanner(sup.facts, problem, self.names,
+                             lambda kind, **row: sup.record(kind, agent=sup.robot, **row)),
+            decision_wait=decision_wait, name="StackBuildingTask")
+        self.partner = StackPartner(person, self.follower, self.spec.get("profile") or {})
+        person.look("robot")
+        self.follower.start()
+
+    @property
+    def busy(self) -> bool:
+        follower = self.follower
+        return follower is not None and (follower.finished is None or follower.beliefs.speaking)

@@ -1,0 +1,65 @@
+"""The StackBuildingTask on the simulated PR2: every stack scenario meets its expectations."""
+
+from __future__ import annotations
+
+import json
+import sqlite3
+
+import pytest
+
+from sim.run import run_scenario
+from sim.scenario import SCENARIOS_DIR
+
+STACK = sorted(p.stem for p in SCENARIOS_DIR.glob("stack-*.yaml"))
+
+
+def test_the_seven_stack_scenarios_are_shipped():
+    assert STACK == ["stack-flicker", "stack-human-chooses-placement",
+                     "stack-human-leaves-it-to-robot", "stack-human-unexpected-action",
+                     "stack-nominal", "stack-not-seen", "stack-place-fails-twice"]
+
+
+@pytest.mark.parametrize("name", [s for s in STACK if s != "stack-not-seen"])
+def test_a_stack_scenario_passes(name):
+    result = run_scenario(SCENARIOS_DIR / f"{name}.yaml")
+    assert result.passed, result.differences
+
+
+def test_not_seen_is_told_and_the_timeline_shows_the_plan(tmp_path):
+    result = run_scenario(SCENARIOS_DIR / "stack-not-seen.yaml", out=tmp_path)
+    assert result.passed, result.differences
+    with sqlite3.connect(tmp_path / "log.sqlite") as db:
+        rows = [(kind, agent, json.loads(data)) for kind, agent, data in db.execute(
+            "SELECT kind, agent, data FROM events WHERE kind IN ('plan-task', 'speech', "
+            "'belief') ORDER BY seq")]
+    missed = [i for i, (kind, agent, data) in enumerate(rows) if kind == "belief"]
+    told = [i for i, (kind, agent, data) in enumerate(rows)
+            if kind == "speech" and "placed the green cube" in data["text"]]
+    assert missed and told and missed[0] < told[0]
+    timeline = (tmp_path / "timeline.svg").read_text()
+    assert 'class="plan-task plan-NOT_SEEN"' in timeline and "plan-ONGOING" in timeline
+    assert (tmp_path / "tree.svg").read_text().count("StackBuildingTask") >= 1
+
+
+def test_a_shared_plan_section_with_mistakes_is_refused_at_its_lines(tmp_path):
+    from tests.hostile import assert_refused, run_inprocess
+
+    path = tmp_path / "bad.yaml"
+    path.write_text((SCENARIOS_DIR / "stack-nominal.yaml").read_text()
+                    .replace("problem: stack\n", "problem: stak\n")
+                    .replace("partner: alice\n", "partner: bob\n"))
+    outcome = run_inprocess("validate", path)
+    assert_refused(outcome, path, message="no planner problem 'stak'")
+    assert "the partner 'bob' is not one of the scenario's people" in outcome.err
+
+
+def test_a_partner_who_leaves_is_asked_for_their_task_and_the_plan_fails(tmp_path):
+    path = tmp_path / "stack-leaves.yaml"
+    path.write_text((SCENARIOS_DIR / "stack-nominal.yaml").read_text()
+                    .replace("scenario: stack-nominal", "scenario: stack-leaves")
+                    .replace("delay: 1}", 'delay: 1, leave: {after: "Place(alice, red_cube_2"}}')
+                    .split("expect:")[0] + "expect:\n  plan: [started, failed]\n"
+                    "  task-states: [[pr2, \"Pick(alice, stick)\", NOT_STARTING]]\n"
+                    "  said: [\"Excuse me, Alice\"]\n")
+    result = run_scenario(path)
+    assert result.passed, result.differences
