@@ -28,9 +28,9 @@ LAYOUT: dict[str, tuple[float, float, list[float], str, str]] = {
     "yellow_cube_2": (-0.4, 0.2, [CUBE] * 3, "cube", "yellow"),
 }
 TYPES = {"placement": ("Placement", "Support"), "cube": ("Cube", "Support"),
-         "stick": ("Stick", "Cube", "Support")}
-"""The classes of each kind: a cube and the stick are supports too (things go on them).
-The stick is a Cube for the action models, whose place moves a Cube."""
+         "stick": ("Stick", "Support")}
+"""The classes of each kind: a cube and the stick are supports too (things go on them);
+both are Pickable in the action ontology, which the action models' roles name."""
 
 
 BOTTLES_AWAY = {"yellow-bottle": (1.8, 1.6), "green-bottle": (2.0, 1.6),
