@@ -42,7 +42,7 @@ def test_not_seen_is_told_and_the_timeline_shows_the_plan(tmp_path):
 
 
 def test_a_shared_plan_section_with_mistakes_is_refused_at_its_lines(tmp_path):
-    from tests.hostile import assert_refused, run_inprocess
+    from hostile import assert_refused, run_inprocess
 
     path = tmp_path / "bad.yaml"
     path.write_text((SCENARIOS_DIR / "stack-nominal.yaml").read_text()
