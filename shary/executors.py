@@ -79,3 +79,32 @@ class ExecutorRegistry:
 
     def names(self) -> list[str]:
         return sorted(self._executors)
+
+    def dispatch(self, request: Request, reporter: Reporter, record: Callable[..., Any], *,
+                 args: dict[str, Any] | None = None, problem: str | None = None,
+                 **extra: Any) -> None:
+        """Log ``request`` as an ``exec-request`` row, then start it on its executor.
+
+        It fails at once (through ``reporter``, so asynchronously like any outcome)
+        with ``problem`` if one is given, or when no executor is registered.  Every
+        path that sends an atomic task to the world goes through here, so the log
+        reads the same whoever asked: a scheme's act, a plan manager, a teleoperator.
+        ``args`` is what the row shows (the request's own by default); ``extra``
+        adds fields to the row (``by=`` for a teleoperator).
+        """
+        record("exec-request", task=request.node, agent=request.agent, atomic=request.atomic,
+               request=request.id, args=request.args if args is None else args, **extra)
+        executor = self.get(request.atomic)
+        if problem is not None:
+            reporter.failed(request, problem)
+        elif executor is None:
+            reporter.failed(request, f"no executor is registered for {request.atomic!r}")
+        else:
+            executor.start(request, reporter)
+
+
+def record_outcome(record: Callable[..., Any], outcome: Outcome) -> None:
+    """Log an outcome as the ``exec-result`` row that answers its ``exec-request``."""
+    request = outcome.request
+    record("exec-result", task=request.node, agent=request.agent, request=request.id,
+           status=outcome.status, reason=outcome.reason or None)

@@ -30,7 +30,7 @@ from typing import Any, Protocol
 from shary.acttask import ActTask, StepRun
 from shary.compiler import CompiledScheme, compile_scheme
 from shary.conditions import ConditionRegistry
-from shary.executors import ExecutorRegistry, Outcome, Reporter, Request
+from shary.executors import ExecutorRegistry, Outcome, Reporter, Request, record_outcome
 from shary.instance import Event, SchemeInstance, SchemeListener
 from shary.loop import EventLoop
 from shary.model import Scheme, State
@@ -280,15 +280,7 @@ class Supervisor:
         request = Request(f"{self.ids}r{next(self._request_ids)}", atomic, args, agent, node)
         run = next(r for r in act.steps.values() if r.node == node)
         self._requests[request.id] = (run, act)
-        self.record("exec-request", task=node, agent=agent, atomic=atomic, request=request.id,
-                    args=args)
-        executor = self.executors.get(atomic)
-        if problem is not None:
-            self.reporter.failed(request, problem)
-        elif executor is None:
-            self.reporter.failed(request, f"no executor is registered for {atomic!r}")
-        else:
-            executor.start(request, self.reporter)
+        self.executors.dispatch(request, self.reporter, self.record, problem=problem)
         return request
 
     def cancel_request(self, request: Request, reason: str) -> None:
@@ -299,10 +291,8 @@ class Supervisor:
             executor.cancel(request)
 
     def _outcome(self, outcome: Outcome) -> None:
-        request = outcome.request
-        self.record("exec-result", task=request.node, agent=request.agent,
-                    request=request.id, status=outcome.status, reason=outcome.reason or None)
-        found = self._requests.pop(request.id, None)
+        record_outcome(self.record, outcome)
+        found = self._requests.pop(outcome.request.id, None)
         if found is not None:
             run, act = found
             act.outcome(run, outcome)

@@ -18,7 +18,7 @@ import re
 from collections.abc import Callable
 from typing import Any
 
-from shary.executors import Outcome, Reporter, Request
+from shary.executors import Outcome, Reporter, Request, record_outcome
 from shary.plans.tasks import PrimitiveTask, is_open
 
 __all__ = ["RobotPlanManager"]
@@ -143,21 +143,12 @@ class RobotPlanManager:
                 done: Callable[[Outcome], Any] | None = None) -> None:
         """An atomic task of the robot's own (look, speak), logged like every other."""
         request = Request(f"p{next(self._ids)}", atomic, args, self.sup.robot, node)
-        self.sup.record("exec-request", task=node, agent=self.sup.robot, atomic=atomic,
-                        request=request.id, args=args)
         if done is not None:
             self._waiting[request.id] = done
-        executor = self.sup.executors.get(atomic)
-        if executor is None:
-            self._reporter.failed(request, f"no executor is registered for {atomic!r}")
-        else:
-            executor.start(request, self._reporter)
+        self.sup.executors.dispatch(request, self._reporter, self.sup.record)
 
     def _outcome(self, outcome: Outcome) -> None:
-        request = outcome.request
-        self.sup.record("exec-result", task=request.node, agent=request.agent,
-                        request=request.id, status=outcome.status,
-                        reason=outcome.reason or None)
-        done = self._waiting.pop(request.id, None)
+        record_outcome(self.sup.record, outcome)
+        done = self._waiting.pop(outcome.request.id, None)
         if done is not None:
             done(outcome)

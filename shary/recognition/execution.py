@@ -21,7 +21,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from shary.executors import Outcome, Reporter, Request
+from shary.executors import Outcome, Reporter, Request, record_outcome
 from shary.recognition.models import ActionModels, RobotActionModel
 
 __all__ = ["ActionResult", "RobotActions"]
@@ -93,20 +93,12 @@ class RobotActions:
         request = Request(f"a{next(self._ids)}", atomic, args, self.sup.robot, running.node)
         running.request, running.looking = request, looking
         self._pending[request.id] = running
-        self.sup.record("exec-request", task=running.node, agent=self.sup.robot, atomic=atomic,
-                        request=request.id, args={k: str(v) for k, v in args.items()})
-        executor = self.sup.executors.get(atomic)
-        if executor is None:
-            self._reporter.failed(request, f"no executor is registered for {atomic!r}")
-        else:
-            executor.start(request, self._reporter)
+        self.sup.executors.dispatch(request, self._reporter, self.sup.record,
+                                    args={k: str(v) for k, v in args.items()})
 
     def _outcome(self, outcome: Outcome) -> None:
-        request = outcome.request
-        self.sup.record("exec-result", task=request.node, agent=request.agent,
-                        request=request.id, status=outcome.status,
-                        reason=outcome.reason or None)
-        running = self._pending.pop(request.id, None)
+        record_outcome(self.sup.record, outcome)
+        running = self._pending.pop(outcome.request.id, None)
         if running is None:
             return
         if outcome.status == "cancelled" or running.cancelled:

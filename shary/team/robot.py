@@ -16,7 +16,7 @@ import itertools
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from shary.executors import Executor, ExecutorRegistry, Outcome, Reporter, Request
+from shary.executors import Executor, ExecutorRegistry, Outcome, Reporter, Request, record_outcome
 from shary.team.agents import (
     ASSOCIATED,
     ASSOCIATED_PRIORITY,
@@ -237,22 +237,14 @@ class RobotAgent(Agent):
             return None
         request = Request(f"{self.sup.ids}t{next(self._teleop_ids)}", atomic, dict(args),
                           self.name, self.current or "teleoperation")
-        self.team.record("exec-request", task=request.node, agent=self.name, atomic=atomic,
-                         request=request.id, args=args, by=human)
 
         def report(outcome: Outcome) -> None:
-            self.team.record("exec-result", task=request.node, agent=self.name,
-                             request=request.id, status=outcome.status,
-                             reason=outcome.reason or None)
+            record_outcome(self.team.record, outcome)
             if on_outcome is not None:
                 on_outcome(outcome)
 
-        executor = self.world.get(atomic)
-        reporter = Reporter(report, self.team.loop.call_soon)
-        if executor is None:
-            reporter.failed(request, f"no executor is registered for {atomic!r}")
-        else:
-            executor.start(request, reporter)
+        self.world.dispatch(request, Reporter(report, self.team.loop.call_soon),
+                            self.team.record, args=args, by=human)
         return request
 
     def hand_back(self, human: str) -> bool:
