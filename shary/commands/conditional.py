@@ -28,12 +28,6 @@ def plan_conditional(args: argparse.Namespace, problem) -> int:  # type: ignore[
     from planner.sharedplan import to_dict
     from planner.validate import validate_conditional
 
-    if args.rules is not None:
-        try:
-            problem.select_rules([] if args.rules == "none" else
-                                 [r for r in args.rules.split(",") if r])
-        except KeyError as err:
-            return error(str(err.args[0]), json_mode=args.json)
     if args.max_depth is not None and not 1 <= args.max_depth <= MAX_STEPS:
         return error(f"--max-depth is the turns per branch of a conditional plan: 1 to "
                      f"{MAX_STEPS:,}", json_mode=args.json)

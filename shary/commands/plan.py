@@ -68,6 +68,12 @@ def cmd_plan(args: argparse.Namespace) -> int:
     else:
         domain = planner.load_domain(args.domain)
         problem = planner.load_problem(args.problem, domain)
+    if args.rules is not None:
+        try:
+            problem.select_rules([] if args.rules == "none" else
+                                 [r for r in args.rules.split(",") if r])
+        except KeyError as err:
+            return error(str(err.args[0]), json_mode=args.json)
     if problem.agendas:
         from shary.commands.conditional import plan_conditional
 
@@ -75,12 +81,6 @@ def cmd_plan(args: argparse.Namespace) -> int:
     if args.render == "policy" or args.yaml:
         return error(f"{'--render policy' if args.render == 'policy' else '--yaml'} is for "
                      "conditional problems (with agendas)", json_mode=args.json)
-    if args.rules is not None:
-        try:
-            problem.select_rules([] if args.rules == "none" else
-                                 [r for r in args.rules.split(",") if r])
-        except KeyError as err:
-            return error(str(err.args[0]), json_mode=args.json)
     result = planner.plan(problem, args.budget_ms, first=args.hddl and not args.improve,
                           max_depth=args.max_depth, max_nodes=args.max_nodes)
     best = result.plan

@@ -125,11 +125,7 @@ class Member:
             self.close()
 
     def close(self) -> None:
-        try:
-            self.port.close()
-        finally:
-            if self.log is not None:
-                self.log.close()
+        _close(self.port, self.log)
 
 
 class Conductor:
@@ -294,8 +290,14 @@ class Conductor:
         return False
 
     def close(self) -> None:
-        try:
-            self.port.close()
-        finally:
-            if self.log is not None:
-                self.log.close()
+        _close(self.port, self.log)
+
+
+def _close(port: Any, log: Any) -> None:
+    """Close a process's port, then its log even if the port's close failed: the log
+    holds what was acknowledged, and must reach the disk whatever happened to Zenoh."""
+    try:
+        port.close()
+    finally:
+        if log is not None:
+            log.close()
