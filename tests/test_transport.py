@@ -28,6 +28,7 @@ from shary.transport.messages import (
     LogRecord,
     Progress,
     Question,
+    State,
 )
 from shary.transport.port import Faults, MessagePort
 from shary.transport.wire import WireError, _not_json, decode, encode, json_schema, key
@@ -47,9 +48,13 @@ EXAMPLES = [
     Answer("IVA", "interaction", question="q1", value="yes"),
     Progress("EVA1", "tasks", task="mount-P1", status="done"),
     FactChange("K-10", "CM", added=(("P1", "isOn", "frame"),), removed=(("P1", "isOn", "rack"),)),
-    LogRecord("EVA1", "CM", time=12.5, event="task-done", task="mount-P1", data={"n": 1}),
+    LogRecord("EVA1", "logs", time=12.5, event="task-done", task="mount-P1", data={"n": 1},
+              agent="EVA1"),
     Clock("EVA1", "clock", state="idle", time=3.0, sent={"tasks": 2}, received={"EVA1": 1},
           next=4.5),
+    State("tasks", "EVA1", id="s1", time=7.0,
+          tasks={"mount-P1": {"state": "running", "agent": "EVA2", "done_by": []}},
+          questions=("q3",), associated=("K-10",), controls=(), facts=(("P1", "isOn", "rack"),)),
 ]
 
 

@@ -11,7 +11,7 @@ docs/distributed.md.
 from __future__ import annotations
 
 import argparse
-import re
+import math
 import signal
 import subprocess
 import sys
@@ -22,6 +22,7 @@ from typing import Any
 
 from shary.terminal import add_json_flag, emit_json, error, escape
 from shary.terminal import out as _out
+from shary.transport.zconfig import zenoh_reason
 from userfiles.limits import seconds
 
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
@@ -43,10 +44,26 @@ def _duration(text: str) -> float:
         raise argparse.ArgumentTypeError(f"{text!r} is not a duration (10min, 90s …)") from None
 
 
+def _loss(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not 0.0 <= value <= 1.0:  # NaN fails too
+        raise argparse.ArgumentTypeError(f"{text!r} is not a share of messages (a number "
+                                         "from 0 to 1, e.g. 0.3)")
+    return value
+
+
 def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--log-dir", type=Path, metavar="DIR",
                    help="write one context log per agent here (NAME.sqlite)")
     p.add_argument("--seed", type=int, default=0, help="the random seed (default 0)")
+    p.add_argument("--zenoh-config", type=Path, metavar="FILE.json5",
+                   help="a Zenoh configuration (JSON5) merged over shary's safe defaults: "
+                   "TLS certificates, mTLS, access control (docs/distributed.md)")
+    p.add_argument("--no-share-log", dest="share_log", action="store_false",
+                   help="do not forward the agents' log records to the managers")
 
 
 def add_agent(sub: argparse._SubParsersAction) -> None:
@@ -60,6 +77,15 @@ def add_agent(sub: argparse._SubParsersAction) -> None:
                    metavar="tcp/HOST:PORT",
                    help=f"where the team's managers listen (default {DEFAULT_ENDPOINT})")
     _common(p)
+    faults = p.add_argument_group("faults (a testing aid: a bad link at this agent's port, "
+                                  "both ways)")
+    faults.add_argument("--inject-latency", type=_duration, default=0.0, metavar="DURATION",
+                        help="delay every message from or to this agent (e.g. 2s), on the "
+                        "team's clock")
+    faults.add_argument("--inject-loss", type=_loss, default=0.0, metavar="SHARE",
+                        help="drop this share of the messages from or to this agent (0 to 1)")
+    faults.add_argument("--fault-seed", type=int, default=0, metavar="N",
+                        help="the seed of the dropped messages' draw (default 0)")
     p.set_defaults(func=cmd_agent)
 
 
@@ -82,7 +108,8 @@ def add_team(sub: argparse._SubParsersAction) -> None:
     up.add_argument("--remote", action="append", default=[], metavar="AGENT",
                     help="do not start AGENT here: it joins from elsewhere (repeatable)")
     up.add_argument("--wait", type=_duration, default=30.0, metavar="DURATION",
-                    help="how long to wait for every agent to join (default 30s)")
+                    help="how long to wait for every agent to join, and for a lost one to "
+                    "come back when the goal needs it (default 30s)")
     _common(up)
     add_json_flag(up, "the outcome")
     up.set_defaults(func=cmd_team_up)
@@ -94,12 +121,23 @@ def _robots(spec: Any, names: list[str]) -> list[str]:
     return [n for n in names if spec.agents[n].kind == ROBOT]
 
 
+def _settings(args: argparse.Namespace) -> dict[str, Any] | None:
+    """The checked ``--zenoh-config`` (a FileError if refused), or None."""
+    if args.zenoh_config is None:
+        return None
+    from shary.transport.zconfig import load_settings
+
+    return load_settings(args.zenoh_config)
+
+
 def cmd_agent(args: argparse.Namespace) -> int:
     import zenoh
 
     from shary.team import load_team
     from shary.transport.distributed import Member
+    from shary.transport.port import Faults
 
+    settings = _settings(args)
     spec = load_team(args.team)
     if args.agent not in spec.agents:
         return error(f"{args.team}: no agent {args.agent!r} in team {spec.name!r} (its "
@@ -107,11 +145,14 @@ def cmd_agent(args: argparse.Namespace) -> int:
     if _robots(spec, [args.agent]):
         return error(f"{args.agent} is a robot: its executors come from a world, which does "
                      "not run as a separate process yet (docs/distributed.md)")
+    faults = (Faults(loss=args.inject_loss, latency=args.inject_latency, seed=args.fault_seed)
+              if args.inject_loss or args.inject_latency else None)
     try:
         member = Member(spec, args.agent, connect=args.connect, logdir=args.log_dir,
-                        seed=args.seed)
+                        seed=args.seed, faults=faults, share_log=args.share_log,
+                        settings=settings)
     except zenoh.ZError as exc:
-        return error(f"cannot join the team at {args.connect}: {_reason(exc)} (is "
+        return error(f"cannot join the team at {args.connect}: {zenoh_reason(exc)} (is "
                      "`shary team up` running there?)")
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))  # close the session on a kill
     reason = member.run()
@@ -124,6 +165,7 @@ def cmd_team_up(args: argparse.Namespace) -> int:
     from shary.team import load_team
     from shary.transport.distributed import Conductor
 
+    settings = _settings(args)
     spec = load_team(args.team)
     unknown = [n for n in args.remote if n not in spec.agents]
     if unknown:
@@ -139,9 +181,10 @@ def cmd_team_up(args: argparse.Namespace) -> int:
 
     try:
         conductor = Conductor(spec, listen=args.listen, logdir=logdir, seed=args.seed,
-                              pace=args.pace, display=display)
+                              pace=args.pace, settings=settings, rejoin_wait=args.wait,
+                              display=display)
     except zenoh.ZError as exc:
-        return error(f"cannot listen at {args.listen}: {_reason(exc)} (another team there? "
+        return error(f"cannot listen at {args.listen}: {zenoh_reason(exc)} (another team there? "
                      "give --listen tcp/127.0.0.1:PORT)", json_mode=args.json)
     try:
         robots = _robots(spec, conductor.members)
@@ -149,12 +192,14 @@ def cmd_team_up(args: argparse.Namespace) -> int:
             return error(f"{robots[0]} is a robot: a robot's executors come from a world, "
                          "which does not run as a separate process yet (docs/distributed.md)",
                          json_mode=args.json)
+        passed = ([] if args.share_log else ["--no-share-log"]) + (
+            ["--zenoh-config", str(args.zenoh_config)] if args.zenoh_config else [])
         for name in conductor.members:
             if name not in args.remote:
                 children[name] = subprocess.Popen(
                     [sys.executable, "-m", "shary", "agent", name, "--team", str(args.team),
                      "--connect", args.listen, "--log-dir", str(logdir),
-                     "--seed", str(args.seed)], stdin=subprocess.DEVNULL)
+                     "--seed", str(args.seed), *passed], stdin=subprocess.DEVNULL)
         show(f"team {escape(spec.name)}: managers at {args.listen}, "
              f"{len(conductor.members)} agents, logs in {logdir}")
         missing = conductor.wait_for_members(args.wait)
@@ -167,7 +212,7 @@ def cmd_team_up(args: argparse.Namespace) -> int:
         if args.json:
             emit_json({"team": spec.name, "outcome": outcome, "time": now,
                        "wall_seconds": round(wall, 3), "lost": conductor.lost,
-                       "logs": str(logdir)})
+                       "logs": str(logdir), "shared_records": conductor.records.by})
         else:
             show(f"goal {outcome or 'not over'} at {now:g} s simulated "
                  f"({wall:.1f} s wall); merged log: shary log {logdir}/*.sqlite")
@@ -182,11 +227,6 @@ def cmd_team_up(args: argparse.Namespace) -> int:
                 child.wait()
 
 
-def _reason(exc: Exception) -> str:
-    """Zenoh's message without the Rust source location it ends with."""
-    return re.sub(r"\s+at /\S+?\.rs:\d+\.?", "", str(exc)).strip()
-
-
 def _line(kind: str, data: dict[str, Any], children: dict[str, Any]) -> str:
     agent = escape(str(data.get("agent", "")))
     task = escape(str(data.get("task", "")))
@@ -196,6 +236,14 @@ def _line(kind: str, data: dict[str, Any], children: dict[str, Any]) -> str:
         return f"+ {agent} joined{pid}"
     if kind == "agent-left":
         return f"- {agent} left"
+    if kind == "rejoined":
+        holds = ", ".join(map(escape, data.get("holds") or [])) or "no task"
+        return (f"+ {agent} rejoined at {data.get('at', 0):g} s: told {data.get('tasks')} "
+                f"tasks ({data.get('done')} done), {data.get('questions')} open questions; "
+                f"it holds {holds}")
+    if kind == "waiting-for-members":
+        return (f"  waiting up to {data.get('within', 0):g} s for "
+                f"{', '.join(map(escape, data.get('missing', [])))} to come back")
     if kind == "agent-lost":
         return f"! {agent} lost while {data.get('state')} {task}: offered again"
     if kind == "task-running":

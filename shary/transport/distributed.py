@@ -22,8 +22,13 @@ simulated second last that many wall seconds (``0``: as fast as possible).
 **Faults**: a member whose process dies leaves (its liveliness token goes
 within milliseconds of a kill -9, within the lease of a freeze); the Task
 Manager takes its task back (``agent-lost``) and offers it to another; the
-clock no longer waits for it.  A member that joins later (a restart) is
-given the current time and takes part from then on.
+clock no longer waits for it.  A member that joins later (a restart) is told
+the current state (:mod:`shary.transport.rejoin`: the State is its first step
+of the clock) and takes part from then on.
+
+**Log records**: a member forwards its log's rows to the managers
+(:mod:`shary.transport.logshare`); :attr:`Conductor.records` is the team's
+merged view, live.
 """
 
 from __future__ import annotations
@@ -34,15 +39,17 @@ from pathlib import Path
 from typing import Any
 
 from shary.loop import EventLoop
-from shary.transport.messages import Clock
+from shary.transport.logshare import LOGS, Forwarder, SharedLog, TeamRecords
+from shary.transport.messages import Clock, FactChange, Message, State
 from shary.transport.port import Faults
-from shary.transport.zenohport import LOOPBACK, ZenohPort, session_config
+from shary.transport.rejoin import learn, state_for
+from shary.transport.zenohport import LOOPBACK, Settings, ZenohPort, session_config
 
 CLOCK = "clock"
 """The shared clock's address, in the conductor's process."""
 CONDUCTOR = "managers"
 """The conductor's process name (its liveliness token, its log file)."""
-MANAGERS = ("tasks", "interaction", CLOCK)
+MANAGERS = ("tasks", "interaction", CLOCK, LOGS)
 WAIT = 0.2
 """Seconds a process waits for a message before looking around again."""
 
@@ -63,26 +70,34 @@ class Member:
     """One agent of a team file in this process (see the module's docstring)."""
 
     def __init__(self, spec: Any, name: str, *, connect: str = LOOPBACK,
-                 logdir: Path | None = None, seed: int = 0, faults: Faults | None = None):
+                 logdir: Path | None = None, seed: int = 0, faults: Faults | None = None,
+                 share_log: bool = True, settings: Settings | None = None):
         from shary.team import Team
 
         if name not in spec.agents:
             raise KeyError(name)
         self.name = name
         self.log = _log(logdir, name, seed)
+        self.forwarder = Forwarder(name) if share_log else None
+        """Sends the log's rows to the managers (None: ``share_log`` off)."""
         ports: list[ZenohPort] = []
 
         def port(loop: EventLoop, record: Callable[..., None]) -> ZenohPort:
             ports.append(ZenohPort(loop, record, team=spec.name, name=name, local=[name],
-                                   config=session_config(mode="client", connect=[connect]),
+                                   config=session_config(mode="client", connect=[connect],
+                                                         settings=settings),
                                    faults=faults))
             return ports[0]
 
-        self.team = Team(spec, log=self.log, port=port)
+        log = SharedLog(self.log, self.forwarder) if self.forwarder else self.log
+        self.team = Team(spec, log=log, port=port)
         self.team.loop.random.seed(seed)
         self.port = ports[0]
+        if self.forwarder is not None:
+            self.forwarder.attach(self.port)
         self.port.on_clock = self._clock
         self.port.on_presence = self._presence
+        self.port.subscribe(name, self._handle)
         self.at: float | None = None
         """The time of the last step (None before the first)."""
         self.stopped: str | None = None
@@ -90,6 +105,23 @@ class Member:
     def _presence(self, name: str, joined: bool) -> None:
         if name == CONDUCTOR and not joined:
             self.stopped = "the managers left"
+
+    def _handle(self, message: Message) -> None:
+        """The agent's messages; a State (a rejoin) is this process's to take in."""
+        if isinstance(message, State):
+            self._state(message)
+        else:
+            self.team.agents[self.name].handle(message)
+
+    def _state(self, state: State) -> None:
+        """The managers' view on joining a running team: its time is our first step."""
+        loop = self.team.loop
+        if self.at is None:
+            loop.clock.advance_to(state.time)
+        elif state.time > loop.now():
+            loop.advance(state.time - loop.now())
+        self.at = max(self.at or 0.0, state.time)
+        learn(self.team, self.name, state)
 
     def _clock(self, message: Clock) -> None:
         if message.state == "stop":
@@ -133,7 +165,8 @@ class Conductor:
 
     def __init__(self, spec: Any, *, listen: str = LOOPBACK, logdir: Path | None = None,
                  seed: int = 0, members: list[str] | None = None, pace: float = 0.0,
-                 faults: Faults | None = None,
+                 faults: Faults | None = None, settings: Settings | None = None,
+                 rejoin_wait: float = 30.0,
                  display: Callable[[str, dict[str, Any]], Any] | None = None):
         from shary.team import Team
         from shary.team.spec import SOFTWARE
@@ -148,17 +181,27 @@ class Conductor:
         def port(loop: EventLoop, record: Callable[..., None]) -> ZenohPort:
             ports.append(ZenohPort(loop, self._record(record), team=spec.name,
                                    name=CONDUCTOR, local=local,
-                                   config=session_config(mode="router", listen=[listen]),
+                                   config=session_config(mode="router", listen=[listen],
+                                                         settings=settings),
                                    faults=faults))
             return ports[0]
 
-        self.team = Team(spec, log=self.log, port=port)
+        self.records = TeamRecords()
+        """The team's logs merged, live: our rows and the rows the members forward."""
+        self.team = Team(spec, log=SharedLog(self.log, self.records.tap(CONDUCTOR)),
+                         port=port)
         self.team.record = self._record(self.team.record)  # type: ignore[method-assign]
         self.team.loop.random.seed(seed)
         self.port = ports[0]
         self.port.on_clock = self._idle
         self.port.on_presence = self._presence
+        self.port.subscribe(LOGS, self.records.handle)
+        self.facts: set[tuple[str, str, str]] = set()
+        """The facts the team's agents shared with the managers (told to a rejoining one)."""
+        self.port.taps.append(self._shared)
         self.pace = pace
+        self.rejoin_wait = rejoin_wait
+        """Wall seconds the run waits for a lost member when nothing else can happen."""
         self.live: set[str] = set()
         self.reports: dict[str, Clock] = {}
         self.lost: list[str] = []
@@ -168,7 +211,8 @@ class Conductor:
     def _record(self, record: Callable[..., None]) -> Callable[..., None]:
         """The team's record, shown on the display too (the rows worth a line)."""
         shown = {"agent-joined", "agent-left", "agent-lost", "task-running", "task-done",
-                 "task-failed", "goal-over", "message-refused", "answer"}
+                 "task-failed", "goal-over", "message-refused", "answer", "rejoined",
+                 "waiting-for-members"}
 
         def both(kind: str, **data: Any) -> None:
             record(kind, **data)
@@ -188,14 +232,32 @@ class Conductor:
                 for link in sent.keys() | received.keys():
                     if name in link.split(">"):
                         self.offsets[link] = sent.get(link, 0) - received.get(link, 0)
-                self.team.tasks.agent_back(name)
-                self._tell(name, self.team.loop.now())
+                self._rejoin(name)
         else:
             self.live.discard(name)
             self.reports.pop(name, None)
             self.lost.append(name)
             if name in self.team.agents:
                 self.team.tasks.agent_lost(name)
+
+    def _rejoin(self, name: str) -> None:
+        """``name`` came back while the goal runs: tell it the state (its first step of
+        the clock), then offer it work."""
+        messages = state_for(self.team, name, self.records, self.facts)
+        state = messages[0]
+        assert isinstance(state, State)
+        holds = sorted(t for t, row in state.tasks.items() if row["agent"] == name)
+        self.team.record("rejoined", agent=name, at=state.time, tasks=len(state.tasks),
+                         done=sum(row["state"] == "done" for row in state.tasks.values()),
+                         holds=holds or None, questions=len(state.questions))
+        for message in messages:
+            self.port.send(message)
+        self.team.tasks.agent_back(name)
+
+    def _shared(self, message: Message) -> None:
+        if isinstance(message, FactChange):
+            self.facts.difference_update(message.removed)
+            self.facts.update(message.added)
 
     def _idle(self, message: Clock) -> None:
         if message.state == "idle" and message.sender in self.live:
@@ -249,6 +311,7 @@ class Conductor:
         team, port, loop = self.team, self.port, self.team.loop
         team.tasks.start()
         start = time.monotonic()
+        stalled: float | None = None
         at = loop.now()
         for name in self.live:
             self._tell(name, at)
@@ -263,6 +326,16 @@ class Conductor:
                 own = loop.clock.next_due()
                 if own is not None:
                     dues.append(own)
+                missing = sorted(set(self.members) - self.live)
+                if not dues and missing:  # only a lost member can go on: wait for it
+                    if stalled is None:
+                        stalled = time.monotonic()
+                        team.record("waiting-for-members", missing=missing,
+                                    within=self.rejoin_wait)
+                    if time.monotonic() - stalled < self.rejoin_wait:
+                        port.pump(WAIT)
+                        continue
+                stalled = None
                 if not dues or min(dues) > limit:
                     break
                 if self.pace and self._paced(start + min(dues) * self.pace):
