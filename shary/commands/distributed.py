@@ -152,10 +152,10 @@ def cmd_agent(args: argparse.Namespace) -> int:
                         seed=args.seed, faults=faults, share_log=args.share_log,
                         settings=settings)
     except zenoh.ZError as exc:
-        tls = (", and does the team's CA accept this agent's certificate?"
+        tls = (", and does the team's CA accept this agent's certificate"
                if args.connect.startswith("tls/") else "")
         return error(f"cannot join the team at {args.connect}: {zenoh_reason(exc)} (is "
-                     f"`shary team up` running there{tls})")
+                     f"`shary team up` running there{tls}?)")
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))  # close the session on a kill
     reason = member.run()
     return 0 if reason in ("done", "failed", "time is up", "stopped") else 1

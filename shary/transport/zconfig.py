@@ -51,6 +51,8 @@ CHOSEN = {
     ("plugins",): "shary loads no Zenoh plugins (a plugin is code to run)",
 }
 """Settings a file may not make, and why."""
+_TOKENS = re.compile(r'"(?:[^"\\]|\\.)*"|\'(?:[^\'\\]|\\.)*\'|//[^\n]*|/\*.*?\*/', re.S)
+"""JSON5's strings and comments (where brackets and keys do not count)."""
 _SYNTAX = re.compile(r"^<string>:(\d+) (.*?)(?: at column (\d+))?$", re.S)
 
 
@@ -141,8 +143,7 @@ def _depth(text: str) -> int:
     """How deep brackets nest, outside strings and comments (before any parser
     recurses into them)."""
     depth = deepest = 0
-    for match in re.finditer(r'"(?:[^"\\]|\\.)*"|\'(?:[^\'\\]|\\.)*\'|//[^\n]*|/\*.*?\*/|'
-                             r"[\[{]|[\]}]", text, re.S):
+    for match in re.finditer(_TOKENS.pattern + r"|[\[{]|[\]}]", text, re.S):
         token = match.group()
         if token in "[{":
             depth += 1
@@ -158,7 +159,7 @@ def _syntax(name: str, text: str, message: str) -> Problem:
     if found is None:
         duplicate = re.match(r'Duplicate key "(.*)" found', message)
         if duplicate:
-            at = _key_at(text, duplicate[1], 0, nth=2)
+            at = _key_at(_uncommented(text), duplicate[1], 0, nth=2)
             return Problem(name, *at, f"key {duplicate[1]!r} given twice")
         return Problem(name, 1, 1, f"not JSON5: {message[:200]}")
     line = min(int(found[1]), max(text.count("\n") + 1, 1))
@@ -166,8 +167,18 @@ def _syntax(name: str, text: str, message: str) -> Problem:
     return Problem(name, line, col, f"not JSON5: {found[2][:200]}")
 
 
+def _uncommented(text: str) -> str:
+    """``text`` with its comments blanked (same length, same lines): keys are found
+    where the parser reads them, not in a comment that names them."""
+    def blank(match: re.Match[str]) -> str:
+        token = match.group()
+        return token if token[0] in "\"'" else re.sub(r"[^\n]", " ", token)
+    return _TOKENS.sub(blank, text)
+
+
 def _locate(text: str, keys: tuple[str, ...]) -> tuple[int, int]:
     """Line and column of the last of ``keys``, found in order in ``text``."""
+    text = _uncommented(text)
     at, found = 0, (1, 1)
     for key in keys:
         place = _find(text, key, at)
