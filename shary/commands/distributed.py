@@ -208,12 +208,15 @@ def cmd_team_up(args: argparse.Namespace) -> int:
         if missing:
             return error(f"{', '.join(missing)} did not join within {args.wait:g} s",
                          json_mode=args.json)
+        running = time.monotonic()
         outcome = conductor.run(args.limit)
+        run_wall = time.monotonic() - running
         now = conductor.team.loop.now()
         wall = time.monotonic() - started
         if args.json:
             emit_json({"team": spec.name, "outcome": outcome, "time": now,
-                       "wall_seconds": round(wall, 3), "lost": conductor.lost,
+                       "wall_seconds": round(wall, 3), "run_seconds": round(run_wall, 3),
+                       "lost": conductor.lost,
                        "logs": str(logdir), "shared_records": conductor.records.by})
         else:
             show(f"goal {outcome or 'not over'} at {now:g} s simulated "
