@@ -204,3 +204,58 @@ def test_zenoh_delivers_refuses_and_notices_a_leaving_peer() -> None:
         _wait(lambda: ("agent-left", {"agent": "B"}) in rows, 1.0, a)
     finally:
         a.close()
+
+
+# -- a member that rejoins learns the state (the managers' side and the member's) --------
+
+
+def test_a_rejoining_member_is_told_its_questions_links_and_the_task_table(
+        tmp_path: Path) -> None:
+    from shary.team.agents import USER
+    from shary.transport.logshare import SharedLog, TeamRecords
+    from shary.transport.rejoin import learn, state_for
+
+    spec = load_team(TEAM)
+    for name in ("IVA", "EVA1", "EVA2"):  # nobody answers: the question stays open
+        person = spec.agents[name]
+        spec = replace(spec, agents={**spec.agents, name: replace(person, behaviour=replace(
+            person.behaviour, questions=Reply("ignore", (0.0, 0.0))))})
+    records = TeamRecords()
+    team = Team(spec, log=SharedLog(ContextLog(tmp_path / "m.sqlite"), records.tap("m")))
+    for robot in spec.of_kind("robot"):
+        executor = ScriptedExecutor(team.loop, {"drive": 2.0, "weld": 10.0, "scan": 3.0,
+                                                "aim-light": 1.0})
+        for name in ATOMIC:
+            team.robot(robot.name).world.register(name, executor)
+    team.start()
+    while not team.interaction.open:
+        team.loop.advance(1.0)
+    (qid, entry), = team.interaction.open.items()
+    holder = entry.holder
+    team.take_control("EVA2", "Robonaut-B")
+    team.loop.advance(5.0)
+    fact = ("P1", "isOn", "frame")
+    messages = state_for(team, holder, records, {fact})
+    state, again = messages
+    assert isinstance(state, State) and state.to == holder and state.time == team.loop.now()
+    assert state.questions == (qid,) and state.facts == (fact,)
+    assert state.tasks["weld-P1-P2"]["state"] == "done"
+    assert state.tasks["inspect-P1-P2"] == {"state": "running", "agent": "K-10",
+                                            "done_by": []}
+    assert isinstance(again, Question) and again.id == qid and again.to == holder
+    assert again.expires == entry.question.expires - 5.0
+    (control,) = state_for(team, "EVA2", records, set())
+    assert control.controls == ("Robonaut-B",) and control.questions == ()
+    assert state_for(team, "Robonaut-B", records, set())[0].controls == ("EVA2",)
+    # the member's side: a fresh team (its process started again) takes it in
+    member = Team(spec, log=ContextLog(tmp_path / "eva2.sqlite"))
+    learn(member, "EVA2", control)
+    robot = member.robot("Robonaut-B")
+    assert (robot.mode, robot.controller) == (USER, "EVA2")
+    assert member.tasks.tasks["weld-P1-P2"].state == "done"
+    assert member.tasks.tasks["weld-P1-P2"].done_by == ["Robonaut-B"]
+    member.log.close()
+    (learned,) = [e for e in read_events(tmp_path / "eva2.sqlite")
+                  if e.kind == "state-learned"]
+    assert learned.agent == "EVA2" and learned.data["controls"] == ["Robonaut-B"]
+    assert learned.data["tasks"]["inspect-P1-P2"]["agent"] == "K-10"
