@@ -119,11 +119,14 @@ class Progress(Message):
 
 @dataclass(frozen=True)
 class FactChange(Message):
-    """Facts an agent shares: ``added`` and ``removed`` triples (subject, predicate, object)."""
+    """Facts an agent shares: ``removed`` then ``added`` triples (subject, predicate, object)
+    of one ``perspective``.  Subjects and predicates are names; an object is a name, a
+    number or a boolean (what :class:`shary.facts.FactDatabase` reads back as itself)."""
 
     kind: ClassVar[str] = "fact"
-    added: tuple[tuple[str, str, str], ...] = ()
-    removed: tuple[tuple[str, str, str], ...] = ()
+    added: tuple[tuple[str, str, Any], ...] = ()
+    removed: tuple[tuple[str, str, Any], ...] = ()
+    perspective: str = "robot"
 
 
 @dataclass(frozen=True)
@@ -187,6 +190,18 @@ def build(kind: str, values: dict[str, Any]) -> Message:
     return cls(**values)
 
 
+PICTURE = "png"
+"""The key of a picture's bytes (base64 PNG) in a question's ``data``: the picture travels
+with the question to whoever answers, on any machine; logs keep its path (``image``)."""
+
+
+def loggable(data: dict[str, Any]) -> dict[str, Any]:
+    """``data`` without the bulky bytes a log row does not need (a picture's)."""
+    if PICTURE not in data:
+        return data
+    return {k: v for k, v in data.items() if k != PICTURE}
+
+
 def summary(message: Message) -> dict[str, Any]:
     """The fields worth a log line (not the whole payload: images stay paths)."""
     if isinstance(message, Act):
@@ -197,7 +212,7 @@ def summary(message: Message) -> dict[str, Any]:
     if isinstance(message, Question):
         return {"text": message.text, "question_type": message.type,
                 "priority": message.priority, "task": message.task,
-                "data": message.data or None}
+                "data": loggable(message.data) or None}
     if isinstance(message, Answer):
         return {"question": message.question, "value": message.value,
                 "expired": message.expired or None}

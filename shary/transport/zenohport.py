@@ -109,6 +109,10 @@ class ZenohPort(MessagePort):
         if address in self.local:
             super().subscribe(address, handler)
 
+    def tap(self, address: str, taker: Callable[[Message], bool]) -> None:
+        if address in self.local:
+            super().tap(address, taker)
+
     def new_id(self, prefix: str) -> str:
         return f"{prefix}{self.name}.{next(self._ids)}"
 
