@@ -17,6 +17,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -27,7 +28,7 @@ from userfiles.limits import seconds
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 
 
-def _endpoint(text: str) -> str:
+def endpoint(text: str) -> str:
     proto, _, rest = text.partition("/")
     host, _, port = rest.rpartition(":")
     if proto not in ("tcp", "udp", "tls", "quic") or not host or not port.isdigit():
@@ -43,7 +44,7 @@ def _duration(text: str) -> float:
         raise argparse.ArgumentTypeError(f"{text!r} is not a duration (10min, 90s …)") from None
 
 
-def _common(p: argparse.ArgumentParser) -> None:
+def add_common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--log-dir", type=Path, metavar="DIR",
                    help="write one context log per agent here (NAME.sqlite)")
     p.add_argument("--seed", type=int, default=0, help="the random seed (default 0)")
@@ -56,23 +57,26 @@ def add_agent(sub: argparse._SubParsersAction) -> None:
     p.add_argument("agent", metavar="AGENT", help="the agent's name in the team file")
     p.add_argument("--team", type=Path, required=True, metavar="TEAM.yaml",
                    help="the team file")
-    p.add_argument("--connect", type=_endpoint, default=DEFAULT_ENDPOINT,
+    p.add_argument("--connect", type=endpoint, default=DEFAULT_ENDPOINT,
                    metavar="tcp/HOST:PORT",
                    help=f"where the team's managers listen (default {DEFAULT_ENDPOINT})")
-    _common(p)
+    add_common(p)
     p.set_defaults(func=cmd_agent)
 
 
-def add_team(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("team", help="run a team: `shary team up TEAM.yaml` (every agent its "
+def add_team(sub: argparse._SubParsersAction, *,
+             run: Callable[[argparse.Namespace], int] | None = None, what: str = "TEAM.yaml",
+             about: str = "the team file") -> None:
+    """Add ``shary team up``; the simulator adds it with scenarios too (``run``, ``what``)."""
+    p = sub.add_parser("team", help=f"run a team: `shary team up {what}` (every agent its "
                        "own process)")
     verbs = p.add_subparsers(dest="verb", metavar="VERB", required=True)
     up = verbs.add_parser("up", help="start the managers here and every agent as its own "
                           "process, on loopback, and run the goal",
                           description="Run the team's managers and shared clock here, start "
                           "each agent as `shary agent`, and run the goal until it is over.")
-    up.add_argument("team", type=Path, metavar="TEAM.yaml", help="the team file")
-    up.add_argument("--listen", type=_endpoint, default=DEFAULT_ENDPOINT,
+    up.add_argument("team", type=Path, metavar=what, help=about)
+    up.add_argument("--listen", type=endpoint, default=DEFAULT_ENDPOINT,
                     metavar="tcp/HOST:PORT",
                     help=f"where the managers listen (default {DEFAULT_ENDPOINT}: loopback)")
     up.add_argument("--limit", type=_duration, default=3600.0, metavar="DURATION",
@@ -83,15 +87,9 @@ def add_team(sub: argparse._SubParsersAction) -> None:
                     help="do not start AGENT here: it joins from elsewhere (repeatable)")
     up.add_argument("--wait", type=_duration, default=30.0, metavar="DURATION",
                     help="how long to wait for every agent to join (default 30s)")
-    _common(up)
+    add_common(up)
     add_json_flag(up, "the outcome")
-    up.set_defaults(func=cmd_team_up)
-
-
-def _robots(spec: Any, names: list[str]) -> list[str]:
-    from shary.team.spec import ROBOT
-
-    return [n for n in names if spec.agents[n].kind == ROBOT]
+    up.set_defaults(func=run or cmd_team_up)
 
 
 def cmd_agent(args: argparse.Namespace) -> int:
@@ -104,14 +102,11 @@ def cmd_agent(args: argparse.Namespace) -> int:
     if args.agent not in spec.agents:
         return error(f"{args.team}: no agent {args.agent!r} in team {spec.name!r} (its "
                      f"agents: {', '.join(spec.agents)})")
-    if _robots(spec, [args.agent]):
-        return error(f"{args.agent} is a robot: its executors come from a world, which does "
-                     "not run as a separate process yet (docs/distributed.md)")
     try:
         member = Member(spec, args.agent, connect=args.connect, logdir=args.log_dir,
                         seed=args.seed)
     except zenoh.ZError as exc:
-        return error(f"cannot join the team at {args.connect}: {_reason(exc)} (is "
+        return error(f"cannot join the team at {args.connect}: {zenoh_reason(exc)} (is "
                      "`shary team up` running there?)")
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))  # close the session on a kill
     reason = member.run()
@@ -119,15 +114,38 @@ def cmd_agent(args: argparse.Namespace) -> int:
 
 
 def cmd_team_up(args: argparse.Namespace) -> int:
+    from shary.team import load_team
+
+    return team_up(args, load_team(args.team))
+
+
+Prepare = Callable[[Any], Any]
+"""Called with the :class:`~shary.transport.distributed.Conductor` before the goal starts."""
+Finish = Callable[[Any, "str | None", Path, float], int]
+"""Called with the conductor, the goal's outcome, the log folder and the wall seconds once
+the run is over; prints the verdict and returns the exit status."""
+
+
+def team_up(args: argparse.Namespace, spec: Any, *, world: list[str] | None = None,
+            prepare: Prepare | None = None, finish: Finish | None = None) -> int:
+    """Run ``spec``'s managers here and start its members (see the module's docstring).
+
+    A team with robots needs its world agent: ``world`` is the command that starts it
+    (``shary world SCENARIO``, which the simulator's ``team up SCENARIO`` gives), or it
+    joins from elsewhere (``--remote world``)."""
     import zenoh
 
-    from shary.team import load_team
+    from shary.team.world import WORLD
     from shary.transport.distributed import Conductor
 
-    spec = load_team(args.team)
-    unknown = [n for n in args.remote if n not in spec.agents]
+    unknown = [n for n in args.remote if n not in spec.agents and n != WORLD]
     if unknown:
         return error(f"--remote {unknown[0]}: no such agent in team {spec.name!r}",
+                     json_mode=args.json)
+    if spec.of_kind("robot") and world is None and WORLD not in args.remote:
+        return error(f"team {spec.name!r} has robots, whose atomic tasks a world performs: "
+                     "run a scenario of the team (shary team up weld-nominal), or start its "
+                     "world yourself and give --remote world (docs/distributed.md)",
                      json_mode=args.json)
     logdir = args.log_dir or Path(tempfile.mkdtemp(prefix=f"shary-{spec.name}-"))
     show = (lambda line: None) if args.json else _out.print
@@ -141,29 +159,31 @@ def cmd_team_up(args: argparse.Namespace) -> int:
         conductor = Conductor(spec, listen=args.listen, logdir=logdir, seed=args.seed,
                               pace=args.pace, display=display)
     except zenoh.ZError as exc:
-        return error(f"cannot listen at {args.listen}: {_reason(exc)} (another team there? "
+        return error(f"cannot listen at {args.listen}: {zenoh_reason(exc)} (another team there? "
                      "give --listen tcp/127.0.0.1:PORT)", json_mode=args.json)
     try:
-        robots = _robots(spec, conductor.members)
-        if robots:
-            return error(f"{robots[0]} is a robot: a robot's executors come from a world, "
-                         "which does not run as a separate process yet (docs/distributed.md)",
-                         json_mode=args.json)
         for name in conductor.members:
-            if name not in args.remote:
-                children[name] = subprocess.Popen(
-                    [sys.executable, "-m", "shary", "agent", name, "--team", str(args.team),
-                     "--connect", args.listen, "--log-dir", str(logdir),
-                     "--seed", str(args.seed)], stdin=subprocess.DEVNULL)
+            if name in args.remote:
+                continue
+            command = (list(world or ()) if name == WORLD else
+                       ["agent", name, "--team", str(spec.file)])
+            children[name] = subprocess.Popen(
+                [sys.executable, "-m", "shary", *command, "--connect", args.listen,
+                 "--log-dir", str(logdir), "--seed", str(args.seed)], stdin=subprocess.DEVNULL)
         show(f"team {escape(spec.name)}: managers at {args.listen}, "
              f"{len(conductor.members)} agents, logs in {logdir}")
         missing = conductor.wait_for_members(args.wait)
         if missing:
             return error(f"{', '.join(missing)} did not join within {args.wait:g} s",
                          json_mode=args.json)
+        if prepare is not None:
+            prepare(conductor)
         outcome = conductor.run(args.limit)
-        now = conductor.team.loop.now()
         wall = time.monotonic() - started
+        _wait(children)  # their logs are complete once they have stopped
+        if finish is not None:
+            return finish(conductor, outcome, logdir, wall)
+        now = conductor.team.loop.now()
         if args.json:
             emit_json({"team": spec.name, "outcome": outcome, "time": now,
                        "wall_seconds": round(wall, 3), "lost": conductor.lost,
@@ -174,15 +194,20 @@ def cmd_team_up(args: argparse.Namespace) -> int:
         return 0 if outcome == "done" else 1
     finally:
         conductor.close()
-        for child in children.values():
-            try:
-                child.wait(timeout=5)
-            except subprocess.TimeoutExpired:
-                child.kill()
-                child.wait()
+        _wait(children)
 
 
-def _reason(exc: Exception) -> str:
+def _wait(children: dict[str, subprocess.Popen[bytes]]) -> None:
+    """Wait a little for the members to stop, then kill the ones still there."""
+    for child in children.values():
+        try:
+            child.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            child.kill()
+            child.wait()
+
+
+def zenoh_reason(exc: Exception) -> str:
     """Zenoh's message without the Rust source location it ends with."""
     return re.sub(r"\s+at /\S+?\.rs:\d+\.?", "", str(exc)).strip()
 

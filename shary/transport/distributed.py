@@ -34,7 +34,9 @@ from pathlib import Path
 from typing import Any
 
 from shary.loop import EventLoop
-from shary.transport.messages import Clock
+from shary.team.world import WORLD
+from shary.transport.facts import SUBSCRIBE
+from shary.transport.messages import Act, Clock
 from shary.transport.port import Faults
 from shary.transport.zenohport import LOOPBACK, ZenohPort, session_config
 
@@ -47,7 +49,9 @@ WAIT = 0.2
 """Seconds a process waits for a message before looking around again."""
 
 
-def _log(logdir: Path | None, name: str, seed: int) -> Any:
+def agent_log(logdir: Path | None, name: str, seed: int) -> Any:
+    """The context log of process ``name`` in ``logdir`` (None without a folder); a
+    restarted process writes a new file beside its first life's."""
     if logdir is None:
         return None
     from shary.log import ContextLog
@@ -59,33 +63,24 @@ def _log(logdir: Path | None, name: str, seed: int) -> Any:
     return ContextLog(path, seed=seed)
 
 
-class Member:
-    """One agent of a team file in this process (see the module's docstring)."""
+class Participant:
+    """One process on the team's shared clock: it advances when the conductor says and
+    reports when it is idle (see the module's docstring).  :class:`Member` is an agent
+    of the team file; the world (``shary world``) is another."""
 
-    def __init__(self, spec: Any, name: str, *, connect: str = LOOPBACK,
-                 logdir: Path | None = None, seed: int = 0, faults: Faults | None = None):
-        from shary.team import Team
-
-        if name not in spec.agents:
-            raise KeyError(name)
+    def __init__(self, name: str, loop: EventLoop, port: ZenohPort, log: Any):
         self.name = name
-        self.log = _log(logdir, name, seed)
-        ports: list[ZenohPort] = []
-
-        def port(loop: EventLoop, record: Callable[..., None]) -> ZenohPort:
-            ports.append(ZenohPort(loop, record, team=spec.name, name=name, local=[name],
-                                   config=session_config(mode="client", connect=[connect]),
-                                   faults=faults))
-            return ports[0]
-
-        self.team = Team(spec, log=self.log, port=port)
-        self.team.loop.random.seed(seed)
-        self.port = ports[0]
-        self.port.on_clock = self._clock
-        self.port.on_presence = self._presence
+        self.loop = loop
+        self.port = port
+        self.log = log
+        port.on_clock = self._clock
+        port.on_presence = self._presence
         self.at: float | None = None
         """The time of the last step (None before the first)."""
         self.stopped: str | None = None
+
+    def start(self) -> None:
+        """The run begins (the first step, at the team's current time)."""
 
     def _presence(self, name: str, joined: bool) -> None:
         if name == CONDUCTOR and not joined:
@@ -97,19 +92,17 @@ class Member:
             return
         if message.state != "step":
             return
-        loop = self.team.loop
+        loop = self.loop
         if self.at is None:
             loop.clock.advance_to(message.time)
-            starting = getattr(self.team.agents[self.name], "start_script", None)
-            if starting is not None:
-                starting()
+            self.start()
         elif message.time > loop.now():
             loop.advance(message.time - loop.now())
         self.at = message.time
 
     def run(self) -> str:
         """Take part until the conductor stops the run (or it vanishes); the reason."""
-        port, loop = self.port, self.team.loop
+        port, loop = self.port, self.loop
         try:
             while self.stopped is None:
                 took = port.pump(WAIT)
@@ -128,6 +121,44 @@ class Member:
         _close(self.port, self.log)
 
 
+class Member(Participant):
+    """One agent of a team file in this process (see the module's docstring).  In a team
+    with robots, the world agent performs the robots' atomic tasks and the on-site
+    people's work (:func:`shary.team.world.connect_world`), and a robot subscribes to the
+    facts the world perceives."""
+
+    def __init__(self, spec: Any, name: str, *, connect: str = LOOPBACK,
+                 logdir: Path | None = None, seed: int = 0, faults: Faults | None = None):
+        from shary.team import Team
+        from shary.team.spec import ROBOT
+        from shary.team.world import connect_world
+
+        if name not in spec.agents:
+            raise KeyError(name)
+        log = agent_log(logdir, name, seed)
+        ports: list[ZenohPort] = []
+
+        def port(loop: EventLoop, record: Callable[..., None]) -> ZenohPort:
+            ports.append(ZenohPort(loop, record, team=spec.name, name=name, local=[name],
+                                   config=session_config(mode="client", connect=[connect]),
+                                   faults=faults))
+            return ports[0]
+
+        self.team = Team(spec, log=log, port=port)
+        self.team.loop.random.seed(seed)
+        super().__init__(name, self.team.loop, ports[0], log)
+        self.robot = spec.agents[name].kind == ROBOT
+        if spec.of_kind(ROBOT):
+            connect_world(self.team)
+
+    def start(self) -> None:
+        if self.robot:
+            self.port.send(Act(self.name, WORLD, act=SUBSCRIBE))
+        starting = getattr(self.team.agents[self.name], "start_script", None)
+        if starting is not None:
+            starting()
+
+
 class Conductor:
     """The managers and the shared clock (see the module's docstring)."""
 
@@ -136,12 +167,14 @@ class Conductor:
                  faults: Faults | None = None,
                  display: Callable[[str, dict[str, Any]], Any] | None = None):
         from shary.team import Team
-        from shary.team.spec import SOFTWARE
+        from shary.team.spec import ROBOT, SOFTWARE
 
+        world = [WORLD] if spec.of_kind(ROBOT) else []  # the robots' world is a member too
         self.members = list(members if members is not None else
-                            [a.name for a in spec.agents.values() if a.kind != SOFTWARE])
+                            [*(a.name for a in spec.agents.values() if a.kind != SOFTWARE),
+                             *world])
         local = [*MANAGERS, *(a for a in spec.agents if a not in self.members)]
-        self.log = _log(logdir, CONDUCTOR, seed)
+        self.log = agent_log(logdir, CONDUCTOR, seed)
         self.display = display or (lambda what, data: None)
         ports: list[ZenohPort] = []
 
@@ -164,6 +197,8 @@ class Conductor:
         self.lost: list[str] = []
         self.offsets: dict[str, int] = {}
         """Per link, sent - received left over from a member's earlier life (a restart)."""
+        self.halted: str | None = None
+        """Why the run cannot go on (the world left: nobody performs the robots' tasks)."""
 
     def _record(self, record: Callable[..., None]) -> Callable[..., None]:
         """The team's record, shown on the display too (the rows worth a line)."""
@@ -194,6 +229,8 @@ class Conductor:
             self.live.discard(name)
             self.reports.pop(name, None)
             self.lost.append(name)
+            if name == WORLD:
+                self.halted = "the world left"
             if name in self.team.agents:
                 self.team.tasks.agent_lost(name)
 
@@ -247,13 +284,15 @@ class Conductor:
         """Run the goal on the shared clock until it is over or ``limit`` simulated seconds
         have passed; the goal's outcome ("done", "failed") or None."""
         team, port, loop = self.team, self.port, self.team.loop
+        if WORLD in self.members:  # the world's facts: poses for the spatial reasoner and
+            port.send(Act(team.tasks.address, WORLD, act=SUBSCRIBE))  # the distances
         team.tasks.start()
         start = time.monotonic()
         at = loop.now()
         for name in self.live:
             self._tell(name, at)
         try:
-            while team.tasks.outcome is None:
+            while team.tasks.outcome is None and self.halted is None:
                 port.pump(WAIT if not self._balanced(at) else 0.0)
                 loop.run_until_idle()
                 port.flush()

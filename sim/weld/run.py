@@ -105,6 +105,15 @@ def offer_spatial(team: Team) -> None:
             agent.offer("spatial", reasoner.service)
 
 
+def record_members(team: Team) -> None:
+    """A ``member`` row per agent that acts: each a lane of the timeline, in the file's
+    order."""
+    for member in team.spec.agents.values():
+        if member.kind != "software":
+            team.record("member", agent=member.name, member_kind=member.kind,
+                        skills=list(member.skills), remote=member.remote or None)
+
+
 def schedule_script(team: Team, scenario: WeldScenario) -> None:
     """What people do at given times beyond their behaviour (take control, teleoperate,
     hand back), as their messages to the robot, on the team's clock."""
@@ -189,10 +198,7 @@ class _WeldRun:
 
     def go(self) -> float:
         """Run until the goal is over and nothing moves; the simulated time at the end."""
-        for member in self.scenario.team.agents.values():
-            if member.kind != "software":  # each a lane of the timeline, in the file's order
-                self.team.record("member", agent=member.name, member_kind=member.kind,
-                                 skills=list(member.skills), remote=member.remote or None)
+        record_members(self.team)
         self.team.start()
         timeout = self.scenario.timeout
         while self.loop.now() < timeout - 1e-9:
