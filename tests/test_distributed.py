@@ -157,7 +157,7 @@ def test_what_cannot_run_distributed_is_refused_plainly(shary) -> None:
     status, _, err = shary("agent", "EVA1", "--team", str(TEAM), "--connect", nobody)
     assert status == 2 and f"cannot join the team at {nobody}" in err and ".rs:" not in err
     seam = Path(__file__).parent / "data" / "team" / "seam-team.yaml"
-    status, _, err = shary("agent", "K-10", "--team", str(seam))
-    assert status == 2 and "K-10 is a robot" in err
+    status, _, err = shary("team", "up", str(seam), "--listen", nobody)
+    assert status == 2 and "has robots, whose atomic tasks a world performs" in err
     status, _, err = shary("agent", "NOBODY", "--team", str(TEAM))
     assert status == 2 and "no agent 'NOBODY' in team 'panels'" in err

@@ -54,7 +54,7 @@ EXAMPLES = [
           next=4.5),
     State("tasks", "EVA1", id="s1", time=7.0,
           tasks={"mount-P1": {"state": "running", "agent": "EVA2", "done_by": []}},
-          questions=("q3",), associated=("K-10",), controls=(), facts=(("P1", "isOn", "rack"),)),
+          questions=("q3",), associated=("K-10",), controls=()),
 ]
 
 
@@ -209,7 +209,7 @@ def test_zenoh_delivers_refuses_and_notices_a_leaving_peer() -> None:
 # -- a member that rejoins learns the state (the managers' side and the member's) --------
 
 
-def test_a_rejoining_member_is_told_its_questions_links_and_the_task_table(
+def test_a_rejoining_member_is_told_its_questions_control_and_the_task_table(
         tmp_path: Path) -> None:
     from shary.team.agents import USER
     from shary.transport.logshare import SharedLog, TeamRecords
@@ -234,19 +234,18 @@ def test_a_rejoining_member_is_told_its_questions_links_and_the_task_table(
     holder = entry.holder
     team.take_control("EVA2", "Robonaut-B")
     team.loop.advance(5.0)
-    fact = ("P1", "isOn", "frame")
-    messages = state_for(team, holder, records, {fact})
+    messages = state_for(team, holder, records)
     state, again = messages
     assert isinstance(state, State) and state.to == holder and state.time == team.loop.now()
-    assert state.questions == (qid,) and state.facts == (fact,)
+    assert state.questions == (qid,)
     assert state.tasks["weld-P1-P2"]["state"] == "done"
     assert state.tasks["inspect-P1-P2"] == {"state": "running", "agent": "K-10",
                                             "done_by": []}
     assert isinstance(again, Question) and again.id == qid and again.to == holder
     assert again.expires == entry.question.expires - 5.0
-    (control,) = state_for(team, "EVA2", records, set())
+    (control,) = state_for(team, "EVA2", records)
     assert control.controls == ("Robonaut-B",) and control.questions == ()
-    assert state_for(team, "Robonaut-B", records, set())[0].controls == ("EVA2",)
+    assert state_for(team, "Robonaut-B", records)[0].controls == ("EVA2",)
     # the member's side: a fresh team (its process started again) takes it in
     member = Team(spec, log=ContextLog(tmp_path / "eva2.sqlite"))
     learn(member, "EVA2", control)

@@ -120,11 +120,14 @@ class Progress(Message):
 
 @dataclass(frozen=True)
 class FactChange(Message):
-    """Facts an agent shares: ``added`` and ``removed`` triples (subject, predicate, object)."""
+    """Facts an agent shares: ``removed`` then ``added`` triples (subject, predicate, object)
+    of one ``perspective``.  Subjects and predicates are names; an object is a name, a
+    number or a boolean (what :class:`shary.facts.FactDatabase` reads back as itself)."""
 
     kind: ClassVar[str] = "fact"
-    added: tuple[tuple[str, str, str], ...] = ()
-    removed: tuple[tuple[str, str, str], ...] = ()
+    added: tuple[tuple[str, str, Any], ...] = ()
+    removed: tuple[tuple[str, str, Any], ...] = ()
+    perspective: str = "robot"
 
 
 @dataclass(frozen=True)
@@ -169,8 +172,10 @@ class State(Message):
     (done, running and by whom, offered to whom); ``questions``: the ids of the
     open questions addressed to the member (each is sent again right after, with
     the time it has left); ``associated``: the robots serving the member's help
-    requests; ``controls``: the robots under its control (user mode); ``facts``:
-    the shared facts the team holds (delivered after as one :class:`FactChange`).
+    requests (for a robot: the person it serves); ``controls``: the robots under
+    its control, user mode (for a robot: the person driving it).  The facts it
+    subscribes to come from their sharer, all at once on subscribing
+    (:mod:`shary.transport.facts`), as on its first start.
     """
 
     kind: ClassVar[str] = "state"
@@ -179,7 +184,6 @@ class State(Message):
     questions: tuple[str, ...] = ()
     associated: tuple[str, ...] = ()
     controls: tuple[str, ...] = ()
-    facts: tuple[tuple[str, str, str], ...] = ()
 
 
 KINDS: dict[str, type[Message]] = {c.kind: c for c in (Act, Assignment, Question, Answer,
@@ -196,7 +200,7 @@ def _names(cls: type[Message]) -> tuple[str, ...]:
 @cache
 def _tuples(cls: type[Message]) -> tuple[tuple[str, bool], ...]:
     """A message class's tuple fields (JSON gives lists): (name, whether of triples)."""
-    return tuple((f.name, "tuple[str, str, str]" in str(f.type)) for f in fields(cls)
+    return tuple((f.name, str(f.type).startswith("tuple[tuple[")) for f in fields(cls)
                  if str(f.type).startswith("tuple["))
 
 
@@ -217,6 +221,18 @@ def build(kind: str, values: dict[str, Any]) -> Message:
     return cls(**values)
 
 
+PICTURE = "png"
+"""The key of a picture's bytes (base64 PNG) in a question's ``data``: the picture travels
+with the question to whoever answers, on any machine; logs keep its path (``image``)."""
+
+
+def loggable(data: dict[str, Any]) -> dict[str, Any]:
+    """``data`` without the bulky bytes a log row does not need (a picture's)."""
+    if PICTURE not in data:
+        return data
+    return {k: v for k, v in data.items() if k != PICTURE}
+
+
 def summary(message: Message) -> dict[str, Any]:
     """The fields worth a log line (not the whole payload: images stay paths)."""
     if isinstance(message, Act):
@@ -227,7 +243,7 @@ def summary(message: Message) -> dict[str, Any]:
     if isinstance(message, Question):
         return {"text": message.text, "question_type": message.type,
                 "priority": message.priority, "task": message.task,
-                "data": message.data or None}
+                "data": loggable(message.data) or None}
     if isinstance(message, Answer):
         return {"question": message.question, "value": message.value,
                 "expired": message.expired or None}
@@ -240,5 +256,5 @@ def summary(message: Message) -> dict[str, Any]:
         return {"at": message.time, "tasks": len(message.tasks),
                 "questions": list(message.questions) or None,
                 "associated": list(message.associated) or None,
-                "controls": list(message.controls) or None, "facts": len(message.facts)}
+                "controls": list(message.controls) or None}
     return {}

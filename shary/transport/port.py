@@ -66,6 +66,7 @@ class MessagePort:
         self.loop = loop
         self._record = record
         self._handlers: dict[str, Handler] = {}
+        self._kinds: dict[str, Handler] = {}
         self._ids = itertools.count(1)
         self.faults = faults
         self._fault_random = random.Random(faults.seed if faults else 0)
@@ -73,6 +74,22 @@ class MessagePort:
 
     def subscribe(self, address: str, handler: Handler) -> None:
         self._handlers[address] = handler
+
+    def tap(self, address: str, taker: Callable[[Message], bool]) -> None:
+        """Let ``taker`` see each message to ``address`` before its handler does, and keep
+        the ones it answers True for (a robot's link to the world takes the world's
+        replies to its requests; the robot's agent hears the rest)."""
+        inner = self._handlers.get(address)
+
+        def first(message: Message) -> None:
+            if not taker(message) and inner is not None:
+                inner(message)
+        self._handlers[address] = first
+
+    def take(self, kind: str, handler: Handler) -> None:
+        """Give every message of ``kind`` that arrives here, whatever its address, to
+        ``handler`` (a process's fact base takes every ``FactChange``)."""
+        self._kinds[kind] = handler
 
     def new_id(self, prefix: str) -> str:
         return f"{prefix}{next(self._ids)}"
@@ -114,7 +131,9 @@ class MessagePort:
 
     def deliver(self, message: Message) -> None:
         """Queue ``message`` for its local handler on the loop."""
-        handler = self._handlers.get(message.to)
+        handler = self._kinds.get(message.kind) if self._kinds else None
+        if handler is None:
+            handler = self._handlers.get(message.to)
         if handler is not None:
             self.loop.call_soon(handler, message)
 

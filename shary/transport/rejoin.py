@@ -6,15 +6,16 @@ zero.  When its liveliness token appears while the goal runs, the managers
 send it one :class:`~shary.transport.messages.State` (:func:`state_for`): the
 team's task table as the Task Manager holds it, the open questions it holds,
 the robots it is associated with or controls (as the robots logged them, from
-the managers' merged view of the logs, :mod:`shary.transport.logshare`), and
-the shared facts; then the open questions again, with the time they have
+the managers' merged view of the logs, :mod:`shary.transport.logshare`); then
+the open questions again, with the time they have
 left.  The State's time is the team's time: it is the member's first step of
-the shared clock (it does not start its own script again).
+the shared clock (it does not start its own script again; a robot subscribes
+to the world's facts again, and gets them all at once,
+:mod:`shary.transport.facts`).
 
-The member (:func:`learn`) logs what it learned (``state-learned``), sets its
-shadows of the managers and of the robots to it (what its own requests read),
-and takes the facts as one ``FactChange``.  The Task Manager then offers it
-work as to any free agent.
+The member (:func:`learn`) logs what it learned (``state-learned``) and sets
+its shadows of the managers and of the robots to it (what its own requests
+read).  The Task Manager then offers it work as to any free agent.
 """
 
 from __future__ import annotations
@@ -22,17 +23,13 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
-from shary.transport.messages import FactChange, Message, State
+from shary.transport.messages import Message, State
 
 if TYPE_CHECKING:
     from shary.team.team import Team
     from shary.transport.logshare import TeamRecords
 
-Triple = tuple[str, str, str]
-
-
-def state_for(team: Team, name: str, records: TeamRecords | None,
-              facts: set[Triple]) -> list[Message]:
+def state_for(team: Team, name: str, records: TeamRecords | None) -> list[Message]:
     """What the managers send ``name`` when it joins the running ``team``: its State, then
     the open questions it holds (their expiry is the time they have left)."""
     now = team.loop.now()
@@ -43,8 +40,7 @@ def state_for(team: Team, name: str, records: TeamRecords | None,
     state = State(team.tasks.address, name, id=team.port.new_id("s"), time=now, tasks=tasks,
                   questions=tuple(e.question.id for e in held),
                   associated=tuple(sorted(_linked(associated, name))),
-                  controls=tuple(sorted(_linked(controlled, name))),
-                  facts=tuple(sorted(facts)))
+                  controls=tuple(sorted(_linked(controlled, name))))
     again: list[Message] = [state]
     for entry in held:
         left = max(entry.question.expires - (now - entry.asked_at), 0.0)
@@ -67,7 +63,7 @@ def learn(team: Team, name: str, state: State) -> None:
     team.record("state-learned", agent=name, at=state.time, tasks=state.tasks,
                 questions=list(state.questions) or None,
                 associated=list(state.associated) or None,
-                controls=list(state.controls) or None, facts=len(state.facts) or None)
+                controls=list(state.controls) or None)
     shadow = team.tasks
     for task_name, row in state.tasks.items():
         task = shadow.tasks.get(task_name)
@@ -90,6 +86,4 @@ def learn(team: Team, name: str, state: State) -> None:
         robot = team.agents.get(other)
         if isinstance(robot, RobotAgent) and other != name:
             robot.mode, robot.controller = USER, name
-    if state.facts:
-        me.handle(FactChange(state.sender, name, added=state.facts))
 

@@ -106,8 +106,10 @@ def _is_strings(v: Any) -> bool:
 
 
 def _is_triples(v: Any) -> bool:
+    """Triples of names whose object may also be a number or a boolean (a pose, a flag)."""
     return isinstance(v, list) and all(
-        isinstance(t, list) and len(t) == 3 and all(isinstance(x, str) for x in t) for t in v)
+        isinstance(t, list) and len(t) == 3 and isinstance(t[0], str) and isinstance(t[1], str)
+        and (isinstance(t[2], (str, bool)) or _is_number(t[2])) for t in v)
 
 
 TYPES: dict[str, tuple[Any, dict[str, Any]]] = {
@@ -119,9 +121,11 @@ TYPES: dict[str, tuple[Any, dict[str, Any]]] = {
     "bool": (_is_bool, {"type": "boolean"}),
     "dict[str, Any]": (_is_object, {"type": "object"}),
     "tuple[str, ...]": (_is_strings, {"type": "array", "items": {"type": "string"}}),
-    "tuple[tuple[str, str, str], ...]": (_is_triples, {
-        "type": "array", "items": {"type": "array", "items": {"type": "string"},
-                                   "minItems": 3, "maxItems": 3}}),
+    "tuple[tuple[str, str, Any], ...]": (_is_triples, {
+        "type": "array", "items": {"type": "array", "prefixItems": [
+            {"type": "string"}, {"type": "string"},
+            {"type": ["string", "number", "boolean"]}], "items": False,
+            "minItems": 3, "maxItems": 3}}),
 }
 """A dataclass field's annotation -> (its check, its JSON Schema)."""
 

@@ -86,8 +86,6 @@ class ZenohPort(MessagePort):
         self.on_clock: Callable[[Clock], Any] | None = None
         self.on_presence: Callable[[str, bool], Any] | None = None
         """Told ``(name, joined)`` when a process of the team joins or leaves."""
-        self.taps: list[Callable[[Message], Any]] = []
-        """Shown every message that arrives, checked, before it is delivered."""
         self._publishers: dict[tuple[str, str], Any] = {}
         self.session = zenoh.open(config)
         try:
@@ -119,6 +117,10 @@ class ZenohPort(MessagePort):
         """Hold ``address`` here if it is one of this process's (others are remote)."""
         if address in self.local:
             super().subscribe(address, handler)
+
+    def tap(self, address: str, taker: Callable[[Message], bool]) -> None:
+        if address in self.local:
+            super().tap(address, taker)
 
     def new_id(self, prefix: str) -> str:
         return f"{prefix}{self.name}.{next(self._ids)}"
@@ -201,8 +203,6 @@ class ZenohPort(MessagePort):
             return
         link = f"{message.sender}>{message.to}"
         self.wire_received[link] = self.wire_received.get(link, 0) + 1
-        for tap in self.taps:
-            tap(message)
         if not self.faulted(message, self.deliver):  # a bad link delays what arrives too
             self.deliver(message)
 
