@@ -272,7 +272,7 @@ def _line(kind: str, data: dict[str, Any], children: dict[str, Any]) -> str:
     task = escape(str(data.get("task", "")))
     if kind == "agent-joined":
         child = children.get(data.get("agent", ""))
-        pid = f" (pid {child.pid})" if child is not None else ""
+        pid = f" (pid {child.pid})" if child is not None and child.poll() is None else ""
         return f"+ {agent} joined{pid}"
     if kind == "agent-left":
         return f"- {agent} left"
