@@ -75,6 +75,9 @@ class ZenohPort(MessagePort):
         self.wire_received: dict[str, int] = {}
         self.refused = 0
         self.on_clock: Callable[[Clock], Any] | None = None
+        """Told each ``Clock`` message as it is taken (outside the loop's callbacks: a step
+        runs what arrived before it at the old time, then moves the clock, so that the
+        messages behind it, sent at the new time, are handled at the new time)."""
         self.on_presence: Callable[[str, bool], Any] | None = None
         """Told ``(name, joined)`` when a process of the team joins or leaves."""
         self._publishers: dict[tuple[str, str], Any] = {}
@@ -178,8 +181,8 @@ class ZenohPort(MessagePort):
                              size=len(payload))
             return
         if isinstance(message, Clock):
-            if self.on_clock is not None:
-                self.loop.call_soon(self.on_clock, message)
+            if self.on_clock is not None:  # now, not queued: a step moves the clock after
+                self.on_clock(message)      # what arrived before it and before what follows
             return
         link = f"{message.sender}>{message.to}"
         self.wire_received[link] = self.wire_received.get(link, 0) + 1
