@@ -127,8 +127,10 @@ the run is over; prints the verdict and returns the exit status."""
 
 
 def team_up(args: argparse.Namespace, spec: Any, *, world: list[str] | None = None,
-            prepare: Prepare | None = None, finish: Finish | None = None) -> int:
-    """Run ``spec``'s managers here and start its members (see the module's docstring).
+            prepare: Prepare | None = None, finish: Finish | None = None,
+            settle: bool = False) -> int:
+    """Run ``spec``'s managers here and start its members (see the module's docstring);
+    ``settle``: see :meth:`~shary.transport.distributed.Conductor.run`.
 
     A team with robots needs its world agent: ``world`` is the command that starts it
     (``shary world SCENARIO``, which the simulator's ``team up SCENARIO`` gives), or it
@@ -178,7 +180,7 @@ def team_up(args: argparse.Namespace, spec: Any, *, world: list[str] | None = No
                          json_mode=args.json)
         if prepare is not None:
             prepare(conductor)
-        outcome = conductor.run(args.limit)
+        outcome = conductor.run(args.limit, settle=settle)
         wall = time.monotonic() - started
         _wait(children)  # their logs are complete once they have stopped
         if finish is not None:

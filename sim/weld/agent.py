@@ -137,4 +137,4 @@ def team_up_scenario(args: argparse.Namespace, path: Path) -> int:
         return 0 if passed else 1
 
     return team_up(args, scenario.team,
-                   world=["world", str(path)], prepare=prepare, finish=finish)
+                   world=["world", str(path)], prepare=prepare, finish=finish, settle=True)
