@@ -165,3 +165,22 @@ def test_what_has_no_world_is_refused_plainly(shary) -> None:
     nobody = _endpoint()
     status, _, err = shary("world", "weld-nominal", "--connect", nobody)
     assert status == 2 and f"cannot join the team at {nobody}" in err and ".rs:" not in err
+
+
+def test_the_world_refuses_what_it_cannot_do_and_goes_on(world: Any) -> None:
+    """Anyone on the network may send the world anything the schema lets through."""
+    weld, heard = world
+    heard.clear()
+    for i, (skill, args) in enumerate([("drive", {"place": [1]}), ("drive", {}),
+                                       ("weld", {"seam": {"x": 1}}), ("inspect", {})]):
+        _send(weld, Assignment("K-10", WORLD, id=f"h{i}", task="n", skill=skill, args=args))
+    assert [(m.id, m.status) for m in heard] == [(f"h{i}", "failed") for i in range(4)]
+    heard.clear()
+    weld.port.subscribe("EVA1", heard.append)
+    _send(weld, Assignment("EVA1", WORLD, id="h5", task="mount-P4", skill="mount-panel",
+                           args={"panel": "P4", "helper": ["EVA2"]}))
+    _send(weld, Act("K-10", WORLD, id="h6", act=QUERY, data={
+        "service": ATTACH, "topic": "seam-okay", "robot": "nobody", "team-task": {}}))
+    assert [(m.id, getattr(m, "status", None)) for m in heard] == [("h5", "failed"),
+                                                                    ("h6", None)]
+    assert "no picture" in heard[1].data["error"]

@@ -191,10 +191,11 @@ class InteractionManager:
                 return
             self._open(message, None)
         elif isinstance(message, Act) and message.act == REQUEST_HELP:  # a person's
-            after = message.data.get("release-after")
+            args, after = message.data.get("args"), message.data.get("release-after")
             self.request_help(message.sender, str(message.data.get("skill", "")),
-                              dict(message.data.get("args") or {}), id=message.id,
-                              release_after=float(after) if after is not None else None)
+                              dict(args) if isinstance(args, dict) else {}, id=message.id,
+                              release_after=float(after) if isinstance(after, (int, float))
+                              else None)
         elif isinstance(message, Answer):
             entry = self.open.get(message.question)
             if entry is None:
