@@ -231,6 +231,12 @@ def _line(kind: str, data: dict[str, Any], children: dict[str, Any]) -> str:
         return f"  {task} done by {agent}"
     if kind == "task-failed":
         return f"  {task} failed ({agent}): {escape(str(data.get('reason', '')))}"
+    if kind == "question":
+        image = (data.get("data") or {}).get("image")
+        return f"  {agent} asks: {escape(str(data.get('text')))}" + (
+            " " + escape(f"[image {image}]") if image else "")
+    if kind == "answer" and data.get("expired"):
+        return f"  nobody answered in time: taken as {escape(str(data.get('value')))}"
     if kind == "answer":
         return f"  {agent} answered {escape(str(data.get('value')))}"
     if kind == "message-refused":

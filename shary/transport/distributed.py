@@ -203,7 +203,7 @@ class Conductor:
     def _record(self, record: Callable[..., None]) -> Callable[..., None]:
         """The team's record, shown on the display too (the rows worth a line)."""
         shown = {"agent-joined", "agent-left", "agent-lost", "task-running", "task-done",
-                 "task-failed", "goal-over", "message-refused", "answer"}
+                 "task-failed", "goal-over", "message-refused", "question", "answer"}
 
         def both(kind: str, **data: Any) -> None:
             record(kind, **data)
