@@ -8,6 +8,8 @@ loop, clock and context log (``LOGDIR/NAME.sqlite``), a Zenoh client of the
 conductor.  Both build the same :class:`~shary.team.team.Team` from the team
 file; each process holds only its own addresses on the port, so the other
 members' objects are shadows (the Task Manager's view of who holds what).
+In a team with robots, the world (``shary world SCENARIO``, in ``sim``) is a
+member too: both it and :class:`Member` are :class:`Participant` of the clock.
 
 **The shared simulated clock** is a barrier: the conductor tells every member
 to advance to time *t* (``Clock`` ``step``); each member runs its timers up to
