@@ -16,6 +16,7 @@ from shary.terminal import add_json_flag, emit_json, error, escape, listing
 from shary.terminal import out as _out
 from userfiles import yamlsafe
 from userfiles.errors import FileError
+from userfiles.schema import did_you_mean
 
 
 def add_scenarios(sub: argparse._SubParsersAction) -> None:
@@ -176,13 +177,20 @@ def add_team(sub: argparse._SubParsersAction) -> None:
 
 def cmd_team_up(args: argparse.Namespace) -> int:
     from shary.commands.distributed import cmd_team_up as engine_team_up
-
-    path = _weld_scenario(args.team)
-    if path is None:
-        return engine_team_up(args)
+    from sim.scenario import builtin_scenarios
     from sim.weld.agent import team_up_scenario
 
-    return team_up_scenario(args, path)
+    if not args.team.exists():  # a built-in scenario's name
+        path = builtin_scenarios().get(str(args.team))
+        if path is None or _weld_scenario(path) is None:
+            names = [n for n, p in builtin_scenarios().items()
+                     if _weld_scenario(p) is not None]
+            return error(f"no team file or team scenario {str(args.team)!r}"
+                         f"{did_you_mean(str(args.team), names)} (team scenarios: "
+                         f"{', '.join(names)})", json_mode=args.json)
+        return team_up_scenario(args, path)
+    path = _weld_scenario(args.team)
+    return engine_team_up(args) if path is None else team_up_scenario(args, path)
 
 
 def _weld_scenario(name: Path) -> Path | None:

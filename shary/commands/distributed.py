@@ -174,8 +174,10 @@ the run is over; prints the verdict and returns the exit status."""
 
 
 def team_up(args: argparse.Namespace, spec: Any, *, world: list[str] | None = None,
-            prepare: Prepare | None = None, finish: Finish | None = None) -> int:
-    """Run ``spec``'s managers here and start its members (see the module's docstring).
+            prepare: Prepare | None = None, finish: Finish | None = None,
+            settle: bool = False) -> int:
+    """Run ``spec``'s managers here and start its members (see the module's docstring);
+    ``settle``: see :meth:`~shary.transport.distributed.Conductor.run`.
 
     A team with robots needs its world agent: ``world`` is the command that starts it
     (``shary world SCENARIO``, which the simulator's ``team up SCENARIO`` gives), or it
@@ -229,7 +231,7 @@ def team_up(args: argparse.Namespace, spec: Any, *, world: list[str] | None = No
         if prepare is not None:
             prepare(conductor)
         running = time.monotonic()
-        outcome = conductor.run(args.limit)
+        outcome = conductor.run(args.limit, settle=settle)
         run_wall = time.monotonic() - running
         wall = time.monotonic() - started
         _wait(children)  # their logs are complete once they have stopped
@@ -292,6 +294,12 @@ def _line(kind: str, data: dict[str, Any], children: dict[str, Any]) -> str:
         return f"  {task} done by {agent}"
     if kind == "task-failed":
         return f"  {task} failed ({agent}): {escape(str(data.get('reason', '')))}"
+    if kind == "question":
+        image = (data.get("data") or {}).get("image")
+        return f"  {agent} asks: {escape(str(data.get('text')))}" + (
+            " " + escape(f"[image {image}]") if image else "")
+    if kind == "answer" and data.get("expired"):
+        return f"  nobody answered in time: taken as {escape(str(data.get('value')))}"
     if kind == "answer":
         return f"  {agent} answered {escape(str(data.get('value')))}"
     if kind == "message-refused":

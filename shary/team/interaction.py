@@ -143,9 +143,10 @@ class InteractionManager:
     # -- help requests ---------------------------------------------------------------
 
     def request_help(self, requester: str, skill: str, args: dict[str, Any], *,
-                     release_after: float | None = None) -> str:
-        """Find a robot with ``skill`` to help ``requester``; return the request's id."""
-        help_ = _Help(self.team.port.new_id("h"), requester, skill, args, release_after)
+                     release_after: float | None = None, id: str | None = None) -> str:
+        """Find a robot with ``skill`` to help ``requester``; return the request's id
+        (``id``: the one the requester gave its ``REQUEST-HELP`` act)."""
+        help_ = _Help(id or self.team.port.new_id("h"), requester, skill, args, release_after)
         self.helps[help_.id] = help_
         self.team.record("help-request", task=help_.id, agent=requester, skill=skill,
                          args=args or None)
@@ -189,6 +190,12 @@ class InteractionManager:
                                  question=message.id)
                 return
             self._open(message, None)
+        elif isinstance(message, Act) and message.act == REQUEST_HELP:  # a person's
+            args, after = message.data.get("args"), message.data.get("release-after")
+            self.request_help(message.sender, str(message.data.get("skill", "")),
+                              dict(args) if isinstance(args, dict) else {}, id=message.id,
+                              release_after=float(after) if isinstance(after, (int, float))
+                              else None)
         elif isinstance(message, Answer):
             entry = self.open.get(message.question)
             if entry is None:

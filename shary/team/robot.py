@@ -93,8 +93,9 @@ class RobotAgent(Agent):
         elif isinstance(message, Act) and message.act == HAND_BACK:
             self.hand_back(message.sender)
         elif isinstance(message, Act) and message.act == TELEOPERATE:
+            args = message.data.get("args")
             self.teleoperate(message.sender, str(message.data.get("atomic", "")),
-                             dict(message.data.get("args") or {}))
+                             dict(args) if isinstance(args, dict) else {})
         elif isinstance(message, Answer):
             asking = self.team.own_executor("ask", self)
             if isinstance(asking, AskExecutor):  # an answer nobody waits for is logged

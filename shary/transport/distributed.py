@@ -8,6 +8,8 @@ loop, clock and context log (``LOGDIR/NAME.sqlite``), a Zenoh client of the
 conductor.  Both build the same :class:`~shary.team.team.Team` from the team
 file; each process holds only its own addresses on the port, so the other
 members' objects are shadows (the Task Manager's view of who holds what).
+In a team with robots, the world (``shary world SCENARIO``, in ``sim``) is a
+member too: both it and :class:`Member` are :class:`Participant` of the clock.
 
 **The shared simulated clock** is a barrier: the conductor tells every member
 to advance to time *t* (``Clock`` ``step``); each member runs its timers up to
@@ -249,8 +251,8 @@ class Conductor:
     def _record(self, record: Callable[..., None]) -> Callable[..., None]:
         """The team's record, shown on the display too (the rows worth a line)."""
         shown = {"agent-joined", "agent-left", "agent-lost", "task-running", "task-done",
-                 "task-failed", "goal-over", "message-refused", "answer", "rejoined",
-                 "waiting-for-members"}
+                 "task-failed", "goal-over", "message-refused", "question", "answer",
+                 "rejoined", "waiting-for-members"}
 
         def both(kind: str, **data: Any) -> None:
             record(kind, **data)
@@ -343,9 +345,11 @@ class Conductor:
             self.team.loop.run_until_idle()
         return sorted(set(self.members) - self.live)
 
-    def run(self, limit: float) -> str | None:
+    def run(self, limit: float, *, settle: bool = False) -> str | None:
         """Run the goal on the shared clock until it is over or ``limit`` simulated seconds
-        have passed; the goal's outcome ("done", "failed") or None."""
+        have passed; the goal's outcome ("done", "failed") or None.  ``settle``: once the
+        goal is over, go on until nobody has anything left to do (the world's last motion,
+        a question's expiry), as a scenario run in one process does."""
         team, port, loop = self.team, self.port, self.team.loop
         if WORLD in self.members:  # the world's facts: poses for the spatial reasoner and
             port.send(Act(team.tasks.address, WORLD, act=SUBSCRIBE))  # the distances
@@ -356,11 +360,11 @@ class Conductor:
         for name in self.live:
             self._tell(name, at)
         try:
-            while team.tasks.outcome is None and self.halted is None:
+            while (team.tasks.outcome is None or settle) and self.halted is None:
                 port.pump(WAIT if not self._balanced(at) else 0.0)
                 loop.run_until_idle()
                 port.flush()
-                if team.tasks.outcome is not None or not self._balanced(at):
+                if not self._balanced(at):
                     continue
                 dues = [r.next for r in self.reports.values() if r.next is not None]
                 own = loop.clock.next_due()

@@ -84,6 +84,9 @@ class ZenohPort(MessagePort):
         self.wire_received: dict[str, int] = {}
         self.refused = 0
         self.on_clock: Callable[[Clock], Any] | None = None
+        """Told each ``Clock`` message as it is taken (outside the loop's callbacks: a step
+        runs what arrived before it at the old time, then moves the clock, so that the
+        messages behind it, sent at the new time, are handled at the new time)."""
         self.on_presence: Callable[[str, bool], Any] | None = None
         """Told ``(name, joined)`` when a process of the team joins or leaves."""
         self._publishers: dict[tuple[str, str], Any] = {}
@@ -200,12 +203,8 @@ class ZenohPort(MessagePort):
                              size=len(payload))
             return
         if isinstance(message, Clock):
-            # Now, in arrival order: what came before the step runs at the old time (the
-            # step's advance drains it first), what comes after it at the new time.  Queued
-            # behind a message that arrived later, the step would let that message be
-            # handled before the clock moved (an assignment taken at 21 s, sent at 27 s).
-            if self.on_clock is not None:
-                self.on_clock(message)
+            if self.on_clock is not None:  # now, not queued: a step moves the clock after
+                self.on_clock(message)      # what arrived before it and before what follows
             return
         link = f"{message.sender}>{message.to}"
         self.wire_received[link] = self.wire_received.get(link, 0) + 1

@@ -12,7 +12,7 @@ reasoner's service on the facts the world shares, the scenario's script), and
 starts the world and every robot and person as their own processes
 (``shary world``, ``shary agent``).  When the goal is over it judges the
 scenario's ``expect`` on the merged logs of every process, as ``shary run``
-judges its one log.
+judges its one log, and draws the timeline of the merged logs (a lane per agent).
 """
 
 from __future__ import annotations
@@ -29,9 +29,11 @@ from shary.loop import EventLoop
 from shary.team.world import WORLD
 from shary.terminal import emit_json, escape
 from shary.terminal import out as _out
+from shary.timeline import render_timeline
 from shary.transport.distributed import CONDUCTOR, Participant, agent_log
 from shary.transport.logshare import Forwarder, SharedLog
 from shary.transport.zenohport import LOOPBACK, Settings, ZenohPort, session_config
+from userfiles.outputs import write_output
 
 from .run import offer_spatial, record_members, schedule_script
 from .scenario import WeldScenario, judge, load_weld_scenario
@@ -120,7 +122,11 @@ def team_up_scenario(args: argparse.Namespace, path: Path) -> int:
         logs = [logdir / f"{CONDUCTOR}.sqlite",
                 *sorted(p for p in logdir.glob("*.sqlite") if p.stem != CONDUCTOR)]
         with merged_events(logs) as events:
-            rows = [(e.time, e.kind, e.task, e.agent, e.data) for e in events]
+            merged = list(events)
+        rows = [(e.time, e.kind, e.task, e.agent, e.data) for e in merged]
+        lanes = [e for e in merged if e.agent != WORLD  # the agents' lanes, not processes'
+                 and e.kind not in ("agent-joined", "agent-left")]
+        write_output(logdir / "timeline.svg", render_timeline(lanes, scenario.name))
         differences = judge(scenario.expect, rows, outcome, end)
         if conductor.halted:
             differences.append(f"the run stopped early: {conductor.halted}")
@@ -140,9 +146,9 @@ def team_up_scenario(args: argparse.Namespace, path: Path) -> int:
                        f"wall, every agent its own process, seed {args.seed}")
             for difference in differences:
                 _out.print(f"  - {escape(difference)}")
-            _out.print(f"[dim]logs and pictures in {escape(str(logdir))}/: shary log "
-                       f"{escape(str(logdir))}/*.sqlite[/dim]")
+            _out.print(f"[dim]logs, pictures and timeline.svg in {escape(str(logdir))}/: "
+                       f"shary log {escape(str(logdir))}/*.sqlite[/dim]")
         return 0 if passed else 1
 
     return team_up(args, scenario.team,
-                   world=["world", str(path)], prepare=prepare, finish=finish)
+                   world=["world", str(path)], prepare=prepare, finish=finish, settle=True)

@@ -28,6 +28,7 @@ Its physics ticks are timers on that loop.
 from __future__ import annotations
 
 import base64
+import json
 import math
 from collections.abc import Callable
 from pathlib import Path
@@ -134,13 +135,23 @@ class WeldWorld:
         """A robot's atomic task: performed on the site, its outcome sent back."""
         request = Request(message.id, message.skill, dict(message.args), message.sender,
                           message.task)
+        odd = [k for k, v in request.args.items() if not isinstance(v, (str, int, float))]
+        if odd:  # the recipes' arguments are names and numbers; anything else is refused
+            self._reply(message, "failed", f"{request.atomic}: argument {odd[0]!r} is "
+                        "neither a name nor a number")
+            return
         self.running[request.id] = request
 
         def over(outcome: Outcome) -> None:
             if self.running.pop(request.id, None) is not None:
                 self._reply(message, outcome.status, outcome.reason, outcome.result)
 
-        self._executor(request.atomic).start(request, Reporter(over, self.loop.call_soon))
+        try:
+            self._executor(request.atomic).start(request, Reporter(over, self.loop.call_soon))
+        except (KeyError, TypeError, ValueError) as err:  # arguments of the wrong kind:
+            self.running.pop(request.id, None)             # refused, the world goes on
+            self._reply(message, "failed", f"{request.atomic} cannot be done with "
+                        f"{json.dumps(request.args)[:120]}: {err}")
 
     def _mount(self, message: Assignment) -> None:
         """A person's ``mount-panel``: they (and their helper) carry the panel and tack it."""
@@ -158,13 +169,19 @@ class WeldWorld:
             self.actions.mount(panel, carriers, over)
         except KeyError as err:
             self._reply(message, "failed", str(err.args[0]))
+        except TypeError:
+            self._reply(message, "failed", f"no such helper: {message.args.get('helper')!r}")
 
     def _serve(self, message: Act) -> None:
         service = message.data.get("service")
         if service == ATTACH:
-            data = self.attachment(str(message.data.get("topic")),
-                                   str(message.data.get("robot") or message.sender),
-                                   message.data.get("team-task"))
+            task = message.data.get("team-task")
+            try:
+                data = self.attachment(str(message.data.get("topic")),
+                                       str(message.data.get("robot") or message.sender),
+                                       None if task is None else str(task))
+            except KeyError as err:  # no such robot: nothing to take a picture with
+                data = {"error": f"no picture: {err}"}
         else:
             data = {"error": f"the world offers no service {service!r} (it offers {ATTACH})"}
         self.port.send(Act(WORLD, message.sender, id=message.id, act=INFORM,
