@@ -84,10 +84,19 @@ class Participant:
         self.port = port
         self.log = log
         port.on_clock = self._clock
+        port.on_time = self._sent_at
         port.on_presence = self._presence
         self.at: float | None = None
         """The time of the last step (None before the first)."""
         self.stopped: str | None = None
+
+    def _sent_at(self, at: float) -> None:
+        """A message sent at ``at`` arrived before the step to ``at`` did (it came by
+        another path): move to ``at`` first, as the step will (the conductor steps to
+        the earliest thing anyone has to do, so nothing here is due before it)."""
+        if self.at is not None and at > self.loop.now():
+            self.loop.advance(at - self.loop.now())
+            self.at = at
 
     def start(self) -> None:
         """The run begins (the first step, at the team's current time)."""

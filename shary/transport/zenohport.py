@@ -32,7 +32,7 @@ import zenoh
 from shary.loop import EventLoop
 from shary.transport.messages import Clock, LogRecord, Message
 from shary.transport.port import Faults, MessagePort
-from shary.transport.wire import MAX_BYTES, PREFIX, WireError, decode, encode, key
+from shary.transport.wire import MAX_BYTES, PREFIX, WireError, decode_timed, encode, key
 
 LEASE_MS = 1000
 """A frozen peer is noticed after this long (Zenoh's default, 10 s, is too slow for a team)."""
@@ -87,6 +87,10 @@ class ZenohPort(MessagePort):
         """Told each ``Clock`` message as it is taken (outside the loop's callbacks: a step
         runs what arrived before it at the old time, then moves the clock, so that the
         messages behind it, sent at the new time, are handled at the new time)."""
+        self.on_time: Callable[[float], Any] | None = None
+        """Told the time a message was sent at, before the message is delivered (a
+        member whose clock is behind catches up: a message is never handled before the
+        time it was sent, whatever order the network brought it in)."""
         self.on_presence: Callable[[str, bool], Any] | None = None
         """Told ``(name, joined)`` when a process of the team joins or leaves."""
         self._publishers: dict[tuple[str, str], Any] = {}
@@ -144,7 +148,7 @@ class ZenohPort(MessagePort):
 
     def publish(self, message: Message) -> None:
         """Put ``message`` on the wire now (the clock's messages do not wait for idle)."""
-        payload = encode(message)
+        payload = encode(message, self.loop.now())
         if len(payload) > MAX_BYTES:  # the receiver would refuse it: say so here
             if self._record is not None and message.kind != LogRecord.kind:
                 self._record("message-too-big", agent=message.sender, to=message.to,
@@ -195,7 +199,7 @@ class ZenohPort(MessagePort):
                 self.loop.call_soon(self.on_presence, who, what == "join")
             return
         try:
-            message = decode(payload, key_expr=expr)
+            message, at = decode_timed(payload, key_expr=expr)
         except WireError as exc:
             self.refused += 1
             if self._record is not None:
@@ -208,6 +212,8 @@ class ZenohPort(MessagePort):
             return
         link = f"{message.sender}>{message.to}"
         self.wire_received[link] = self.wire_received.get(link, 0) + 1
+        if at is not None and self.on_time is not None:
+            self.on_time(at)
         if not self.faulted(message, self.deliver):  # a bad link delays what arrives too
             self.deliver(message)
 
