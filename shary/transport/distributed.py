@@ -24,8 +24,14 @@ simulated second last that many wall seconds (``0``: as fast as possible).
 **Faults**: a member whose process dies leaves (its liveliness token goes
 within milliseconds of a kill -9, within the lease of a freeze); the Task
 Manager takes its task back (``agent-lost``) and offers it to another; the
-clock no longer waits for it.  A member that joins later (a restart) is
-given the current time and takes part from then on.
+clock no longer waits for it, and when nothing else can happen the run waits
+(``rejoin_wait``) for it to come back.  A member that joins later (a restart)
+is told the current state (:mod:`shary.transport.rejoin`: the State is its
+first step of the clock) and takes part from then on.
+
+**Log records**: a member forwards its log's rows to the managers
+(:mod:`shary.transport.logshare`); :attr:`Conductor.records` is the team's
+merged view, live.
 """
 
 from __future__ import annotations
@@ -38,15 +44,17 @@ from typing import Any
 from shary.loop import EventLoop
 from shary.team.world import WORLD
 from shary.transport.facts import SUBSCRIBE
-from shary.transport.messages import Act, Clock
+from shary.transport.logshare import LOGS, Forwarder, SharedLog, TeamRecords
+from shary.transport.messages import Act, Clock, Message, State
 from shary.transport.port import Faults
-from shary.transport.zenohport import LOOPBACK, ZenohPort, session_config
+from shary.transport.rejoin import learn, state_for
+from shary.transport.zenohport import LOOPBACK, Settings, ZenohPort, session_config
 
 CLOCK = "clock"
 """The shared clock's address, in the conductor's process."""
 CONDUCTOR = "managers"
 """The conductor's process name (its liveliness token, its log file)."""
-MANAGERS = ("tasks", "interaction", CLOCK)
+MANAGERS = ("tasks", "interaction", CLOCK, LOGS)
 WAIT = 0.2
 """Seconds a process waits for a message before looking around again."""
 
@@ -139,7 +147,8 @@ class Member(Participant):
     facts the world perceives."""
 
     def __init__(self, spec: Any, name: str, *, connect: str = LOOPBACK,
-                 logdir: Path | None = None, seed: int = 0, faults: Faults | None = None):
+                 logdir: Path | None = None, seed: int = 0, faults: Faults | None = None,
+                 share_log: bool = True, settings: Settings | None = None):
         from shary.team import Team
         from shary.team.spec import ROBOT
         from shary.team.world import connect_world
@@ -147,27 +156,56 @@ class Member(Participant):
         if name not in spec.agents:
             raise KeyError(name)
         log = agent_log(logdir, name, seed)
+        self.forwarder = Forwarder(name) if share_log else None
+        """Sends the log's rows to the managers (None: ``share_log`` off)."""
         ports: list[ZenohPort] = []
 
         def port(loop: EventLoop, record: Callable[..., None]) -> ZenohPort:
             ports.append(ZenohPort(loop, record, team=spec.name, name=name, local=[name],
-                                   config=session_config(mode="client", connect=[connect]),
+                                   config=session_config(mode="client", connect=[connect],
+                                                         settings=settings),
                                    faults=faults))
             return ports[0]
 
-        self.team = Team(spec, log=log, port=port)
+        self.team = Team(spec, log=SharedLog(log, self.forwarder) if self.forwarder else log,
+                         port=port)
         self.team.loop.random.seed(seed)
         super().__init__(name, self.team.loop, ports[0], log)
+        if self.forwarder is not None:
+            self.forwarder.attach(self.port)
         self.robot = spec.agents[name].kind == ROBOT
         if spec.of_kind(ROBOT):
             connect_world(self.team)
+        self.port.tap(name, self._rejoined)
 
     def start(self) -> None:
-        if self.robot:
-            self.port.send(Act(self.name, WORLD, act=SUBSCRIBE))
+        self._subscribe()
         starting = getattr(self.team.agents[self.name], "start_script", None)
         if starting is not None:
             starting()
+
+    def _subscribe(self) -> None:
+        """A robot asks the world for its facts: all of them now, then each change."""
+        if self.robot:
+            self.port.send(Act(self.name, WORLD, act=SUBSCRIBE))
+
+    def _rejoined(self, state: Message) -> bool:
+        """A State (this process joined a running team) is the process's to take in: the
+        managers' view, whose time is our first step (the person's own script does not
+        start again; a robot asks the world for its facts).  The rest is the agent's."""
+        if not isinstance(state, State):
+            return False
+        loop = self.loop
+        first = self.at is None
+        if first:
+            loop.clock.advance_to(state.time)
+        elif state.time > loop.now():
+            loop.advance(state.time - loop.now())
+        self.at = max(self.at or 0.0, state.time)
+        learn(self.team, self.name, state)
+        if first:
+            self._subscribe()
+        return True
 
 
 class Conductor:
@@ -175,7 +213,8 @@ class Conductor:
 
     def __init__(self, spec: Any, *, listen: str = LOOPBACK, logdir: Path | None = None,
                  seed: int = 0, members: list[str] | None = None, pace: float = 0.0,
-                 faults: Faults | None = None,
+                 faults: Faults | None = None, settings: Settings | None = None,
+                 rejoin_wait: float = 30.0,
                  display: Callable[[str, dict[str, Any]], Any] | None = None):
         from shary.team import Team
         from shary.team.spec import ROBOT, SOFTWARE
@@ -192,17 +231,24 @@ class Conductor:
         def port(loop: EventLoop, record: Callable[..., None]) -> ZenohPort:
             ports.append(ZenohPort(loop, self._record(record), team=spec.name,
                                    name=CONDUCTOR, local=local,
-                                   config=session_config(mode="router", listen=[listen]),
+                                   config=session_config(mode="router", listen=[listen],
+                                                         settings=settings),
                                    faults=faults))
             return ports[0]
 
-        self.team = Team(spec, log=self.log, port=port)
+        self.records = TeamRecords()
+        """The team's logs merged, live: our rows and the rows the members forward."""
+        self.team = Team(spec, log=SharedLog(self.log, self.records.tap(CONDUCTOR)),
+                         port=port)
         self.team.record = self._record(self.team.record)  # type: ignore[method-assign]
         self.team.loop.random.seed(seed)
         self.port = ports[0]
         self.port.on_clock = self._idle
         self.port.on_presence = self._presence
+        self.port.subscribe(LOGS, self.records.handle)
         self.pace = pace
+        self.rejoin_wait = rejoin_wait
+        """Wall seconds the run waits for a lost member when nothing else can happen."""
         self.live: set[str] = set()
         self.reports: dict[str, Clock] = {}
         self.lost: list[str] = []
@@ -214,7 +260,8 @@ class Conductor:
     def _record(self, record: Callable[..., None]) -> Callable[..., None]:
         """The team's record, shown on the display too (the rows worth a line)."""
         shown = {"agent-joined", "agent-left", "agent-lost", "task-running", "task-done",
-                 "task-failed", "goal-over", "message-refused", "question", "answer"}
+                 "task-failed", "goal-over", "message-refused", "question", "answer",
+                 "rejoined", "waiting-for-members"}
 
         def both(kind: str, **data: Any) -> None:
             record(kind, **data)
@@ -234,8 +281,10 @@ class Conductor:
                 for link in sent.keys() | received.keys():
                     if name in link.split(">"):
                         self.offsets[link] = sent.get(link, 0) - received.get(link, 0)
-                self.team.tasks.agent_back(name)
-                self._tell(name, self.team.loop.now())
+                if name in self.team.agents:
+                    self._rejoin(name)
+                else:  # the world: it starts from the team's time
+                    self._tell(name, self.team.loop.now())
         else:
             self.live.discard(name)
             self.reports.pop(name, None)
@@ -244,6 +293,20 @@ class Conductor:
                 self.halted = "the world left"
             if name in self.team.agents:
                 self.team.tasks.agent_lost(name)
+
+    def _rejoin(self, name: str) -> None:
+        """``name`` came back while the goal runs: tell it the state (its first step of
+        the clock), then offer it work."""
+        messages = state_for(self.team, name, self.records)
+        state = messages[0]
+        assert isinstance(state, State)
+        holds = sorted(t for t, row in state.tasks.items() if row["agent"] == name)
+        self.team.record("rejoined", agent=name, at=state.time, tasks=len(state.tasks),
+                         done=sum(row["state"] == "done" for row in state.tasks.values()),
+                         holds=holds or None, questions=len(state.questions))
+        for message in messages:
+            self.port.send(message)
+        self.team.tasks.agent_back(name)
 
     def _idle(self, message: Clock) -> None:
         if message.state == "idle" and message.sender in self.live:
@@ -301,6 +364,7 @@ class Conductor:
             port.send(Act(team.tasks.address, WORLD, act=SUBSCRIBE))  # the distances
         team.tasks.start()
         start = time.monotonic()
+        stalled: float | None = None
         at = loop.now()
         for name in self.live:
             self._tell(name, at)
@@ -315,6 +379,16 @@ class Conductor:
                 own = loop.clock.next_due()
                 if own is not None:
                     dues.append(own)
+                missing = sorted(set(self.members) - self.live)
+                if not dues and missing:  # only a lost member can go on: wait for it
+                    if stalled is None:
+                        stalled = time.monotonic()
+                        team.record("waiting-for-members", missing=missing,
+                                    within=self.rejoin_wait)
+                    if time.monotonic() - stalled < self.rejoin_wait:
+                        port.pump(WAIT)
+                        continue
+                stalled = None
                 if not dues or min(dues) > limit:
                     break
                 if self.pace and self._paced(start + min(dues) * self.pace):

@@ -31,7 +31,8 @@ from shary.terminal import emit_json, escape
 from shary.terminal import out as _out
 from shary.timeline import render_timeline
 from shary.transport.distributed import CONDUCTOR, Participant, agent_log
-from shary.transport.zenohport import LOOPBACK, ZenohPort, session_config
+from shary.transport.logshare import Forwarder, SharedLog
+from shary.transport.zenohport import LOOPBACK, Settings, ZenohPort, session_config
 from userfiles.outputs import write_output
 
 from .run import offer_spatial, record_members, schedule_script
@@ -45,20 +46,26 @@ class WorldMember(Participant):
     Pictures go to ``logdir`` with the log (none without a folder, as in ``shary run``)."""
 
     def __init__(self, scenario: WeldScenario, *, connect: str = LOOPBACK,
-                 logdir: Path | None = None, seed: int = 0):
+                 logdir: Path | None = None, seed: int = 0, share_log: bool = True,
+                 settings: Settings | None = None):
         log = agent_log(logdir, WORLD, seed)
+        forwarder = Forwarder(WORLD) if share_log else None  # its rows to the managers too
+        writer = SharedLog(log, forwarder) if forwarder is not None else log
         loop = EventLoop(seed=seed)
         if log is not None:
             loop.idle_hooks.append(log.flush)  # the log commits before the port sends
 
         def record(kind: str, task: str | None = None, agent: str | None = None,
                    **data: Any) -> None:
-            if log is not None:
-                log.record(loop.now(), kind, task=task, agent=agent or WORLD,
+            if writer is not None:
+                writer.record(loop.now(), kind, task=task, agent=agent or WORLD,
                            **{k: v for k, v in data.items() if v is not None})
 
         port = ZenohPort(loop, record, team=scenario.team.name, name=WORLD, local=[WORLD],
-                         config=session_config(mode="client", connect=[connect]))
+                         config=session_config(mode="client", connect=[connect],
+                                               settings=settings))
+        if forwarder is not None:
+            forwarder.attach(port)
         super().__init__(WORLD, loop, port, log)
         self.site = WeldSite()
         try:
@@ -78,16 +85,17 @@ def cmd_world(args: argparse.Namespace, path: Path) -> int:
     """``shary world SCENARIO``: the scenario's world joins the team at ``--connect``."""
     import zenoh
 
-    from shary.commands.distributed import zenoh_reason
+    from shary.commands.distributed import check_there, zenoh_reason, zenoh_settings
     from shary.terminal import error
 
+    settings = zenoh_settings(args)
     scenario = load_weld_scenario(path)
     try:
         member = WorldMember(scenario, connect=args.connect, logdir=args.log_dir,
-                             seed=args.seed)
+                             seed=args.seed, share_log=args.share_log, settings=settings)
     except zenoh.ZError as exc:
-        return error(f"cannot join the team at {args.connect}: {zenoh_reason(exc)} (is `shary "
-                     "team up` running there?)")
+        return error(f"cannot join the team at {args.connect}: {zenoh_reason(exc)} "
+                     f"({check_there(args.connect)})")
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))  # close the session on a kill
     reason = member.run()
     return 0 if reason in ("done", "failed", "time is up", "stopped") else 1
