@@ -29,6 +29,7 @@ function send(message) {
   message.id = st.nextId++;
   st.ws.send(JSON.stringify(message));
 }
+st.send = send;
 
 // -- agents and their schemes --------------------------------------------------
 
@@ -253,7 +254,7 @@ function goal(id, name, args, priority, state) {
     st.goals.set(id, row);
   }
   const cells = row.children;
-  cells[0].textContent = "#" + id; cells[1].textContent = name + (args ? " (" + args + ")" : "");
+  cells[0].textContent = typeof id === "number" ? "#" + id : id; cells[1].textContent = name + (args ? " (" + args + ")" : "");
   cells[2].textContent = "priority " + priority; cells[3].textContent = state;
 }
 
@@ -377,6 +378,7 @@ const APPLY = {
   "node": node, "state": nodeState, "cut": cut, "item": item, "item-end": itemEnd,
   "goal": goal, "fact": fact, "line": line, "question": question, "question-end": questionEnd,
 };
+Object.assign(APPLY, window.sharyChanges || {});  // a team's kinds (team.js)
 
 function reset() {
   for (const id of ["agents", "tree", "lines", "facts"]) $(id).textContent = "";
@@ -387,6 +389,7 @@ function reset() {
   for (const m of ["agents", "tasks", "nodes", "items", "lanes", "goals", "facts", "questions"]) st[m].clear();
   st.open.clear();
   noneShown();
+  for (const f of window.sharyResets || []) f();
 }
 
 function receive(message) {
