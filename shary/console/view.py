@@ -21,6 +21,7 @@ Change kinds (the first item; the page's ``console.js`` applies them):
 ``item-end ID T1 CLASS``; ``goal ID NAME ARGS PRIORITY STATE``; ``fact
 PERSPECTIVE S P O ADDED``; ``line T WHO KIND TEXT``; ``question NODE ACT
 [AGENTS] [ANSWERS] IMAGE``; ``question-end NODE``; ``time T``; ``status {…}``.
+A shared plan's kinds (``plan``, ``plan-state`` …) are :mod:`shary.console.planview`'s.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from collections.abc import Callable
 from typing import Any
 
 from shary.acts import ACT_TYPES
+from shary.console.planview import PlanView
 from shary.log import LogEvent
 from shary.model import Scheme
 
@@ -62,6 +64,8 @@ class View:
         self._open_acts: dict[tuple[str, str], str] = {}
         self._entered: dict[str, str] = {}
         self._requests: dict[str, str] = {}
+        self.plans = PlanView(self)
+        """The shared plans (JAHRVIS), folded into the same changes: :mod:`.planview`."""
 
     # -- folding ------------------------------------------------------------------
 
@@ -77,9 +81,9 @@ class View:
                 handler = View._goal
             elif e.kind.startswith("fact-"):
                 handler = View._fact
-            else:
-                return out
-        handler(self, e, out)
+        if handler is not None:
+            handler(self, e, out)
+        self.plans.apply(e, out)
         return out
 
     def snapshot(self) -> list[Change]:
@@ -101,6 +105,7 @@ class View:
             out += [["fact", perspective, s, p, o, True] for s, p, o in facts]
         out += list(self.lines)
         out += list(self.questions.values())
+        out += self.plans.snapshot()
         return out
 
     # -- the agents -----------------------------------------------------------------
