@@ -71,6 +71,9 @@ class PlanView:
         self.agents: dict[str, str] = {}
         """task -> its agent (``a|b`` for an AgentX)."""
         self.prefix_of: dict[str, str] = {}
+        self.actions: dict[str, tuple[str, list[str | None]]] = {}
+        """task -> its action's name and objects (None: an open value not resolved yet),
+        what an operator's report of a human action says."""
         self.head: dict[str, Change] = {}
         self.says: dict[str, Change] = {}
         self.recognized: deque[Change] = deque(maxlen=MAX_RECOGNIZED)
@@ -107,6 +110,9 @@ class PlanView:
         decisions = {_text(d.get("id")): d for d in _list(d.get("decisions"))
                      if isinstance(d, dict)}
         rows = plan_rows(tasks)
+        for t in tasks:
+            self.actions[_text(t["id"])] = (_text(t.get("name")), [
+                None if o is None else _text(o) for o in _list(t.get("objects"))])
         for row in rows:
             task = row[0]
             self.labels[task], self.agents[task], self.prefix_of[task] = row[1], row[2], prefix
@@ -172,6 +178,14 @@ class PlanView:
         change = ["plan-status", prefix, state, text]
         self.status[prefix] = change
         out.append(change)
+
+    def _resolved(self, e: LogEvent, out: list[Change]) -> None:
+        """An AgentX's agent or a query's value chosen as its task starts."""
+        task, params = _text(e.task), [_text(p) for p in _list(e.data.get("params"))]
+        if task in self.actions and e.agent:
+            self.agents[task] = e.agent
+            objects = params[1:] if params[:1] == [e.agent] else params
+            self.actions[task] = (self.actions[task][0], list(objects))
 
     def _match(self, e: LogEvent, out: list[Change]) -> None:
         match = _text(e.data.get("match"))
@@ -263,6 +277,7 @@ def plan_rows(tasks: list[dict[str, Any]]) -> list[list[Any]]:
 _HANDLERS: dict[str, Callable[[PlanView, LogEvent, list[Any]], None]] = {
     "plan-loaded": PlanView._loaded, "plan-task": PlanView._task,
     "plan-decision": PlanView._decision, "shared-plan": PlanView._shared,
-    "plan-match": PlanView._match, "exec-request": PlanView._request,
-    "speech": PlanView._speech, "recognition": PlanView._recognition,
+    "plan-match": PlanView._match, "plan-resolve": PlanView._resolved,
+    "exec-request": PlanView._request, "speech": PlanView._speech,
+    "recognition": PlanView._recognition,
 }

@@ -362,7 +362,9 @@ def _outline(plan: SharedPlan, prefix: str, views: list[str]) -> dict[str, Any]:
 
     return {"problem": plan.problem, "prefix": prefix, "views": views,
             "tasks": [{"id": name(t.id), "label": t.label(), "agent": agent(t.agent),
-                       "kind": t.kind, "after": [name(p) for p in t.preds],
+                       "kind": t.kind, "name": t.name,
+                       "objects": [None if is_open(v) else str(v) for v in t.objects()],
+                       "after": [name(p) for p in t.preds],
                        "decision": t.decision} for t in plan.primitive.values()],
             "decisions": [{"id": d.id, "agent": d.agent, "after": name(d.after),
                            "options": [name(o) for o in d.options]}
