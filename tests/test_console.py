@@ -305,7 +305,7 @@ def test_a_live_run_logs_refusals_and_cancels_a_task(tmp_path: Path):
     events = read_events(tmp_path / "log.sqlite")
     refused = [e for e in events if e.kind == "operator-refused"]
     assert len(refused) == len(hostile) + len(refusals)
-    assert {e.agent for e in refused} == {"unknown", "ann"}
+    assert {e.agent for e in refused} == {"unknown", "ann", "op"}  # "op": the team corpus
     done = [(e.agent, e.data["action"]) for e in events if e.kind == "operator"]
     assert done == [("ann", "step"), ("ann", "speed"), ("ann", "cancel"), ("ann", "resume")]
     ends = {e.task: e.data["outcome"] for e in events if e.kind == "task-end"}

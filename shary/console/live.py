@@ -34,6 +34,7 @@ from typing import Any
 from shary.acts import ACT_TYPES, builtin_acts
 from shary.console.operator import RUN_CONTROLS
 from shary.console.ports import Feed, StatusFeed
+from shary.console.teamlive import BREAK_EVENTS, TEAM_KINDS, TeamSteering
 from shary.console.view import View
 from shary.log import LogEvent
 from shary.model import Scheme
@@ -58,15 +59,20 @@ class Attachment:
         self._seq = itertools.count(1)
 
     def attach(self, supervisor: Any) -> None:
+        """The supervisor's ports, or a team's (:class:`~shary.team.Team`: then the live
+        run's :class:`~shary.console.teamlive.TeamSteering` acts on it)."""
         self.sup = supervisor
+        if self.live.steering is not None:
+            self.live.steering.attach(supervisor)
 
     def observe(self, t: float, kind: str, task: str | None, agent: str | None,
                 data: dict[str, Any]) -> None:
         live = self.live
-        if kind == "act" and data.get("act") in live.breakpoints:
+        hit = data.get("act") if kind == "act" else kind if kind in BREAK_EVENTS else None
+        if hit is not None and hit in live.breakpoints:
             with live.lock:
                 live.paused = True
-                live.stopped_at = f"breakpoint {data.get('act')} at {t:.1f} s"
+                live.stopped_at = f"breakpoint {hit} at {t:.1f} s"
         elif kind == "plan-task" and live.plan_breaks and (
                 (data.get("state"), agent) in live.plan_breaks
                 or (data.get("state"), None) in live.plan_breaks):
@@ -88,7 +94,7 @@ class LiveRun:
 
     def __init__(self, title: str, runner: Runner, folder: Path | None, *,
                  schemes: Callable[[str], Scheme | None], speed: float = 1.0,
-                 paused: bool = False):
+                 paused: bool = False, steering: TeamSteering | None = None):
         self.title = title
         self.folder = folder
         self._runner = runner
@@ -99,6 +105,8 @@ class LiveRun:
         self.breakpoints: set[str] = set()
         self.plan_breaks: set[tuple[str, str | None]] = set()
         """(state, view) of a shared plan's tasks to pause at (view None: any)."""
+        self.steering = steering
+        """A team run's operator actions (None: a single SHARY robot's run)."""
         self.state = "waiting"
         self.verdict: dict[str, Any] | None = None
         self._commands: queue.SimpleQueue[Callable[[], None]] = queue.SimpleQueue()
@@ -153,7 +161,8 @@ class LiveRun:
             return "the run is over: nothing can be changed (open its log with --replay)"
         if self.state == "waiting":
             return "the run has not started yet"
-        refusal = self._check(message, view)
+        refusal = (self.steering.check(message, view) if self.steering is not None
+                   else self._check(message, view))
         if refusal is not None:
             return refusal
         fields = {("for_agent" if k == "agent" else k): v for k, v in message.items()
@@ -162,6 +171,9 @@ class LiveRun:
                                                         **fields))
         if kind in RUN_CONTROLS:
             self._control(kind, message)
+        elif self.steering is not None:
+            steering = self.steering
+            self._submit(lambda: steering.perform(message, by))
         elif kind in ("answer", "act"):
             self._submit(lambda: self.attachment.sup.receive_act(
                 message["agent"], message["act"], task=message.get("task")))
@@ -197,7 +209,7 @@ class LiveRun:
 
     def _check(self, message: dict[str, Any], view: View) -> str | None:
         kind = message["kind"]
-        if kind == "answer":
+        if kind == "answer" and "task" in message:
             question = view.questions.get(message["task"])
             if question is None:
                 return f"task {message['task']} asks no question now"
@@ -221,6 +233,9 @@ class LiveRun:
         elif kind in ("breakpoint", "clear-breakpoint") and "agent" in message \
                 and message["agent"] not in view.agents:
             return f"{message['agent']} is not an agent of this run"
+        elif kind in TEAM_KINDS or "question" in message:
+            return (f"{kind} acts on an HRI/OS team, and this run is one SHARY robot's "
+                    "(a team runs with 'shary serve weld-…' or 'shary serve --team FILE')")
         elif kind in ("take-control", "hand-back"):
             return ("this run has no control-authority port: a simulated SHARY robot answers "
                     "to its own supervisor only (control authority comes with HRI/OS teams)")

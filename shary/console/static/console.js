@@ -31,6 +31,7 @@ function send(message) {
   message.id = st.nextId++;
   st.ws.send(JSON.stringify(message));
 }
+st.send = send;
 
 // -- agents and their schemes --------------------------------------------------
 
@@ -255,7 +256,7 @@ function goal(id, name, args, priority, state) {
     st.goals.set(id, row);
   }
   const cells = row.children;
-  cells[0].textContent = "#" + id; cells[1].textContent = name + (args ? " (" + args + ")" : "");
+  cells[0].textContent = typeof id === "number" ? "#" + id : id; cells[1].textContent = name + (args ? " (" + args + ")" : "");
   cells[2].textContent = "priority " + priority; cells[3].textContent = state;
 }
 
@@ -379,6 +380,7 @@ const APPLY = {
   "node": node, "state": nodeState, "cut": cut, "item": item, "item-end": itemEnd,
   "goal": goal, "fact": fact, "line": line, "question": question, "question-end": questionEnd,
 };
+Object.assign(APPLY, window.sharyChanges || {});  // a team's kinds (team.js)
 
 function reset() {
   for (const id of ["agents", "tree", "lines", "facts"]) $(id).textContent = "";
@@ -390,6 +392,7 @@ function reset() {
   st.open.clear();
   noneShown();
   for (const f of HOOKS.reset) f();
+  for (const f of window.sharyResets || []) f();
 }
 
 function receive(message) {
