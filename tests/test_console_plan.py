@@ -259,3 +259,19 @@ def test_the_plan_channels_in_the_mcap_file(run_dir: Path, tmp_path: Path):
     assert [(d["state"], d["agent"], d["parameters"]) for d in got["/recognitions"]] == [
         ("started", "alice", {"Pickable": "red_cube"}),
         ("achieved", "alice", {"Pickable": "red_cube"})]
+
+
+def test_a_replan_puts_the_new_plan_beside_the_old(run_dir: Path):
+    view, _ = fold(run_dir / "log.sqlite", until=2.0)
+    out = view.apply(LogEvent(999, 2.1, "shared-plan", "n3", "pr2",
+                              {"state": "replan", "reason": "Place failed"}))
+    out += view.apply(LogEvent(1000, 2.1, "plan-loaded", "n3", "pr2", {
+        "prefix": "P-2", "problem": "stack", "views": ["pr2", "alice"],
+        "tasks": [{"id": "P-2-1", "label": "Place(pr2, red_cube, base)", "agent": "pr2",
+                   "after": []}]}))
+    assert ["plan-status", "P-1", "replan", "Place failed"] in out
+    assert ["plan-status", "P-1", "replaced", "by P-2"] in out
+    assert [c[1] for c in view.snapshot() if c[0] == "plan"] == ["P-1", "P-2"]
+    view.apply(LogEvent(1001, 3.0, "shared-plan", "n3", "pr2", {"state": "achieved"}))
+    assert view.plans.status["P-2"][2] == "achieved"
+    assert view.plans.status["P-1"][2] == "replaced"
