@@ -157,6 +157,7 @@ def live_run(path: Path, *, out: Path | None = None, seed: int = 0, snapshots: b
     """A :class:`shary.console.live.LiveRun` of a scenario file (read and checked now; run
     when the first page connects), writing its files to ``out`` (default runs/SCENARIO)."""
     from shary.console.live import LiveRun
+    from shary.console.replay import named_schemes
     from sim.run import load, run_scenario
     from sim.scenario import is_team_scenario
 
@@ -167,9 +168,11 @@ def live_run(path: Path, *, out: Path | None = None, seed: int = 0, snapshots: b
     schemes = {choice.scheme.name: choice.scheme for task in library.tasks.values()
                for choice in task.schemes}
     out = out or Path("runs") / _name_of(path)
+    builtin = named_schemes()  # the schemes the engine runs besides the tasks' (a plan's)
     return LiveRun(scenario.name, lambda attachment: run_scenario(
         path, seed=seed, out=out, snapshots=snapshots, console=attachment),
-        out, schemes=schemes.get, speed=speed, paused=paused)
+        out, schemes=lambda name: schemes.get(name) or builtin(name), speed=speed,
+        paused=paused)
 
 
 def _weld_run(path: Path, *, out: Path | None, seed: int, snapshots: bool, speed: float,

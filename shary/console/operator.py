@@ -59,6 +59,8 @@ def parse(text: str | bytes) -> dict[str, Any]:
         if error.validator == "oneOf" and not where and message.get("kind") == "answer":
             said = ("an answer gives either 'task' and 'act' (a robot's question) or "
                     "'question' and 'text' (a team's question), with 'agent'")
+        elif error.validator == "oneOf" and isinstance(error.schema, dict):
+            said = error.schema.get("description", said)  # which shapes are allowed
         raise Refused(f"{where + ': ' if where else ''}{said}"[:300], by=by, raw=shown)
     return message
 

@@ -96,6 +96,8 @@ class TeamSteering:
     # -- checks, on the server's thread -------------------------------------------------
 
     def check(self, message: dict[str, Any], view: View) -> str | None:
+        """Why a message cannot be carried out now (None: it can); the run's own controls
+        (pause, step, speed, breakpoints) are :class:`~shary.console.live.LiveRun`'s."""
         kind = message["kind"]
         team = view.team
         members = {name: change[2] for name, change in team.members.items()}
@@ -142,6 +144,8 @@ class TeamSteering:
             task = view.tasks.get(message["task"])
             if task is None or task["outcome"] is not None:
                 return f"task {message['task']} is not running"
+        else:
+            return f"{kind} is not an action on a team (it acts on a JAHRVIS shared plan)"
         return None
 
     @staticmethod

@@ -21,7 +21,8 @@ Change kinds (the first item; the page's ``console.js`` applies them):
 ``item-end ID T1 CLASS``; ``goal ID NAME ARGS PRIORITY STATE``; ``fact
 PERSPECTIVE S P O ADDED``; ``line T WHO KIND TEXT``; ``question NODE ACT
 [AGENTS] [ANSWERS] IMAGE``; ``question-end NODE``; ``time T``; ``status {…}``;
-and a team's (:mod:`shary.console.teamview`).
+and a team's (:mod:`shary.console.teamview`).  A shared plan's kinds (``plan``,
+``plan-state`` …) are :mod:`shary.console.planview`'s.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from collections.abc import Callable
 from typing import Any
 
 from shary.acts import ACT_TYPES
+from shary.console.planview import PlanView
 from shary.console.teamview import TeamView
 from shary.log import LogEvent
 from shary.model import Scheme
@@ -66,6 +68,8 @@ class View:
         self._requests: dict[str, str] = {}
         self.team = TeamView(self)
         """A team's managers and members (:mod:`shary.console.teamview`)."""
+        self.plans = PlanView(self)
+        """The shared plans (JAHRVIS), folded into the same changes: :mod:`.planview`."""
 
     # -- folding ------------------------------------------------------------------
 
@@ -81,10 +85,11 @@ class View:
                 handler = View._goal
             elif e.kind.startswith("fact-"):
                 handler = View._fact
-            else:
-                self.team.apply(e, out)
-                return out
-        handler(self, e, out)
+        if handler is not None:
+            handler(self, e, out)
+        else:
+            self.team.apply(e, out)
+        self.plans.apply(e, out)
         return out
 
     def snapshot(self) -> list[Change]:
@@ -107,6 +112,7 @@ class View:
         out += list(self.lines)
         out += list(self.questions.values())
         out += self.team.snapshot()
+        out += self.plans.snapshot()
         return out
 
     # -- the agents -----------------------------------------------------------------

@@ -16,6 +16,8 @@ const st = {
   latencies: [], applied: 0,
 };
 window.shary = st;  // read by the browser tests and the benchmark
+// what the page's other scripts (plan.js, team.js) hook into: a reset, a scheme drawn, a status
+const HOOKS = { reset: [], scheme: [], status: [] };
 
 function el(tag, cls, text) {
   const e = document.createElement(tag);
@@ -29,7 +31,6 @@ function send(message) {
   message.id = st.nextId++;
   st.ws.send(JSON.stringify(message));
 }
-st.send = send;
 
 // -- agents and their schemes --------------------------------------------------
 
@@ -378,7 +379,6 @@ const APPLY = {
   "node": node, "state": nodeState, "cut": cut, "item": item, "item-end": itemEnd,
   "goal": goal, "fact": fact, "line": line, "question": question, "question-end": questionEnd,
 };
-Object.assign(APPLY, window.sharyChanges || {});  // a team's kinds (team.js)
 
 function reset() {
   for (const id of ["agents", "tree", "lines", "facts"]) $(id).textContent = "";
@@ -389,7 +389,7 @@ function reset() {
   for (const m of ["agents", "tasks", "nodes", "items", "lanes", "goals", "facts", "questions"]) st[m].clear();
   st.open.clear();
   noneShown();
-  for (const f of window.sharyResets || []) f();
+  for (const f of HOOKS.reset) f();
 }
 
 function receive(message) {
@@ -402,6 +402,7 @@ function receive(message) {
     case "scheme":
       st.svgs[message.name] = message.svg;
       for (const t of st.tasks.values()) if (t.scheme === message.name) drawInto(t);
+      for (const f of HOOKS.scheme) f(message.name);
       break;
     case "changes":
       if (message.reset) reset();
@@ -410,6 +411,7 @@ function receive(message) {
       break;
     case "status":
       status(message.status);
+      for (const f of HOOKS.status) f(message.status);
       break;
     case "reply": {
       const r = $("reply");
@@ -441,4 +443,4 @@ $("slider").oninput = () => {
   $("slider-time").textContent = "at " + Number(slider.value).toFixed(1) + " s";
   if (seekDue === null) seekDue = setTimeout(() => { seekDue = null; send({ kind: "seek", time: Number(slider.value) }); }, 30);
 };
-connect();
+document.addEventListener("DOMContentLoaded", connect);  // after the page's other scripts (plan.js) are in

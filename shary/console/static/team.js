@@ -1,27 +1,18 @@
 // The team's part of the shary console: an HRI/OS team's members, the Task Manager's
 // table, the Resource Manager's delegations, the Interaction Manager's questions, and the
 // operator's team actions.  The change kinds are documented in shary/console/teamview.py.
-// Loaded before console.js, which applies the kinds registered here (window.sharyChanges)
-// and calls window.sharyResets when the page is rebuilt.  Text goes in through
-// textContent only.
+// Loaded after console.js: its kinds go into console.js's APPLY, its reset into HOOKS.
+// Text goes in through textContent only.
 "use strict";
 
 (() => {
-  const $ = (id) => document.getElementById(id);
   const tm = {
     members: new Map(), tasks: new Map(), questions: new Map(), robots: new Map(),
     people: new Map(),
   };
   window.sharyTeam = tm;  // read by the browser tests
 
-  function el(tag, cls, text) {
-    const e = document.createElement(tag);
-    if (cls) e.className = cls;
-    if (text !== undefined) e.textContent = text;
-    return e;
-  }
   const live = () => window.shary.mode === "live";
-  const send = (message) => window.shary.send(message);
   const humans = () => [...tm.members].filter(([, m]) => m.kind === "human").map(([n]) => n);
 
   function shown() {
@@ -315,9 +306,9 @@
 
   setInterval(() => { for (const e of tm.questions.values()) countdown(e); }, 250);
 
-  window.sharyChanges = Object.assign(window.sharyChanges || {}, {
+  Object.assign(APPLY, {
     "member": member, "team-task": teamTask, "holds": holds, "delegation": delegation,
     "tq": tq, "tq-end": tqEnd, "control": control, "assoc": assoc, "robot-break": robotBreak,
   });
-  (window.sharyResets = window.sharyResets || []).push(reset);
+  HOOKS.reset.push(reset);
 })();
