@@ -105,15 +105,22 @@ def test_the_fold_has_every_member_the_task_table_and_the_delegations(tmp_path: 
     members = [c for c in snapshot if c[0] == "member"]
     assert [c[1] for c in members] == list(team.agents)
     assert again.snapshot()[-1:] != snapshot[-1:]
+    # the log's replay shows the members in the team file's order too
+    team.log.flush()
+    for event in read_events(tmp_path / "run.sqlite"):
+        again.apply(event)
+    assert list(again.team.members) == list(team.agents)
+    assert again.team.tasks == view.team.tasks
 
 
 def test_questions_answers_control_and_associations_fold_into_changes():
     view = View(named_schemes())
     rows = [
-        (0.0, "team", None, None, {"team": "t", "members": {
-            "K-10": {"kind": "robot", "skills": ["inspect-seam"], "atomic": {"aim": ["target"]}},
-            "IVA": {"kind": "human", "skills": [], "remote": True},
-            "EVA1": {"kind": "human", "skills": ["mount-panel"]}},
+        (0.0, "team", None, None, {"team": "t", "members": [
+            {"name": "K-10", "kind": "robot", "skills": ["inspect-seam"],
+             "atomic": {"aim": ["target"]}},
+            {"name": "IVA", "kind": "human", "skills": [], "remote": True},
+            {"name": "EVA1", "kind": "human", "skills": ["mount-panel"]}],
             "tasks": [{"name": "inspect", "skill": "inspect-seam", "after": []}]}),
         (1.0, "question", "inspect", "K-10", {"question": "q3", "text": "Is this seam okay?",
                                               "question_type": "yes-no", "priority": 5,
@@ -145,7 +152,19 @@ def test_questions_answers_control_and_associations_fold_into_changes():
         assert why in steering.check({**message, **wrong}, view)
     view.apply(LogEvent(9, 4.0, "answer", "inspect", "IVA", {"question": "q3", "value": "no"}))
     assert "not open" in steering.check(message, view)
-    assert [c[0] for c in view.snapshot() if c[0].startswith("tq")] == ["tq", "tq-end"]
+    # a multiple choice and a free text question, put to EVA1
+    for i, (qid, kind, choices) in enumerate((("q5", "multiple-choice", ["P3", "P4"]),
+                                              ("q6", "free-text", []))):
+        view.apply(LogEvent(10 + i, 5.0, "question", "inspect", "K-10", {
+            "question": qid, "text": "which?", "question_type": kind, "choices": choices,
+            "to": "EVA1"}))
+    answer = {"kind": "answer", "by": "op", "agent": "EVA1"}
+    assert steering.check({**answer, "question": "q5", "text": "P4"}, view) is None
+    assert "takes one of P3, P4, not 'P9'" in steering.check(
+        {**answer, "question": "q5", "text": "P9"}, view)
+    assert steering.check({**answer, "question": "q6", "text": "the left one"}, view) is None
+    assert view.team.questions["q5"]["expires"] is None  # none said: no countdown
+    assert [c[0] for c in view.snapshot() if c[0].startswith("tq")] == ["tq", "tq-end", "tq", "tq"]
 
 
 # -- the operator's team actions ------------------------------------------------------------

@@ -54,10 +54,10 @@ def roster(team: Team) -> dict[str, Any]:
     """The ``team`` row a run records when it starts: every member (robots with the atomic
     tasks they can be teleoperated with) and every team task, so that the page shows the
     whole team and the Task Manager's whole table from the start."""
-    members: dict[str, Any] = {}
+    members: list[dict[str, Any]] = []  # a list: the file's order (a log sorts its keys)
     for name, agent in team.agents.items():
         spec = agent.spec
-        about: dict[str, Any] = {"kind": spec.kind, "skills": list(spec.skills)}
+        about: dict[str, Any] = {"name": name, "kind": spec.kind, "skills": list(spec.skills)}
         if spec.services:
             about["services"] = list(spec.services)
         if spec.remote:
@@ -67,7 +67,7 @@ def roster(team: Team) -> dict[str, Any]:
             world = set(agent.world.names())  # type: ignore[attr-defined]
             about["atomic"] = {a: list(t.params) for a, t in sup.library.atomic.items()
                                if a in world}
-        members[name] = about
+        members.append(about)
     tasks = [{"name": t.name, "skill": t.spec.skill, "after": list(t.spec.after)}
              for t in team.tasks.tasks.values()]
     return {"team": team.spec.name, "members": members, "tasks": tasks}

@@ -108,10 +108,11 @@ class TeamView:
 
     def _team(self, e: LogEvent, out: list[Change]) -> None:
         """The roster a run records when it starts (:func:`shary.console.teamlive.roster`)."""
-        for name, member in (e.data.get("members") or {}).items():
-            if isinstance(member, dict):
-                self._member(str(name), str(member.get("kind")),
-                             {k: v for k, v in member.items() if k != "kind"}, out)
+        for member in e.data.get("members") or ():
+            if isinstance(member, dict) and isinstance(member.get("name"), str):
+                self._member(member["name"], str(member.get("kind")),
+                             {k: v for k, v in member.items() if k not in ("kind", "name")},
+                             out)
         for task in e.data.get("tasks") or ():
             if isinstance(task, dict) and str(task.get("name")) not in self.tasks:
                 self._set_task(str(task.get("name")), out, skill=task.get("skill"),
@@ -276,10 +277,8 @@ class TeamView:
     # -- the site's own events ----------------------------------------------------------
 
     def _message(self, e: LogEvent, out: list[Change]) -> None:
-        kind = str(e.data.get("type", "message"))
-        label = str(e.data.get("act") or e.data.get("status") or kind)
-        self._mark(f"m{e.seq}", e.agent or "?", e.time, f"{label} → {e.data.get('to')}",
-                   "message", out)
+        # a mark without a label: messages come in bursts, and their words would overlap
+        self._mark(f"m{e.seq}", e.agent or "?", e.time, "", "message", out)
 
     def _site(self, e: LogEvent, out: list[Change]) -> None:
         self.view._line(e, "site", f"{e.data.get('what', '')}: {e.data.get('text', '')}", out)

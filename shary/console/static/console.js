@@ -192,7 +192,7 @@ function item(id, laneName, t0, label, cls) {
   rect.setAttribute("height", LANE_ROW - 3); rect.setAttribute("width", 2);
   rect.setAttribute("class", cls);
   const title = document.createElementNS(SVGNS, "title");
-  title.textContent = label + " from " + t0.toFixed(1) + " s";
+  title.textContent = (label || cls) + " from " + t0.toFixed(1) + " s";
   rect.append(title);
   const text = document.createElementNS(SVGNS, "text");
   text.setAttribute("x", x(t0) + 3); text.setAttribute("y", y + 10);
