@@ -62,10 +62,12 @@ SUITS = ((0.95, 0.95, 0.93, 1.0), (0.93, 0.55, 0.2, 1.0), (0.3, 0.55, 0.9, 1.0))
 
 def run_weld(path: str | Path, *, seed: int = 0, out: str | Path | None = None,
              snapshots: bool = False, gui: bool = False,
-             report: Report | None = None) -> RunResult:
+             report: Report | None = None, console: Any = None) -> RunResult:
     """Run one seam-welding scenario (see the module's docstring).  Pictures from K-10's
     camera are written whenever there is an output folder (they go with its questions);
-    ``snapshots`` adds a view of the whole site at the end."""
+    ``snapshots`` adds a view of the whole site at the end.  ``console`` (a
+    :class:`shary.console.live.Attachment`) is given the team, sees every logged event and
+    is called between two steps of the clock, as in :func:`sim.run.run_scenario`."""
     scenario = load_weld_scenario(path)
     out_dir = Path(out) if out is not None else None
     log_path = None
@@ -79,7 +81,7 @@ def run_weld(path: str | Path, *, seed: int = 0, out: str | Path | None = None,
     with WeldSite(gui=gui) as site:
         log: Any = ContextLog(log_path, seed=seed) if log_path is not None else _Rows()
         try:
-            run = _WeldRun(scenario, site, _Told(log, story), seed, out_dir,
+            run = _WeldRun(scenario, site, _Told(log, story, console), seed, out_dir,
                            views=snapshots)
             setup = time.perf_counter() - wall
             wall = time.perf_counter()
@@ -132,9 +134,10 @@ class _Rows:
 class _Told:
     """The context log, each event also told to the story (and to ``watchers``)."""
 
-    def __init__(self, log: Any, story: TeamStory):
+    def __init__(self, log: Any, story: TeamStory, console: Any = None):
         self.log = log
         self.story = story
+        self.console = console
         self.watchers: list[Any] = []
         if hasattr(log, "path"):
             self.path = log.path  # the Context Manager reads the log's file
@@ -143,6 +146,8 @@ class _Told:
                agent: str | None = None, **data: Any) -> int:
         row = self.log.record(t, kind, task=task, agent=agent, **data)
         self.story.event(t, kind, agent, data, task)
+        if self.console is not None:
+            self.console.observe(t, kind, task, agent, data)
         for watcher in self.watchers:
             watcher(kind, agent, task)
         return row
@@ -251,16 +256,24 @@ class _WeldRun:
 
     def go(self) -> float:
         """Run until the goal is over and nothing moves; the simulated time at the end."""
+        from shary.console.teamlive import roster
+
+        console = self.log.console
+        self.team.record("team", **roster(self.team))
         for member in self.scenario.team.agents.values():
             if member.kind != "software":  # each a lane of the timeline, in the file's order
                 self.team.record("member", agent=member.name, member_kind=member.kind,
                                  skills=list(member.skills), remote=member.remote or None)
+        if console is not None:
+            console.attach(self.team)
         self.team.start()
         timeout = self.scenario.timeout
         while self.loop.now() < timeout - 1e-9:
             self.loop.advance(min(CHUNK, timeout - self.loop.now()))
             if self.site.gui:
                 time.sleep(CHUNK)
+            if console is not None:  # pause, step, speed and the operator's commands
+                console.between(self.loop.now())
             if self.team.tasks.outcome is not None and not self.sim.busy \
                     and self.loop.clock.next_due() is None:
                 break
@@ -399,7 +412,7 @@ class _Light:
         self.meanings[qid] = dict(data.get("answers") or {})
         self.team.record("question", task=request.node, agent=self.robot, question=qid,
                          text=data.get("question"), question_type="multiple-choice",
-                         choices=list(choices), to=speaker)
+                         choices=list(choices), to=speaker, expires=ASK_SPEAKER_FOR)
         self.team.port.send(Question(self.address, speaker, id=qid,
                                      text=str(data.get("question")), type="multiple-choice",
                                      choices=choices, expires=ASK_SPEAKER_FOR,
