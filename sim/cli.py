@@ -104,7 +104,10 @@ def add_serve(sub: argparse._SubParsersAction) -> None:
                        "browser (the operator console)")
     p.add_argument("scenario", nargs="?", metavar="NAME|FILE",
                    help="a built-in scenario (see 'shary scenarios') or a scenario file, "
-                   "run live when the first page connects")
+                   "run live when the first page connects (weld-…: a team on its site)")
+    p.add_argument("--team", type=Path, metavar="TEAM.yaml",
+                   help="run a team file alone instead (people and software agents; "
+                   "robots need a seam-welding scenario's site)")
     p.add_argument("--replay", type=Path, metavar="LOG",
                    help="replay a recorded run (its log.sqlite) with a time slider instead")
     p.add_argument("--host", default="127.0.0.1", metavar="ADDR",
@@ -125,8 +128,8 @@ def add_serve(sub: argparse._SubParsersAction) -> None:
 def cmd_serve(args: argparse.Namespace) -> int:
     from shary.console.server import serve
 
-    if (args.scenario is None) == (args.replay is None):
-        return error("give a scenario to run, or --replay LOG (one of the two)")
+    if [args.scenario, args.replay, args.team].count(None) != 2:
+        return error("give a scenario to run, --team TEAM.yaml or --replay LOG (one of them)")
     if not 0 < args.port < 65536:
         return error(f"--port {args.port}: a port is a number from 1 to 65535")
     if not 0 <= args.speed <= 1000:
@@ -135,15 +138,16 @@ def cmd_serve(args: argparse.Namespace) -> int:
         from shary.console.replay import Replay, named_schemes
 
         return serve(Replay(args.replay, named_schemes()), args.host, args.port)
-    from sim.scenario import find_scenario, is_team_scenario
+    if args.team is not None:
+        live = team_run(args.team, out=args.out, seed=args.seed, speed=args.speed,
+                        paused=args.paused)
+        return live if isinstance(live, int) else serve(live, args.host, args.port)
+    from sim.scenario import find_scenario
 
     try:
         path = find_scenario(args.scenario)
     except KeyError as err:
         return error(err.args[0])
-    if is_team_scenario(path):
-        return error(f"{args.scenario}: a team scenario; the console shows one SHARY robot's "
-                     "run for now (teams come with HRI/OS's views): 'shary run' runs it")
     live = live_run(path, out=args.out, seed=args.seed, snapshots=args.snapshots,
                     speed=args.speed, paused=args.paused)
     return serve(live, args.host, args.port)
@@ -154,15 +158,59 @@ def live_run(path: Path, *, out: Path | None = None, seed: int = 0, snapshots: b
     """A :class:`shary.console.live.LiveRun` of a scenario file (read and checked now; run
     when the first page connects), writing its files to ``out`` (default runs/SCENARIO)."""
     from shary.console.live import LiveRun
+    from shary.console.replay import named_schemes
     from sim.run import load, run_scenario
+    from sim.scenario import is_team_scenario
 
+    if is_team_scenario(path):
+        return _weld_run(path, out=out, seed=seed, snapshots=snapshots, speed=speed,
+                         paused=paused)
     scenario, library, _ = load(path)  # a bad file is refused here, before serving
     schemes = {choice.scheme.name: choice.scheme for task in library.tasks.values()
                for choice in task.schemes}
     out = out or Path("runs") / _name_of(path)
+    builtin = named_schemes()  # the schemes the engine runs besides the tasks' (a plan's)
     return LiveRun(scenario.name, lambda attachment: run_scenario(
         path, seed=seed, out=out, snapshots=snapshots, console=attachment),
-        out, schemes=schemes.get, speed=speed, paused=paused)
+        out, schemes=lambda name: schemes.get(name) or builtin(name), speed=speed,
+        paused=paused)
+
+
+def _weld_run(path: Path, *, out: Path | None, seed: int, snapshots: bool, speed: float,
+              paused: bool) -> Any:
+    """A team on the seam-welding site, live (:func:`sim.weld.run.run_weld` with the console)."""
+    from shary.console.live import LiveRun
+    from shary.console.teamlive import TeamSteering
+    from shary.team.teamfile import robot_library
+    from sim.weld.run import run_weld
+    from sim.weld.scenario import load_weld_scenario
+
+    scenario = load_weld_scenario(path)  # a bad file is refused here, before serving
+    library = robot_library(scenario.team)
+    schemes = {choice.scheme.name: choice.scheme for task in library.tasks.values()
+               for choice in task.schemes}
+    out = out or Path("runs") / _name_of(path)
+    return LiveRun(scenario.name, lambda attachment: run_weld(
+        path, seed=seed, out=out, snapshots=snapshots, console=attachment),
+        out, schemes=schemes.get, speed=speed, paused=paused, steering=TeamSteering())
+
+
+def team_run(path: Path, *, out: Path | None = None, seed: int = 0, speed: float = 1.0,
+             paused: bool = False) -> Any:
+    """A team file run alone under the console (people and software agents), or the exit
+    status of a refusal: a team with robots needs a world."""
+    from shary.console.live import LiveRun
+    from shary.console.teamlive import TeamSteering, refuse_robots, run_team
+    from shary.team import load_team
+
+    spec = load_team(path)
+    refusal = refuse_robots(spec)
+    if refusal is not None:
+        return error(f"{path}: {refusal}")
+    out = out or Path("runs") / spec.name
+    return LiveRun(spec.name, lambda attachment: run_team(spec, attachment, out=out, seed=seed),
+                   out, schemes=lambda name: None, speed=speed, paused=paused,
+                   steering=TeamSteering())
 
 
 def add_team(sub: argparse._SubParsersAction) -> None:

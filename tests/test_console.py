@@ -257,7 +257,8 @@ def test_export_and_replay_refuse_a_hostile_log(log: Path, tmp_path: Path):
 
 def test_serve_refuses_bad_arguments():
     for argv in (("serve",), ("serve", "give-bottle", "--replay", "x.sqlite"),
-                 ("serve", "give-bottle", "--port", "70000"), ("serve", "weld-nominal")):
+                 ("serve", "give-bottle", "--port", "70000"), ("serve", "no-such-scenario"),
+                 ("serve", "give-bottle", "--speed", "-1")):  # (a team scenario is served now)
         outcome = run_inprocess(*argv)
         assert outcome.status == 2 and "Traceback" not in outcome.err, argv
 

@@ -11,7 +11,9 @@ and ended), ``/facts`` (each perspective's additions and removals),
 (each task's active scheme states after every transition), ``/log`` (the
 console's act/action lines as ``foxglove.Log``, for the Log panel),
 ``/snapshots`` (the run's PNG views as ``foxglove.CompressedImage``, for the
-Image panel) and ``/events`` (every event of the log, as it is).
+Image panel), ``/plan-tasks`` (a shared plan's task states, per view: the
+robot's and each human's as the robot estimates it), ``/recognitions`` (the
+recognized human actions) and ``/events`` (every event of the log, as it is).
 
 Times are the run's engine seconds from zero (a viewer shows them as
 1970-01-01 plus the run's time).  The configurations and lines come from the
@@ -32,6 +34,8 @@ from shary.console.ports import run_file
 from shary.console.replay import named_schemes
 from shary.console.view import View
 from shary.log import LogEvent, stream_events
+from shary.plans.states import STATES as TASK_STATES
+from shary.recognition.recognizer import STATES as RECOGNITION_STATES
 from shary.terminal import add_json_flag, emit_json
 from shary.terminal import out as _out
 from userfiles.outputs import open_output, output_file
@@ -64,6 +68,15 @@ SCHEMAS: dict[str, tuple[str, dict[str, Any]]] = {
     "/snapshots": ("foxglove.CompressedImage", _obj(
         timestamp=_TIME, frame_id=_STRING, format=_STRING,
         data={"type": "string", "contentEncoding": "base64"})),
+    "/plan-tasks": ("shary.PlanTaskState", _obj(
+        time=_NUMBER, task=_STRING, name=_STRING, view=_STRING,
+        state={"enum": list(TASK_STATES)}, estimate={"type": "boolean"}, event=_STRING,
+        reason=_STRING)),
+    "/recognitions": ("shary.Recognition", _obj(
+        time=_NUMBER, action=_STRING, action_class=_STRING, agent=_STRING,
+        parameters={"type": "object", "additionalProperties": {"type": ["string", "null"]}},
+        state={"enum": list(RECOGNITION_STATES)}, candidate=_STRING, cause=_STRING,
+        fact=_STRING)),
     "/events": ("shary.Event", _obj(seq={"type": "integer"}, time=_NUMBER, kind=_STRING,
                                     task={"type": ["string", "null"]},
                                     agent={"type": ["string", "null"]}, data={"type": "object"})),
@@ -159,6 +172,20 @@ def _messages(e: LogEvent, folder: Path,
     elif e.kind == "node-removed":
         put("/tree", e.time, {"time": e.time, "change": "cut", "node": e.task or "",
                               "nodes": [str(n) for n in d.get("nodes") or ()]})
+    elif e.kind == "plan-task" and d.get("state") in TASK_STATES:
+        put("/plan-tasks", e.time, {"time": e.time, "task": e.task or "",
+                                    "name": str(d.get("name") or ""), "view": e.agent or "",
+                                    "state": d["state"], "estimate": bool(d.get("estimate")),
+                                    "event": str(d.get("event") or ""),
+                                    "reason": str(d.get("reason") or "")})
+    elif e.kind == "recognition" and d.get("state") in RECOGNITION_STATES:
+        params = d.get("params") if isinstance(d.get("params"), dict) else {}
+        put("/recognitions", e.time, {
+            "time": e.time, "action": str(d.get("action")),
+            "action_class": str(d.get("action_class") or ""), "agent": e.agent or "",
+            "parameters": {str(k): None if v is None else str(v) for k, v in params.items()},
+            "state": d["state"], "candidate": str(d.get("candidate") or ""),
+            "cause": str(d.get("cause") or ""), "fact": str(d.get("fact") or "")})
     elif e.kind == "snapshot":
         image = run_file(folder, d.get("file"))
         if image is not None:

@@ -34,6 +34,7 @@ from typing import Any
 from shary.acts import ACT_TYPES, builtin_acts
 from shary.console.operator import RUN_CONTROLS
 from shary.console.ports import Feed, StatusFeed
+from shary.console.teamlive import BREAK_EVENTS, TEAM_KINDS, TeamSteering
 from shary.console.view import View
 from shary.log import LogEvent
 from shary.model import Scheme
@@ -58,15 +59,27 @@ class Attachment:
         self._seq = itertools.count(1)
 
     def attach(self, supervisor: Any) -> None:
+        """The supervisor's ports, or a team's (:class:`~shary.team.Team`: then the live
+        run's :class:`~shary.console.teamlive.TeamSteering` acts on it)."""
         self.sup = supervisor
+        if self.live.steering is not None:
+            self.live.steering.attach(supervisor)
 
     def observe(self, t: float, kind: str, task: str | None, agent: str | None,
                 data: dict[str, Any]) -> None:
         live = self.live
-        if kind == "act" and data.get("act") in live.breakpoints:
+        hit = data.get("act") if kind == "act" else kind if kind in BREAK_EVENTS else None
+        if hit is not None and hit in live.breakpoints:
             with live.lock:
                 live.paused = True
-                live.stopped_at = f"breakpoint {data.get('act')} at {t:.1f} s"
+                live.stopped_at = f"breakpoint {hit} at {t:.1f} s"
+        elif kind == "plan-task" and live.plan_breaks and (
+                (data.get("state"), agent) in live.plan_breaks
+                or (data.get("state"), None) in live.plan_breaks):
+            with live.lock:
+                live.paused = True
+                live.stopped_at = (f"breakpoint {data.get('state')}: {data.get('name')} in "
+                                   f"{agent}'s view at {t:.1f} s")
         live.post(live.feed, LogEvent(next(self._seq), t, kind, task, agent, dict(data)))
 
     def between(self, now: float) -> None:
@@ -81,7 +94,7 @@ class LiveRun:
 
     def __init__(self, title: str, runner: Runner, folder: Path | None, *,
                  schemes: Callable[[str], Scheme | None], speed: float = 1.0,
-                 paused: bool = False):
+                 paused: bool = False, steering: TeamSteering | None = None):
         self.title = title
         self.folder = folder
         self._runner = runner
@@ -90,6 +103,10 @@ class LiveRun:
         self.paused = paused
         self.stopped_at = "paused at the start: press Resume" if paused else ""
         self.breakpoints: set[str] = set()
+        self.plan_breaks: set[tuple[str, str | None]] = set()
+        """(state, view) of a shared plan's tasks to pause at (view None: any)."""
+        self.steering = steering
+        """A team run's operator actions (None: a single SHARY robot's run)."""
         self.state = "waiting"
         self.verdict: dict[str, Any] | None = None
         self._commands: queue.SimpleQueue[Callable[[], None]] = queue.SimpleQueue()
@@ -124,6 +141,7 @@ class LiveRun:
         state = "paused" if self.paused and self.state == "running" else self.state
         return {"mode": self.mode, "state": state, "speed": self.speed,
                 "breakpoints": sorted(self.breakpoints), "why": self.stopped_at,
+                "plan_breakpoints": sorted([s, v] for s, v in self.plan_breaks),
                 "verdict": self.verdict}
 
     def tell(self) -> None:
@@ -143,7 +161,9 @@ class LiveRun:
             return "the run is over: nothing can be changed (open its log with --replay)"
         if self.state == "waiting":
             return "the run has not started yet"
-        refusal = self._check(message, view)
+        refusal = (self.steering.check(message, view)
+                   if self.steering is not None and kind not in RUN_CONTROLS
+                   else self._check(message, view))
         if refusal is not None:
             return refusal
         fields = {("for_agent" if k == "agent" else k): v for k, v in message.items()
@@ -152,13 +172,27 @@ class LiveRun:
                                                         **fields))
         if kind in RUN_CONTROLS:
             self._control(kind, message)
+        elif self.steering is not None:
+            steering = self.steering
+            self._submit(lambda: steering.perform(message, by))
         elif kind in ("answer", "act"):
             self._submit(lambda: self.attachment.sup.receive_act(
                 message["agent"], message["act"], task=message.get("task")))
         elif kind == "cancel":
             self._submit(lambda: self.attachment.sup.cancel_task(
                 message["task"], f"cancelled by the operator {by}"))
+        elif kind == "human-action":
+            name, objects = view.plans.actions[message["plan_task"]]
+            self._submit(lambda: self._report(message["agent"], name, objects, by))
         return None
+
+    def _report(self, agent: str, action: str, objects: list[Any], by: str) -> None:
+        """An operator's report of a person's action, through the recognizer's port."""
+        try:
+            self.attachment.sup.recognizer.report(agent, action, objects, by)
+        except (AttributeError, ValueError) as err:
+            self.attachment.sup.record("operator-refused", agent=by, action="human-action",
+                                       reason=str(err))
 
     def refused(self, by: str, action: str, reason: str) -> None:
         if self.state == "running":
@@ -176,7 +210,7 @@ class LiveRun:
 
     def _check(self, message: dict[str, Any], view: View) -> str | None:
         kind = message["kind"]
-        if kind == "answer":
+        if kind == "answer" and "task" in message:
             question = view.questions.get(message["task"])
             if question is None:
                 return f"task {message['task']} asks no question now"
@@ -195,6 +229,14 @@ class LiveRun:
             task = view.tasks.get(message["task"])
             if task is None or task["outcome"] is not None:
                 return f"task {message['task']} is not running"
+        elif kind == "human-action":
+            return _check_report(message, view)
+        elif kind in ("breakpoint", "clear-breakpoint") and "agent" in message \
+                and message["agent"] not in view.agents:
+            return f"{message['agent']} is not an agent of this run"
+        elif kind in TEAM_KINDS or "question" in message:
+            return (f"{kind} acts on an HRI/OS team, and this run is one SHARY robot's "
+                    "(a team runs with 'shary serve weld-…' or 'shary serve --team FILE')")
         elif kind in ("take-control", "hand-back"):
             return ("this run has no control-authority port: a simulated SHARY robot answers "
                     "to its own supervisor only (control authority comes with HRI/OS teams)")
@@ -212,6 +254,10 @@ class LiveRun:
                 self.paused, self._step, self.stopped_at = True, True, "stepping"
             elif kind == "speed":
                 self.speed, self._pace = float(message["value"]), None
+            elif kind == "breakpoint" and "state" in message:
+                self.plan_breaks.add((message["state"], message.get("agent")))
+            elif kind == "clear-breakpoint" and "state" in message:
+                self.plan_breaks.discard((message["state"], message.get("agent")))
             elif kind == "breakpoint":
                 self.breakpoints.add(message["act"])
             elif kind == "clear-breakpoint":
@@ -282,3 +328,23 @@ class LiveRun:
             except (KeyError, ValueError) as err:  # e.g. the task ended meanwhile
                 print(f"console: an operator's command failed: {err}", file=sys.stderr)
 
+
+DUE = ("TODO", "ONGOING", "NOT_STARTING", "NOT_FINISHED")
+"""A shared plan's task states (in the robot's view) in which its agent may be doing it."""
+
+
+def _check_report(message: dict[str, Any], view: View) -> str | None:
+    """Whether an operator may report that a person did a task of the plan: a task of
+    the plan, theirs, due now, with its values known."""
+    plans, task, agent = view.plans, message["plan_task"], message["agent"]
+    if task not in plans.actions:
+        return f"{task} is not a task of a shared plan of this run"
+    if agent not in plans.agents.get(task, "").split("|"):
+        return f"{task} is {plans.agents.get(task) or 'nobody'}'s to do, not {agent}'s"
+    robot = plans.views(task)[0] if plans.views(task) else ""
+    state = plans.states.get((task, robot), "PLANNED")
+    if state not in DUE:
+        return f"{plans.labels.get(task, task)} is {state}, not due: nothing to report"
+    if None in plans.actions[task][1]:
+        return f"{plans.labels.get(task, task)} has values not chosen yet"
+    return None

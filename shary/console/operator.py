@@ -55,7 +55,13 @@ def parse(text: str | bytes) -> dict[str, Any]:
     error = best_match(validator().iter_errors(message))
     if error is not None:
         where = "/".join(map(str, error.absolute_path))
-        raise Refused(f"{where + ': ' if where else ''}{error.message}"[:300], by=by, raw=shown)
+        said = error.message
+        if error.validator == "oneOf" and not where and message.get("kind") == "answer":
+            said = ("an answer gives either 'task' and 'act' (a robot's question) or "
+                    "'question' and 'text' (a team's question), with 'agent'")
+        elif error.validator == "oneOf" and isinstance(error.schema, dict):
+            said = error.schema.get("description", said)  # which shapes are allowed
+        raise Refused(f"{where + ': ' if where else ''}{said}"[:300], by=by, raw=shown)
     return message
 
 

@@ -52,12 +52,13 @@ class RunPort(Protocol):
         """The server is stopping: stop the run, keep what it logged."""
 
 
-SNAPSHOT = re.compile(r"^snapshot-[A-Za-z0-9._-]{1,200}\.png$")
-"""The names of a run's snapshots, the only files of its folder the console reads."""
+SNAPSHOT = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,200}\.png$")
+"""The names of a run's pictures (``snapshot-….png``, a team robot's camera ``k-10-01-….png``),
+the only files of its folder the console reads."""
 
 
 def run_file(folder: Path | None, name: object) -> Path | None:
-    """A snapshot of the run's folder by name; None for anything else: no path, no other
+    """A picture of the run's folder by name; None for anything else: no path, no other
     file, no link that leads out of the folder."""
     if folder is None or not isinstance(name, str) or not SNAPSHOT.match(name):
         return None

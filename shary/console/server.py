@@ -77,8 +77,7 @@ class Hub:
             return
         self._pending += changes
         for change in changes:
-            if change[0] == "task":
-                self._draw(change[4])
+            self._draw_for(change)
         if not self._flush_due:
             self._flush_due = True
             asyncio.get_running_loop().call_soon(self._flush)
@@ -103,6 +102,13 @@ class Hub:
                 out.put_nowait("")  # the page's sender stops
             else:
                 out.put_nowait(text)
+
+    def _draw_for(self, change: Change) -> None:
+        """Draw the scheme a change shows: a task's, or a shared plan's task states."""
+        if change[0] == "task":
+            self._draw(change[4])
+        elif change[0] == "plan":
+            self._draw(change[3])
 
     def _draw(self, name: str) -> None:
         """Draw a scheme once, off the loop (``dot`` takes a while), then send it."""
@@ -142,8 +148,7 @@ class Hub:
                    else self.view.snapshot())
         if self.port.mode == "replay":
             for change in changes:
-                if change[0] == "task":
-                    self._draw(change[4])
+                self._draw_for(change)
         out.put_nowait(_encode({"type": "changes", "reset": True, "changes": changes}))
         if self._status:
             out.put_nowait(_encode({"type": "status", "status": self._status}))

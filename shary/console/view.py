@@ -20,7 +20,9 @@ Change kinds (the first item; the page's ``console.js`` applies them):
 ``state ID STATE``; ``cut [IDS]``; ``item ID LANE T0 LABEL CLASS``;
 ``item-end ID T1 CLASS``; ``goal ID NAME ARGS PRIORITY STATE``; ``fact
 PERSPECTIVE S P O ADDED``; ``line T WHO KIND TEXT``; ``question NODE ACT
-[AGENTS] [ANSWERS] IMAGE``; ``question-end NODE``; ``time T``; ``status {…}``.
+[AGENTS] [ANSWERS] IMAGE``; ``question-end NODE``; ``time T``; ``status {…}``;
+and a team's (:mod:`shary.console.teamview`).  A shared plan's kinds (``plan``,
+``plan-state`` …) are :mod:`shary.console.planview`'s.
 """
 
 from __future__ import annotations
@@ -30,6 +32,8 @@ from collections.abc import Callable
 from typing import Any
 
 from shary.acts import ACT_TYPES
+from shary.console.planview import PlanView
+from shary.console.teamview import TeamView
 from shary.log import LogEvent
 from shary.model import Scheme
 
@@ -53,7 +57,7 @@ class View:
         self.tasks: dict[str, dict[str, Any]] = {}
         self.nodes: dict[str, list[Any]] = {}
         self.items: dict[str, list[Any]] = {}
-        self.goals: dict[int, list[Any]] = {}
+        self.goals: dict[int | str, list[Any]] = {}
         self.facts: dict[str, dict[tuple[str, str, str], None]] = {}
         self.lines: deque[Change] = deque(maxlen=MAX_LINES)
         self.questions: dict[str, Change] = {}
@@ -62,6 +66,10 @@ class View:
         self._open_acts: dict[tuple[str, str], str] = {}
         self._entered: dict[str, str] = {}
         self._requests: dict[str, str] = {}
+        self.team = TeamView(self)
+        """A team's managers and members (:mod:`shary.console.teamview`)."""
+        self.plans = PlanView(self)
+        """The shared plans (JAHRVIS), folded into the same changes: :mod:`.planview`."""
 
     # -- folding ------------------------------------------------------------------
 
@@ -77,9 +85,11 @@ class View:
                 handler = View._goal
             elif e.kind.startswith("fact-"):
                 handler = View._fact
-            else:
-                return out
-        handler(self, e, out)
+        if handler is not None:
+            handler(self, e, out)
+        else:
+            self.team.apply(e, out)
+        self.plans.apply(e, out)
         return out
 
     def snapshot(self) -> list[Change]:
@@ -101,6 +111,8 @@ class View:
             out += [["fact", perspective, s, p, o, True] for s, p, o in facts]
         out += list(self.lines)
         out += list(self.questions.values())
+        out += self.team.snapshot()
+        out += self.plans.snapshot()
         return out
 
     # -- the agents -----------------------------------------------------------------
@@ -271,6 +283,8 @@ class View:
         goal_id = e.data.get("goal")
         if not isinstance(goal_id, int):
             return
+        if self.team.active and e.agent:  # each robot of a team has its own agenda
+            goal_id = f"{e.agent} #{goal_id}"
         goal = self.goals.get(goal_id)
         if goal is None:
             args = e.data.get("args") or {}

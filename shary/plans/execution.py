@@ -83,8 +83,11 @@ class PlanFollower:
         self._nodes: dict[int, str] = {}
         self._abstract_nodes: dict[int, str] = {}
         names = {t.id: t.label() for t in plan.primitive.values()}
+        prefix = f"{self.name}-{self.generation}"
+        self.sup.record("plan-loaded", task=self.root, agent=self.sup.robot,
+                        **_outline(plan, prefix, [self.sup.robot, *self.humans]))
         self.states = TaskStates(self.sup, [self.sup.robot, *self.humans], names,
-                                 prefix=f"{self.name}-{self.generation}",
+                                 prefix=prefix,
                                  changed=self._changed)
         self.beliefs = HumanBeliefs(self)
 
@@ -344,3 +347,25 @@ class PlanFollower:
         """Asked for their task, ``human`` never attended: the shared plan fails."""
         self._finish("failed", f"{human} is not there to do "
                                f"{self.plan.primitive[task].label()}")
+
+
+def _outline(plan: SharedPlan, prefix: str, views: list[str]) -> dict[str, Any]:
+    """The plan as the context log keeps it (a ``plan-loaded`` row), so that a reader of
+    the log (the console, its replay) can show the whole plan before any task changes:
+    each task with its agent and what it follows, and each human decision's options.
+    Task ids are those of the ``plan-task`` rows (``PREFIX-ID``)."""
+    def name(task: int | None) -> str | None:
+        return None if task is None else f"{prefix}-{task}"
+
+    def agent(value: Any) -> str:
+        return "|".join(map(str, value.get("any-of", ()))) if is_open(value) else str(value)
+
+    return {"problem": plan.problem, "prefix": prefix, "views": views,
+            "tasks": [{"id": name(t.id), "label": t.label(), "agent": agent(t.agent),
+                       "kind": t.kind, "name": t.name,
+                       "objects": [None if is_open(v) else str(v) for v in t.objects()],
+                       "after": [name(p) for p in t.preds],
+                       "decision": t.decision} for t in plan.primitive.values()],
+            "decisions": [{"id": d.id, "agent": d.agent, "after": name(d.after),
+                           "options": [name(o) for o in d.options]}
+                          for d in plan.decisions.values()]}

@@ -137,6 +137,7 @@ class Recognizer:
         self.achieved: list[Recognition] = []
         """Every achievement so far, in order (the paper's *possibly achieved* list)."""
         self._store = FactMemory()
+        self._reports = 0
         # (predicate, change) -> (side, class) -> triggers: an effect or move is looked up
         # by the class of the entity in its non-agent role (side 0: subject, 1: object;
         # None: the fact names the agent alone), so that with a model per kind of object
@@ -514,6 +515,29 @@ class Recognizer:
         kept = max(forget, self._recent)
         for name, done in self._done.items():
             self._done[name] = [(b, t) for b, t in done if now - t <= kept]
+
+    def report(self, agent: str, action: str, objects: list[Any], by: str) -> Recognition:
+        """A person's action that someone saw, not the perception: an operator standing in
+        for it (a Wizard-of-Oz study, an action the sensors cannot see).  Achieved at once,
+        logged like any recognition (cause ``reported by BY``) and given to the listeners
+        (the human plan manager matches it to the plan).  ``action`` is any name of the
+        action's class (a planner's ``Place``), ``objects`` fill its roles in order; a
+        ValueError says when no human action model is that action."""
+        ontology = self.models.ontology
+        cls = ontology.action_class(action)
+        model = next((m for m in self.models.human.values()
+                      if cls is not None and ontology.action_class(m.name) == cls), None)
+        if model is None:
+            raise ValueError(f"no human action model is {action!r}")
+        roles = {p.role: o for p, o in zip(ontology.parameters(cls), objects, strict=False)}
+        now = self.clock()
+        self._reports += 1
+        candidate = Candidate(f"reported-{self._reports}", model,
+                              {model.agent: agent, **{role: roles.get(role)
+                                                      for role, _ in model.params}},
+                              "achieved", now, now)
+        self._emit(candidate, f"reported by {by}", None, now)
+        return self.achieved[-1]
 
     def _emit(self, candidate: Candidate, cause: str, fact: Fact | None, now: float) -> None:
         model = candidate.model

@@ -26,7 +26,7 @@ from typing import Any
 from shary.facts import FactDatabase
 from shary.log import merged_events
 from shary.loop import EventLoop
-from shary.team.world import WORLD
+from shary.team.world import WORLD, connect_world
 from shary.terminal import emit_json, escape
 from shary.terminal import out as _out
 from shary.timeline import render_timeline
@@ -110,6 +110,7 @@ def team_up_scenario(args: argparse.Namespace, path: Path) -> int:
 
     def prepare(conductor: Any) -> None:
         team = conductor.team
+        connect_world(team)  # the managers' view: the robots' executors are the world's
         record_members(team)
         offer_spatial(team)
         schedule_script(team, scenario)

@@ -50,10 +50,12 @@ VIEWED = ("question", "answer", "respawn", "associate", "release", "control", "s
 
 def run_weld(path: str | Path, *, seed: int = 0, out: str | Path | None = None,
              snapshots: bool = False, gui: bool = False,
-             report: Report | None = None) -> RunResult:
+             report: Report | None = None, console: Any = None) -> RunResult:
     """Run one seam-welding scenario (see the module's docstring).  Pictures from K-10's
     camera are written whenever there is an output folder (they go with its questions);
-    ``snapshots`` adds a view of the whole site at the end."""
+    ``snapshots`` adds a view of the whole site at the end.  ``console`` (a
+    :class:`shary.console.live.Attachment`) is given the team, sees every logged event and
+    is called between two steps of the clock, as in :func:`sim.run.run_scenario`."""
     scenario = load_weld_scenario(path)
     out_dir = Path(out) if out is not None else None
     log_path = None
@@ -67,7 +69,7 @@ def run_weld(path: str | Path, *, seed: int = 0, out: str | Path | None = None,
     with WeldSite(gui=gui) as site:
         log: Any = ContextLog(log_path, seed=seed) if log_path is not None else _Rows()
         try:
-            run = _WeldRun(scenario, site, _Told(log, story), seed, out_dir,
+            run = _WeldRun(scenario, site, _Told(log, story, console), seed, out_dir,
                            views=snapshots)
             setup = time.perf_counter() - wall
             wall = time.perf_counter()
@@ -106,8 +108,11 @@ def offer_spatial(team: Team) -> None:
 
 
 def record_members(team: Team) -> None:
-    """A ``member`` row per agent that acts: each a lane of the timeline, in the file's
-    order."""
+    """The team's roster (``team``: what the console shows of it), and a ``member`` row
+    per agent that acts: each a lane of the timeline, in the file's order."""
+    from shary.console.teamlive import roster
+
+    team.record("team", **roster(team))
     for member in team.spec.agents.values():
         if member.kind != "software":
             team.record("member", agent=member.name, member_kind=member.kind,
@@ -152,9 +157,10 @@ class _Rows:
 class _Told:
     """The context log, each event also told to the story (and to ``watchers``)."""
 
-    def __init__(self, log: Any, story: TeamStory):
+    def __init__(self, log: Any, story: TeamStory, console: Any = None):
         self.log = log
         self.story = story
+        self.console = console
         self.watchers: list[Any] = []
         if hasattr(log, "path"):
             self.path = log.path  # the Context Manager reads the log's file
@@ -163,6 +169,8 @@ class _Told:
                agent: str | None = None, **data: Any) -> int:
         row = self.log.record(t, kind, task=task, agent=agent, **data)
         self.story.event(t, kind, agent, data, task)
+        if self.console is not None:
+            self.console.observe(t, kind, task, agent, data)
         for watcher in self.watchers:
             watcher(kind, agent, task)
         return row
@@ -198,13 +206,18 @@ class _WeldRun:
 
     def go(self) -> float:
         """Run until the goal is over and nothing moves; the simulated time at the end."""
+        console = self.log.console
         record_members(self.team)
+        if console is not None:
+            console.attach(self.team)
         self.team.start()
         timeout = self.scenario.timeout
         while self.loop.now() < timeout - 1e-9:
             self.loop.advance(min(CHUNK, timeout - self.loop.now()))
             if self.site.gui:
                 time.sleep(CHUNK)
+            if console is not None:  # pause, step, speed and the operator's commands
+                console.between(self.loop.now())
             if self.team.tasks.outcome is not None and not self.sim.busy \
                     and self.loop.clock.next_due() is None:
                 break

@@ -307,7 +307,7 @@ class _Light:
         self.meanings[qid] = dict(data.get("answers") or {})
         world.record("question", task=request.node, agent=request.agent, question=qid,
                      text=data.get("question"), question_type="multiple-choice",
-                     choices=list(choices), to=speaker)
+                     choices=list(choices), to=speaker, expires=ASK_SPEAKER_FOR)
         world.port.send(Question(WORLD, speaker, id=qid, text=str(data.get("question")),
                                  type="multiple-choice", choices=choices,
                                  expires=ASK_SPEAKER_FOR, topic="spatial", task=request.node))

@@ -16,6 +16,8 @@ const st = {
   latencies: [], applied: 0,
 };
 window.shary = st;  // read by the browser tests and the benchmark
+// what the page's other scripts (plan.js, team.js) hook into: a reset, a scheme drawn, a status
+const HOOKS = { reset: [], scheme: [], status: [] };
 
 function el(tag, cls, text) {
   const e = document.createElement(tag);
@@ -190,7 +192,7 @@ function item(id, laneName, t0, label, cls) {
   rect.setAttribute("height", LANE_ROW - 3); rect.setAttribute("width", 2);
   rect.setAttribute("class", cls);
   const title = document.createElementNS(SVGNS, "title");
-  title.textContent = label + " from " + t0.toFixed(1) + " s";
+  title.textContent = (label || cls) + " from " + t0.toFixed(1) + " s";
   rect.append(title);
   const text = document.createElementNS(SVGNS, "text");
   text.setAttribute("x", x(t0) + 3); text.setAttribute("y", y + 10);
@@ -253,7 +255,7 @@ function goal(id, name, args, priority, state) {
     st.goals.set(id, row);
   }
   const cells = row.children;
-  cells[0].textContent = "#" + id; cells[1].textContent = name + (args ? " (" + args + ")" : "");
+  cells[0].textContent = typeof id === "number" ? "#" + id : id; cells[1].textContent = name + (args ? " (" + args + ")" : "");
   cells[2].textContent = "priority " + priority; cells[3].textContent = state;
 }
 
@@ -387,6 +389,7 @@ function reset() {
   for (const m of ["agents", "tasks", "nodes", "items", "lanes", "goals", "facts", "questions"]) st[m].clear();
   st.open.clear();
   noneShown();
+  for (const f of HOOKS.reset) f();
 }
 
 function receive(message) {
@@ -399,6 +402,7 @@ function receive(message) {
     case "scheme":
       st.svgs[message.name] = message.svg;
       for (const t of st.tasks.values()) if (t.scheme === message.name) drawInto(t);
+      for (const f of HOOKS.scheme) f(message.name);
       break;
     case "changes":
       if (message.reset) reset();
@@ -407,6 +411,7 @@ function receive(message) {
       break;
     case "status":
       status(message.status);
+      for (const f of HOOKS.status) f(message.status);
       break;
     case "reply": {
       const r = $("reply");
@@ -438,4 +443,4 @@ $("slider").oninput = () => {
   $("slider-time").textContent = "at " + Number(slider.value).toFixed(1) + " s";
   if (seekDue === null) seekDue = setTimeout(() => { seekDue = null; send({ kind: "seek", time: Number(slider.value) }); }, 30);
 };
-connect();
+document.addEventListener("DOMContentLoaded", connect);  // after the page's other scripts (plan.js) are in
