@@ -74,7 +74,6 @@ class Forwarder:
         self.name = name
         self.port: Any = None
         self._early: list[LogRecord] = []
-        self.forwarded = 0
 
     def __call__(self, time: float, kind: str, task: str | None, agent: str | None,
                  data: dict[str, Any]) -> None:
@@ -83,7 +82,6 @@ class Forwarder:
         if self.port is None:
             self._early.append(record)
             return
-        self.forwarded += 1
         self.port.forward(record)
 
     def attach(self, port: Any) -> None:
@@ -91,7 +89,6 @@ class Forwarder:
         self.port = port
         early, self._early = self._early, []
         for record in early:
-            self.forwarded += 1
             port.forward(record)
 
 

@@ -29,6 +29,7 @@ if TYPE_CHECKING:
     from shary.team.team import Team
     from shary.transport.logshare import TeamRecords
 
+
 def state_for(team: Team, name: str, records: TeamRecords | None) -> list[Message]:
     """What the managers send ``name`` when it joins the running ``team``: its State, then
     the open questions it holds (their expiry is the time they have left)."""
