@@ -13,11 +13,17 @@ schema, delivery on the child's loop.
 - round trip: ``--pings`` times, A sends an ``Act`` and waits for B's reply
   (one at a time); p50/p99 in milliseconds;
 - the peer: the same acts and pings through the in-process
-  :class:`~shary.transport.port.MessagePort` (two addresses on one loop).
+  :class:`~shary.transport.port.MessagePort` (two addresses on one loop);
+- log records shared: ``--team-runs`` runs of ``shary team up`` (``--team``:
+  the panels team by default, every person its own process; or a weld
+  scenario, whose world process logs far more) with the members forwarding
+  their log rows to the managers and without (``--no-share-log``),
+  alternated; the median wall time of the run itself (joins excluded; for a
+  scenario, the whole command's) and the ratio.
 
 Goals (issue 15): >= 40,000 acts/s and p99 RTT <= 1 ms over Zenoh on loopback.
 
-    python benchmarks/transport.py [--json] [--acts 100000] [--pings 2000]
+    python benchmarks/transport.py [--json] [--acts 100000] [--pings 2000] [--team-runs 5]
 """
 
 from __future__ import annotations
@@ -213,11 +219,43 @@ def _raw(port: Any, acts: int) -> float:
     return rate
 
 
+PANELS = "tests/data/transport/panels.team.yaml"
+
+
+def team_runs(runs: int, team: str) -> dict[str, Any]:
+    """``shary team up`` with and without the log rows forwarded, alternated."""
+    from pathlib import Path
+
+    if team == PANELS:
+        team = str(Path(__file__).parent.parent / PANELS)
+    walls: dict[bool, list[float]] = {True: [], False: []}
+    records = 0
+    for _ in range(runs):
+        for share in (True, False):
+            out = subprocess.run(
+                [sys.executable, "-m", "shary", "team", "up", team, "--listen",
+                 f"tcp/127.0.0.1:{_free_port()}", "--json",
+                 *([] if share else ["--no-share-log"])],
+                capture_output=True, text=True, check=True).stdout
+            result = json.loads(out.strip().splitlines()[-1])
+            assert result["outcome"] == "done", result
+            walls[share].append(result.get("run_seconds", result["wall_seconds"]))
+            if share:
+                records = sum(n for who, n in result.get("shared_records", {}).items()
+                              if who != "managers")
+    return {"shared_s": statistics.median(walls[True]),
+            "unshared_s": statistics.median(walls[False]), "records": records}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--json", action="store_true", help="end with one JSON line")
     parser.add_argument("--acts", type=int, default=100_000)
     parser.add_argument("--pings", type=int, default=2000)
+    parser.add_argument("--team-runs", type=int, default=5,
+                        help="team runs with and without the log shared (0: none)")
+    parser.add_argument("--team", default=PANELS, metavar="TEAM.yaml|SCENARIO",
+                        help=f"the team of those runs (default {PANELS})")
     parser.add_argument("--echo", metavar="ENDPOINT", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.echo:
@@ -235,6 +273,12 @@ def main() -> None:
           f"zenoh / in-process: {z['msgs_per_s'] / p['msgs_per_s']:.2f} of the throughput; "
           f"goals: >= 40,000 acts/s ({'met' if z['msgs_per_s'] >= 40_000 else 'missed'}), "
           f"p99 <= 1 ms ({'met' if z['p99_rtt_ms'] <= 1.0 else 'missed'})")
+    t = team_runs(args.team_runs, args.team) if args.team_runs else None
+    if t is not None:
+        rows = f" ({t['records']} rows)" if t["records"] else ""
+        print(f"team run ({args.team}), median of {args.team_runs}: "
+              f"{t['shared_s']:.3f} s with the log rows forwarded{rows}, "
+              f"{t['unshared_s']:.3f} s without: x{t['shared_s'] / t['unshared_s']:.2f}")
     if args.json:
         figures: dict[str, Any] = {
             "zenoh_msgs_per_s": round(z["msgs_per_s"]),
@@ -246,6 +290,11 @@ def main() -> None:
             "ratio": round(z["msgs_per_s"] / p["msgs_per_s"], 3),
             "port_over_raw": round(z["msgs_per_s"] / z["raw_msgs_per_s"], 3),
             "acts": args.acts, "pings": args.pings}
+        if t is not None:
+            figures.update(team_run_shared_s=round(t["shared_s"], 3),
+                           team_run_unshared_s=round(t["unshared_s"], 3),
+                           log_share_ratio=round(t["shared_s"] / t["unshared_s"], 3),
+                           shared_records=t["records"])
         print(json.dumps(figures))
 
 

@@ -16,6 +16,7 @@ from shary.terminal import add_json_flag, emit_json, error, escape, listing
 from shary.terminal import out as _out
 from userfiles import yamlsafe
 from userfiles.errors import FileError
+from userfiles.schema import did_you_mean
 
 
 def add_scenarios(sub: argparse._SubParsersAction) -> None:
@@ -210,3 +211,79 @@ def team_run(path: Path, *, out: Path | None = None, seed: int = 0, speed: float
     return LiveRun(spec.name, lambda attachment: run_team(spec, attachment, out=out, seed=seed),
                    out, schemes=lambda name: None, speed=speed, paused=paused,
                    steering=TeamSteering())
+
+
+def add_team(sub: argparse._SubParsersAction) -> None:
+    """``shary team up``: the engine's (a team file), and a seam-welding scenario with its
+    world (sim/weld/agent.py), every agent its own process."""
+    from shary.commands.distributed import add_team as add_engine_team
+
+    add_engine_team(sub, run=cmd_team_up, what="SCENARIO|TEAM.yaml",
+                    about="a seam-welding scenario (built-in name or file: its world, robots "
+                    "and people each run as their own process) or a team file")
+
+
+def cmd_team_up(args: argparse.Namespace) -> int:
+    from shary.commands.distributed import cmd_team_up as engine_team_up
+    from sim.scenario import builtin_scenarios
+    from sim.weld.agent import team_up_scenario
+
+    if not args.team.exists():  # a built-in scenario's name
+        path = builtin_scenarios().get(str(args.team))
+        if path is None or _weld_scenario(path) is None:
+            names = [n for n, p in builtin_scenarios().items()
+                     if _weld_scenario(p) is not None]
+            return error(f"no team file or team scenario {str(args.team)!r}"
+                         f"{did_you_mean(str(args.team), names)} (team scenarios: "
+                         f"{', '.join(names)})", json_mode=args.json)
+        return team_up_scenario(args, path)
+    path = _weld_scenario(args.team)
+    return engine_team_up(args) if path is None else team_up_scenario(args, path)
+
+
+def _weld_scenario(name: Path) -> Path | None:
+    """The seam-welding scenario ``name`` names (a built-in name or a file), or None when it
+    is a team file (or names nothing: the team file's reader says what is wrong)."""
+    from sim.scenario import builtin_scenarios
+    from sim.weld.scenario import is_weld_scenario
+
+    path = builtin_scenarios().get(str(name)) if not name.exists() else name
+    if path is None:
+        return None
+    try:
+        return path if is_weld_scenario(yamlsafe.load_file(path).data) else None
+    except FileError:
+        return None
+
+
+def add_world(sub: argparse._SubParsersAction) -> None:
+    from shary.commands.distributed import DEFAULT_ENDPOINT, add_common, endpoint
+
+    p = sub.add_parser("world", help="run a seam-welding scenario's world (the PyBullet site) "
+                       "as an agent of a distributed team (Zenoh)",
+                       description="Run the scenario's world in this process: it joins the "
+                       "team whose managers listen at --connect (shary team up SCENARIO), "
+                       "performs the robots' atomic tasks and the people's work on site, and "
+                       "shares what it perceives.")
+    p.add_argument("scenario", metavar="SCENARIO",
+                   help="a seam-welding scenario (built-in name or file)")
+    p.add_argument("--connect", type=endpoint, default=DEFAULT_ENDPOINT,
+                   metavar="tcp/HOST:PORT",
+                   help=f"where the team's managers listen (default {DEFAULT_ENDPOINT})")
+    add_common(p)
+    p.set_defaults(func=cmd_world)
+
+
+def cmd_world(args: argparse.Namespace) -> int:
+    from sim.scenario import find_scenario
+
+    try:
+        path = find_scenario(args.scenario)
+    except KeyError as err:
+        return error(err.args[0])
+    if _weld_scenario(path) is None:
+        return error(f"{args.scenario}: not a seam-welding scenario (site: seam-welding); "
+                     "only those have a world that runs as its own agent")
+    from sim.weld.agent import cmd_world as run_world
+
+    return run_world(args, path)

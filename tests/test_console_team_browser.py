@@ -132,11 +132,13 @@ def steered(browser: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[
         seen["image"] = browser.execute_script(
             "return document.querySelector('.team-question img').naturalWidth")
         seen["questions"] = text(browser, "team-questions")
+        qid = browser.execute_script(  # its id (the order of the run's messages makes it)
+            "return document.querySelector('.team-question').dataset.question")
         browser.save_screenshot(str(out / "at-the-question.png"))
         yes[0].click()
         wait(lambda: "answer for_agent=IVA" in text(browser, "lines"), message="logged")
         browser.find_element(By.ID, "step").click()  # the answer goes out with the clock
-        wait(lambda: "answers q3" in text(browser, "lines"), message="IVA's answer")
+        wait(lambda: f"answers {qid}" in text(browser, "lines"), message="IVA's answer")
         seen["lines"] = text(browser, "lines")
         browser.find_element(By.ID, "resume").click()
         wait(lambda: status(browser) == "ended", message="the end of the run")

@@ -22,6 +22,7 @@ from shary.log import read_events
 from shary.team import Team, load_team
 
 TEAM = Path(__file__).parent / "data" / "transport" / "panels.team.yaml"
+REJOIN = Path(__file__).parent / "data" / "transport" / "rejoin.team.yaml"
 
 
 def _endpoint() -> str:
@@ -30,9 +31,10 @@ def _endpoint() -> str:
         return f"tcp/127.0.0.1:{s.getsockname()[1]}"
 
 
-def _up(logdir: Path, *extra: str, endpoint: str | None = None) -> subprocess.Popen[str]:
+def _up(logdir: Path, *extra: str, endpoint: str | None = None,
+        team: Path = TEAM) -> subprocess.Popen[str]:
     return subprocess.Popen(
-        [sys.executable, "-u", "-m", "shary", "team", "up", str(TEAM), "--listen",
+        [sys.executable, "-u", "-m", "shary", "team", "up", str(team), "--listen",
          endpoint or _endpoint(),
          "--log-dir", str(logdir), *extra],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
@@ -82,10 +84,10 @@ def test_team_up_runs_the_goal_as_in_process(tmp_path: Path, shary) -> None:
                                                                       "tasks"}
 
 
-def test_a_member_killed_mid_task_is_noticed_and_its_task_goes_to_another(
-        tmp_path: Path) -> None:
+def test_a_member_killed_mid_task_is_noticed_and_restarted_learns_the_state(
+        tmp_path: Path, shary) -> None:
     endpoint = _endpoint()
-    process = _up(tmp_path / "logs", "--pace", "0.2", endpoint=endpoint)
+    process = _up(tmp_path / "logs", "--pace", "0.2", endpoint=endpoint, team=REJOIN)
     assert process.stdout is not None
     restart = None
     lines: list[tuple[float, str]] = []
@@ -102,7 +104,7 @@ def test_a_member_killed_mid_task_is_noticed_and_its_task_goes_to_another(
                 killed_at = time.monotonic()
             if line.strip() == "- EVA1 left":  # restarted: it joins the running team
                 restart = subprocess.Popen(
-                    [sys.executable, "-m", "shary", "agent", "EVA1", "--team", str(TEAM),
+                    [sys.executable, "-m", "shary", "agent", "EVA1", "--team", str(REJOIN),
                      "--connect", endpoint, "--log-dir", str(tmp_path / "logs")],
                     stdin=subprocess.DEVNULL)
         process.wait(timeout=60)
@@ -121,19 +123,33 @@ def test_a_member_killed_mid_task_is_noticed_and_its_task_goes_to_another(
     (left_at,) = [t for t, line in lines if line.strip() == "- EVA1 left"]
     assert left_at - killed_at < 1.0, text
     assert re.search(r"! EVA1 lost while running mount-P\d: offered again", text)
+    assert re.search(r"\+ EVA1 rejoined at [\d.]+ s: told 4 tasks \(\d done\), "
+                     r"0 open questions; it holds no task", text), text
     logs = tmp_path / "logs"
     done = {task: agent for task, agent, _ in _done(logs / "managers.sqlite")}
-    assert set(done) == {"mount-P1", "mount-P2", "check"} and done["check"] == "IVA"
-    # the restarted EVA1 joined the running team, in a log of its own
-    assert [line for _, line in lines if line.strip().startswith("+ EVA1 joined")][1:], text
-    assert (logs / "EVA1.1.sqlite").exists()
-    # the killed member's log is readable up to its last commit, and everything the
-    # managers acted on (its acceptance) is in it
-    eva1 = [e for e in read_events(logs / "EVA1.sqlite") if e.kind == "message"]
-    running = [e for e in read_events(logs / "managers.sqlite")
-               if e.kind == "task-running" and e.agent == "EVA1"]
-    assert running and all(any(m.task == r.task and m.data["status"] == "accepted"
-                               for m in eva1) for r in running)
+    assert set(done) == {"mount-P1", "mount-P2", "check", "report"}
+    assert done["check"] == "IVA" and done["report"] == "EVA1"
+    # the restarted EVA1 learned the task table, in a log of its own, and worked again
+    again = list(read_events(logs / "EVA1.1.sqlite"))
+    (learned,) = [e for e in again if e.kind == "state-learned"]
+    table = learned.data["tasks"]
+    assert set(table) == set(done) and table["report"]["state"] == "pending"
+    assert all(row["agent"] != "EVA1" for row in table.values())
+    assert [e.data["status"] for e in again if e.kind == "message"
+            and e.task == "report"] == ["accepted", "done"]
+    # the killed member's log is readable up to its last commit, and every progress the
+    # managers acted on (an acceptance, a task done) is in one of EVA1's logs: merged by
+    # shary log, nothing acknowledged is missing
+    status, out, _ = shary("log", *sorted(map(str, logs.glob("*.sqlite"))), "--json")
+    assert status == 0
+    rows = [json.loads(line) for line in out.splitlines()]
+    said = {(r["task"], r["data"]["status"]) for r in rows
+            if r["kind"] == "message" and r["agent"] == "EVA1" and "status" in r["data"]}
+    acted = [(r["task"], {"task-running": "accepted", "task-done": "done"}[r["kind"]])
+             for r in rows if r["kind"] in ("task-running", "task-done")
+             and r["agent"] == "EVA1"]
+    assert acted and set(acted) <= said
+    assert [e for e in read_events(logs / "EVA1.sqlite") if e.kind == "message"]
 
 
 def test_what_cannot_run_distributed_is_refused_plainly(shary) -> None:
@@ -141,7 +157,7 @@ def test_what_cannot_run_distributed_is_refused_plainly(shary) -> None:
     status, _, err = shary("agent", "EVA1", "--team", str(TEAM), "--connect", nobody)
     assert status == 2 and f"cannot join the team at {nobody}" in err and ".rs:" not in err
     seam = Path(__file__).parent / "data" / "team" / "seam-team.yaml"
-    status, _, err = shary("agent", "K-10", "--team", str(seam))
-    assert status == 2 and "K-10 is a robot" in err
+    status, _, err = shary("team", "up", str(seam), "--listen", nobody)
+    assert status == 2 and "has robots, whose atomic tasks a world performs" in err
     status, _, err = shary("agent", "NOBODY", "--team", str(TEAM))
     assert status == 2 and "no agent 'NOBODY' in team 'panels'" in err

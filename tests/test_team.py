@@ -435,8 +435,8 @@ def test_questions_carry_what_the_team_attaches_and_people_ask_on_their_own(
 
     team, log, _ = build(tmp_path, edit=eva1_asks_for_light)
     seen: list[tuple[str, str]] = []
-    team.attach("seam-okay", lambda robot, request: {
-        "image": f"{robot.name}-{request.id.split('/')[-1]}.png"})
+    team.attach("seam-okay", lambda robot, request, then: then({
+        "image": f"{robot.name}-{request.id.split('/')[-1]}.png"}))
     team.human("IVA").listeners.append(lambda m: seen.append((m.kind, getattr(m, "text", ""))))
     assert team.run(900) == "done"
     log.close()

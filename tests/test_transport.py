@@ -28,6 +28,7 @@ from shary.transport.messages import (
     LogRecord,
     Progress,
     Question,
+    State,
 )
 from shary.transport.port import Faults, MessagePort
 from shary.transport.wire import WireError, _not_json, decode, encode, json_schema, key
@@ -47,9 +48,13 @@ EXAMPLES = [
     Answer("IVA", "interaction", question="q1", value="yes"),
     Progress("EVA1", "tasks", task="mount-P1", status="done"),
     FactChange("K-10", "CM", added=(("P1", "isOn", "frame"),), removed=(("P1", "isOn", "rack"),)),
-    LogRecord("EVA1", "CM", time=12.5, event="task-done", task="mount-P1", data={"n": 1}),
+    LogRecord("EVA1", "logs", time=12.5, event="task-done", task="mount-P1", data={"n": 1},
+              agent="EVA1"),
     Clock("EVA1", "clock", state="idle", time=3.0, sent={"tasks": 2}, received={"EVA1": 1},
           next=4.5),
+    State("tasks", "EVA1", id="s1", time=7.0,
+          tasks={"mount-P1": {"state": "running", "agent": "EVA2", "done_by": []}},
+          questions=("q3",), associated=("K-10",), controls=()),
 ]
 
 
@@ -199,3 +204,57 @@ def test_zenoh_delivers_refuses_and_notices_a_leaving_peer() -> None:
         _wait(lambda: ("agent-left", {"agent": "B"}) in rows, 1.0, a)
     finally:
         a.close()
+
+
+# -- a member that rejoins learns the state (the managers' side and the member's) --------
+
+
+def test_a_rejoining_member_is_told_its_questions_control_and_the_task_table(
+        tmp_path: Path) -> None:
+    from shary.team.agents import USER
+    from shary.transport.logshare import SharedLog, TeamRecords
+    from shary.transport.rejoin import learn, state_for
+
+    spec = load_team(TEAM)
+    for name in ("IVA", "EVA1", "EVA2"):  # nobody answers: the question stays open
+        person = spec.agents[name]
+        spec = replace(spec, agents={**spec.agents, name: replace(person, behaviour=replace(
+            person.behaviour, questions=Reply("ignore", (0.0, 0.0))))})
+    records = TeamRecords()
+    team = Team(spec, log=SharedLog(ContextLog(tmp_path / "m.sqlite"), records.tap("m")))
+    for robot in spec.of_kind("robot"):
+        executor = ScriptedExecutor(team.loop, {"drive": 2.0, "weld": 10.0, "scan": 3.0,
+                                                "aim-light": 1.0})
+        for name in ATOMIC:
+            team.robot(robot.name).world.register(name, executor)
+    team.start()
+    while not team.interaction.open:
+        team.loop.advance(1.0)
+    (qid, entry), = team.interaction.open.items()
+    holder = entry.holder
+    team.take_control("EVA2", "Robonaut-B")
+    team.loop.advance(5.0)
+    messages = state_for(team, holder, records)
+    state, again = messages
+    assert isinstance(state, State) and state.to == holder and state.time == team.loop.now()
+    assert state.questions == (qid,)
+    assert state.tasks["weld-P1-P2"]["state"] == "done"
+    assert state.tasks["inspect-P1-P2"] == {"state": "running", "agent": "K-10",
+                                            "done_by": []}
+    assert isinstance(again, Question) and again.id == qid and again.to == holder
+    assert again.expires == entry.question.expires - 5.0
+    (control,) = state_for(team, "EVA2", records)
+    assert control.controls == ("Robonaut-B",) and control.questions == ()
+    assert state_for(team, "Robonaut-B", records)[0].controls == ("EVA2",)
+    # the member's side: a fresh team (its process started again) takes it in
+    member = Team(spec, log=ContextLog(tmp_path / "eva2.sqlite"))
+    learn(member, "EVA2", control)
+    robot = member.robot("Robonaut-B")
+    assert (robot.mode, robot.controller) == (USER, "EVA2")
+    assert member.tasks.tasks["weld-P1-P2"].state == "done"
+    assert member.tasks.tasks["weld-P1-P2"].done_by == ["Robonaut-B"]
+    member.log.close()
+    (learned,) = [e for e in read_events(tmp_path / "eva2.sqlite")
+                  if e.kind == "state-learned"]
+    assert learned.agent == "EVA2" and learned.data["controls"] == ["Robonaut-B"]
+    assert learned.data["tasks"]["inspect-P1-P2"]["agent"] == "K-10"

@@ -26,7 +26,7 @@ from shary.team.agents import REQUEST_HELP
 from shary.team.proxy import HumanProxy
 from shary.team.resources import HELP, QUESTION, Need
 from shary.team.spec import QuestionSpec
-from shary.transport.messages import Act, Answer, Message, Progress, Question
+from shary.transport.messages import Act, Answer, Message, Progress, Question, loggable
 
 if TYPE_CHECKING:
     from shary.team.robot import RobotAgent
@@ -79,19 +79,24 @@ class InteractionManager:
             data: dict[str, Any] | None = None, on_answer: OnAnswer | None = None) -> str:
         """Ask the team ``spec``'s question; return its id (the answer comes to
         ``on_answer`` and, as a message, to the asker)."""
+        question = Question(asker, "", id=self.team.port.new_id("q"), text=spec.text,
+                            type=spec.type, choices=spec.choices, priority=spec.priority,
+                            expires=spec.expires, fallback=spec.fallback, topic=spec.topic,
+                            data=dict(data or {}), task=task)
+        self._open(question, on_answer)
+        return question.id
+
+    def _open(self, question: Question, on_answer: OnAnswer | None) -> None:
+        """Ask the team ``question`` (from its sender): route it, and time its expiry."""
         team = self.team
-        question = Question(asker, "", id=team.port.new_id("q"), text=spec.text, type=spec.type,
-                            choices=spec.choices, priority=spec.priority, expires=spec.expires,
-                            fallback=spec.fallback, topic=spec.topic, data=dict(data or {}),
-                            task=task)
         entry = _Open(question, on_answer, asked_at=team.loop.now())
         self.open[question.id] = entry
-        team.record("question", task=task, agent=asker, question=question.id, text=spec.text,
-                    question_type=spec.type, choices=list(spec.choices) or None,
-                    priority=spec.priority, expires=spec.expires, data=question.data or None)
-        entry.timer = team.loop.call_later(spec.expires, self._expire, question.id)
+        team.record("question", task=question.task, agent=question.sender,
+                    question=question.id, text=question.text, question_type=question.type,
+                    choices=list(question.choices) or None, priority=question.priority,
+                    expires=question.expires, data=loggable(question.data) or None)
+        entry.timer = team.loop.call_later(question.expires, self._expire, question.id)
         self._route(entry)
-        return question.id
 
     def _route(self, entry: _Open) -> None:
         question = entry.question
@@ -138,9 +143,10 @@ class InteractionManager:
     # -- help requests ---------------------------------------------------------------
 
     def request_help(self, requester: str, skill: str, args: dict[str, Any], *,
-                     release_after: float | None = None) -> str:
-        """Find a robot with ``skill`` to help ``requester``; return the request's id."""
-        help_ = _Help(self.team.port.new_id("h"), requester, skill, args, release_after)
+                     release_after: float | None = None, id: str | None = None) -> str:
+        """Find a robot with ``skill`` to help ``requester``; return the request's id
+        (``id``: the one the requester gave its ``REQUEST-HELP`` act)."""
+        help_ = _Help(id or self.team.port.new_id("h"), requester, skill, args, release_after)
         self.helps[help_.id] = help_
         self.team.record("help-request", task=help_.id, agent=requester, skill=skill,
                          args=args or None)
@@ -178,7 +184,19 @@ class InteractionManager:
     # -- messages ---------------------------------------------------------------------
 
     def handle(self, message: Message) -> None:
-        if isinstance(message, Answer):
+        if isinstance(message, Question):  # an agent asks the team (a robot's ``ask``)
+            if message.id in self.open:
+                self.team.record("question-duplicate", agent=message.sender,
+                                 question=message.id)
+                return
+            self._open(message, None)
+        elif isinstance(message, Act) and message.act == REQUEST_HELP:  # a person's
+            args, after = message.data.get("args"), message.data.get("release-after")
+            self.request_help(message.sender, str(message.data.get("skill", "")),
+                              dict(args) if isinstance(args, dict) else {}, id=message.id,
+                              release_after=float(after) if isinstance(after, (int, float))
+                              else None)
+        elif isinstance(message, Answer):
             entry = self.open.get(message.question)
             if entry is None:
                 self.team.record("answer-late", agent=message.sender, question=message.question,
@@ -213,14 +231,17 @@ class InteractionManager:
 
 
 class AskExecutor:
-    """The atomic task ``ask`` of one robot: a question of the team file, asked through the
-    Interaction Manager, with the data the team attaches to its topic (an image)."""
+    """The atomic task ``ask`` of one robot: a question of the team file, sent to the
+    Interaction Manager as a message (it may run in another process), with the data the
+    team attaches to its topic (a picture the world takes); the answer comes back to the
+    robot as a message (:meth:`answered`)."""
 
     def __init__(self, team: Team, robot: RobotAgent):
         self.team = team
         self.robot = robot
-        self._asked: dict[str, tuple[str, Reporter]] = {}
-        """Request id -> (question id, reporter) while the robot waits for an answer."""
+        self._asked: dict[str, tuple[str | None, Request, Reporter]] = {}
+        """Request id -> (question id, None while the attachment is made; the request; its
+        reporter) while the robot waits."""
 
     def start(self, request: Request, reporter: Reporter) -> None:
         team = self.team
@@ -230,34 +251,51 @@ class AskExecutor:
             reporter.failed(request, f"the team file declares no question {topic!r}")
             return
         attach = team.attachments.get(topic)
-        data = attach(self.robot, request) if attach is not None else {}
+        if attach is None:
+            self._ask(request, reporter, spec, {})
+            return
+        self._asked[request.id] = (None, request, reporter)
 
-        def answered(answer: Answer) -> None:
-            self._asked.pop(request.id, None)
-            if not spec.wait:
-                return
-            if answer.value is None:
-                reporter.failed(request, f"nobody answered {spec.text!r} within "
-                                         f"{spec.expires:g}s")
-            elif spec.accept and answer.value not in spec.accept:
-                reporter.failed(request, f"{answer.sender} answered {answer.value!r} to "
-                                         f"{spec.text!r}")
-            else:
-                reporter.done(request, answer=answer.value)
+        def attached(data: dict[str, Any]) -> None:
+            if request.id in self._asked:  # not cancelled meanwhile
+                self._ask(request, reporter, spec, data)
+        attach(self.robot, request, attached)
 
-        qid = team.interaction.ask(self.robot.name, spec, task=self.robot.current, data=data,
-                                   on_answer=answered)
+    def _ask(self, request: Request, reporter: Reporter, spec: QuestionSpec,
+             data: dict[str, Any]) -> None:
+        team = self.team
+        qid = team.port.new_id("q")
+        team.port.send(Question(self.robot.name, InteractionManager.address, id=qid,
+                                text=spec.text, type=spec.type, choices=spec.choices,
+                                priority=spec.priority, expires=spec.expires,
+                                fallback=spec.fallback, topic=spec.topic, data=dict(data),
+                                task=self.robot.current))
         if spec.wait:
-            self._asked[request.id] = (qid, reporter)
+            self._asked[request.id] = (qid, request, reporter)
         else:
+            self._asked.pop(request.id, None)
             reporter.done(request, question=qid)
 
-    def cancel(self, request: Request) -> None:
-        found = self._asked.pop(request.id, None)
+    def answered(self, answer: Answer) -> bool:
+        """The answer to one of this robot's questions (False: not one it waits for)."""
+        found = next((rid for rid, (qid, _, _) in self._asked.items()
+                      if qid == answer.question), None)
         if found is None:
-            return
-        qid, reporter = found
-        entry = self.team.interaction.open.get(qid)
-        if entry is not None:
-            entry.on_answer = None  # the question stays asked; its answer is still logged
-        reporter.cancelled(request)
+            return False
+        _, request, reporter = self._asked.pop(found)
+        spec = self.team.spec.questions[str(request.args.get("topic", ""))]
+        if answer.value is None:
+            reporter.failed(request, f"nobody answered {spec.text!r} within "
+                                     f"{spec.expires:g}s")
+        elif spec.accept and answer.value not in spec.accept:
+            reporter.failed(request, f"{answer.sender} answered {answer.value!r} to "
+                                     f"{spec.text!r}")
+        else:
+            reporter.done(request, answer=answer.value)
+        return True
+
+    def cancel(self, request: Request) -> None:
+        """Stop waiting (the question stays asked; its answer is still logged)."""
+        found = self._asked.pop(request.id, None)
+        if found is not None:
+            found[2].cancelled(request)

@@ -16,10 +16,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from shary.team.agents import ANSWERING, IDLE, WORKING, Agent
+from shary.team.agents import ANSWERING, IDLE, REQUEST_HELP, WORKING, Agent
 from shary.team.resources import QUESTION, Need
 from shary.team.spec import ACCEPT, ANSWER, IGNORE, AgentSpec, Delay, HelpRequest
-from shary.transport.messages import Answer, Assignment, Message, Progress, Question
+from shary.transport.messages import Act, Answer, Assignment, Message, Progress, Question
 
 if TYPE_CHECKING:
     from shary.team.team import Team
@@ -128,9 +128,15 @@ class HumanProxy(Agent):
 
     def request_help(self, skill: str, args: dict[str, Any] | None = None, *,
                      release_after: float | None = None) -> str:
-        """Ask the team for help (a robot's skill): the Interaction Manager finds one."""
-        return self.team.interaction.request_help(self.name, skill, dict(args or {}),
-                                                  release_after=release_after)
+        """Ask the team for help (a robot's skill): the Interaction Manager finds one (a
+        ``REQUEST-HELP`` act to it, wherever it runs); the request's id."""
+        help_id = self.team.port.new_id("h")
+        data: dict[str, Any] = {"skill": skill, "args": dict(args or {})}
+        if release_after is not None:
+            data["release-after"] = release_after
+        self.send(Act(self.name, self.team.interaction.address, id=help_id, act=REQUEST_HELP,
+                      task=help_id, data=data))
+        return help_id
 
     # -- the simulated person -----------------------------------------------------------
 

@@ -32,6 +32,7 @@ from shary.team.agents import (
     WORKING,
     Agent,
 )
+from shary.team.interaction import AskExecutor
 from shary.team.resources import HELP, Need
 from shary.team.spec import AgentSpec
 from shary.transport.messages import Act, Answer, Assignment, Message, Progress
@@ -91,8 +92,16 @@ class RobotAgent(Agent):
             self.take_control(message.sender)
         elif isinstance(message, Act) and message.act == HAND_BACK:
             self.hand_back(message.sender)
-        elif isinstance(message, (Answer, Progress)):
-            pass  # answers reach the asking step through the Interaction Manager's callback
+        elif isinstance(message, Act) and message.act == TELEOPERATE:
+            args = message.data.get("args")
+            self.teleoperate(message.sender, str(message.data.get("atomic", "")),
+                             dict(args) if isinstance(args, dict) else {})
+        elif isinstance(message, Answer):
+            asking = self.team.own_executor("ask", self)
+            if isinstance(asking, AskExecutor):  # an answer nobody waits for is logged
+                asking.answered(message)         # by the Interaction Manager already
+        elif isinstance(message, Progress):
+            pass  # what became of the help a robot gave, told to the requester
         else:
             super().handle(message)
 
@@ -256,6 +265,11 @@ class RobotAgent(Agent):
         self.team.record("control", task=self.current, agent=self.name, mode=SYSTEM, by=human)
         self.sup.agenda.release(f"control:{human}")
         return True
+
+
+TELEOPERATE = "TELEOPERATE"
+"""The act by which the human in control sends the robot one atomic task (``data``:
+``atomic`` and ``args``)."""
 
 
 def _requester(message: Act) -> str:

@@ -204,6 +204,8 @@ class TaskManager:
         member = self.team.agents[name]
         if member.current == LOST:
             member.current = None
+            for task in self.tasks.values():
+                task.refused.discard(name)  # it was lost, it did not refuse: offer it again
             self.team.loop.call_soon(self.dispatch)
 
     # -- progress ------------------------------------------------------------------

@@ -29,17 +29,19 @@ from shary.team.agents import HAND_BACK, TAKE_CONTROL, Agent, SoftwareAgent
 from shary.team.interaction import AskExecutor, InteractionManager
 from shary.team.proxy import HumanProxy
 from shary.team.resources import ResourceManager
-from shary.team.robot import RobotAgent
+from shary.team.robot import TELEOPERATE, RobotAgent
 from shary.team.spec import HUMAN, ROBOT, TeamSpec
 from shary.team.tasks import TaskManager
-from shary.transport.messages import Act
+from shary.transport.facts import apply_change
+from shary.transport.messages import Act, FactChange
 from shary.transport.port import MessagePort
 
 if TYPE_CHECKING:
     from shary.team.context import ContextManager
 
-Attachment = Callable[[RobotAgent, Request], dict[str, Any]]
-"""What a question of a topic carries, computed when it is asked (``{"image": path}``)."""
+Attachment = Callable[[RobotAgent, Request, Callable[[dict[str, Any]], Any]], Any]
+"""What a question of a topic carries, computed when it is asked and handed to the callback
+(``{"image": path}``): at once, or when the world that takes the picture replies."""
 
 
 class AgentLog:
@@ -85,6 +87,13 @@ class Team:
 
             library = library or robot_library(spec)
             facts = facts if facts is not None else FactDatabase()
+        self.facts = facts
+        """The facts the team's robots and software agents reason on (None without robots);
+        what other processes share arrives as ``FactChange`` messages and is applied here."""
+        if facts is not None:
+            self.port.take(FactChange.kind, lambda change: apply_change(facts, change))
+            for axis in ("x", "y"):
+                facts.subscribe(self._moved, predicate=axis, kind="added")
         for agent in spec.agents.values():
             if agent.kind == ROBOT:
                 sup = Supervisor(library, facts, robot=agent.name, loop=self.loop,
@@ -113,6 +122,15 @@ class Team:
         if self.log is not None:
             self.log.record(self.loop.now(), kind, task=task, agent=agent,
                             **{k: v for k, v in data.items() if v is not None})
+
+    def _moved(self, event: Any) -> None:
+        """An agent's perceived ``x`` or ``y`` changed: its position follows (the Resource
+        Manager's distance criterion reads it)."""
+        agent = self.agents.get(str(event.subject))
+        if agent is None or not isinstance(event.object, (int, float)):
+            return
+        x, y = (agent.position or (0.0, 0.0))[:2]
+        agent.position = (event.object, y) if event.predicate == "x" else (x, event.object)
 
     # -- the members ------------------------------------------------------------------
 
@@ -150,6 +168,11 @@ class Team:
     def hand_back(self, human: str, robot: str) -> None:
         """``human`` gives ``robot`` its autonomy back (system mode)."""
         self.port.send(Act(human, robot, act=HAND_BACK))
+
+    def teleoperate(self, human: str, robot: str, atomic: str, args: dict[str, Any]) -> None:
+        """``human``, in control of ``robot``, sends it one atomic task."""
+        self.port.send(Act(human, robot, act=TELEOPERATE, data={"atomic": atomic,
+                                                                "args": dict(args)}))
 
     # -- running ------------------------------------------------------------------------
 

@@ -8,6 +8,8 @@ loop, clock and context log (``LOGDIR/NAME.sqlite``), a Zenoh client of the
 conductor.  Both build the same :class:`~shary.team.team.Team` from the team
 file; each process holds only its own addresses on the port, so the other
 members' objects are shadows (the Task Manager's view of who holds what).
+In a team with robots, the world (``shary world SCENARIO``, in ``sim``) is a
+member too: both it and :class:`Member` are :class:`Participant` of the clock.
 
 **The shared simulated clock** is a barrier: the conductor tells every member
 to advance to time *t* (``Clock`` ``step``); each member runs its timers up to
@@ -22,8 +24,14 @@ simulated second last that many wall seconds (``0``: as fast as possible).
 **Faults**: a member whose process dies leaves (its liveliness token goes
 within milliseconds of a kill -9, within the lease of a freeze); the Task
 Manager takes its task back (``agent-lost``) and offers it to another; the
-clock no longer waits for it.  A member that joins later (a restart) is
-given the current time and takes part from then on.
+clock no longer waits for it, and when nothing else can happen the run waits
+(``rejoin_wait``) for it to come back.  A member that joins later (a restart)
+is told the current state (:mod:`shary.transport.rejoin`: the State is its
+first step of the clock) and takes part from then on.
+
+**Log records**: a member forwards its log's rows to the managers
+(:mod:`shary.transport.logshare`); :attr:`Conductor.records` is the team's
+merged view, live.
 """
 
 from __future__ import annotations
@@ -34,20 +42,26 @@ from pathlib import Path
 from typing import Any
 
 from shary.loop import EventLoop
-from shary.transport.messages import Clock
+from shary.team.world import WORLD
+from shary.transport.facts import SUBSCRIBE
+from shary.transport.logshare import LOGS, Forwarder, SharedLog, TeamRecords
+from shary.transport.messages import Act, Clock, Message, State
 from shary.transport.port import Faults
-from shary.transport.zenohport import LOOPBACK, ZenohPort, session_config
+from shary.transport.rejoin import learn, state_for
+from shary.transport.zenohport import LOOPBACK, Settings, ZenohPort, session_config
 
 CLOCK = "clock"
 """The shared clock's address, in the conductor's process."""
 CONDUCTOR = "managers"
 """The conductor's process name (its liveliness token, its log file)."""
-MANAGERS = ("tasks", "interaction", CLOCK)
+MANAGERS = ("tasks", "interaction", CLOCK, LOGS)
 WAIT = 0.2
 """Seconds a process waits for a message before looking around again."""
 
 
-def _log(logdir: Path | None, name: str, seed: int) -> Any:
+def agent_log(logdir: Path | None, name: str, seed: int) -> Any:
+    """The context log of process ``name`` in ``logdir`` (None without a folder); a
+    restarted process writes a new file beside its first life's."""
     if logdir is None:
         return None
     from shary.log import ContextLog
@@ -59,33 +73,33 @@ def _log(logdir: Path | None, name: str, seed: int) -> Any:
     return ContextLog(path, seed=seed)
 
 
-class Member:
-    """One agent of a team file in this process (see the module's docstring)."""
+class Participant:
+    """One process on the team's shared clock: it advances when the conductor says and
+    reports when it is idle (see the module's docstring).  :class:`Member` is an agent
+    of the team file; the world (``shary world``) is another."""
 
-    def __init__(self, spec: Any, name: str, *, connect: str = LOOPBACK,
-                 logdir: Path | None = None, seed: int = 0, faults: Faults | None = None):
-        from shary.team import Team
-
-        if name not in spec.agents:
-            raise KeyError(name)
+    def __init__(self, name: str, loop: EventLoop, port: ZenohPort, log: Any):
         self.name = name
-        self.log = _log(logdir, name, seed)
-        ports: list[ZenohPort] = []
-
-        def port(loop: EventLoop, record: Callable[..., None]) -> ZenohPort:
-            ports.append(ZenohPort(loop, record, team=spec.name, name=name, local=[name],
-                                   config=session_config(mode="client", connect=[connect]),
-                                   faults=faults))
-            return ports[0]
-
-        self.team = Team(spec, log=self.log, port=port)
-        self.team.loop.random.seed(seed)
-        self.port = ports[0]
-        self.port.on_clock = self._clock
-        self.port.on_presence = self._presence
+        self.loop = loop
+        self.port = port
+        self.log = log
+        port.on_clock = self._clock
+        port.on_time = self._sent_at
+        port.on_presence = self._presence
         self.at: float | None = None
         """The time of the last step (None before the first)."""
         self.stopped: str | None = None
+
+    def _sent_at(self, at: float) -> None:
+        """A message sent at ``at`` arrived before the step to ``at`` did (it came by
+        another path): move to ``at`` first, as the step will (the conductor steps to
+        the earliest thing anyone has to do, so nothing here is due before it)."""
+        if self.at is not None and at > self.loop.now():
+            self.loop.advance(at - self.loop.now())
+            self.at = at
+
+    def start(self) -> None:
+        """The run begins (the first step, at the team's current time)."""
 
     def _presence(self, name: str, joined: bool) -> None:
         if name == CONDUCTOR and not joined:
@@ -97,19 +111,17 @@ class Member:
             return
         if message.state != "step":
             return
-        loop = self.team.loop
+        loop = self.loop
         if self.at is None:
             loop.clock.advance_to(message.time)
-            starting = getattr(self.team.agents[self.name], "start_script", None)
-            if starting is not None:
-                starting()
+            self.start()
         elif message.time > loop.now():
             loop.advance(message.time - loop.now())
         self.at = message.time
 
     def run(self) -> str:
         """Take part until the conductor stops the run (or it vanishes); the reason."""
-        port, loop = self.port, self.team.loop
+        port, loop = self.port, self.loop
         try:
             while self.stopped is None:
                 took = port.pump(WAIT)
@@ -128,47 +140,128 @@ class Member:
         _close(self.port, self.log)
 
 
+class Member(Participant):
+    """One agent of a team file in this process (see the module's docstring).  In a team
+    with robots, the world agent performs the robots' atomic tasks and the on-site
+    people's work (:func:`shary.team.world.connect_world`), and a robot subscribes to the
+    facts the world perceives."""
+
+    def __init__(self, spec: Any, name: str, *, connect: str = LOOPBACK,
+                 logdir: Path | None = None, seed: int = 0, faults: Faults | None = None,
+                 share_log: bool = True, settings: Settings | None = None):
+        from shary.team import Team
+        from shary.team.spec import ROBOT
+        from shary.team.world import connect_world
+
+        if name not in spec.agents:
+            raise KeyError(name)
+        log = agent_log(logdir, name, seed)
+        self.forwarder = Forwarder(name) if share_log else None
+        """Sends the log's rows to the managers (None: ``share_log`` off)."""
+        ports: list[ZenohPort] = []
+
+        def port(loop: EventLoop, record: Callable[..., None]) -> ZenohPort:
+            ports.append(ZenohPort(loop, record, team=spec.name, name=name, local=[name],
+                                   config=session_config(mode="client", connect=[connect],
+                                                         settings=settings),
+                                   faults=faults))
+            return ports[0]
+
+        self.team = Team(spec, log=SharedLog(log, self.forwarder) if self.forwarder else log,
+                         port=port)
+        self.team.loop.random.seed(seed)
+        super().__init__(name, self.team.loop, ports[0], log)
+        if self.forwarder is not None:
+            self.forwarder.attach(self.port)
+        self.robot = spec.agents[name].kind == ROBOT
+        if spec.of_kind(ROBOT):
+            connect_world(self.team)
+        self.port.tap(name, self._rejoined)
+
+    def start(self) -> None:
+        self._subscribe()
+        starting = getattr(self.team.agents[self.name], "start_script", None)
+        if starting is not None:
+            starting()
+
+    def _subscribe(self) -> None:
+        """A robot asks the world for its facts: all of them now, then each change."""
+        if self.robot:
+            self.port.send(Act(self.name, WORLD, act=SUBSCRIBE))
+
+    def _rejoined(self, state: Message) -> bool:
+        """A State (this process joined a running team) is the process's to take in: the
+        managers' view, whose time is our first step (the person's own script does not
+        start again; a robot asks the world for its facts).  The rest is the agent's."""
+        if not isinstance(state, State):
+            return False
+        loop = self.loop
+        first = self.at is None
+        if first:
+            loop.clock.advance_to(state.time)
+        elif state.time > loop.now():
+            loop.advance(state.time - loop.now())
+        self.at = max(self.at or 0.0, state.time)
+        learn(self.team, self.name, state)
+        if first:
+            self._subscribe()
+        return True
+
+
 class Conductor:
     """The managers and the shared clock (see the module's docstring)."""
 
     def __init__(self, spec: Any, *, listen: str = LOOPBACK, logdir: Path | None = None,
                  seed: int = 0, members: list[str] | None = None, pace: float = 0.0,
-                 faults: Faults | None = None,
+                 faults: Faults | None = None, settings: Settings | None = None,
+                 rejoin_wait: float = 30.0,
                  display: Callable[[str, dict[str, Any]], Any] | None = None):
         from shary.team import Team
-        from shary.team.spec import SOFTWARE
+        from shary.team.spec import ROBOT, SOFTWARE
 
+        world = [WORLD] if spec.of_kind(ROBOT) else []  # the robots' world is a member too
         self.members = list(members if members is not None else
-                            [a.name for a in spec.agents.values() if a.kind != SOFTWARE])
+                            [*(a.name for a in spec.agents.values() if a.kind != SOFTWARE),
+                             *world])
         local = [*MANAGERS, *(a for a in spec.agents if a not in self.members)]
-        self.log = _log(logdir, CONDUCTOR, seed)
+        self.log = agent_log(logdir, CONDUCTOR, seed)
         self.display = display or (lambda what, data: None)
         ports: list[ZenohPort] = []
 
         def port(loop: EventLoop, record: Callable[..., None]) -> ZenohPort:
             ports.append(ZenohPort(loop, self._record(record), team=spec.name,
                                    name=CONDUCTOR, local=local,
-                                   config=session_config(mode="router", listen=[listen]),
+                                   config=session_config(mode="router", listen=[listen],
+                                                         settings=settings),
                                    faults=faults))
             return ports[0]
 
-        self.team = Team(spec, log=self.log, port=port)
+        self.records = TeamRecords()
+        """The team's logs merged, live: our rows and the rows the members forward."""
+        self.team = Team(spec, log=SharedLog(self.log, self.records.tap(CONDUCTOR)),
+                         port=port)
         self.team.record = self._record(self.team.record)  # type: ignore[method-assign]
         self.team.loop.random.seed(seed)
         self.port = ports[0]
         self.port.on_clock = self._idle
         self.port.on_presence = self._presence
+        self.port.subscribe(LOGS, self.records.handle)
         self.pace = pace
+        self.rejoin_wait = rejoin_wait
+        """Wall seconds the run waits for a lost member when nothing else can happen."""
         self.live: set[str] = set()
         self.reports: dict[str, Clock] = {}
         self.lost: list[str] = []
         self.offsets: dict[str, int] = {}
         """Per link, sent - received left over from a member's earlier life (a restart)."""
+        self.halted: str | None = None
+        """Why the run cannot go on (the world left: nobody performs the robots' tasks)."""
 
     def _record(self, record: Callable[..., None]) -> Callable[..., None]:
         """The team's record, shown on the display too (the rows worth a line)."""
         shown = {"agent-joined", "agent-left", "agent-lost", "task-running", "task-done",
-                 "task-failed", "goal-over", "message-refused", "answer"}
+                 "task-failed", "goal-over", "message-refused", "question", "answer",
+                 "rejoined", "waiting-for-members"}
 
         def both(kind: str, **data: Any) -> None:
             record(kind, **data)
@@ -188,14 +281,32 @@ class Conductor:
                 for link in sent.keys() | received.keys():
                     if name in link.split(">"):
                         self.offsets[link] = sent.get(link, 0) - received.get(link, 0)
-                self.team.tasks.agent_back(name)
-                self._tell(name, self.team.loop.now())
+                if name in self.team.agents:
+                    self._rejoin(name)
+                else:  # the world: it starts from the team's time
+                    self._tell(name, self.team.loop.now())
         else:
             self.live.discard(name)
             self.reports.pop(name, None)
             self.lost.append(name)
+            if name == WORLD:
+                self.halted = "the world left"
             if name in self.team.agents:
                 self.team.tasks.agent_lost(name)
+
+    def _rejoin(self, name: str) -> None:
+        """``name`` came back while the goal runs: tell it the state (its first step of
+        the clock), then offer it work."""
+        messages = state_for(self.team, name, self.records)
+        state = messages[0]
+        assert isinstance(state, State)
+        holds = sorted(t for t, row in state.tasks.items() if row["agent"] == name)
+        self.team.record("rejoined", agent=name, at=state.time, tasks=len(state.tasks),
+                         done=sum(row["state"] == "done" for row in state.tasks.values()),
+                         holds=holds or None, questions=len(state.questions))
+        for message in messages:
+            self.port.send(message)
+        self.team.tasks.agent_back(name)
 
     def _idle(self, message: Clock) -> None:
         if message.state == "idle" and message.sender in self.live:
@@ -243,26 +354,41 @@ class Conductor:
             self.team.loop.run_until_idle()
         return sorted(set(self.members) - self.live)
 
-    def run(self, limit: float) -> str | None:
+    def run(self, limit: float, *, settle: bool = False) -> str | None:
         """Run the goal on the shared clock until it is over or ``limit`` simulated seconds
-        have passed; the goal's outcome ("done", "failed") or None."""
+        have passed; the goal's outcome ("done", "failed") or None.  ``settle``: once the
+        goal is over, go on until nobody has anything left to do (the world's last motion,
+        a question's expiry), as a scenario run in one process does."""
         team, port, loop = self.team, self.port, self.team.loop
+        if WORLD in self.members:  # the world's facts: poses for the spatial reasoner and
+            port.send(Act(team.tasks.address, WORLD, act=SUBSCRIBE))  # the distances
         team.tasks.start()
         start = time.monotonic()
+        stalled: float | None = None
         at = loop.now()
         for name in self.live:
             self._tell(name, at)
         try:
-            while team.tasks.outcome is None:
+            while (team.tasks.outcome is None or settle) and self.halted is None:
                 port.pump(WAIT if not self._balanced(at) else 0.0)
                 loop.run_until_idle()
                 port.flush()
-                if team.tasks.outcome is not None or not self._balanced(at):
+                if not self._balanced(at):
                     continue
                 dues = [r.next for r in self.reports.values() if r.next is not None]
                 own = loop.clock.next_due()
                 if own is not None:
                     dues.append(own)
+                missing = sorted(set(self.members) - self.live)
+                if not dues and missing:  # only a lost member can go on: wait for it
+                    if stalled is None:
+                        stalled = time.monotonic()
+                        team.record("waiting-for-members", missing=missing,
+                                    within=self.rejoin_wait)
+                    if time.monotonic() - stalled < self.rejoin_wait:
+                        port.pump(WAIT)
+                        continue
+                stalled = None
                 if not dues or min(dues) > limit:
                     break
                 if self.pace and self._paced(start + min(dues) * self.pace):

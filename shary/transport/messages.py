@@ -18,9 +18,10 @@ The kinds between agents:
 - :class:`FactChange`: facts an agent shares (added or removed triples);
 - :class:`LogRecord`: a row of an agent's context log, for whoever gathers them.
 
-and one between the processes of a distributed team: :class:`Clock` (the
+and two between the processes of a distributed team: :class:`Clock` (the
 shared simulated clock's steps and the agents' replies, see
-:mod:`shary.transport.distributed`).
+:mod:`shary.transport.distributed`) and :class:`State` (what the managers tell
+a member that joins a running team, see :mod:`shary.transport.rejoin`).
 """
 
 from __future__ import annotations
@@ -119,11 +120,14 @@ class Progress(Message):
 
 @dataclass(frozen=True)
 class FactChange(Message):
-    """Facts an agent shares: ``added`` and ``removed`` triples (subject, predicate, object)."""
+    """Facts an agent shares: ``removed`` then ``added`` triples (subject, predicate, object)
+    of one ``perspective``.  Subjects and predicates are names; an object is a name, a
+    number or a boolean (what :class:`shary.facts.FactDatabase` reads back as itself)."""
 
     kind: ClassVar[str] = "fact"
-    added: tuple[tuple[str, str, str], ...] = ()
-    removed: tuple[tuple[str, str, str], ...] = ()
+    added: tuple[tuple[str, str, Any], ...] = ()
+    removed: tuple[tuple[str, str, Any], ...] = ()
+    perspective: str = "robot"
 
 
 @dataclass(frozen=True)
@@ -135,6 +139,8 @@ class LogRecord(Message):
     event: str = ""
     task: str | None = None
     data: dict[str, Any] = field(default_factory=dict)
+    agent: str | None = None
+    """The row's agent (the sender is the process that logged it)."""
 
 
 @dataclass(frozen=True)
@@ -158,15 +164,44 @@ class Clock(Message):
     reason: str = ""
 
 
+@dataclass(frozen=True)
+class State(Message):
+    """What a member joining a running team needs to take part: the managers' view.
+
+    ``tasks``: the team's task table, task -> ``{"state", "agent", "done_by"}``
+    (done, running and by whom, offered to whom); ``questions``: the ids of the
+    open questions addressed to the member (each is sent again right after, with
+    the time it has left); ``associated``: the robots serving the member's help
+    requests (for a robot: the person it serves); ``controls``: the robots under
+    its control, user mode (for a robot: the person driving it).  The facts it
+    subscribes to come from their sharer, all at once on subscribing
+    (:mod:`shary.transport.facts`), as on its first start.
+    """
+
+    kind: ClassVar[str] = "state"
+    time: float = 0.0
+    tasks: dict[str, Any] = field(default_factory=dict)
+    questions: tuple[str, ...] = ()
+    associated: tuple[str, ...] = ()
+    controls: tuple[str, ...] = ()
+
+
 KINDS: dict[str, type[Message]] = {c.kind: c for c in (Act, Assignment, Question, Answer,
                                                          Progress, FactChange, LogRecord,
-                                                         Clock)}
+                                                         Clock, State)}
 
 
 @cache
 def _names(cls: type[Message]) -> tuple[str, ...]:
     """A message class's field names, in order."""
     return tuple(f.name for f in fields(cls))
+
+
+@cache
+def _tuples(cls: type[Message]) -> tuple[tuple[str, bool], ...]:
+    """A message class's tuple fields (JSON gives lists): (name, whether of triples)."""
+    return tuple((f.name, str(f.type).startswith("tuple[tuple[")) for f in fields(cls)
+                 if str(f.type).startswith("tuple["))
 
 
 def message_from_dict(data: dict[str, Any]) -> Message:
@@ -179,12 +214,23 @@ def message_from_dict(data: dict[str, Any]) -> Message:
 def build(kind: str, values: dict[str, Any]) -> Message:
     """The message of ``kind`` with these fields (JSON lists made tuples again)."""
     cls = KINDS[kind]
-    if "choices" in values:
-        values["choices"] = tuple(values["choices"])
-    for name in ("added", "removed"):
+    for name, triples in _tuples(cls):
         if name in values:
-            values[name] = tuple(tuple(triple) for triple in values[name])
+            values[name] = (tuple(tuple(t) for t in values[name]) if triples
+                            else tuple(values[name]))
     return cls(**values)
+
+
+PICTURE = "png"
+"""The key of a picture's bytes (base64 PNG) in a question's ``data``: the picture travels
+with the question to whoever answers, on any machine; logs keep its path (``image``)."""
+
+
+def loggable(data: dict[str, Any]) -> dict[str, Any]:
+    """``data`` without the bulky bytes a log row does not need (a picture's)."""
+    if PICTURE not in data:
+        return data
+    return {k: v for k, v in data.items() if k != PICTURE}
 
 
 def summary(message: Message) -> dict[str, Any]:
@@ -197,7 +243,7 @@ def summary(message: Message) -> dict[str, Any]:
     if isinstance(message, Question):
         return {"text": message.text, "question_type": message.type,
                 "priority": message.priority, "task": message.task,
-                "data": message.data or None}
+                "data": loggable(message.data) or None}
     if isinstance(message, Answer):
         return {"question": message.question, "value": message.value,
                 "expired": message.expired or None}
@@ -206,4 +252,9 @@ def summary(message: Message) -> dict[str, Any]:
                 "reason": message.reason or None}
     if isinstance(message, FactChange):
         return {"added": len(message.added), "removed": len(message.removed)}
+    if isinstance(message, State):
+        return {"at": message.time, "tasks": len(message.tasks),
+                "questions": list(message.questions) or None,
+                "associated": list(message.associated) or None,
+                "controls": list(message.controls) or None}
     return {}

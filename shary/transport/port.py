@@ -10,7 +10,8 @@ knows which one it talks through.
 
 Faults are injected here, for both: :class:`Faults` drops a share of the
 messages and delays the others, on the loop's clock (so a simulated run
-with faults is still repeatable for a seed).
+with faults is still repeatable for a seed).  The Zenoh port applies them to
+what arrives too, so the faults of one process are a bad link both ways.
 """
 
 from __future__ import annotations
@@ -38,7 +39,12 @@ class Faults:
     agents: frozenset[str] = frozenset()
 
     def touches(self, message: Message) -> bool:
-        return not self.agents or message.sender in self.agents or message.to in self.agents
+        """Whether ``message`` travels this link.  The copies of the log do not (they are
+        not the team's messages, :mod:`shary.transport.logshare`), nor a rejoining
+        member's State (its first step of the shared clock, which faults never touch)."""
+        return (message.kind not in ("log", "state")
+                and (not self.agents or message.sender in self.agents
+                     or message.to in self.agents))
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.loss <= 1.0:
@@ -60,6 +66,7 @@ class MessagePort:
         self.loop = loop
         self._record = record
         self._handlers: dict[str, Handler] = {}
+        self._kinds: dict[str, Handler] = {}
         self._ids = itertools.count(1)
         self.faults = faults
         self._fault_random = random.Random(faults.seed if faults else 0)
@@ -67,6 +74,22 @@ class MessagePort:
 
     def subscribe(self, address: str, handler: Handler) -> None:
         self._handlers[address] = handler
+
+    def tap(self, address: str, taker: Callable[[Message], bool]) -> None:
+        """Let ``taker`` see each message to ``address`` before its handler does, and keep
+        the ones it answers True for (a robot's link to the world takes the world's
+        replies to its requests; the robot's agent hears the rest)."""
+        inner = self._handlers.get(address)
+
+        def first(message: Message) -> None:
+            if not taker(message) and inner is not None:
+                inner(message)
+        self._handlers[address] = first
+
+    def take(self, kind: str, handler: Handler) -> None:
+        """Give every message of ``kind`` that arrives here, whatever its address, to
+        ``handler`` (a process's fact base takes every ``FactChange``)."""
+        self._kinds[kind] = handler
 
     def new_id(self, prefix: str) -> str:
         return f"{prefix}{next(self._ids)}"
@@ -79,19 +102,24 @@ class MessagePort:
             self._record("message" if known else "message-lost",
                          agent=message.sender, to=message.to, type=message.kind,
                          id=message.id or None, **summary(message))
-        if not known:
-            return
+        if known and not self.faulted(message, self.route):
+            self.route(message)
+
+    def faulted(self, message: Message, then: Handler) -> bool:
+        """Whether the faults took ``message`` over: dropped (logged), or handed to
+        ``then`` after the latency; False when it goes on now."""
         faults = self.faults
-        if faults is not None and faults.touches(message):
-            if faults.loss and self._fault_random.random() < faults.loss:
-                if self._record is not None:
-                    self._record("message-dropped", agent=message.sender, to=message.to,
-                                 type=message.kind, id=message.id or None)
-                return
-            if faults.latency:
-                self.loop.call_later(faults.latency, self.route, message)
-                return
-        self.route(message)
+        if faults is None or not faults.touches(message):
+            return False
+        if faults.loss and self._fault_random.random() < faults.loss:
+            if self._record is not None:
+                self._record("message-dropped", agent=message.sender, to=message.to,
+                             type=message.kind, id=message.id or None)
+            return True
+        if faults.latency:
+            self.loop.call_later(faults.latency, then, message)
+            return True
+        return False
 
     def reaches(self, address: str) -> bool:
         """Whether a message to ``address`` goes anywhere (here: a local handler)."""
@@ -103,7 +131,9 @@ class MessagePort:
 
     def deliver(self, message: Message) -> None:
         """Queue ``message`` for its local handler on the loop."""
-        handler = self._handlers.get(message.to)
+        handler = self._kinds.get(message.kind) if self._kinds else None
+        if handler is None:
+            handler = self._handlers.get(message.to)
         if handler is not None:
             self.loop.call_soon(handler, message)
 

@@ -1,7 +1,8 @@
 """The wire format: messages as versioned JSON under key expressions.
 
 A message on the wire is one JSON object: ``{"v": 1, "kind": …, "sender": …,
-"to": …, "id": …, <the kind's fields>}``, published under the key expression
+"to": …, "id": …, <the kind's fields>}`` (and ``"at"``: the simulated time it
+was sent at, for a team on a shared clock), published under the key expression
 ``shary/<team>/<to>/<kind>``.  JSON rather than CBOR: the standard library
 encodes and decodes a message of a few fields in a few microseconds (well
 inside the transport's budget, see ``benchmarks/transport.py``), any
@@ -55,10 +56,13 @@ def key(team: str, address: str, kind: str) -> str:
     return f"{PREFIX}/{team}/{address}/{kind}"
 
 
-def encode(message: Message) -> bytes:
-    """The message's bytes on the wire."""
+def encode(message: Message, at: float | None = None) -> bytes:
+    """The message's bytes on the wire; ``at``: the sender's simulated time when it sent
+    it (a receiver whose clock is behind catches up before handling it)."""
     data = message.as_dict()
     data["v"] = VERSION
+    if at is not None:
+        data["at"] = at
     return _ENCODE(data).encode()
 
 
@@ -106,8 +110,10 @@ def _is_strings(v: Any) -> bool:
 
 
 def _is_triples(v: Any) -> bool:
+    """Triples of names whose object may also be a number or a boolean (a pose, a flag)."""
     return isinstance(v, list) and all(
-        isinstance(t, list) and len(t) == 3 and all(isinstance(x, str) for x in t) for t in v)
+        isinstance(t, list) and len(t) == 3 and isinstance(t[0], str) and isinstance(t[1], str)
+        and (isinstance(t[2], (str, bool)) or _is_number(t[2])) for t in v)
 
 
 TYPES: dict[str, tuple[Any, dict[str, Any]]] = {
@@ -119,9 +125,11 @@ TYPES: dict[str, tuple[Any, dict[str, Any]]] = {
     "bool": (_is_bool, {"type": "boolean"}),
     "dict[str, Any]": (_is_object, {"type": "object"}),
     "tuple[str, ...]": (_is_strings, {"type": "array", "items": {"type": "string"}}),
-    "tuple[tuple[str, str, str], ...]": (_is_triples, {
-        "type": "array", "items": {"type": "array", "items": {"type": "string"},
-                                   "minItems": 3, "maxItems": 3}}),
+    "tuple[tuple[str, str, Any], ...]": (_is_triples, {
+        "type": "array", "items": {"type": "array", "prefixItems": [
+            {"type": "string"}, {"type": "string"},
+            {"type": ["string", "number", "boolean"]}], "items": False,
+            "minItems": 3, "maxItems": 3}}),
 }
 """A dataclass field's annotation -> (its check, its JSON Schema)."""
 
@@ -134,6 +142,13 @@ _NAMES_SEEN: set[str] = set()
 
 def decode(payload: bytes, *, key_expr: str | None = None) -> Message:
     """The message in ``payload`` (received under ``key_expr``), or :class:`WireError`."""
+    return decode_timed(payload, key_expr=key_expr)[0]
+
+
+def decode_timed(payload: bytes, *, key_expr: str | None = None) -> tuple[Message,
+                                                                          float | None]:
+    """The message in ``payload`` and the time it was sent at (None if not given), or
+    :class:`WireError`."""
     if len(payload) > MAX_BYTES:
         raise WireError(f"message of {len(payload)} bytes (at most {MAX_BYTES})")
     try:
@@ -145,6 +160,9 @@ def decode(payload: bytes, *, key_expr: str | None = None) -> Message:
     version = data.pop("v", None)
     if version != VERSION:
         raise WireError(f"schema version {version!r} (this peer reads version {VERSION})")
+    at = data.pop("at", None)
+    if at is not None and not (_is_number(at) and at >= 0):
+        raise WireError(f"'at' is a time in seconds, not {json.dumps(at)[:60]}")
     kind = data.pop("kind", None)
     checks = CHECKS.get(kind) if isinstance(kind, str) else None
     if checks is None:
@@ -172,7 +190,7 @@ def decode(payload: bytes, *, key_expr: str | None = None) -> Message:
         if len(parts) != 4 or parts[2] != data["to"] or parts[3] != kind:
             raise WireError(f"{_a(kind)} message to {data['to']!r} published under "
                             f"{key_expr!r}")
-    return build(kind, data)
+    return build(kind, data), at
 
 
 def _a(kind: str) -> str:
@@ -183,7 +201,8 @@ def json_schema() -> dict[str, Any]:
     """The wire format as a JSON Schema (the same rules :func:`decode` checks)."""
     variants = []
     for kind, cls in KINDS.items():
-        props: dict[str, Any] = {"v": {"const": VERSION}, "kind": {"const": kind}}
+        props: dict[str, Any] = {"v": {"const": VERSION}, "kind": {"const": kind},
+                                 "at": {"type": "number", "minimum": 0}}
         for f in fields(cls):
             props[f.name] = dict(TYPES[str(f.type)][1])
         for name in REQUIRED:

@@ -30,9 +30,9 @@ from typing import Any
 import zenoh
 
 from shary.loop import EventLoop
-from shary.transport.messages import Clock, Message
+from shary.transport.messages import Clock, LogRecord, Message
 from shary.transport.port import Faults, MessagePort
-from shary.transport.wire import PREFIX, WireError, decode, encode, key
+from shary.transport.wire import MAX_BYTES, PREFIX, WireError, decode_timed, encode, key
 
 LEASE_MS = 1000
 """A frozen peer is noticed after this long (Zenoh's default, 10 s, is too slow for a team)."""
@@ -40,21 +40,30 @@ LOOPBACK = "tcp/127.0.0.1:7447"
 """Where a team listens unless told otherwise."""
 
 
+Settings = dict[str, Any]
+"""A user's Zenoh settings, path -> value (checked by :mod:`shary.transport.zconfig`)."""
+
+
 def session_config(*, mode: str = "peer", listen: Iterable[str] = (),
-                   connect: Iterable[str] = (), lease_ms: int = LEASE_MS) -> zenoh.Config:
+                   connect: Iterable[str] = (), lease_ms: int = LEASE_MS,
+                   settings: Settings | None = None) -> zenoh.Config:
     """A Zenoh configuration that reaches exactly the endpoints given.
 
     No multicast scouting, no gossip, and ``listen`` empty unless given (Zenoh
     would otherwise listen on every interface): a team stays on loopback
-    unless a user names another endpoint.
+    unless a user names another endpoint.  ``settings`` (a user's
+    ``--zenoh-config``: TLS, access control …) go over these defaults; the mode
+    and the endpoints stay the ones given here.
     """
     conf = zenoh.Config()
     conf.insert_json5("mode", json.dumps(mode))
     conf.insert_json5("scouting/multicast/enabled", "false")
     conf.insert_json5("scouting/gossip/enabled", "false")
+    conf.insert_json5("transport/link/tx/lease", str(lease_ms))
+    for path, value in (settings or {}).items():
+        conf.insert_json5(path, json.dumps(value))
     conf.insert_json5("listen/endpoints", json.dumps(list(listen)))
     conf.insert_json5("connect/endpoints", json.dumps(list(connect)))
-    conf.insert_json5("transport/link/tx/lease", str(lease_ms))
     return conf
 
 
@@ -75,6 +84,13 @@ class ZenohPort(MessagePort):
         self.wire_received: dict[str, int] = {}
         self.refused = 0
         self.on_clock: Callable[[Clock], Any] | None = None
+        """Told each ``Clock`` message as it is taken (outside the loop's callbacks: a step
+        runs what arrived before it at the old time, then moves the clock, so that the
+        messages behind it, sent at the new time, are handled at the new time)."""
+        self.on_time: Callable[[float], Any] | None = None
+        """Told the time a message was sent at, before the message is delivered (a
+        member whose clock is behind catches up: a message is never handled before the
+        time it was sent, whatever order the network brought it in)."""
         self.on_presence: Callable[[str, bool], Any] | None = None
         """Told ``(name, joined)`` when a process of the team joins or leaves."""
         self._publishers: dict[tuple[str, str], Any] = {}
@@ -109,6 +125,10 @@ class ZenohPort(MessagePort):
         if address in self.local:
             super().subscribe(address, handler)
 
+    def tap(self, address: str, taker: Callable[[Message], bool]) -> None:
+        if address in self.local:
+            super().tap(address, taker)
+
     def new_id(self, prefix: str) -> str:
         return f"{prefix}{self.name}.{next(self._ids)}"
 
@@ -121,15 +141,26 @@ class ZenohPort(MessagePort):
         else:
             self.outbox.append(message)
 
+    def forward(self, message: Message) -> None:
+        """Queue ``message`` for the wire without logging it or faulting it (a copy of a
+        log row: :mod:`shary.transport.logshare`)."""
+        self.outbox.append(message)
+
     def publish(self, message: Message) -> None:
         """Put ``message`` on the wire now (the clock's messages do not wait for idle)."""
+        payload = encode(message, self.loop.now())
+        if len(payload) > MAX_BYTES:  # the receiver would refuse it: say so here
+            if self._record is not None and message.kind != LogRecord.kind:
+                self._record("message-too-big", agent=message.sender, to=message.to,
+                             type=message.kind, size=len(payload))
+            return
         route = (message.to, message.kind)
         publisher = self._publishers.get(route)
         if publisher is None:
             publisher = self._publishers[route] = self.session.declare_publisher(
                 key(self.team, message.to, message.kind),
                 congestion_control=zenoh.CongestionControl.BLOCK)
-        publisher.put(encode(message))
+        publisher.put(payload)
         if message.kind != Clock.kind:
             link = f"{message.sender}>{message.to}"
             self.wire_sent[link] = self.wire_sent.get(link, 0) + 1
@@ -142,7 +173,9 @@ class ZenohPort(MessagePort):
 
     def pump(self, timeout: float = 0.0) -> int:
         """Bring what arrived into the loop (waiting up to ``timeout`` s for the first);
-        returns how many items were taken."""
+        returns how many items were taken.  A step of the shared clock takes effect here,
+        in arrival order, so call it from the top of a process's loop (never from a
+        callback)."""
         inbox = self.inbox
         try:
             item = inbox.get(timeout=timeout) if timeout > 0 else inbox.get_nowait()
@@ -166,7 +199,7 @@ class ZenohPort(MessagePort):
                 self.loop.call_soon(self.on_presence, who, what == "join")
             return
         try:
-            message = decode(payload, key_expr=expr)
+            message, at = decode_timed(payload, key_expr=expr)
         except WireError as exc:
             self.refused += 1
             if self._record is not None:
@@ -174,12 +207,15 @@ class ZenohPort(MessagePort):
                              size=len(payload))
             return
         if isinstance(message, Clock):
-            if self.on_clock is not None:
-                self.loop.call_soon(self.on_clock, message)
+            if self.on_clock is not None:  # now, not queued: a step moves the clock after
+                self.on_clock(message)      # what arrived before it and before what follows
             return
         link = f"{message.sender}>{message.to}"
         self.wire_received[link] = self.wire_received.get(link, 0) + 1
-        self.deliver(message)
+        if at is not None and self.on_time is not None:
+            self.on_time(at)
+        if not self.faulted(message, self.deliver):  # a bad link delays what arrives too
+            self.deliver(message)
 
     def close(self) -> None:
         """Flush, undeclare and close the session (always: an open one outlives a crash)."""

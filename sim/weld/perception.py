@@ -5,9 +5,9 @@ After every tick, :class:`SitePerception` writes into the fact base (the
 — ``x``, ``y``, ``z`` and ``yaw`` (where its front faces), rounded to a
 centimetre and a hundredth of a radian so that standing still changes nothing
 — whether each panel is ``mounted`` and each seam ``welded``.  The spatial
-reasoning agent (:mod:`shary.team.spatial`) reasons on these facts only; the
-Resource Manager's distance criterion reads the agents' positions, which are
-kept up to date here too.
+reasoning agent (:mod:`shary.team.spatial`) reasons on these facts only, and the
+team keeps its agents' positions (the Resource Manager's distance criterion)
+from their ``x`` and ``y``.
 
 Before the run, the kinds of things and the panels' sizes are stated once.
 """
@@ -26,12 +26,10 @@ class SitePerception:
     """Poses and states of the site, published as facts when they change."""
 
     def __init__(self, site: WeldSite, people: dict[str, Any], facts: Any,
-                 agents: dict[str, Any], perspective: str = "robot"):
+                 perspective: str = "robot"):
         self.site = site
         self.people = people
         self.facts = facts
-        self.agents = agents
-        """The team's agents by name: their ``position`` follows the world."""
         self.perspective = perspective
         self._published: dict[tuple[str, str], Any] = {}
         """What was last written for each (subject, predicate): only changes are written."""
@@ -76,9 +74,6 @@ class SitePerception:
             self._set(name, predicate, round(value, 2))
         if yaw is not None:
             self._set(name, "yaw", round(math.atan2(math.sin(yaw), math.cos(yaw)), 2))
-        agent = self.agents.get(name)
-        if agent is not None:
-            agent.position = (round(x, 2), round(y, 2))
 
     def _set(self, s: str, p: str, o: Any) -> None:
         key = (s, p)
