@@ -57,6 +57,8 @@ CONDUCTOR = "managers"
 MANAGERS = ("tasks", "interaction", CLOCK, LOGS)
 WAIT = 0.2
 """Seconds a process waits for a message before looking around again."""
+DRAIN = 2.0
+"""Wall seconds the managers wait, once the run is over, for what is still on its way."""
 
 
 def agent_log(logdir: Path | None, name: str, seed: int) -> Any:
@@ -398,11 +400,22 @@ class Conductor:
                     self._tell(name, at)
                 loop.advance(at - loop.now())
                 port.flush()
+            self._drain(at)
             return team.tasks.outcome
         finally:
             for name in self.members:
                 port.publish(Clock(CLOCK, name, state="stop",
                                    reason=team.tasks.outcome or "time is up"))
+
+    def _drain(self, at: float) -> None:
+        """The run is over: take in what is still on its way at ``at`` (the members' last
+        log rows, a reply sent with the one that ended the goal) before they are told to
+        stop, for :data:`DRAIN` seconds at most (a member gone silent is not waited for)."""
+        end = time.monotonic() + DRAIN
+        while not self._balanced(at) and time.monotonic() < end:
+            self.port.pump(WAIT / 4)
+            self.team.loop.run_until_idle()
+            self.port.flush()
 
     def _paced(self, deadline: float) -> bool:
         """Wait for the wall clock to reach ``deadline``, handling what arrives meanwhile
