@@ -170,7 +170,7 @@ def test_not_seen_in_her_view_then_executed_once_told(browser: Any, watched: Pat
     assert now[GREEN_PLACE] == {"pr2": "EXECUTED", "alice": "EXECUTED"}
     assert browser.find_element(By.ID, "verdict").text.startswith("PASSED")
     said = browser.find_element(By.CSS_SELECTOR, ".plan-robot .says").text
-    assert said == "pr2 says “I placed the green cube on the blue cube 2.”"
+    assert said == "pr2 says “I placed the green cube on the blue cube on the stick.”"
     assert "d2: alice chose Pick(alice, blue_cube_2)" in browser.find_element(By.ID,
                                                                             "lines").text
 

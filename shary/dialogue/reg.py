@@ -192,6 +192,10 @@ class Referrer:
         kind = self._kind(types)
         return self.index.labels.get(kind, humanize(kind))
 
+    def knows(self, thing: str) -> bool:
+        """Whether this perspective holds anything of ``thing`` (its type, at least)."""
+        return bool(self.index.values.get(thing, {}).get("type"))
+
     def is_agent(self, thing: str) -> bool:
         return bool(self.index.values.get(thing, {}).get("type", set()) & AGENT_TYPES)
 

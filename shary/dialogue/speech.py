@@ -9,7 +9,8 @@ A recipe speaks in one of two ways (``recipes/core.yaml``):
   :mod:`shary.dialogue.verbalize`) with the performing robot as speaker and
   ``to`` as addressee (``_`` for nobody in particular), and every object is
   named by a referring expression in the addressee's perspective of the fact
-  base ("Shall I give the yellow bottle to you?");
+  base, or in the robot's where the addressee's holds nothing of it ("Shall I
+  give the yellow bottle to you?");
 * ``{do: speak, with: {text: "Thank you for the {object}."}}`` -- the
   recipe's own sentence, said as written: the override for what no action
   label says (thanks, reasons, greetings).
@@ -121,11 +122,20 @@ class Speech:
         addressee = args.get("to")
         addressee = str(addressee) if addressee not in (None, "", "_") else None
         agents = {t for t in values if self._is_agent(t)}
-        referrer = Referrer.for_perspective(self.facts, perspective or addressee or "robot")
+        seen_by = perspective or addressee or "robot"
+        listener = Referrer.for_perspective(self.facts, seen_by)
+        scene = listener if seen_by == "robot" else Referrer.for_perspective(self.facts, "robot")
+
+        def refer(thing: str) -> str:
+            # What the listener's perspective says nothing of (the robot has no estimate
+            # of what they know of it) is described from the scene the robot perceives,
+            # which they share, rather than by its identifier.
+            known = listener.knows(thing) or not scene.knows(thing)
+            return (listener if known else scene).describe(thing, by_name=True).text()
+
         bindings = {"Agent": values[0], **dict(zip(roles, values[1:], strict=True))}
         return verbalize(ontology.label(cls), bindings, act, speaker=speaker,
-                         addressee=addressee, agents=agents,
-                         refer=lambda thing: referrer.describe(thing, by_name=True).text())
+                         addressee=addressee, agents=agents, refer=refer)
 
     def _is_agent(self, thing: str) -> bool:
         types = set(map(str, self.facts.objects(thing, "type")))
