@@ -72,9 +72,9 @@ class Initiative:
 
     def ontology(self) -> Any:
         """The action ontology: the one the robot's speech uses (read once)."""
-        from shary.dialogue.speech import _ontology
+        from shary.dialogue.speech import core_ontology
 
-        return self.sup.speech.ontology or _ontology()
+        return self.sup.speech.ontology or core_ontology()
 
     def grammar(self) -> Grammar:
         """The requests' grammar, from the action ontology's labels."""

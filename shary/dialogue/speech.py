@@ -31,7 +31,7 @@ from shary.dialogue.reg import Referrer
 from shary.dialogue.verbalize import ACTS, verbalize
 from userfiles.schema import did_you_mean
 
-__all__ = ["SAY_PARAMS", "Speech", "check_say", "parse_about"]
+__all__ = ["SAY_PARAMS", "Speech", "check_say", "core_ontology", "parse_about"]
 
 SAY_PARAMS = ("act", "about", "to")
 """The parameters of the ``say`` atomic task."""
@@ -72,7 +72,7 @@ def check_say(args: Mapping[str, Any], params: set[str]) -> list[tuple[str, str]
     filled = _PLACEHOLDER.sub(lambda m: m.group(1), about)
     try:
         name, values = parse_about(filled)
-        _action(_ontology(), name, values)
+        _action(core_ontology(), name, values)
     except ValueError as err:
         problems.append(("about", str(err).replace(repr(filled), repr(about))))
     return problems
@@ -91,7 +91,7 @@ def _action(ontology: Any, name: str, values: list[str]) -> tuple[str, list[str]
 
 
 @functools.cache
-def _ontology() -> Any:
+def core_ontology() -> Any:
     """The core action ontology, loaded once into a fact base of its own (it is a-priori
     knowledge shared by every run; a run's facts are not filled with it)."""
     from shary.facts import FactDatabase
@@ -117,7 +117,7 @@ class Speech:
         if act not in ACTS:
             raise ValueError(f"say: unknown act {act!r}; one of: {', '.join(ACTS)}")
         name, values = parse_about(args.get("about", ""))
-        ontology = self.ontology or _ontology()
+        ontology = self.ontology or core_ontology()
         cls, roles = _action(ontology, name, values)
         addressee = args.get("to")
         addressee = str(addressee) if addressee not in (None, "", "_") else None
