@@ -32,6 +32,19 @@ def test_builtin_files_are_valid(shary):
     assert "give-object.yaml" in out and "acts.yaml" in out
 
 
+def test_a_builtin_recipe_file_given_by_its_relative_path(shary, monkeypatch):
+    """The built-in library is loaded under every recipe file checked; the same file
+    named again by a relative path is that file, not a second declaration of its tasks."""
+    from pathlib import Path
+
+    import shary as package
+
+    monkeypatch.chdir(Path(package.__file__).resolve().parent.parent)
+    status, out, err = shary("validate", "recipes/core.yaml", "recipes/dialogue.yaml")
+    assert status == 0, err
+    assert "declared twice" not in err and "ok    recipes/core.yaml" in out
+
+
 def test_builtin_files_come_from_the_file_kinds():
     """``shary validate`` alone checks what each registered kind lists as shipped: the
     engine's kinds and those sim registers by entry point (scenarios, profiles)."""

@@ -59,7 +59,11 @@ def load_library(paths: list[str | os.PathLike[str]] | None = None, *,
                  acts: ActRegistry | None = None, with_builtin: bool = True) -> RecipeLibrary:
     """Load and check recipe files (the built-in ones first, unless told otherwise)."""
     files = [Path(p) for p in (builtin_library_files() if with_builtin else [])]
-    files += [Path(p) for p in paths or [] if Path(p) not in files]
+    loaded = {f.resolve() for f in files}  # a built-in file given by path is loaded once
+    for path in map(Path, paths or []):
+        if path.resolve() not in loaded:
+            loaded.add(path.resolve())
+            files.append(path)
     problems: list[Problem] = []
     documents: list[Reader] = []
     for path in files:
