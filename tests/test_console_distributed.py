@@ -17,8 +17,10 @@ import socket
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
+from urllib.request import urlopen
 
 from websockets.sync.client import connect
 
@@ -49,11 +51,13 @@ def _connect(url: str) -> Any:
 class Page:
     """A WebSocket client that keeps what the console sent it."""
 
-    def __init__(self, ws: Any):
+    def __init__(self, ws: Any, http: str):
         self.ws = ws
+        self.http = http
         self.changes: list[list[Any]] = []
         self.status: dict[str, Any] = {}
         self.replies: dict[int, dict[str, Any]] = {}
+        self.schemes: set[str] = set()
         self._id = 0
 
     def read(self, until: Any, timeout: float = 60) -> None:
@@ -69,6 +73,8 @@ class Page:
                 self.changes += message["changes"]
             elif message["type"] == "status":
                 self.status = message["status"]
+            elif message["type"] == "scheme":
+                self.schemes.add(message["name"])
             elif message["type"] == "reply":
                 self.replies[message["id"]] = message
 
@@ -99,6 +105,9 @@ def _steer(page: Page) -> None:
     assert "EVA1 runs in its own process" in refused["error"]
     assert "not offered or running" in page.send(
         "cancel-team-task", team_task="check")["error"]
+    page.ws.send('{"kind": "pause", "by": "tester", "kind": "resume"}')  # refused unread
+    page.read(lambda: None in page.replies)
+    assert "given twice" in page.replies[None]["error"]
     assert page.send("step")["ok"]  # one step: EVA1 accepts at 1 s
     page.read(lambda: page.tasks().get("mount-P1") == "running")
     assert page.tasks()["mount-P2"] == "offered"
@@ -109,33 +118,69 @@ def _steer(page: Page) -> None:
     assert {"EVA1", "EVA2", "IVA"} <= {c[1] for c in page.changes if c[0] == "agent"}
 
 
-def test_a_distributed_team_is_watched_and_steered_from_the_managers(tmp_path: Path) -> None:
+def _team_up(what: str, logs: Path, steer: Callable[[Page], None]) -> tuple[int, str]:
+    """``shary team up WHAT --console`` steered by ``steer`` over the WebSocket, then
+    stopped with Ctrl-C (the console stays up until then); its exit status and output.
+    Every process of the team goes in the end (its process group)."""
     port = _free()
-    logs = tmp_path / "logs"
     process = subprocess.Popen(
-        [sys.executable, "-u", "-m", "shary", "team", "up", str(TEAM), "--listen",
+        [sys.executable, "-u", "-m", "shary", "team", "up", what, "--listen",
          f"tcp/127.0.0.1:{_free()}", "--log-dir", str(logs), "--console",
          "--console-port", str(port)],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
         env={**os.environ, "COLUMNS": "200"}, start_new_session=True)
     try:
         with _connect(f"ws://127.0.0.1:{port}/ws") as ws:
-            page = Page(ws)
-            _steer(page)
-        process.send_signal(signal.SIGINT)  # the console stays until Ctrl-C
+            steer(Page(ws, f"http://127.0.0.1:{port}"))
+        process.send_signal(signal.SIGINT)
         out, err = process.communicate(timeout=60)
     finally:
         if process.poll() is None:
             os.killpg(process.pid, signal.SIGKILL)
         process.wait(timeout=30)
-    assert process.returncode == 0, err
     assert f"shary console: http://127.0.0.1:{port}/" in out
+    return process.returncode, err
+
+
+def test_a_distributed_team_is_watched_and_steered_from_the_managers(tmp_path: Path) -> None:
+    logs = tmp_path / "logs"
+    status, err = _team_up(str(TEAM), logs, _steer)
+    assert status == 0, err
     rows = list(read_events(logs / "managers.sqlite"))
     actions = [(e.agent, e.data["action"]) for e in rows if e.kind == "operator"]
     assert actions == [("tester", "pause"), ("tester", "step"), ("tester", "resume")]
     refusals = [e.data for e in rows if e.kind == "operator-refused"]
-    assert [r["action"] for r in refusals] == ["answer", "cancel-team-task"]
-    assert all(e.agent == "tester" for e in rows if e.kind == "operator-refused")
+    assert [r["action"] for r in refusals] == ["answer", "cancel-team-task", "malformed"]
+    assert [e.agent for e in rows if e.kind == "operator-refused"] == [
+        "tester", "tester", "unknown"]  # a message not read says nobody
+
+
+def _watch_weld(page: Page) -> None:
+    """A breakpoint at K-10's question; the answer is IVA's to give, from IVA's process."""
+    assert page.send("breakpoint", act="question")["ok"]
+    page.read(lambda: page.status.get("state") == "paused" and any(
+        c[0] == "tq" and c[2]["holder"] == "IVA" for c in page.changes), timeout=120)
+    question = next(c for c in page.changes if c[0] == "tq")
+    assert question[2]["asker"] == "K-10"
+    with urlopen(f"{page.http}/run/{question[2]['image']}") as picture:  # K-10's camera
+        assert picture.read(8) == b"\x89PNG\r\n\x1a\n"
+    refused = page.send("answer", question=question[1], agent="IVA", text="no")
+    assert "IVA runs in its own process" in refused["error"]
+    assert page.send("clear-breakpoint", act="question")["ok"]
+    assert page.send("resume")["ok"]
+    page.read(lambda: page.status.get("state") == "ended", timeout=120)
+    assert page.status["verdict"] == {"passed": True, "differences": []}
+    agents = {c[1] for c in page.changes if c[0] == "member"}
+    assert {"K-10", "Robonaut-B", "IVA"} <= agents
+    assert set(page.tasks().values()) == {"done"}
+    configs = {c[1].partition("/")[0] for c in page.changes if c[0] == "config" and c[2]}
+    assert configs == {"K-10", "Robonaut-B"}  # the robots' schemes, from their processes
+    page.read(lambda: bool(page.schemes))  # and their diagrams
+
+
+def test_a_weld_scenario_distributed_shows_the_robots_and_the_question(tmp_path: Path) -> None:
+    status, err = _team_up("weld-human-supports-robot", tmp_path / "logs", _watch_weld)
+    assert status == 0, err
 
 
 def test_a_cancelled_team_task_is_withdrawn_at_the_task_manager(tmp_path: Path) -> None:

@@ -323,7 +323,7 @@ def _console(args: argparse.Namespace, spec: Any,
                           schemes=lambda name: schemes.get(name) or builtin(name),
                           speed=1 / args.pace if args.pace > 0 else 0.0)
     try:
-        status = serve(live, args.console_host, args.console_port)
+        status = serve(live, args.console_host, args.console_port, option="--console-port")
     except KeyboardInterrupt:  # uvicorn raises the Ctrl-C it stopped on again
         status = 0
     if status:
