@@ -3,7 +3,7 @@
 One run of the panels team (the managers and three people, each its own process),
 watched and steered over the console's WebSocket from the managers' machine: the
 page gets every agent's block and the team tasks going done from the merged records;
-pause holds the shared clock, step moves it once, resume lets it go; a person's
+pause holds the shared clock, step moves it once, speed and resume let it go; a person's
 answer is refused with its reason; every action is in the managers' log with who
 did it.  A cancelled team task is withdrawn at the Task Manager (in one process:
 the same code path, without processes)."""
@@ -111,6 +111,9 @@ def _steer(page: Page) -> None:
     assert page.send("step")["ok"]  # one step: EVA1 accepts at 1 s
     page.read(lambda: page.tasks().get("mount-P1") == "running")
     assert page.tasks()["mount-P2"] == "offered"
+    assert page.send("speed", value=50)["ok"]
+    page.read(lambda: page.status["speed"] == 50)
+    assert page.send("speed", value=0)["ok"]  # as fast as it goes
     assert page.send("resume")["ok"]
     page.read(lambda: page.status.get("state") == "ended", timeout=120)
     assert page.status["verdict"]["passed"], page.status
@@ -148,7 +151,8 @@ def test_a_distributed_team_is_watched_and_steered_from_the_managers(tmp_path: P
     assert status == 0, err
     rows = list(read_events(logs / "managers.sqlite"))
     actions = [(e.agent, e.data["action"]) for e in rows if e.kind == "operator"]
-    assert actions == [("tester", "pause"), ("tester", "step"), ("tester", "resume")]
+    assert actions == [("tester", kind) for kind in ("pause", "step", "speed", "speed",
+                                                      "resume")]
     refusals = [e.data for e in rows if e.kind == "operator-refused"]
     assert [r["action"] for r in refusals] == ["answer", "cancel-team-task", "malformed"]
     assert [e.agent for e in rows if e.kind == "operator-refused"] == [
