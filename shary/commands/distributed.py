@@ -46,6 +46,12 @@ def _duration(text: str) -> float:
         raise argparse.ArgumentTypeError(f"{text!r} is not a duration (10min, 90s …)") from None
 
 
+def _port(text: str) -> int:
+    if not text.isdigit() or not 0 < int(text) < 65536:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a port (1 to 65535)")
+    return int(text)
+
+
 def _loss(text: str) -> float:
     try:
         value = float(text)
@@ -133,7 +139,7 @@ def add_team(sub: argparse._SubParsersAction, *,
     up.add_argument("--console", action="store_true",
                     help="serve the operator console for the run (it starts when the first "
                     "page connects; Ctrl-C stops the console once the run is over)")
-    up.add_argument("--console-port", type=int, default=8765, metavar="N",
+    up.add_argument("--console-port", type=_port, default=8765, metavar="N",
                     help="the console's port (default 8765)")
     up.add_argument("--console-host", default="127.0.0.1", metavar="HOST",
                     help="the console's address (default 127.0.0.1: this machine only)")
@@ -213,6 +219,9 @@ def team_up(args: argparse.Namespace, spec: Any, *, world: list[str] | None = No
                      json_mode=args.json)
     if args.console and args.json:
         return error("--console and --json do not go together (the console shows the run)")
+    if args.console and not args.share_log:
+        return error("--console shows the agents' log records, which --no-share-log keeps "
+                     "in their processes: give one of them")
     logdir = args.log_dir or Path(tempfile.mkdtemp(prefix=f"shary-{spec.name}-"))
     show = (lambda line: None) if args.json else _out.print
     children: dict[str, subprocess.Popen[bytes]] = {}
