@@ -102,7 +102,7 @@ def _steer(page: Page) -> None:
     assert page.status["state"] == "paused"
     refused = page.send("answer", question="q1", agent="EVA1", text="yes")
     assert not refused["ok"]
-    assert "EVA1 runs in its own process" in refused["error"]
+    assert refused["error"] == "question q1 is not open (answered or expired)"
     assert "not offered or running" in page.send(
         "cancel-team-task", team_task="check")["error"]
     page.ws.send('{"kind": "pause", "by": "tester", "kind": "resume"}')  # refused unread
@@ -170,6 +170,9 @@ def _watch_weld(page: Page) -> None:
         assert picture.read(8) == b"\x89PNG\r\n\x1a\n"
     refused = page.send("answer", question=question[1], agent="IVA", text="no")
     assert "IVA runs in its own process" in refused["error"]
+    assert page.send("take-control", agent="K-10", person="IVA")["error"].startswith(
+        "K-10 runs in its own process: control authority")
+    assert "runs in its own process" in page.send("robot-breakpoint", agent="K-10")["error"]
     assert page.send("clear-breakpoint", act="question")["ok"]
     assert page.send("resume")["ok"]
     page.read(lambda: page.status.get("state") == "ended", timeout=120)

@@ -74,13 +74,12 @@ class DistributedSteering:
             if task is None or task["state"] not in ("offered", "running"):
                 return f"team task {message['team_task']} is not offered or running"
             return None
-        if kind in ELSEWHERE:
+        why = TeamSteering().check(message, view)  # what is wrong with it, in any team run
+        if why is None and kind in ELSEWHERE:  # right, but not the managers' to do
             agent = message["task"].rpartition("/")[0] if kind == "cancel" \
-                else message.get("agent")
-            if agent not in view.team.members:
-                return f"{agent} is not an agent of this team"
-            return ELSEWHERE[kind].format(agent=agent)
-        return TeamSteering().check(message, view)  # the same words for the rest
+                else message["agent"]
+            why = ELSEWHERE[kind].format(agent=agent)
+        return why
 
     def perform(self, message: dict[str, Any], by: str) -> None:
         """Carry out a checked message (on the conductor's thread; logged already)."""
