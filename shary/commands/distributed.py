@@ -18,6 +18,7 @@ import sys
 import tempfile
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -43,6 +44,12 @@ def _duration(text: str) -> float:
         return seconds(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not a duration (10min, 90s …)") from None
+
+
+def _port(text: str) -> int:
+    if not text.isdigit() or not 0 < int(text) < 65536:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a port (1 to 65535)")
+    return int(text)
 
 
 def _loss(text: str) -> float:
@@ -129,6 +136,13 @@ def add_team(sub: argparse._SubParsersAction, *,
     up.add_argument("--wait", type=_duration, default=30.0, metavar="DURATION",
                     help="how long to wait for every agent to join, and for a lost one to "
                     "come back when the goal needs it (default 30s)")
+    up.add_argument("--console", action="store_true",
+                    help="serve the operator console for the run (it starts when the first "
+                    "page connects; Ctrl-C stops the console once the run is over)")
+    up.add_argument("--console-port", type=_port, default=8765, metavar="N",
+                    help="the console's port (default 8765)")
+    up.add_argument("--console-host", default="127.0.0.1", metavar="HOST",
+                    help="the console's address (default 127.0.0.1: this machine only)")
     add_common(up)
     add_json_flag(up, "the outcome")
     up.set_defaults(func=run or cmd_team_up)
@@ -168,9 +182,13 @@ def cmd_team_up(args: argparse.Namespace) -> int:
 
 Prepare = Callable[[Any], Any]
 """Called with the :class:`~shary.transport.distributed.Conductor` before the goal starts."""
-Finish = Callable[[Any, "str | None", Path, float], int]
+Finish = Callable[[Any, "str | None", Path, float], list[str]]
 """Called with the conductor, the goal's outcome, the log folder and the wall seconds once
-the run is over; prints the verdict and returns the exit status."""
+the run is over; prints the verdict and returns its differences (none: passed)."""
+
+
+class NotRun(Exception):
+    """The run cannot start: the managers cannot listen, members did not join."""
 
 
 def team_up(args: argparse.Namespace, spec: Any, *, world: list[str] | None = None,
@@ -181,7 +199,9 @@ def team_up(args: argparse.Namespace, spec: Any, *, world: list[str] | None = No
 
     A team with robots needs its world agent: ``world`` is the command that starts it
     (``shary world SCENARIO``, which the simulator's ``team up SCENARIO`` gives), or it
-    joins from elsewhere (``--remote world``)."""
+    joins from elsewhere (``--remote world``).  With ``--console`` the run starts when the
+    first page connects, and the console is served until Ctrl-C
+    (:mod:`shary.console.distributed`)."""
     import zenoh
 
     from shary.team.world import WORLD
@@ -197,6 +217,11 @@ def team_up(args: argparse.Namespace, spec: Any, *, world: list[str] | None = No
                      "run a scenario of the team (shary team up weld-nominal), or start its "
                      "world yourself and give --remote world (docs/distributed.md)",
                      json_mode=args.json)
+    if args.console and args.json:
+        return error("--console and --json do not go together (the console shows the run)")
+    if args.console and not args.share_log:
+        return error("--console shows the agents' log records, which --no-share-log keeps "
+                     "in their processes: give one of them")
     logdir = args.log_dir or Path(tempfile.mkdtemp(prefix=f"shary-{spec.name}-"))
     show = (lambda line: None) if args.json else _out.print
     children: dict[str, subprocess.Popen[bytes]] = {}
@@ -205,14 +230,31 @@ def team_up(args: argparse.Namespace, spec: Any, *, world: list[str] | None = No
     def display(kind: str, data: dict[str, Any]) -> None:
         show(_line(kind, data, children))
 
-    try:
-        conductor = Conductor(spec, listen=args.listen, logdir=logdir, seed=args.seed,
-                              pace=args.pace, settings=settings, rejoin_wait=args.wait,
-                              display=display)
-    except zenoh.ZError as exc:
-        return error(f"cannot listen at {args.listen}: {zenoh_reason(exc)} (another team there? "
-                     "give --listen tcp/127.0.0.1:PORT)", json_mode=args.json)
-    try:
+    def conduct() -> Any:
+        try:
+            return Conductor(spec, listen=args.listen, logdir=logdir, seed=args.seed,
+                             pace=0.0 if args.console else args.pace, settings=settings,
+                             rejoin_wait=args.wait, display=display)
+        except zenoh.ZError as exc:
+            raise NotRun(f"cannot listen at {args.listen}: {zenoh_reason(exc)} (another team "
+                         "there? give --listen tcp/127.0.0.1:PORT)") from None
+
+    def run(watch: Callable[[Any], Any] | None = None) -> list[str]:
+        """Start the managers and the members, run the goal, judge it: the verdict's
+        differences.  All in one thread (the conductor's log is SQLite's)."""
+
+        conductor = conduct()
+        try:
+            if watch is not None:
+                watch(conductor)
+            return conducted(conductor)
+        finally:
+            conductor.close()
+            _wait(children)
+
+    def conducted(conductor: Any) -> list[str]:
+        from shary.console.teamlive import roster
+
         for name in conductor.members:
             if name in args.remote:
                 continue
@@ -226,10 +268,11 @@ def team_up(args: argparse.Namespace, spec: Any, *, world: list[str] | None = No
              f"{len(conductor.members)} agents, logs in {logdir}")
         missing = conductor.wait_for_members(args.wait)
         if missing:
-            return error(f"{', '.join(missing)} did not join within {args.wait:g} s",
-                         json_mode=args.json)
+            raise NotRun(f"{', '.join(missing)} did not join within {args.wait:g} s")
         if prepare is not None:
             prepare(conductor)
+        else:  # the roster a console shows (a scenario's prepare records it with the rest)
+            conductor.team.record("team", **roster(conductor.team))
         running = time.monotonic()
         outcome = conductor.run(args.limit, settle=settle)
         run_wall = time.monotonic() - running
@@ -246,10 +289,55 @@ def team_up(args: argparse.Namespace, spec: Any, *, world: list[str] | None = No
         else:
             show(f"goal {outcome or 'not over'} at {now:g} s simulated "
                  f"({wall:.1f} s wall); merged log: shary log {logdir}/*.sqlite")
-        return 0 if outcome == "done" else 1
-    finally:
-        conductor.close()
-        _wait(children)
+        return [] if outcome == "done" else [f"the goal is {outcome or 'not over'} at "
+                                             f"{now:g} s"]
+
+    if args.console:
+        return _console(args, spec, run, logdir)
+    try:
+        return 1 if run() else 0
+    except NotRun as exc:
+        return error(str(exc), json_mode=args.json)
+
+
+@dataclass
+class _Verdict:
+    differences: list[str]
+
+    def summary(self) -> dict[str, Any]:
+        return {"passed": not self.differences, "differences": self.differences}
+
+
+def _console(args: argparse.Namespace, spec: Any,
+             run: Callable[[Callable[[Any], Any]], list[str]], logdir: Path) -> int:
+    """Serve the console; the run starts with the first page (on the run's thread, where
+    the conductor lives from then on) and the console stays until Ctrl-C; the verdict's
+    exit status."""
+    from shary.console.distributed import DistributedRun
+    from shary.console.replay import named_schemes
+    from shary.console.server import serve
+
+    builtin = named_schemes()
+    schemes: dict[str, Any] = {}
+    if spec.of_kind("robot"):
+        from shary.team.teamfile import robot_library
+
+        schemes = {choice.scheme.name: choice.scheme
+                   for task in robot_library(spec).tasks.values() for choice in task.schemes}
+
+    def runner(attachment: Any) -> _Verdict:
+        return _Verdict(run(live.watch))
+
+    live = DistributedRun(spec.name, runner, logdir,
+                          schemes=lambda name: schemes.get(name) or builtin(name),
+                          speed=1 / args.pace if args.pace > 0 else 0.0)
+    try:
+        status = serve(live, args.console_host, args.console_port, option="--console-port")
+    except KeyboardInterrupt:  # uvicorn raises the Ctrl-C it stopped on again
+        status = 0
+    if status:
+        return status
+    return 0 if live.verdict is not None and live.verdict.get("passed") else 1
 
 
 def _wait(children: dict[str, subprocess.Popen[bytes]]) -> None:

@@ -266,8 +266,10 @@ def serving(port: RunPort, *, host: str = "127.0.0.1", stamp: bool = False) -> I
         thread.join(timeout=15)
 
 
-def serve(port: RunPort, host: str = "127.0.0.1", port_number: int = 8765) -> int:
-    """Serve the console until interrupted (Ctrl-C); the address is printed first.
+def serve(port: RunPort, host: str = "127.0.0.1", port_number: int = 8765, *,
+          option: str = "--port") -> int:
+    """Serve the console until interrupted (Ctrl-C); the address is printed first
+    (``option``: the command's option that chooses the port, named when it is in use).
 
     The socket is bound here, before the server starts, so that an address in use
     is one clear line (exit status 2) and the address printed is one that listens.
@@ -285,7 +287,7 @@ def serve(port: RunPort, host: str = "127.0.0.1", port_number: int = 8765) -> in
         listening.bind((host, port_number))
     except OSError as err:
         return error(f"cannot listen on {host} port {port_number}: {err.strerror or err} "
-                     "(another server there? choose one with --port N)")
+                     f"(another server there? choose one with {option} N)")
     app = make_app(port, host=host)
     config = uvicorn.Config(app, log_level="warning", ws_max_size=MAX_MESSAGE_BYTES * 4,
                             timeout_graceful_shutdown=2, lifespan="on")

@@ -210,11 +210,35 @@ class TaskManager:
 
     # -- progress ------------------------------------------------------------------
 
+    def withdraw(self, name: str, reason: str) -> str | None:
+        """End the attempt at team task ``name`` here, as failed with ``reason`` (an
+        operator's cancel, when its holder runs in another process): it is retried,
+        respawned or given up as the team file says; the holder is told (a ``withdrawn``
+        progress) and offered nothing new until it says the task is over.  Why not, or None."""
+        task = self.tasks.get(name)
+        if task is None or task.agent is None or task.state not in (OFFERED, RUNNING):
+            return f"team task {name} is not offered or running now"
+        holder = task.agent
+        if task.timer is not None:
+            task.timer.cancel()
+            task.timer = None
+        self.team.record("task-failed", task=name, agent=holder, reason=reason)
+        self.team.port.send(Progress(self.address, holder, task=name, status="withdrawn",
+                                     reason=reason))
+        self._attempt_over(task, reason)
+        self.team.loop.call_soon(self.dispatch)
+        return None
+
     def handle(self, message: Message) -> None:
         if not isinstance(message, Progress):
             return
         task = self.tasks.get(message.task)
         if task is None or task.agent != message.sender:
+            holder = self.team.agents.get(message.sender)
+            if holder is not None and holder.current == message.task and \
+                    message.status in ("refused", "done", "failed"):
+                holder.current = None  # over with a withdrawn task: free for another
+                self.team.loop.call_soon(self.dispatch)
             return  # progress of a withdrawn offer
         status = message.status
         if status == "accepted" and task.state == OFFERED:

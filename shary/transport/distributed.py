@@ -258,6 +258,10 @@ class Conductor:
         """Per link, sent - received left over from a member's earlier life (a restart)."""
         self.halted: str | None = None
         """Why the run cannot go on (the world left: nobody performs the robots' tasks)."""
+        self.gate: Callable[[float, float], float] | None = None
+        """Asked ``(now, next)`` before each step of the clock, when everyone is idle: the
+        wall seconds to hold (an operator's pause, the console's speed; the run looks
+        again after them, since the gate may have acted on the team), or 0 to step."""
 
     def _record(self, record: Callable[..., None]) -> Callable[..., None]:
         """The team's record, shown on the display too (the rows worth a line)."""
@@ -393,6 +397,9 @@ class Conductor:
                 stalled = None
                 if not dues or min(dues) > limit:
                     break
+                if self.gate is not None and (hold := self.gate(at, min(dues))) > 0:
+                    port.pump(hold)
+                    continue
                 if self.pace and self._paced(start + min(dues) * self.pace):
                     continue  # something happened meanwhile (a member left …): look again
                 at = min(dues)

@@ -115,7 +115,7 @@ def team_up_scenario(args: argparse.Namespace, path: Path) -> int:
         offer_spatial(team)
         schedule_script(team, scenario)
 
-    def finish(conductor: Any, outcome: str | None, logdir: Path, wall: float) -> int:
+    def finish(conductor: Any, outcome: str | None, logdir: Path, wall: float) -> list[str]:
         team = conductor.team
         end = team.loop.now()
         team.record("run-end", scenario=scenario.name)
@@ -149,7 +149,7 @@ def team_up_scenario(args: argparse.Namespace, path: Path) -> int:
                 _out.print(f"  - {escape(difference)}")
             _out.print(f"[dim]logs, pictures and timeline.svg in {escape(str(logdir))}/: "
                        f"shary log {escape(str(logdir))}/*.sqlite[/dim]")
-        return 0 if passed else 1
+        return differences
 
     return team_up(args, scenario.team,
                    world=["world", str(path)], prepare=prepare, finish=finish, settle=True)
