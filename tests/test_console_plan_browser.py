@@ -12,31 +12,20 @@ or Selenium is missing.
 
 from __future__ import annotations
 
-import shutil
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
+from browser import By, chromium, status, wait  # skips this module without a browser
+from selenium.webdriver.support.ui import Select
 
-CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
-DRIVER = shutil.which("chromedriver") or "/usr/bin/chromedriver"
-webdriver = pytest.importorskip("selenium.webdriver",
-                                reason="Selenium is not installed (pip install '.[test]')")
-if not (Path(CHROMIUM).exists() and Path(DRIVER).exists()):
-    pytest.skip("no headless browser: apt-get install chromium chromium-driver",
-                allow_module_level=True)
-
-from selenium.webdriver.chrome.service import Service  # noqa: E402
-from selenium.webdriver.common.by import By  # noqa: E402
-from selenium.webdriver.support.ui import Select  # noqa: E402
-
-from shary.console.replay import Replay, named_schemes  # noqa: E402
-from shary.console.server import serving  # noqa: E402
-from shary.log import read_events  # noqa: E402
-from sim.cli import live_run  # noqa: E402
-from sim.scenario import find_scenario  # noqa: E402
+from shary.console.replay import Replay, named_schemes
+from shary.console.server import serving
+from shary.log import read_events
+from sim.cli import live_run
+from sim.scenario import find_scenario
 
 GREEN_PICK = "Pick(pr2, green_cube)"
 GREEN_PLACE = "Place(pr2, green_cube, blue_cube_2)"
@@ -59,30 +48,7 @@ KEY_ELEMENTS = [
 
 @pytest.fixture(scope="module")
 def browser() -> Iterator[Any]:
-    options = webdriver.ChromeOptions()
-    for arg in ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage",
-                "--window-size=1400,1000", "--disable-gpu"):
-        options.add_argument(arg)
-    options.binary_location = CHROMIUM
-    driver = webdriver.Chrome(options=options, service=Service(DRIVER))
-    try:
-        yield driver
-    finally:
-        driver.quit()
-
-
-def wait(what: Callable[[], Any], seconds: float = 90, message: str = "") -> Any:
-    deadline = time.monotonic() + seconds
-    while time.monotonic() < deadline:
-        found = what()
-        if found:
-            return found
-        time.sleep(0.05)
-    raise AssertionError(f"waited {seconds} s in vain: {message}")
-
-
-def status(driver: Any) -> str:
-    return driver.find_element(By.ID, "status").text
+    yield from chromium(1400, 1000)
 
 
 def views(driver: Any) -> dict[str, dict[str, str]]:

@@ -149,7 +149,6 @@ def add_team(sub: argparse._SubParsersAction, *,
 
 
 def cmd_agent(args: argparse.Namespace) -> int:
-    import zenoh
 
     from shary.team import load_team
     from shary.transport.distributed import Member
@@ -162,13 +161,23 @@ def cmd_agent(args: argparse.Namespace) -> int:
                      f"agents: {', '.join(spec.agents)})")
     faults = (Faults(loss=args.inject_loss, latency=args.inject_latency, seed=args.fault_seed)
               if args.inject_loss or args.inject_latency else None)
+    return take_part(lambda: Member(spec, args.agent, connect=args.connect,
+                                    logdir=args.log_dir, seed=args.seed, faults=faults,
+                                    share_log=args.share_log, settings=settings),
+                     args.connect)
+
+
+def take_part(join: Callable[[], Any], connect: str) -> int:
+    """Join the team at ``connect`` (``join()`` builds the process's member: an agent, the
+    world) and take part until the run stops; the exit status (0 when the run ended,
+    whatever its outcome; 2 when the member could not join)."""
+    import zenoh
+
     try:
-        member = Member(spec, args.agent, connect=args.connect, logdir=args.log_dir,
-                        seed=args.seed, faults=faults, share_log=args.share_log,
-                        settings=settings)
+        member = join()
     except zenoh.ZError as exc:
-        return error(f"cannot join the team at {args.connect}: {zenoh_reason(exc)} "
-                     f"({check_there(args.connect)})")
+        return error(f"cannot join the team at {connect}: {zenoh_reason(exc)} "
+                     f"({check_there(connect)})")
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))  # close the session on a kill
     reason = member.run()
     return 0 if reason in ("done", "failed", "time is up", "stopped") else 1

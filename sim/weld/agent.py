@@ -18,8 +18,6 @@ judges its one log, and draws the timeline of the merged logs (a lane per agent)
 from __future__ import annotations
 
 import argparse
-import signal
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -83,22 +81,13 @@ class WorldMember(Participant):
 
 def cmd_world(args: argparse.Namespace, path: Path) -> int:
     """``shary world SCENARIO``: the scenario's world joins the team at ``--connect``."""
-    import zenoh
-
-    from shary.commands.distributed import check_there, zenoh_reason, zenoh_settings
-    from shary.terminal import error
+    from shary.commands.distributed import take_part, zenoh_settings
 
     settings = zenoh_settings(args)
     scenario = load_weld_scenario(path)
-    try:
-        member = WorldMember(scenario, connect=args.connect, logdir=args.log_dir,
-                             seed=args.seed, share_log=args.share_log, settings=settings)
-    except zenoh.ZError as exc:
-        return error(f"cannot join the team at {args.connect}: {zenoh_reason(exc)} "
-                     f"({check_there(args.connect)})")
-    signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))  # close the session on a kill
-    reason = member.run()
-    return 0 if reason in ("done", "failed", "time is up", "stopped") else 1
+    return take_part(lambda: WorldMember(scenario, connect=args.connect, logdir=args.log_dir,
+                                         seed=args.seed, share_log=args.share_log,
+                                         settings=settings), args.connect)
 
 
 def team_up_scenario(args: argparse.Namespace, path: Path) -> int:
