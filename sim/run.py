@@ -21,6 +21,7 @@ from __future__ import annotations
 import json
 import math
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -152,47 +153,55 @@ def run_scenario(path: str | Path, *, seed: int = 0, out: str | Path | None = No
     return result
 
 
-class _MemoryLog:
+Listener = Callable[[float, str, "str | None", "str | None", dict[str, Any]], Any]
+"""Told ``(time, kind, task, agent, data)`` for every event a run logs."""
+
+
+class MemoryLog:
     """The context log's interface, kept in memory when no output folder is asked for."""
 
     def __init__(self) -> None:
         self.events: list[tuple[float, str, str | None, str | None, dict[str, Any]]] = []
 
     def record(self, t: float, kind: str, *, task: str | None = None,
-               agent: str | None = None, **data: Any) -> None:
+               agent: str | None = None, **data: Any) -> int:
         self.events.append((t, kind, task, agent, data))
+        return len(self.events)
 
     def flush(self) -> None:
         pass
 
-    def __enter__(self) -> _MemoryLog:
+    def __enter__(self) -> MemoryLog:
         return self
 
     def __exit__(self, *exc: object) -> None:
         pass
 
 
-class _Told:
-    """The context log, with each event also shown to the narrator of the run's story."""
+class Told:
+    """The context log, each event also told to ``listeners`` in order (the run's story,
+    the console's attachment, ``--snapshots`` views): one log for the engine, several
+    audiences, none of which the engine knows."""
 
-    def __init__(self, log: Any, narrator: Narrator, console: Any = None):
+    def __init__(self, log: Any, *listeners: Listener):
         self.log = log
-        self.narrator = narrator
-        self.console = console
+        self.listeners = list(listeners)
+        if hasattr(log, "path"):
+            self.path = log.path  # the Context Manager reads the log's file
 
     def record(self, t: float, kind: str, *, task: str | None = None,
-               agent: str | None = None, **data: Any) -> None:
-        self.log.record(t, kind, task=task, agent=agent, **data)
-        self.narrator.event(t, kind, agent, data)
-        if self.console is not None:
-            self.console.observe(t, kind, task, agent, data)
+               agent: str | None = None, **data: Any) -> Any:
+        row = self.log.record(t, kind, task=task, agent=agent, **data)
+        for listener in self.listeners:
+            listener(t, kind, task, agent, data)
+        return row
 
     def flush(self) -> None:
         self.log.flush()
 
 
 def _log(path: Path | None, seed: int) -> Any:
-    return ContextLog(path, seed=seed) if path is not None else _MemoryLog()
+    return ContextLog(path, seed=seed) if path is not None else MemoryLog()
 
 
 class _Run:
@@ -220,9 +229,12 @@ class _Run:
         hatp = HatpPlanner(domain, budget_ms=300)
         self.narrator = Narrator(report, robot, {p.name for p in scenario.people},
                                  last_plan=lambda: hatp.last.plan if hatp.last else None)
+        told = Told(log, lambda t, kind, task, agent, data:
+                    self.narrator.event(t, kind, agent, data))
+        if console is not None:
+            told.listeners.append(console.observe)
         self.sup = Supervisor(library, self.facts, robot=robot, loop=self.loop,
-                              executors=registry, log=_Told(log, self.narrator, console),
-                              planners={"living-room": hatp})
+                              executors=registry, log=told, planners={"living-room": hatp})
         self.console = console
         if console is not None:
             console.attach(self.sup)

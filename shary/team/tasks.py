@@ -20,7 +20,7 @@ messages, all logged.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -304,21 +304,8 @@ class TaskManager:
 
     def _between(self, first: str, last: str) -> set[str]:
         """``first``, ``last`` and the tasks on a path of constraints from one to the other."""
-        after_first: set[str] = set()
-        todo = [first]
-        while todo:
-            name = todo.pop()
-            if name not in after_first:
-                after_first.add(name)
-                todo.extend(self._after[name])
-        before_last: set[str] = set()
-        todo = [last]
-        while todo:
-            name = todo.pop()
-            if name not in before_last:
-                before_last.add(name)
-                todo.extend(self.tasks[name].spec.after)
-        return after_first & before_last
+        return (_reach(first, lambda name: self._after[name])
+                & _reach(last, lambda name: self.tasks[name].spec.after))
 
     def _check_over(self) -> None:
         if all(t.state == DONE for t in self.tasks.values()):
@@ -340,3 +327,15 @@ class TaskManager:
         for task in self.tasks.values():
             counts[task.state] = counts.get(task.state, 0) + 1
         return counts
+
+
+def _reach(start: str, following: Callable[[str], Iterable[str]]) -> set[str]:
+    """``start`` and every task reached from it by ``following`` (a constraint's direction)."""
+    seen: set[str] = set()
+    todo = [start]
+    while todo:
+        name = todo.pop()
+        if name not in seen:
+            seen.add(name)
+            todo.extend(following(name))
+    return seen

@@ -38,7 +38,7 @@ from shary.team.world import connect_world
 from userfiles.outputs import output_folder, write_output
 
 from ..narration import Report
-from ..run import CHUNK, RunResult
+from ..run import CHUNK, MemoryLog, RunResult, Told
 from .scenario import WeldScenario, judge, load_weld_scenario
 from .site import WeldSite
 from .story import TeamStory
@@ -67,10 +67,14 @@ def run_weld(path: str | Path, *, seed: int = 0, out: str | Path | None = None,
     wall = time.perf_counter()
     story = TeamStory(report or (lambda t, who, kind, text: None))
     with WeldSite(gui=gui) as site:
-        log: Any = ContextLog(log_path, seed=seed) if log_path is not None else _Rows()
+        log: Any = ContextLog(log_path, seed=seed) if log_path is not None else MemoryLog()
+        told = Told(log, lambda t, kind, task, agent, data:
+                    story.event(t, kind, agent, data, task))
+        if console is not None:
+            told.listeners.append(console.observe)
         try:
-            run = _WeldRun(scenario, site, _Told(log, story, console), seed, out_dir,
-                           views=snapshots)
+            run = _WeldRun(scenario, site, told, seed, out_dir, views=snapshots,
+                           console=console)
             setup = time.perf_counter() - wall
             wall = time.perf_counter()
             end = run.go()
@@ -79,7 +83,7 @@ def run_weld(path: str | Path, *, seed: int = 0, out: str | Path | None = None,
                 log.flush()
                 rows = [(e.time, e.kind, e.task, e.agent, e.data) for e in read_events(log_path)]
             else:
-                rows = log.rows
+                rows = log.events
             differences = judge(scenario.expect, rows, run.team.tasks.outcome, end)
             if end >= scenario.timeout - 1e-9:
                 differences.append(f"the run was still going at the timeout "
@@ -139,57 +143,18 @@ def site_steps(site: WeldSite) -> int:
     return round(site.time / site.timestep)
 
 
-class _Rows:
-    """The context log's interface, kept in memory when no output folder is asked for."""
-
-    def __init__(self) -> None:
-        self.rows: list[tuple[float, str, str | None, str | None, dict[str, Any]]] = []
-
-    def record(self, t: float, kind: str, *, task: str | None = None,
-               agent: str | None = None, **data: Any) -> int:
-        self.rows.append((t, kind, task, agent, data))
-        return len(self.rows)
-
-    def flush(self) -> None:
-        pass
-
-
-class _Told:
-    """The context log, each event also told to the story (and to ``watchers``)."""
-
-    def __init__(self, log: Any, story: TeamStory, console: Any = None):
-        self.log = log
-        self.story = story
-        self.console = console
-        self.watchers: list[Any] = []
-        if hasattr(log, "path"):
-            self.path = log.path  # the Context Manager reads the log's file
-
-    def record(self, t: float, kind: str, *, task: str | None = None,
-               agent: str | None = None, **data: Any) -> int:
-        row = self.log.record(t, kind, task=task, agent=agent, **data)
-        self.story.event(t, kind, agent, data, task)
-        if self.console is not None:
-            self.console.observe(t, kind, task, agent, data)
-        for watcher in self.watchers:
-            watcher(kind, agent, task)
-        return row
-
-    def flush(self) -> None:
-        self.log.flush()
-
-
 class _WeldRun:
     """One run's parts, wired together: the world agent and the team on one loop."""
 
-    def __init__(self, scenario: WeldScenario, site: WeldSite, log: _Told, seed: int,
-                 out_dir: Path | None, views: bool = False):
+    def __init__(self, scenario: WeldScenario, site: WeldSite, log: Told, seed: int,
+                 out_dir: Path | None, views: bool = False, console: Any = None):
         self.scenario = scenario
         self.site = site
         self.out_dir = out_dir
         self.views = 0
+        self.console = console
         if views and out_dir is not None:
-            log.watchers.append(self._moment)
+            log.listeners.append(self._moment)
         self.loop = EventLoop(seed=seed)
         self.facts = FactDatabase()
         self.log = log
@@ -206,7 +171,7 @@ class _WeldRun:
 
     def go(self) -> float:
         """Run until the goal is over and nothing moves; the simulated time at the end."""
-        console = self.log.console
+        console = self.console
         record_members(self.team)
         if console is not None:
             console.attach(self.team)
@@ -224,7 +189,8 @@ class _WeldRun:
         self.team.record("run-end", scenario=self.scenario.name)
         return self.loop.now()
 
-    def _moment(self, kind: str, agent: str | None, task: str | None) -> None:
+    def _moment(self, t: float, kind: str, task: str | None, agent: str | None,
+                data: dict[str, Any]) -> None:
         """A view of the whole site at the moments worth seeing (``--snapshots``)."""
         if kind in VIEWED:
             self.overview(f"{kind}" + (f" by {agent}" if agent else ""))
