@@ -41,20 +41,14 @@ import statistics
 import sys
 import time
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
-# This script is benchmarks/planner.py: its folder, first on the path when it is run,
-# would shadow the planner package.  The package first, then the helpers beside it.
-HERE = Path(__file__).resolve().parent
-sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != HERE]
+import _first  # noqa: F401  (this folder after the packages: see _first.py)
+from livingroom import clean_up  # noqa: E402
 
 from planner import plan, validate  # noqa: E402
 from planner.search import Search  # noqa: E402
 from planner.state import State  # noqa: E402
-
-sys.path.append(str(HERE))
-from livingroom import clean_up  # noqa: E402
 
 HEADLINE = (6, 2)
 """The size of ``first_plan_ms`` (a 26-action plan) and ``proven_best_ms``: six bottles,

@@ -44,6 +44,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import _first  # noqa: F401  (this folder after the packages: see _first.py)
+
 from planner import load_hddl, plan, validate
 
 SUITE = Path(__file__).resolve().parents[1].parent / "shared" / "suites" / "ipc2020"

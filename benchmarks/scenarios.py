@@ -22,6 +22,8 @@ import statistics
 import sys
 import time
 
+import _first  # noqa: F401  (this folder after the packages: see _first.py)
+
 from sim.run import run_scenario
 from sim.scenario import builtin_scenarios
 from sim.world import LivingRoom
