@@ -10,12 +10,15 @@ from __future__ import annotations
 
 import json
 import os
+import queue
 import re
 import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 from shary.log import read_events
@@ -46,6 +49,31 @@ def _stop(process: subprocess.Popen[str]) -> None:
     if process.poll() is None:
         os.killpg(process.pid, signal.SIGKILL)
     process.wait(timeout=30)
+
+
+def _lines(process: subprocess.Popen[str], seconds: float) -> Iterator[str]:
+    """``process``'s output lines as they come, for ``seconds`` at most (then the test
+    fails with what came: a run that never ends must not hang the suite)."""
+    lines: queue.SimpleQueue[str | None] = queue.SimpleQueue()
+
+    def read() -> None:
+        assert process.stdout is not None
+        for line in process.stdout:
+            lines.put(line)
+        lines.put(None)
+
+    threading.Thread(target=read, daemon=True).start()
+    end = time.monotonic() + seconds
+    seen: list[str] = []
+    while True:
+        try:
+            line = lines.get(timeout=max(0.0, end - time.monotonic()))
+        except queue.Empty:
+            raise AssertionError(f"no end after {seconds:g} s:\n" + "".join(seen)) from None
+        if line is None:
+            return
+        seen.append(line)
+        yield line
 
 
 def _done(path: Path) -> list[tuple[str, str, float]]:
@@ -94,7 +122,7 @@ def test_a_member_killed_mid_task_is_noticed_and_restarted_learns_the_state(
     pids: dict[str, int] = {}
     killed_at = None
     try:
-        for line in process.stdout:
+        for line in _lines(process, 240):
             lines.append((time.monotonic(), line.rstrip()))
             joined = re.match(r"\+ (\S+) joined \(pid (\d+)\)", line.strip())
             if joined:

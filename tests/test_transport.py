@@ -258,3 +258,32 @@ def test_a_rejoining_member_is_told_its_questions_control_and_the_task_table(
                   if e.kind == "state-learned"]
     assert learned.agent == "EVA2" and learned.data["controls"] == ["Robonaut-B"]
     assert learned.data["tasks"]["inspect-P1-P2"]["agent"] == "K-10"
+
+
+def test_a_member_says_nothing_until_it_is_admitted_to_the_clock(tmp_path: Path) -> None:
+    """A restarted member's first log rows, counted by the managers before they knew of
+    its new life, left the shared clock waiting forever for messages it already had (a
+    CI run hung on it): a member holds what it sends until its first step, or its State."""
+    from shary.transport.distributed import CLOCK, Conductor, Member
+
+    spec = load_team(Path(__file__).parent / "data" / "transport" / "panels.team.yaml")
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    conductor = Conductor(spec, listen=endpoint, logdir=tmp_path, members=["EVA1"])
+    try:
+        member = Member(spec, "EVA1", connect=endpoint, logdir=tmp_path)
+        try:
+            assert conductor.wait_for_members(30) == []
+            port = member.port  # it heard the managers join and logged it: held
+            _wait(lambda: port.outbox, 5.0, port)
+            assert port.held and port.wire_sent == {}
+            conductor.port.publish(Clock(CLOCK, "EVA1", state="step", time=0.0))
+            _wait(lambda: member.at == 0.0, 5.0, port)
+            port.flush()
+            assert not port.held and not port.outbox and port.wire_sent["EVA1>logs"] > 0
+            sent = port.wire_sent["EVA1>logs"]
+            _wait(lambda: conductor.port.wire_received.get("EVA1>logs") == sent, 5.0,
+                  conductor.port)
+        finally:
+            member.close()
+    finally:
+        conductor.close()

@@ -214,6 +214,10 @@ def _yaml_problem(err: yaml.YAMLError, file: str, text: str) -> Problem:
     line, col = (mark.line + 1, mark.column + 1) if mark is not None else (1, 1)
     line, col = _within(text, line, col)
     what = getattr(err, "problem", None) or str(err)
+    if what.startswith("exceeded maximum nesting depth"):
+        # libyaml 0.2.5's own limit (PyYAML 6.0.4 on), met while it scans ahead of the
+        # events that would have met ours: the same refusal in our words
+        return Problem(file, line, col, f"nesting deeper than {MAX_DEPTH} levels")
     context = getattr(err, "context", None)
     message = f"YAML syntax: {what}" + (f" ({context})" if context else "")
     return Problem(file, line, col, message)

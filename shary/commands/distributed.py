@@ -383,6 +383,9 @@ def _line(kind: str, data: dict[str, Any], children: dict[str, Any]) -> str:
     if kind == "waiting-for-members":
         return (f"  waiting up to {data.get('within', 0):g} s for "
                 f"{', '.join(map(escape, data.get('missing', [])))} to come back")
+    if kind == "clock-waiting":
+        return (f"  the clock has waited {data.get('seconds', 0):g} s at "
+                f"{data.get('at', 0):g} s for {escape(str(data.get('why')))}")
     if kind == "agent-lost":
         return f"! {agent} lost while {data.get('state')} {task}: offered again"
     if kind == "task-running":

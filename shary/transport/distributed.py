@@ -59,6 +59,10 @@ WAIT = 0.2
 """Seconds a process waits for a message before looking around again."""
 DRAIN = 2.0
 """Wall seconds the managers wait, once the run is over, for what is still on its way."""
+STALL = 10.0
+"""Wall seconds the clock waits at one time before it says what for (a ``clock-waiting``
+row, on the display): a member busy for long, or a count that can never balance."""
+"""Wall seconds the managers wait, once the run is over, for what is still on its way."""
 
 
 def agent_log(logdir: Path | None, name: str, seed: int) -> Any:
@@ -88,6 +92,7 @@ class Participant:
         port.on_clock = self._clock
         port.on_time = self._sent_at
         port.on_presence = self._presence
+        port.held = True  # until admitted: see _admitted
         self.at: float | None = None
         """The time of the last step (None before the first)."""
         self.stopped: str | None = None
@@ -103,6 +108,14 @@ class Participant:
     def start(self) -> None:
         """The run begins (the first step, at the team's current time)."""
 
+    def _admitted(self) -> None:
+        """The first step of the clock (or, on a restart, the State) came: the managers
+        know this process, so what it has to say goes out now.  Before, it stays held: a
+        restarted process's first log rows, counted by the managers before they learn of
+        its new life, would leave the clock waiting forever for a message it already
+        has."""
+        self.port.held = False
+
     def _presence(self, name: str, joined: bool) -> None:
         if name == CONDUCTOR and not joined:
             self.stopped = "the managers left"
@@ -116,6 +129,7 @@ class Participant:
         loop = self.loop
         if self.at is None:
             loop.clock.advance_to(message.time)
+            self._admitted()
             self.start()
         elif message.time > loop.now():
             loop.advance(message.time - loop.now())
@@ -201,6 +215,7 @@ class Member(Participant):
         first = self.at is None
         if first:
             loop.clock.advance_to(state.time)
+            self._admitted()
         elif state.time > loop.now():
             loop.advance(state.time - loop.now())
         self.at = max(self.at or 0.0, state.time)
@@ -267,7 +282,7 @@ class Conductor:
         """The team's record, shown on the display too (the rows worth a line)."""
         shown = {"agent-joined", "agent-left", "agent-lost", "task-running", "task-done",
                  "task-failed", "goal-over", "message-refused", "question", "answer",
-                 "rejoined", "waiting-for-members"}
+                 "rejoined", "waiting-for-members", "clock-waiting"}
 
         def both(kind: str, **data: Any) -> None:
             record(kind, **data)
@@ -322,20 +337,27 @@ class Conductor:
         self.port.publish(Clock(CLOCK, name, state="step", time=at))
 
     def _balanced(self, at: float) -> bool:
-        """Every live member idle at ``at``, every message between live addresses received
+        return self._waiting(at) is None
+
+    def _waiting(self, at: float) -> str | None:
+        """What the clock waits for before it steps from ``at`` (None: nothing): every
+        live member idle at ``at``, every message between live addresses received
         (counted per link: what a lost member sent, or was sent, is not waited for)."""
         if self.port.outbox or self.port.inbox.qsize():
-            return False
-        if any(self.reports.get(m) is None or self.reports[m].time != at for m in self.live):
-            return False
+            return "the managers' own messages"
+        for m in sorted(self.live):
+            report = self.reports.get(m)
+            if report is None or report.time != at:
+                return f"{m} to be idle at {at:g} s"
         sent, received = self._totals()
         alive = self.live | self.port.local
-        for link in sent.keys() | received.keys():
+        for link in sorted(sent.keys() | received.keys()):
             source, _, target = link.partition(">")
             if (source in alive and target in alive
                     and sent.get(link, 0) - received.get(link, 0) != self.offsets.get(link, 0)):
-                return False
-        return True
+                return (f"{link}: {sent.get(link, 0)} sent, {received.get(link, 0)} "
+                        f"received, {self.offsets.get(link, 0)} of an earlier life")
+        return None
 
     def _totals(self) -> tuple[dict[str, int], dict[str, int]]:
         """Messages sent and received per link, by everyone live, as last reported."""
@@ -375,12 +397,19 @@ class Conductor:
         for name in self.live:
             self._tell(name, at)
         try:
+            waiting: float | None = None  # since when the clock waits at ``at`` (wall)
+            said = False
             while (team.tasks.outcome is None or settle) and self.halted is None:
                 port.pump(WAIT if not self._balanced(at) else 0.0)
                 loop.run_until_idle()
                 port.flush()
-                if not self._balanced(at):
+                if (why := self._waiting(at)) is not None:
+                    waiting = waiting or time.monotonic()
+                    if not said and time.monotonic() - waiting >= STALL:
+                        team.record("clock-waiting", at=at, why=why, seconds=STALL)
+                        said = True
                     continue
+                waiting, said = None, False
                 dues = [r.next for r in self.reports.values() if r.next is not None]
                 own = loop.clock.next_due()
                 if own is not None:

@@ -93,6 +93,10 @@ class ZenohPort(MessagePort):
         time it was sent, whatever order the network brought it in)."""
         self.on_presence: Callable[[str, bool], Any] | None = None
         """Told ``(name, joined)`` when a process of the team joins or leaves."""
+        self.held = False
+        """While True, what the loop sends waits in the outbox: a process not yet admitted
+        to the team's shared clock says nothing, so that the managers count its messages
+        from the moment they know it (:class:`~shary.transport.distributed.Participant`)."""
         self._publishers: dict[tuple[str, str], Any] = {}
         self.session = zenoh.open(config)
         try:
@@ -166,7 +170,10 @@ class ZenohPort(MessagePort):
             self.wire_sent[link] = self.wire_sent.get(link, 0) + 1
 
     def flush(self) -> None:
-        """Publish what the loop sent (an idle hook: after the log's commit)."""
+        """Publish what the loop sent (an idle hook: after the log's commit), unless
+        :attr:`held`."""
+        if self.held:
+            return
         outbox, self.outbox = self.outbox, []
         for message in outbox:
             self.publish(message)
