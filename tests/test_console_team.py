@@ -266,6 +266,15 @@ def test_a_cancelled_team_task_fails_for_the_task_manager(tmp_path: Path):
     failed = {e.task: e.data["reason"] for e in read_events(tmp_path / "run.sqlite")
               if e.kind == "task-failed"}
     assert failed[person] == failed[robot] == "cancelled by the operator op"
+    # the holders were told (a message, as in a distributed run) and stopped: the robot's
+    # goal is cancelled on its agenda (then it is free for the retry), the person dropped
+    # the assignment
+    robonaut = team.robot("Robonaut-B")
+    goals = [g for g in robonaut.sup.agenda.goals
+             if any(s.startswith(f"team:{robot}#") for s in g.sources)]
+    assert goals[0].sources == {f"team:{robot}#1"} and goals[0].state == "cancelled"
+    assert all(g.state != "cancelled" for g in goals[1:])  # the retry, offered to it again
+    assert all(person not in team.human(p).assignments for p in ("EVA1", "EVA2"))
     assert console.view.team.tasks[robot]["state"] in ("failed", "ready", "pending",
                                                       "offered", "running")
 

@@ -16,10 +16,10 @@ clock, when every member is idle): pause, resume, step and speed of the
 shared clock, run breakpoints (every row of a step has reached the managers
 before the clock moves on, since log records are counted in the barrier's
 balance), and cancelling a team task (:meth:`~shary.team.tasks.TaskManager.withdraw`:
-the Task Manager is here).  A person's answer, control authority,
-teleoperation, a robot's breakpoint or one of its SHARY tasks belong to a
-process elsewhere: :class:`DistributedSteering` refuses them with the reason,
-rather than forging that agent's messages from here.
+the Task Manager is here; the holder, in its own process, is told and stops).
+A person's answer, control authority, teleoperation, a robot's breakpoint or
+one of its SHARY tasks belong to a process elsewhere: :class:`DistributedSteering`
+refuses them with the reason, rather than forging that agent's messages from here.
 """
 
 from __future__ import annotations

@@ -14,7 +14,8 @@ differs is what an operator may do, which :class:`TeamSteering` holds:
   ``HumanProxy.answer`` (the Interaction Manager routes the answer), the
   ``TAKE-CONTROL``/``HAND-BACK`` acts (:meth:`~shary.team.Team.take_control`),
   :meth:`~shary.team.robot.RobotAgent.teleoperate` (the robot's executor
-  port), a robot's agenda or a person's report for a cancelled team task;
+  port), and the Task Manager's withdrawal of a cancelled team task (its holder, a
+  robot or a person's proxy, is told and stops: the same in one process or many);
 * a **breakpoint on a robot** (HRI/OS Section 3.9): the robot finishes the
   atomic task it is doing and stops before its next one (its executors are
   wrapped by :class:`_Stop`); the rest of the team goes on; clearing it starts
@@ -198,7 +199,7 @@ class TeamSteering:
         elif kind == "clear-robot-breakpoint":
             self._clear(message["agent"], by)
         elif kind == "cancel-team-task":
-            why = self._cancel(message["team_task"], f"cancelled by the operator {by}")
+            why = team.tasks.withdraw(message["team_task"], f"cancelled by the operator {by}")
         elif kind == "cancel":
             robot = team.robot(message["task"].rpartition("/")[0])
             robot.sup.cancel_task(message["task"], f"cancelled by the operator {by}")
@@ -214,33 +215,6 @@ class TeamSteering:
         if held is not None:
             request, reporter, inner = held
             inner.start(request, reporter)
-
-    def _cancel(self, name: str, reason: str) -> str | None:
-        """A team task ends as failed for the Task Manager (which retries, respawns or
-        gives up as the team file says): a robot's goal is cancelled on its agenda, a
-        person's interface reports it failed (or refuses the offer)."""
-        team = self.team
-        assert team is not None
-        task = team.tasks.tasks.get(name)
-        if task is None or task.agent is None or task.state not in ("offered", "running"):
-            return f"team task {name} is not offered or running now"
-        agent = team.agents[task.agent]
-        sup = getattr(agent, "sup", None)
-        if sup is None:
-            proxy = team.human(task.agent)
-            if task.state == "offered":
-                proxy.reply(name, False, reason)
-            else:
-                proxy.report(name, "failed", reason)
-            return None
-        goals = [g for g in sup.agenda.goals if g.state not in ("done", "failed", "cancelled")
-                 and any(s.startswith(f"team:{name}#") for s in g.sources)]
-        if not goals:
-            return f"{task.agent} holds {name} but runs no goal for it yet"
-        agent.last_failure = reason  # type: ignore[attr-defined]  # the progress says why
-        for goal in goals:
-            sup.agenda.cancel(goal, reason)
-        return None
 
     def stopping(self, robot: str) -> bool:
         """Whether ``robot``'s next atomic task waits (a breakpoint, not in user mode)."""

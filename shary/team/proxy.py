@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 from shary.team.agents import ANSWERING, IDLE, REQUEST_HELP, WORKING, Agent
 from shary.team.resources import QUESTION, Need
 from shary.team.spec import ACCEPT, ANSWER, IGNORE, AgentSpec, Delay, HelpRequest
+from shary.team.tasks import WITHDRAWN
 from shary.transport.messages import Act, Answer, Assignment, Message, Progress, Question
 
 if TYPE_CHECKING:
@@ -66,6 +67,9 @@ class HumanProxy(Agent):
             self.team.record("heard", agent=self.name, type=message.kind,
                              task=getattr(message, "task", None),
                              status=getattr(message, "status", None))
+            if isinstance(message, Progress) and message.status == WITHDRAWN \
+                    and message.task in self.assignments:
+                self.report(message.task, "failed", message.reason or WITHDRAWN)
         else:
             super().handle(message)
 

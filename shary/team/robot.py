@@ -35,6 +35,7 @@ from shary.team.agents import (
 from shary.team.interaction import AskExecutor
 from shary.team.resources import HELP, Need
 from shary.team.spec import AgentSpec
+from shary.team.tasks import WITHDRAWN
 from shary.transport.messages import Act, Answer, Assignment, Message, Progress
 
 if TYPE_CHECKING:
@@ -101,7 +102,9 @@ class RobotAgent(Agent):
             if isinstance(asking, AskExecutor):  # an answer nobody waits for is logged
                 asking.answered(message)         # by the Interaction Manager already
         elif isinstance(message, Progress):
-            pass  # what became of the help a robot gave, told to the requester
+            if message.status == WITHDRAWN and message.sender == self.team.tasks.address:
+                self._withdrawn(message.task, message.reason or WITHDRAWN)
+            # else: what became of the help a robot gave, told to the requester
         else:
             super().handle(message)
 
@@ -120,6 +123,18 @@ class RobotAgent(Agent):
                                    source=f"team:{message.task}#{message.attempt}")
         self._goals.setdefault(goal.id, []).append((message.task, message.sender))
         self.progress(message.sender, message.task, "accepted")
+
+    def _withdrawn(self, task: str, reason: str) -> None:
+        """The Task Manager took team task ``task`` back (an operator's cancel): its goal
+        is cancelled on the agenda (the SHARY task stops as its scheme says), and the
+        goal's end tells the Task Manager it is over here."""
+        goals = [g for g in self.sup.agenda.goals
+                 if g.state not in ("done", "failed", "cancelled")
+                 and any(s.startswith(f"team:{task}#") for s in g.sources)]
+        if goals:
+            self.last_failure = reason  # the progress says why
+        for goal in goals:
+            self.sup.agenda.cancel(goal, reason)
 
     def _goal_over(self, goal: Goal) -> None:
         found = self._goals.pop(goal.id, None)

@@ -59,6 +59,12 @@ class TeamTask:
         return self.spec.name
 
 
+WITHDRAWN = "withdrawn"
+"""The status of the Progress that tells a holder its team task was taken back: a robot
+cancels the task's goal, a person's proxy drops the assignment; either then says it is
+over, and is offered work again."""
+
+
 class TaskManager:
     """Runs the goal (see the module's docstring)."""
 
@@ -213,8 +219,10 @@ class TaskManager:
     def withdraw(self, name: str, reason: str) -> str | None:
         """End the attempt at team task ``name`` here, as failed with ``reason`` (an
         operator's cancel, when its holder runs in another process): it is retried,
-        respawned or given up as the team file says; the holder is told (a ``withdrawn``
-        progress) and offered nothing new until it says the task is over.  Why not, or None."""
+        respawned or given up as the team file says; the holder is told (a
+        :data:`WITHDRAWN` progress) and offered nothing new until it says the task is over
+        (a robot's goal cancelled, a person's assignment dropped), wherever it runs.  Why
+        not, or None."""
         task = self.tasks.get(name)
         if task is None or task.agent is None or task.state not in (OFFERED, RUNNING):
             return f"team task {name} is not offered or running now"
@@ -223,7 +231,7 @@ class TaskManager:
             task.timer.cancel()
             task.timer = None
         self.team.record("task-failed", task=name, agent=holder, reason=reason)
-        self.team.port.send(Progress(self.address, holder, task=name, status="withdrawn",
+        self.team.port.send(Progress(self.address, holder, task=name, status=WITHDRAWN,
                                      reason=reason))
         self._attempt_over(task, reason)
         self.team.loop.call_soon(self.dispatch)
