@@ -209,19 +209,15 @@ def test_zenoh_delivers_refuses_and_notices_a_leaving_peer() -> None:
 # -- a member that rejoins learns the state (the managers' side and the member's) --------
 
 
-def test_a_rejoining_member_is_told_its_questions_control_and_the_task_table(
-        tmp_path: Path) -> None:
-    from shary.team.agents import USER
-    from shary.transport.logshare import SharedLog, TeamRecords
-    from shary.transport.rejoin import learn, state_for
-
+def _asking(log) -> Team:
+    """The seam team, its robots on scripted executors, run until K-10 asks its question
+    (nobody answers: it stays open)."""
     spec = load_team(TEAM)
-    for name in ("IVA", "EVA1", "EVA2"):  # nobody answers: the question stays open
+    for name in ("IVA", "EVA1", "EVA2"):
         person = spec.agents[name]
         spec = replace(spec, agents={**spec.agents, name: replace(person, behaviour=replace(
             person.behaviour, questions=Reply("ignore", (0.0, 0.0))))})
-    records = TeamRecords()
-    team = Team(spec, log=SharedLog(ContextLog(tmp_path / "m.sqlite"), records.tap("m")))
+    team = Team(spec, log=log)
     for robot in spec.of_kind("robot"):
         executor = ScriptedExecutor(team.loop, {"drive": 2.0, "weld": 10.0, "scan": 3.0,
                                                 "aim-light": 1.0})
@@ -230,6 +226,18 @@ def test_a_rejoining_member_is_told_its_questions_control_and_the_task_table(
     team.start()
     while not team.interaction.open:
         team.loop.advance(1.0)
+    return team
+
+
+def test_a_rejoining_member_is_told_its_questions_control_and_the_task_table(
+        tmp_path: Path) -> None:
+    from shary.team.agents import USER
+    from shary.transport.logshare import SharedLog, TeamRecords
+    from shary.transport.rejoin import learn, state_for
+
+    records = TeamRecords()
+    team = _asking(SharedLog(ContextLog(tmp_path / "m.sqlite"), records.tap("m")))
+    spec = team.spec
     (qid, entry), = team.interaction.open.items()
     holder = entry.holder
     team.take_control("EVA2", "Robonaut-B")
@@ -287,3 +295,32 @@ def test_a_member_says_nothing_until_it_is_admitted_to_the_clock(tmp_path: Path)
             member.close()
     finally:
         conductor.close()
+
+
+def test_a_question_held_by_a_lost_person_goes_to_the_next_and_back_when_they_return(
+        tmp_path: Path) -> None:
+    team = _asking(ContextLog(tmp_path / "m.sqlite"))
+    asked: list[Question] = []
+    for name in ("IVA", "EVA1", "EVA2"):
+        team.port.tap(name, lambda m: isinstance(m, Question) and not asked.append(m))
+    (entry,) = team.interaction.open.values()
+    first = entry.holder
+    team.loop.advance(5.0)
+    for _ in range(3):  # whoever holds it loses their process: the question follows
+        lost = entry.holder
+        assert lost is not None
+        team.tasks.agent_lost(lost)
+        team.interaction.agent_lost(lost)
+        team.loop.advance(1.0)
+    team.log.flush()
+    rows = [e for e in read_events(tmp_path / "m.sqlite")]
+    rerouted = [e.agent for e in rows if e.kind == "question-rerouted"]
+    assert rerouted == [first, *(q.to for q in asked)] and len(set(rerouted)) == 3
+    assert [q.expires for q in asked] == [entry.question.expires - 5.0,
+                                          entry.question.expires - 6.0]  # the time left
+    assert entry.holder is None and rows[-1].kind == "question-waiting"
+    team.tasks.agent_back(first)  # the first comes back: it is asked again
+    team.interaction.agent_back(first)
+    team.loop.run_until_idle()
+    assert entry.holder == first and asked[-1].to == first
+    assert asked[-1].expires == entry.question.expires - 8.0

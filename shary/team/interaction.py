@@ -26,6 +26,7 @@ from shary.team.agents import REQUEST_HELP
 from shary.team.proxy import HumanProxy
 from shary.team.resources import HELP, QUESTION, Need
 from shary.team.spec import QuestionSpec
+from shary.team.tasks import LOST
 from shary.transport.messages import Act, Answer, Message, Progress, Question, loggable
 
 if TYPE_CHECKING:
@@ -42,9 +43,16 @@ class _Open:
     question: Question
     on_answer: OnAnswer | None
     tried: set[str] = field(default_factory=set)
+    lost: set[str] = field(default_factory=set)
+    """Those it was taken from when their process went (asked again when they are back)."""
     holder: str | None = None
     timer: Timer | None = None
     asked_at: float = 0.0
+
+    def left(self, now: float) -> float:
+        """Seconds the question has left before it expires (what a person asked later,
+        another after a loss or a rejoin, is told)."""
+        return max(self.question.expires - (now - self.asked_at), 0.0)
 
 
 @dataclass(eq=False)
@@ -102,8 +110,9 @@ class InteractionManager:
         question = entry.question
         need = Need(QUESTION, at=None, kinds=("human",), subject=question.id,
                     requester=question.sender)
-        human = self.team.resources.choose(need, self.team.agents.values(),
-                                           free=lambda a: a.name not in entry.tried)
+        human = self.team.resources.choose(
+            need, self.team.agents.values(),
+            free=lambda a: a.name not in entry.tried and a.current != LOST)
         if human is None:
             entry.holder = None
             self.team.record("question-waiting", task=question.task, agent=question.sender,
@@ -111,7 +120,33 @@ class InteractionManager:
             return
         entry.holder = human.name
         entry.tried.add(human.name)
-        self.team.port.send(replace(question, sender=self.address, to=human.name))
+        self.team.port.send(replace(question, sender=self.address, to=human.name,
+                                    expires=entry.left(self.team.loop.now())))
+
+    def agent_lost(self, name: str) -> None:
+        """``name``'s process is gone: the questions it held go to the next best person
+        (or wait for one), the help it was giving to the next robot with the skill."""
+        for entry in list(self.open.values()):
+            if entry.holder == name:
+                self.team.record("question-rerouted", task=entry.question.task, agent=name,
+                                 question=entry.question.id, reason="lost")
+                entry.lost.add(name)
+                self._route(entry)
+        for help_ in list(self.helps.values()):
+            if help_.robot == name:
+                self.team.record("help-rerouted", task=help_.id, agent=name,
+                                 reason="lost")
+                self._place(help_)
+
+    def agent_back(self, name: str) -> None:
+        """``name`` is back: a question taken from it, that nobody else holds now, goes
+        to it again if it is still the best one to ask."""
+        for entry in list(self.open.values()):
+            if name in entry.lost:
+                entry.lost.discard(name)
+                entry.tried.discard(name)
+                if entry.holder is None:
+                    self._route(entry)
 
     def _expire(self, qid: str) -> None:
         entry = self.open.get(qid)
@@ -157,8 +192,9 @@ class InteractionManager:
         requester = self.team.agents.get(help_.requester)
         need = Need(HELP, help_.skill, at=requester.position if requester else None,
                     kinds=("robot",), subject=help_.id, requester=help_.requester)
-        robot = self.team.resources.choose(need, self.team.agents.values(),
-                                           free=lambda a: a.name not in help_.tried)
+        robot = self.team.resources.choose(
+            need, self.team.agents.values(),
+            free=lambda a: a.name not in help_.tried and a.current != LOST)
         if robot is None:
             del self.helps[help_.id]
             self.team.record("help-unserved", task=help_.id, agent=help_.requester,

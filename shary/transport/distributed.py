@@ -314,6 +314,7 @@ class Conductor:
                 self.halted = "the world left"
             if name in self.team.agents:
                 self.team.tasks.agent_lost(name)
+                self.team.interaction.agent_lost(name)
 
     def _rejoin(self, name: str) -> None:
         """``name`` came back while the goal runs: tell it the state (its first step of
@@ -328,6 +329,7 @@ class Conductor:
         for message in messages:
             self.port.send(message)
         self.team.tasks.agent_back(name)
+        self.team.interaction.agent_back(name)
 
     def _idle(self, message: Clock) -> None:
         if message.state == "idle" and message.sender in self.live:

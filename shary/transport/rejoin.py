@@ -44,9 +44,8 @@ def state_for(team: Team, name: str, records: TeamRecords | None) -> list[Messag
                   controls=tuple(sorted(_linked(controlled, name))))
     again: list[Message] = [state]
     for entry in held:
-        left = max(entry.question.expires - (now - entry.asked_at), 0.0)
         again.append(replace(entry.question, sender=team.interaction.address, to=name,
-                             expires=left))
+                             expires=entry.left(now)))
     return again
 
 
