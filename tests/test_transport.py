@@ -259,6 +259,13 @@ def test_a_rejoining_member_is_told_its_questions_control_and_the_task_table(
     learn(member, "EVA2", control)
     robot = member.robot("Robonaut-B")
     assert (robot.mode, robot.controller) == (USER, "EVA2")
+    # the robot's side: restarted while EVA2 drove it, it is EVA2's again
+    again = Team(spec, log=ContextLog(tmp_path / "robonaut.sqlite"))
+    learn(again, "Robonaut-B", state_for(team, "Robonaut-B", records)[0])
+    restarted = again.robot("Robonaut-B")
+    assert (restarted.mode, restarted.controller) == (USER, "EVA2")
+    assert restarted.hand_back("EVA2") and restarted.mode != USER
+    again.log.close()
     assert member.tasks.tasks["weld-P1-P2"].state == "done"
     assert member.tasks.tasks["weld-P1-P2"].done_by == ["Robonaut-B"]
     member.log.close()

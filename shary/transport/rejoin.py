@@ -4,11 +4,13 @@ A process that died and is started again (``shary agent EVA1 …``) begins
 with a fresh team: no task table, no questions, no associations, its clock at
 zero.  When its liveliness token appears while the goal runs, the managers
 send it one :class:`~shary.transport.messages.State` (:func:`state_for`): the
-team's task table as the Task Manager holds it, the open questions it holds,
-the robots it is associated with or controls (as the robots logged them, from
-the managers' merged view of the logs, :mod:`shary.transport.logshare`); then
-the open questions again, with the time they have
-left.  The State's time is the team's time: it is the member's first step of
+team's task table as the Task Manager holds it, the open questions it holds
+(none after a loss: the Interaction Manager gave them to the next person, or
+keeps them waiting and asks this one again once it is back), the robots it is
+associated with or controls (as the robots logged them, from the managers'
+merged view of the logs, :mod:`shary.transport.logshare`); then the open
+questions again, with the time they have left.  A robot that a person
+controlled is theirs again.  The State's time is the team's time: it is the member's first step of
 the shared clock (it does not start its own script again; a robot subscribes
 to the world's facts again, and gets them all at once,
 :mod:`shary.transport.facts`).
@@ -86,4 +88,9 @@ def learn(team: Team, name: str, state: State) -> None:
         robot = team.agents.get(other)
         if isinstance(robot, RobotAgent) and other != name:
             robot.mode, robot.controller = USER, name
+    if isinstance(me, RobotAgent) and state.controls:
+        # a robot restarted while a person drove it: it is still theirs (its own goals
+        # wait) until they hand it back.  An association is not taken up again: the
+        # help it served went to another robot when this one was lost.
+        me.take_control(state.controls[0])
 
