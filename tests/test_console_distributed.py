@@ -179,6 +179,8 @@ def _watch_weld(page: Page) -> None:
     assert page.status["verdict"] == {"passed": True, "differences": []}
     agents = {c[1] for c in page.changes if c[0] == "member"}
     assert {"K-10", "Robonaut-B", "IVA"} <= agents
+    own = {c[1] for c in page.changes if c[0] == "member" and c[3].get("process") == "own"}
+    assert own >= {"K-10", "Robonaut-B", "IVA"}  # the page offers them no actions of theirs
     assert set(page.tasks().values()) == {"done"}
     configs = {c[1].partition("/")[0] for c in page.changes if c[0] == "config" and c[2]}
     assert configs == {"K-10", "Robonaut-B"}  # the robots' schemes, from their processes

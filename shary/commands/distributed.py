@@ -281,7 +281,7 @@ def team_up(args: argparse.Namespace, spec: Any, *, world: list[str] | None = No
         if prepare is not None:
             prepare(conductor)
         else:  # the roster a console shows (a scenario's prepare records it with the rest)
-            conductor.team.record("team", **roster(conductor.team))
+            conductor.team.record("team", **roster(conductor.team, conductor.members))
         running = time.monotonic()
         outcome = conductor.run(args.limit, settle=settle)
         run_wall = time.monotonic() - running

@@ -28,7 +28,7 @@ need a world, which a seam-welding scenario gives them) on a simulated clock.
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -51,10 +51,12 @@ CHUNK = 0.1
 """Simulated seconds between two looks at the console (as in ``sim``'s runs)."""
 
 
-def roster(team: Team) -> dict[str, Any]:
+def roster(team: Team, elsewhere: Collection[str] = ()) -> dict[str, Any]:
     """The ``team`` row a run records when it starts: every member (robots with the atomic
     tasks they can be teleoperated with) and every team task, so that the page shows the
-    whole team and the Task Manager's whole table from the start."""
+    whole team and the Task Manager's whole table from the start.  ``elsewhere``: the
+    members that run in processes of their own (a distributed run: ``"process": "own"``,
+    and the page offers no action that only their own process may take)."""
     members: list[dict[str, Any]] = []  # a list: the file's order (a log sorts its keys)
     for name, agent in team.agents.items():
         spec = agent.spec
@@ -63,6 +65,8 @@ def roster(team: Team) -> dict[str, Any]:
             about["services"] = list(spec.services)
         if spec.remote:
             about["remote"] = True
+        if name in elsewhere:
+            about["process"] = "own"
         sup = getattr(agent, "sup", None)
         if sup is not None:
             world = set(agent.world.names())  # type: ignore[attr-defined]

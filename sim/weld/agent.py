@@ -100,7 +100,7 @@ def team_up_scenario(args: argparse.Namespace, path: Path) -> int:
     def prepare(conductor: Any) -> None:
         team = conductor.team
         connect_world(team)  # the managers' view: the robots' executors are the world's
-        record_members(team)
+        record_members(team, conductor.members)
         offer_spatial(team)
         schedule_script(team, scenario)
 

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import json
 import time
+from collections.abc import Collection
 from pathlib import Path
 from typing import Any
 
@@ -111,12 +112,13 @@ def offer_spatial(team: Team) -> None:
             agent.offer("spatial", reasoner.service)
 
 
-def record_members(team: Team) -> None:
-    """The team's roster (``team``: what the console shows of it), and a ``member`` row
-    per agent that acts: each a lane of the timeline, in the file's order."""
+def record_members(team: Team, elsewhere: Collection[str] = ()) -> None:
+    """The team's roster (``team``: what the console shows of it; ``elsewhere``: the
+    members in processes of their own), and a ``member`` row per agent that acts: each a
+    lane of the timeline, in the file's order."""
     from shary.console.teamlive import roster
 
-    team.record("team", **roster(team))
+    team.record("team", **roster(team, elsewhere))
     for member in team.spec.agents.values():
         if member.kind != "software":
             team.record("member", agent=member.name, member_kind=member.kind,

@@ -39,8 +39,27 @@
       if (kind === "human") personBlock(name, m);
     }
     m.kind = kind; m.about = about;
+    if (own(name)) elsewhere(name, m);
     facts(name);
     for (const r of tm.robots.values()) people(r);
+  }
+
+  // A member in a process of its own (a distributed run): what only that process may do
+  // (a person's answer, a robot's controls) is not offered here; the server would refuse it.
+  function own(name) {
+    const m = tm.members.get(name);
+    return Boolean(m && m.about && m.about.process === "own");
+  }
+
+  function elsewhere(name, m) {
+    const r = tm.robots.get(name);
+    if (r) { r.box.remove(); tm.robots.delete(name); }
+    const a = window.shary.agents.get(name);
+    if (a) a.box.classList.add("own-process");  // its SHARY tasks' cancel buttons go too
+    if (m.kind === "robot" && live() && !m.box.querySelector(".elsewhere")) {
+      m.box.append(el("div", "robot-controls elsewhere", name + " runs in its own process: " +
+        "control, teleoperation and breakpoints come from a person's own interface there"));
+    }
   }
 
   function facts(name) {
@@ -51,6 +70,7 @@
     if (about.skills && about.skills.length) parts.push("skills: " + about.skills.join(", "));
     if (about.services && about.services.length) parts.push("services: " + about.services.join(", "));
     if (about.remote) parts.push("remote");
+    if (about.process === "own") parts.push("own process");
     parts.push("holds: " + (m.holds || "—"));
     if (m.kind === "robot") {
       parts.push("mode: " + (m.mode === "user" ? "user (driven by " + m.by + ")" : "system"));
@@ -61,7 +81,7 @@
   }
 
   function robotBlock(name, m) {
-    if (!live()) return;
+    if (!live() || own(name)) return;
     const r = { name, box: el("div", "robot-controls") };
     r.person = el("select", "person");
     r.person.title = "the person the operator acts for";
@@ -253,7 +273,10 @@
       img.alt = "the picture " + q.asker + " attached";
       box.append(img);
     }
-    if (live()) {
+    if (live() && own(q.holder)) {
+      box.append(el("div", "elsewhere", q.holder + " answers from their own interface " +
+        "(shary agent " + q.holder + ")"));
+    } else if (live()) {
       const answer = (text) => send({ kind: "answer", question: qid, agent: q.holder, text });
       const row = el("div", null, "answer for " + q.holder + ": ");
       const options = q.type === "yes-no" ? ["yes", "no"] : q.choices;
