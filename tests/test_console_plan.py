@@ -16,12 +16,13 @@ import jsonschema
 import pytest
 from hostile import run_inprocess
 from PIL import Image
+from test_console import fold
 
 from shary.console.live import LiveRun, _check_report
 from shary.console.planview import plan_rows
 from shary.console.replay import Replay, named_schemes
 from shary.console.view import View
-from shary.log import ContextLog, LogEvent, read_events
+from shary.log import ContextLog, LogEvent
 from shary.recognition.models import builtin_models, load_action_models
 from shary.recognition.recognizer import Recognizer
 
@@ -97,12 +98,6 @@ def run_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     folder = tmp_path_factory.mktemp("plan-run")
     write_plan_run(folder)
     return folder
-
-
-def fold(path: Path, until: float = 1e9) -> tuple[View, list[list]]:
-    view = View(named_schemes())
-    changes = [c for e in read_events(path) if e.time <= until for c in view.apply(e)]
-    return view, changes
 
 
 # -- the fold ---------------------------------------------------------------------------
