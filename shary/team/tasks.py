@@ -218,7 +218,7 @@ class TaskManager:
 
     def withdraw(self, name: str, reason: str) -> str | None:
         """End the attempt at team task ``name`` here, as failed with ``reason`` (an
-        operator's cancel, when its holder runs in another process): it is retried,
+        operator's cancel): it is retried,
         respawned or given up as the team file says; the holder is told (a
         :data:`WITHDRAWN` progress) and offered nothing new until it says the task is over
         (a robot's goal cancelled, a person's assignment dropped), wherever it runs.  Why

@@ -62,7 +62,6 @@ DRAIN = 2.0
 STALL = 10.0
 """Wall seconds the clock waits at one time before it says what for (a ``clock-waiting``
 row, on the display): a member busy for long, or a count that can never balance."""
-"""Wall seconds the managers wait, once the run is over, for what is still on its way."""
 
 
 def agent_log(logdir: Path | None, name: str, seed: int) -> Any:

@@ -10,10 +10,10 @@ keeps them waiting and asks this one again once it is back), the robots it is
 associated with or controls (as the robots logged them, from the managers'
 merged view of the logs, :mod:`shary.transport.logshare`); then the open
 questions again, with the time they have left.  A robot that a person
-controlled is theirs again.  The State's time is the team's time: it is the member's first step of
-the shared clock (it does not start its own script again; a robot subscribes
-to the world's facts again, and gets them all at once,
-:mod:`shary.transport.facts`).
+controlled is theirs again.  The State's time is the team's time: it is the
+member's first step of the shared clock (it does not start its own script
+again; a robot subscribes to the world's facts again, and gets them all at
+once, :mod:`shary.transport.facts`).
 
 The member (:func:`learn`) logs what it learned (``state-learned``) and sets
 its shadows of the managers and of the robots to it (what its own requests
