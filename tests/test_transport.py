@@ -331,3 +331,24 @@ def test_a_question_held_by_a_lost_person_goes_to_the_next_and_back_when_they_re
     team.loop.run_until_idle()
     assert entry.holder == first and asked[-1].to == first
     assert asked[-1].expires == entry.question.expires - 8.0
+
+
+def test_the_merged_view_keeps_the_newest_rows_and_every_link() -> None:
+    """The managers' view of every log is bounded (a team may run for hours), and what a
+    restarted member is told of associations and control survives the rows let go."""
+    from shary.transport.logshare import TeamRecords
+
+    records = TeamRecords(keep=10)
+    heard: list = []
+    records.listeners.append(heard.append)
+    tap = records.tap("K-10")
+    tap(0.0, "associate", None, "K-10", {"requester": "EVA1"})
+    tap(0.5, "control", None, "Robonaut-B", {"mode": "user", "by": "EVA2"})
+    for i in range(1, 30):
+        tap(float(i), "perceived", None, "world", {"i": i})
+    tap(29.5, "release", None, "Robonaut-B", {})  # releases what it was never associated in
+    assert 9 <= len(records.events) <= 10 and records.dropped + len(records.events) == 32
+    assert records.events[-1].kind == "release" and records.events[-2].data["i"] == 29
+    assert [e.time for e in records.events] == sorted(e.time for e in records.events)
+    assert records.links() == ({"K-10": "EVA1"}, {"Robonaut-B": "EVA2"})
+    assert len(heard) == 32 and records.by == {"K-10": 32}

@@ -28,6 +28,9 @@ from shary.transport.messages import LogRecord, Message
 
 LOGS = "logs"
 """The managers' address for the members' log records."""
+KEEP = 100_000
+"""Rows the merged view keeps in memory, the newest (every process's log file keeps them
+all): a team that runs for hours must not grow the managers' process without end."""
 
 Tap = Callable[[float, str, "str | None", "str | None", dict[str, Any]], Any]
 """Told ``(time, kind, task, agent, data)`` for every row a log records."""
@@ -96,17 +99,23 @@ class TeamRecords:
     """The live merged view of a team's logs, in the managers' process.
 
     ``events`` are :class:`~shary.log.LogEvent` s ordered by time (rows of one
-    time keep their arrival order; ``seq`` numbers them as they arrive);
-    ``listeners`` hear each row as it comes (a console's feed).  ``by`` counts
-    the rows per process.
+    time keep their arrival order; ``seq`` numbers them as they arrive), the
+    newest ``keep`` of them (``dropped`` counts the older ones let go: the log
+    files hold them); ``listeners`` hear each row as it comes (a console's
+    feed).  ``by`` counts the rows per process.  Which robots are associated
+    with or controlled by whom is kept from every row, dropped or not.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, keep: int = KEEP) -> None:
+        self.keep = keep
         self.events: list[LogEvent] = []
         self._times: list[float] = []
         self._seq = itertools.count(1)
         self.listeners: list[Callable[[LogEvent], Any]] = []
         self.by: dict[str, int] = {}
+        self.dropped = 0
+        self._associated: dict[str, str] = {}
+        self._controlled: dict[str, str] = {}
 
     def tap(self, process: str) -> Tap:
         """The tap for this process's own log (the managers' rows)."""
@@ -128,24 +137,30 @@ class TeamRecords:
         self._times.insert(at, time)
         self.events.insert(at, event)
         self.by[process] = self.by.get(process, 0) + 1
+        self._link(event)
+        if len(self.events) > self.keep:  # a tenth at once: the cost of a cut is shared
+            cut = len(self.events) - self.keep + self.keep // 10
+            del self.events[:cut], self._times[:cut]
+            self.dropped += cut
         for listener in self.listeners:
             listener(event)
+
+    def _link(self, e: LogEvent) -> None:
+        """Follow the robots' association and control rows (each robot's come from its
+        own process, in its order)."""
+        if e.agent is None:
+            return
+        if e.kind == "associate" and isinstance(e.data.get("requester"), str):
+            self._associated[e.agent] = e.data["requester"]
+        elif e.kind == "release":
+            self._associated.pop(e.agent, None)
+        elif e.kind == "control" and isinstance(e.data.get("by"), str):
+            if e.data.get("mode") == "user":
+                self._controlled[e.agent] = e.data["by"]
+            else:
+                self._controlled.pop(e.agent, None)
 
     def links(self) -> tuple[dict[str, str], dict[str, str]]:
         """From the rows so far: robot -> the person it is associated with, and robot ->
         the person controlling it (user mode), as the robots logged them."""
-        associated: dict[str, str] = {}
-        controlled: dict[str, str] = {}
-        for e in self.events:
-            if e.agent is None:
-                continue
-            if e.kind == "associate" and isinstance(e.data.get("requester"), str):
-                associated[e.agent] = e.data["requester"]
-            elif e.kind == "release":
-                associated.pop(e.agent, None)
-            elif e.kind == "control" and isinstance(e.data.get("by"), str):
-                if e.data.get("mode") == "user":
-                    controlled[e.agent] = e.data["by"]
-                else:
-                    controlled.pop(e.agent, None)
-        return associated, controlled
+        return dict(self._associated), dict(self._controlled)
