@@ -479,6 +479,15 @@ class FactDatabase:
         self._index.setdefault(key, []).append(subscription)
         return subscription
 
+    def log_changes(self, record: Callable[..., object]) -> Subscription:
+        """Write every change as a ``fact-added`` / ``fact-removed`` row through
+        ``record(kind, **data)`` (a context log's): the rows the timeline's attention band,
+        the console's Facts panel and a run's story read."""
+        def logged(event: FactEvent) -> None:
+            record(f"fact-{event.kind}", perspective=event.perspective, s=str(event.subject),
+                   p=str(event.predicate), o=str(event.object))
+        return self.subscribe(logged)
+
     def unsubscribe(self, subscription: Subscription) -> None:
         """Stop a subscription at once (even mid-delivery); unsubscribing twice is harmless."""
         if not subscription.active:

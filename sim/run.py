@@ -238,7 +238,7 @@ class _Run:
         self.console = console
         if console is not None:
             console.attach(self.sup)
-        self.facts.subscribe(self._fact_logged)
+        self.facts.log_changes(self.sup.record)
         self.people: dict[str, Person] = {}
         for spec in scenario.people:
             self.sim.add_person(spec.name, spec.at, (*spec.shirt, 1.0))
@@ -329,10 +329,6 @@ class _Run:
     def learned(self, s: str, p: str, o: Any) -> None:
         """An executor found something out by trying (the bottle is out of reach)."""
         self.facts.set(s, p, o)
-
-    def _fact_logged(self, event: Any) -> None:
-        self.sup.record(f"fact-{event.kind}", perspective=event.perspective,
-                        s=str(event.subject), p=str(event.predicate), o=str(event.object))
 
     def _act_started(self, run: Any, state: Any, agent: str) -> None:
         self.report(self.loop.now(), agent, "act", f"[{state.act}] {run.type.name}")

@@ -91,6 +91,7 @@ class WeldWorld:
         self.running: dict[str, Request] = {}
         """Request id -> the robot's atomic task being performed (to cancel it)."""
         self.sharing = FactSharing(facts, port, WORLD)
+        facts.log_changes(record)  # the site as perceived, in the log (the Facts panel)
         self.perception = SitePerception(site, self.actions.people, facts)
         self.perception.a_priori()
         self.perception.update()
