@@ -346,13 +346,13 @@ class Conductor:
         (counted per link: what a lost member sent, or was sent, is not waited for)."""
         if self.port.outbox or self.port.inbox.qsize():
             return "the managers' own messages"
-        for m in sorted(self.live):
+        for m in self.live:
             report = self.reports.get(m)
             if report is None or report.time != at:
                 return f"{m} to be idle at {at:g} s"
         sent, received = self._totals()
         alive = self.live | self.port.local
-        for link in sorted(sent.keys() | received.keys()):
+        for link in sent.keys() | received.keys():
             source, _, target = link.partition(">")
             if (source in alive and target in alive
                     and sent.get(link, 0) - received.get(link, 0) != self.offsets.get(link, 0)):
