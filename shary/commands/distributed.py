@@ -179,7 +179,6 @@ def take_part(join: Callable[[], Any], connect: str) -> int:
         return error(f"cannot join the team at {connect}: {zenoh_reason(exc)} "
                      f"({check_there(connect)})")
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))  # close the session on a kill
-    member.loop.settle()  # the process is the member's, set up: the long run begins
     reason = member.run()
     return 0 if reason in ("done", "failed", "time is up", "stopped") else 1
 
