@@ -21,13 +21,17 @@ says so (:attr:`Description.pointing`) and the speaker points at the object
 
 Nothing here runs SPARQL: a :class:`PerspectiveIndex` is built once from the
 perspective's triples (each attribute value's set of things, each relation's
-things per landmark), and describing an object is a few set intersections.
+things per landmark) and then kept current by the fact database as facts
+change (:meth:`shary.facts.FactDatabase.derived`), so that a sentence costs
+what it says, not the size of the world; describing an object is a few set
+intersections.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 from shary.dialogue.verbalize import humanize
 
@@ -119,38 +123,85 @@ class PerspectiveIndex:
     relations: dict[str, list[tuple[str, str]]] = field(default_factory=dict)
     labels: dict[str, str] = field(default_factory=dict)
 
+    rank: dict[str, int] = field(default_factory=lambda: {p: i for i, p in enumerate(RELATIONS)})
+    """The relations indexed, each with its place in the order they are tried."""
+    wanted: frozenset[str] = frozenset(ATTRIBUTES) | {"type"}
+    """The attributes indexed."""
+
     @classmethod
     def from_triples(cls, triples: Iterable[tuple[object, object, object]],
                      attributes: Sequence[str] = ATTRIBUTES,
                      relations: Mapping[str, str] = RELATIONS) -> PerspectiveIndex:
         """Index (subject, predicate, object) names: what :meth:`FactDatabase.triples` gives."""
-        index = cls()
-        wanted = set(attributes) | {"type"}
-        rank = {p: i for i, p in enumerate(relations)}
+        index = cls(rank={p: i for i, p in enumerate(relations)},
+                    wanted=frozenset(attributes) | {"type"})
         for s, p, o in triples:
-            s, p = str(s), str(p)
-            if p in wanted:
-                o = str(o)
-                index.values.setdefault(s, {}).setdefault(p, set()).add(o)
-                index.having.setdefault(p, {}).setdefault(o, set()).add(s)
-                if p == "type":
-                    index.entities.add(s)
-            elif p in rank:
-                o = str(o)
-                index.related.setdefault(p, {}).setdefault(o, set()).add(s)
-                index.relations.setdefault(s, []).append((p, o))
-            elif p == _LABEL:
-                index.labels[s] = str(o)
-        for pairs in index.relations.values():
-            pairs.sort(key=lambda pair: (rank[pair[0]], pair[1]))
+            index.change(True, s, p, o)
         return index
 
     @classmethod
-    def from_facts(cls, facts: object, perspective: str,
+    def from_facts(cls, facts: Any, perspective: str,
                    attributes: Sequence[str] = ATTRIBUTES,
                    relations: Mapping[str, str] = RELATIONS) -> PerspectiveIndex:
-        """Index one perspective of a :class:`shary.facts.FactDatabase`."""
-        return cls.from_triples(facts.triples(perspective), attributes, relations)  # type: ignore[attr-defined]
+        """The index of one perspective of a :class:`shary.facts.FactDatabase`, kept
+        current by the database as facts change (built on the first call only: a
+        sentence costs what it says, not the size of the world)."""
+        attributes, relations = tuple(attributes), dict(relations)
+        return facts.derived(
+            (cls, attributes, tuple(relations)), perspective,
+            lambda triples: cls.from_triples(triples, attributes, relations),
+            {*attributes, "type", *relations, _LABEL}, PerspectiveIndex.change)
+
+    def change(self, added: bool, s: object, p: object, o: object) -> None:
+        """Take in one fact added (``added``) or removed; facts of other predicates are
+        ignored."""
+        s, p, o = str(s), str(p), str(o)
+        if p in self.wanted:
+            if added:
+                self.values.setdefault(s, {}).setdefault(p, set()).add(o)
+                self.having.setdefault(p, {}).setdefault(o, set()).add(s)
+                if p == "type":
+                    self.entities.add(s)
+                return
+            _discard(self.values.get(s), p, o)
+            _discard(self.having.get(p), o, s)
+            if p == "type" and not self.values.get(s, {}).get("type"):
+                self.entities.discard(s)
+        elif p in self.rank:
+            pairs = self.relations.setdefault(s, [])
+            if added:
+                _add(self.related.setdefault(p, {}), o, s)
+                if (p, o) not in pairs:
+                    pairs.append((p, o))
+                    pairs.sort(key=lambda pair: (self.rank[pair[0]], pair[1]))
+                return
+            _discard(self.related.get(p), o, s)
+            if (p, o) in pairs:
+                pairs.remove((p, o))
+            if not pairs:
+                del self.relations[s]
+        elif p == _LABEL:
+            if added:
+                self.labels[s] = o
+            elif self.labels.get(s) == o:
+                del self.labels[s]
+
+
+def _add(sets: dict[str, set[str]], key: str, item: str) -> None:
+    found = sets.get(key)
+    if found is None:
+        sets[key] = {item}
+    else:
+        found.add(item)
+
+
+def _discard(sets: dict[str, set[str]] | None, key: str, item: str) -> None:
+    """Take ``item`` out of ``sets[key]``, and the key with its last item."""
+    found = sets.get(key) if sets is not None else None
+    if found is not None:
+        found.discard(item)
+        if not found:
+            del sets[key]  # type: ignore[index]
 
 
 class Referrer:
@@ -169,10 +220,11 @@ class Referrer:
         self.depth = depth
 
     @classmethod
-    def for_perspective(cls, facts: object, perspective: str,
+    def for_perspective(cls, facts: Any, perspective: str,
                         attributes: Sequence[str] = ATTRIBUTES,
                         relations: Mapping[str, str] = RELATIONS) -> Referrer:
-        """A referrer over one perspective of a fact database (indexed once, now)."""
+        """A referrer over one perspective of a fact database (its index is kept current
+        by the database: see :meth:`PerspectiveIndex.from_facts`)."""
         return cls(PerspectiveIndex.from_facts(facts, perspective, attributes, relations),
                    attributes, relations)
 
@@ -239,10 +291,12 @@ class Referrer:
         if not types:
             return None
         kind = self._kind(types)
-        distractors = set(index.having["type"][kind])
+        # The things that fit what is chosen so far, the target among them (it fits
+        # all it is described by): the index's own set until narrowed, never copied,
+        # so that describing a cube does not cost every cube of the world.
+        fitting = index.having["type"][kind]
         if scope is not None:
-            distractors &= scope
-        distractors.discard(target)
+            fitting = (fitting & scope) | {target}
         chosen: list[tuple[str, str]] = [("type", kind)]
         for attribute in self.attributes:
             have = values.get(attribute)
@@ -252,27 +306,27 @@ class Referrer:
             if value not in have:
                 # The value that rules out the most distractors (Dale & Reiter's
                 # "FindBestValue" for an attribute with several values).
-                value = min(have, key=lambda v: (len(distractors & index.having[attribute][v]), v))
-            left = distractors & index.having[attribute][value]
-            if len(left) < len(distractors) or attribute in given:
+                value = min(have, key=lambda v: (len(fitting & index.having[attribute][v]), v))
+            left = fitting & index.having[attribute][value]
+            if len(left) < len(fitting) or attribute in given:
                 chosen.append((attribute, value))
-                distractors = left
+                fitting = left
         relations: list[tuple[str, str, Description]] = []
-        if distractors and depth > 0:
+        if len(fitting) > 1 and depth > 0:
             for predicate, landmark in index.relations.get(target, ()):
                 if landmark in visited:
                     continue
-                left = distractors & index.related[predicate][landmark]
-                if len(left) == len(distractors):
+                left = fitting & index.related[predicate][landmark]
+                if len(left) == len(fitting):
                     continue
                 described = self._landmark(landmark, depth - 1, visited | {target})
                 if described is None:
                     continue
                 relations.append((predicate, self.relations[predicate], described))
-                distractors = left
-                if not distractors:
+                fitting = left
+                if len(fitting) == 1:
                     break
-        if distractors:
+        if len(fitting) > 1:
             return None
         return Description(target, self.noun(target), tuple(chosen), tuple(relations))
 
@@ -290,13 +344,17 @@ class Referrer:
         if description.pointing:
             return {description.target}
         index = self.index
-        found: set[str] | None = set(scope) if scope is not None else None
-        for attribute, value in description.attributes:
-            have = index.having.get(attribute, {}).get(value, set())
-            found = set(have) if found is None else found & have
+        sets: list[set[str]] = [] if scope is None else [scope]
+        sets += [index.having.get(attribute, {}).get(value, set())
+                 for attribute, value in description.attributes]
         for predicate, _, landmark in description.relations:
             near: set[str] = set()
             for thing in self.denotes(landmark):
                 near |= index.related.get(predicate, {}).get(thing, set())
-            found = near if found is None else found & near
-        return found if found is not None else set(index.entities)
+            sets.append(near)
+        if not sets:
+            return set(index.entities)
+        # From the smallest set on, so that the check costs what the description picks
+        # out rather than every thing of its type.
+        sets.sort(key=len)
+        return sets[0].intersection(*sets[1:])
