@@ -33,20 +33,31 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from shary.dialogue.verbalize import humanize
+from shary.dialogue.verbalize import humanize, plural
 
-__all__ = ["AGENT_TYPES", "ATTRIBUTES", "RELATIONS", "Description", "PerspectiveIndex",
-           "Referrer"]
+__all__ = ["AGENT_PHRASES", "AGENT_TYPES", "ATTRIBUTES", "INVERSES", "RELATIONS", "Description",
+           "PerspectiveIndex", "Referrer"]
 
 ATTRIBUTES = ("type", "color", "size")
 """The attributes tried, in Dale & Reiter's preference order, unless told otherwise."""
 
 RELATIONS: Mapping[str, str] = {
-    "isOn": "on", "isIn": "in", "isUnder": "under", "isNear": "near",
+    "isOn": "on", "isIn": "in", "heldBy": "held by", "isUnder": "under", "isNear": "near",
     "leftOf": "to the left of", "rightOf": "to the right of",
     "behind": "behind", "inFrontOf": "in front of",
 }
 """Spatial relations (predicate -> preposition), in the order they are tried."""
+
+INVERSES: Mapping[str, str] = {"isHolding": "heldBy"}
+"""Facts whose subject is the landmark, indexed the other way round: (alice,
+isHolding, cup) is (cup, heldBy, alice), "the cup in Alice's hand"."""
+
+AGENT_PHRASES: Mapping[str, str] = {
+    "heldBy": "in {my} hand", "leftOf": "on {my} left", "rightOf": "on {my} right",
+}
+"""How a relation to a person or robot is said, from their point of view: "the
+placement on your left", "the cube in my hand" (``{my}`` is the possessive: my,
+your, Alice's); other relations put the name after the preposition ("near you")."""
 
 AGENT_TYPES = frozenset({"Human", "Robot", "Agent", "Person"})
 """Types of agents: an agent is named ("Alice"), never described."""
@@ -75,6 +86,9 @@ class Description:
     name: str | None = None
     given: tuple[tuple[str, str], ...] = ()
     """Attributes the listener already said: left out after "one" ("the one on the shelf")."""
+    silent: tuple[tuple[str, str], ...] = ()
+    """(predicate, landmark) relations that tell the target apart but go unsaid: the
+    sentence around the description says them ("I placed the blue cube on the stick")."""
 
     @property
     def gesture(self) -> tuple[str, str] | None:
@@ -86,23 +100,37 @@ class Description:
         """Relations used, the landmarks' own included (what the benchmark reports)."""
         return sum(1 + d.relation_count for _, _, d in self.relations)
 
-    def text(self, head: str | None = None) -> str:
+    def text(self, head: str | None = None, people: Mapping[str, str] | None = None) -> str:
         """The noun phrase: "the small green cube on the table" (``head="one"`` gives
-        "the one on the table", as the second half of a disambiguation question)."""
+        "the one on the table", as the second half of a disambiguation question).
+
+        ``people`` maps the speaker and the addressee to "me" and "you", so that
+        a landmark that is one of them reads "near you", "on my left".
+        """
+        people = people or {}
         if self.name is not None:
-            return self.name
+            return people.get(self.target, self.name)
         if self.pointing:
             return f"this {self.noun}"
         adjectives = sorted((a for a in self.attributes if a[0] != "type"
                              and (head is None or a not in self.given)),
                             key=lambda a: _ADJECTIVE_ORDER.get(a[0], 1))
         words = [humanize(v) for _, v in adjectives] + [head or self.noun]
-        for _, preposition, landmark in self.relations:
-            words += [preposition, landmark.text()]
+        for predicate, preposition, landmark in self.relations:
+            phrase = AGENT_PHRASES.get(predicate) if landmark.name is not None else None
+            if phrase is not None:
+                words.append(phrase.format(my=_possessive(landmark.text(people=people))))
+            else:
+                words += [preposition, landmark.text(people=people)]
         return "the " + " ".join(words)
 
     def __str__(self) -> str:
         return self.text()
+
+
+def _possessive(name: str) -> str:
+    """"me" -> "my", "you" -> "your", "Alice" -> "Alice's"."""
+    return {"me": "my", "you": "your"}.get(name, name + "'s")
 
 
 @dataclass
@@ -150,12 +178,14 @@ class PerspectiveIndex:
         return facts.derived(
             (cls, attributes, tuple(relations)), perspective,
             lambda triples: cls.from_triples(triples, attributes, relations),
-            {*attributes, "type", *relations, _LABEL}, PerspectiveIndex.change)
+            {*attributes, "type", *relations, *INVERSES, _LABEL}, PerspectiveIndex.change)
 
     def change(self, added: bool, s: object, p: object, o: object) -> None:
         """Take in one fact added (``added``) or removed; facts of other predicates are
         ignored."""
         s, p, o = str(s), str(p), str(o)
+        if p in INVERSES:
+            s, p, o = o, INVERSES[p], s
         if p in self.wanted:
             if added:
                 self.values.setdefault(s, {}).setdefault(p, set()).add(o)
@@ -258,16 +288,21 @@ class Referrer:
     # -- the algorithm ---------------------------------------------------------------------------
 
     def describe(self, target: str, context: Iterable[str] | None = None,
-                 given: Iterable[tuple[str, str]] = (), by_name: bool = False) -> Description:
+                 given: Iterable[tuple[str, str]] = (), by_name: bool = False,
+                 implied: Iterable[str] = ()) -> Description:
         """The description of ``target`` that rules out every other thing of ``context``
         (every entity of the perspective, unless given).
 
         ``given`` are (attribute, value) pairs to say anyway (what the person
         already said: "the green cube on the table" rather than "the cube on
-        the table").  Returns a pointing description when nothing else works,
-        or, with ``by_name``, the thing's identifier in words ("the coffee
-        table" for ``coffee-table``), unique as identifiers are, for a speaker
-        who cannot point.
+        the table").  ``implied`` are the other things the sentence names: the
+        target's relations to them are said by the sentence itself, so they
+        rule out distractors without being said twice ("I placed the blue
+        cube on the stick", not "the blue cube on the stick on the stick").
+        Returns a pointing description when nothing else works, or, with
+        ``by_name``, words for a speaker who cannot point: its identifier in
+        words if that is a name ("the coffee area" for ``coffee-area``), never
+        with a number ("one of the red cubes" for ``red_cube_1``).
         """
         index = self.index
         if self.is_agent(target):
@@ -275,16 +310,34 @@ class Referrer:
                                name=index.labels.get(target) or humanize(target).title())
         scope = None if context is None else set(context)
         said = dict(given)
-        found = self._describe(target, scope, said, self.depth, frozenset({target}))
+        found = self._describe(target, scope, said, self.depth, frozenset({target}),
+                               frozenset(implied) - {target})
         if found is not None and self.denotes(found, scope) == {target}:
             return replace(found, given=tuple(a for a in found.attributes
                                               if said.get(a[0]) == a[1]))
         if by_name:
-            return Description(target, self.noun(target), name="the " + humanize(target))
+            return Description(target, self.noun(target), name=self._unnamed(target))
         return Description(target, self.noun(target), pointing=True)
 
+    def _unnamed(self, target: str) -> str:
+        """Words for a thing no description singles out, for a speaker who cannot point:
+        its identifier in words when that is a name ("the coffee area"); for a thing
+        numbered among its twins ("red_cube_1"), "one of the red cubes", or, if its
+        type is not known, the identifier without the number ("the red cube")."""
+        words = humanize(target).split()
+        if not any(w.isdigit() for w in words):
+            return "the " + " ".join(words)
+        values = self.index.values.get(target, {})
+        if not values.get("type"):
+            return "the " + " ".join(w for w in words if not w.isdigit())
+        adjectives = [humanize(min(values[a])) for a in sorted(
+            (a for a in self.attributes if values.get(a)),
+            key=lambda a: _ADJECTIVE_ORDER.get(a, 1))]
+        return "one of the " + " ".join(adjectives + [plural(self.noun(target))])
+
     def _describe(self, target: str, scope: set[str] | None, given: dict[str, str],
-                  depth: int, visited: frozenset[str]) -> Description | None:
+                  depth: int, visited: frozenset[str],
+                  implied: frozenset[str] = frozenset()) -> Description | None:
         index = self.index
         values = index.values.get(target, {})
         types = values.get("type")
@@ -311,10 +364,17 @@ class Referrer:
             if len(left) < len(fitting) or attribute in given:
                 chosen.append((attribute, value))
                 fitting = left
+        silent: list[tuple[str, str]] = []
+        for predicate, landmark in index.relations.get(target, ()):
+            if len(fitting) > 1 and landmark in implied:
+                left = fitting & index.related[predicate][landmark]
+                if len(left) < len(fitting):
+                    silent.append((predicate, landmark))
+                    fitting = left
         relations: list[tuple[str, str, Description]] = []
         if len(fitting) > 1 and depth > 0:
             for predicate, landmark in index.relations.get(target, ()):
-                if landmark in visited:
+                if landmark in visited or landmark in implied:
                     continue
                 left = fitting & index.related[predicate][landmark]
                 if len(left) == len(fitting):
@@ -328,7 +388,8 @@ class Referrer:
                     break
         if len(fitting) > 1:
             return None
-        return Description(target, self.noun(target), tuple(chosen), tuple(relations))
+        return Description(target, self.noun(target), tuple(chosen), tuple(relations),
+                           silent=tuple(silent))
 
     def _landmark(self, landmark: str, depth: int, visited: frozenset[str]) -> Description | None:
         if self.is_agent(landmark):
@@ -347,6 +408,8 @@ class Referrer:
         sets: list[set[str]] = [] if scope is None else [scope]
         sets += [index.having.get(attribute, {}).get(value, set())
                  for attribute, value in description.attributes]
+        sets += [index.related.get(predicate, {}).get(landmark, set())
+                 for predicate, landmark in description.silent]
         for predicate, _, landmark in description.relations:
             near: set[str] = set()
             for thing in self.denotes(landmark):
