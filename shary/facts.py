@@ -50,6 +50,11 @@ receiving the net changes made since its last read just before it is read
 :mod:`shary.turtle`.  ``docs/architecture.md`` has the figures
 of the alternatives measured (oxrdflib, pyoxigraph).
 
+**Derived structures.**  :meth:`FactDatabase.derived` keeps a consumer's own
+index of one perspective (the referring expressions' index, say) current:
+built once from the perspective's facts, then told of each change of the
+predicates it follows as the change is made, before any event.
+
 **Events.**  Every addition and deletion made through :meth:`add`,
 :meth:`remove` and :meth:`set` is delivered as a :class:`FactEvent` to the
 subscribers whose pattern matches.  Monitors react to those events; they never
