@@ -53,7 +53,10 @@ FAMILIES: dict[str, list[str]] = {
                     "explore-new-objects", "inform-after-look-back"],
     "weld": ["weld-question-expires"],
 }
-"""The shipped scenarios of each family run as they are."""
+"""The shipped scenarios of each family run as they are.  Only runs that say something
+new are kept (the campaign runs in the suite): the other stack scenarios, the other
+weld scenarios (with seeds 0-2, their robots only ask "Is this seam okay?") and the
+seeds other than 0 (they move timings, not words) said nothing more when tried."""
 
 PROFILES = {"clean-up-unreachable": ["phone-call", "refuser"],
             "give-red-cup": ["phone-call-forever", "refuser"]}
