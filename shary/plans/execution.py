@@ -217,7 +217,7 @@ class PlanFollower:
             if status == "done":
                 self._executed(task, seen=False)
                 self._advance(task)
-            elif status == "failed":
+            else:  # failed, or cancelled by nobody in the plan: the plan decides
                 self.states.send(task, "failed", reason=reason)
                 self.replan(f"{self.plan.primitive[task].label()} failed: {reason}")
 
