@@ -13,8 +13,8 @@ robot keeps looking at the person it spoke to and never perceives her place).
 and the world's executors for the atomic tasks that move the head or an arm:
 
 * **the head** serves one *aim* at a time, the one of highest priority
-  (:attr:`~shary.executors.Request.priority`: 1 a plan watching, 2 a robot
-  action's own look, 3 a task's step) and, among equals, the newest.  An aim
+  (:attr:`~shary.executors.Request.priority`: 1 a plan watching, 2 a task's
+  step, 3 a robot action's own look) and, among equals, the newest.  An aim
   is *held* as long as whoever asked for it is alive: the node's parent in the
   task tree (the act x task that looks then speaks, the robot action) or the
   node itself when it has no parent.  A request below a held aim waits and is
@@ -40,10 +40,12 @@ from shary.executors import Outcome, Reporter, Request
 from shary.tasktree import ACT as ACT_NODE
 from shary.tasktree import FINISHED
 
-__all__ = ["ARM_TASKS", "HEAD_TASKS", "WATCH", "ACT", "TASK", "BodyArbiter"]
+__all__ = ["ACT", "ARM_TASKS", "HEAD_TASKS", "TASK", "WATCH", "BodyArbiter"]
 
-WATCH, ACT, TASK = 1, 2, 3
-"""Request priorities: a plan watching, a robot action's own look, a task's step."""
+WATCH, TASK, ACT = 1, 2, 3
+"""Request priorities: a plan watching, a task's step (look at the person spoken to), a
+robot action's own look (held while the action runs: the robot sees what it moves, and
+perceives the effect it then reports)."""
 HEAD_TASKS = frozenset({"look-at"})
 ARM_TASKS = frozenset({"move-arm", "pick", "place", "dump", "give", "put-back"})
 """The core library's atomic tasks that move the arm (recipes/core.yaml)."""

@@ -27,9 +27,9 @@ class Request:
     args: dict[str, Any]
     agent: str
     node: str
-    priority: int = 3
+    priority: int = 2
     """Who asks, for a part of the body several ask for at once (:mod:`shary.arbiter`):
-    1 a plan watching, 2 a robot action's own look, 3 a task's step (the default)."""
+    1 a plan watching, 2 a task's step (the default), 3 a robot action's own look."""
 
 
 @dataclass(frozen=True)

@@ -107,12 +107,12 @@ class Recovery:
 
     def look(self, task: int, target: str, seconds: float) -> None:
         """Turn the head to ``target`` for ``seconds`` (a node of the task, held meanwhile)."""
-        from shary.arbiter import ACT
+        from shary.arbiter import TASK
 
         f = self.follower
         node = self.sup.tree.add(ATOMIC, f"look at {target}", f.node(task), state="ongoing",
                                  agent=self.sup.robot)
-        f.robot.watch(target, node, priority=ACT)
+        f.robot.watch(target, node, priority=TASK)
         self.sup.loop.call_later(seconds, self.sup.tree.set_state, node, "done")
 
     def _ask(self, task: int, why: str) -> bool:
