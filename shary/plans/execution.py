@@ -384,6 +384,8 @@ class PlanFollower:
         if view == self.sup.robot and state in ("NOT_STARTING", "NOT_FINISHED") and \
                 self.agents.get(task) in self.humans:
             self.sup.loop.call_soon(self.recovery.stuck, task, f"{state} in the plan")
+        elif view == self.sup.robot and state == "NOT_FINISHED" and self.robot.busy == task:
+            self.sup.loop.call_soon(self.recovery.robot_stuck, task, f"{state} in the plan")
 
     def partner_absent(self, task: int, human: str) -> None:
         """Asked for their task, ``human`` never attended: the shared plan fails."""

@@ -22,6 +22,9 @@ the task has not moved for ``patience`` seconds after the last:
 4. **replan** from what is now true (:meth:`PlanFollower.replan`), which ends
    the plan, failed with its reason said aloud, once the replans are spent.
 
+A robot's own task that becomes NOT_FINISHED (its executor never reported)
+is stopped, fails, and the plan is replanned (:meth:`Recovery.robot_stuck`).
+
 Every rung is a ``plan-recover`` row of the context log (the task, its agent,
 the rung, why).  :class:`Watchdog` is the last resort: when nothing in the
 plan has progressed for ``idle`` seconds (no task state changed, nothing
@@ -87,6 +90,18 @@ class Recovery:
         self.sup.record("plan-recover", task=f.states.fact_name(task),
                         agent=str(f.agents.get(task, f.plan.primitive[task].agent)),
                         rung=rung, why=why, name=f.plan.primitive[task].label(), **extra)
+
+    def robot_stuck(self, task: int, why: str) -> None:
+        """The robot's own action does not end (its executor hangs): it is stopped and
+        fails, and the plan is replanned as for any failed action."""
+        f = self.follower
+        if f.finished or f.robot.busy != task:
+            return
+        f.robot.cancel(f.node(task))
+        f.robot.busy = None
+        self._record(task, "replan", why)
+        f.states.send(task, "failed", reason=why)
+        f.replan(f"{f.plan.primitive[task].label()} never ended ({why})", task=task)
 
     # -- the rungs: each returns whether it acted ------------------------------------
 
@@ -208,11 +223,7 @@ class Watchdog:
             for task in humans:
                 f.recovery.stuck(task, why)
         elif action == "robot action failed":
-            task = f.robot.busy
-            f.robot.cancel(f.node(task))
-            f.robot.busy = None
-            f.states.send(task, "failed", reason=why)
-            f.replan(f"{f.plan.primitive[task].label()} never ended ({why})", task=task)
+            f.recovery.robot_stuck(f.robot.busy, why)
         elif action == "replan":
             f.replan(f"{', '.join(labels)}: {why}", task=due[0])
         else:
