@@ -328,8 +328,8 @@ class PlanFollower:
             return
         old = self.plan
         pending = [t for t in old.primitive if t not in self.executed]
-        for task in pending:
-            self.states.send(task, "suspend", reason=reason)
+        for waiting in pending:
+            self.states.send(waiting, "suspend", reason=reason)
         if self.robot.busy is not None:
             self.robot.cancel(self.node(self.robot.busy))
             self.robot.busy = None
@@ -340,8 +340,8 @@ class PlanFollower:
             self.replans += 1
             new = self.replanner(remaining_agendas(old, self.current, self.executed,
                                                    self.agents))
-        for task in pending:
-            self.states.send(task, "drop", reason="replanned" if new else reason)
+        for waiting in pending:
+            self.states.send(waiting, "drop", reason="replanned" if new else reason)
         if new is None:
             self._finish("failed", reason, task)
             return
@@ -390,7 +390,7 @@ class PlanFollower:
     def partner_absent(self, task: int, human: str) -> None:
         """Asked for their task, ``human`` never attended: the shared plan fails."""
         self._finish("failed", f"{human} is not there to do "
-                               f"{self.plan.primitive[task].label()}")
+                               f"{self.plan.primitive[task].label()}", task)
 
 
 def _outline(plan: SharedPlan, prefix: str, views: list[str]) -> dict[str, Any]:

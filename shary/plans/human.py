@@ -101,9 +101,13 @@ class HumanPlanManager:
         generation = follower.generation
 
         def asked(run: Any) -> None:
-            if run.outcome != "done" and generation == follower.generation \
-                    and task in follower.current and not follower.finished:
+            if generation != follower.generation or task not in follower.current \
+                    or follower.finished:
+                return
+            if run.outcome != "done":
                 follower.partner_absent(task, human)
+            else:  # heard: they have the ladder's patience to act on it
+                follower.recovery.wait(task, "ask")
 
         tell(self.sup, human, text, on_finish=asked)
 

@@ -70,9 +70,14 @@ class Recovery:
                 break
             rung += 1
         f.progressed()
-        if rung < len(RUNGS) - 1 and not f.finished:
-            self.sup.loop.call_later(self.patience, self._check, task, f.generation,
-                                     f.states.state(task, self.sup.robot), RUNGS[rung])
+        if rung < len(RUNGS) - 1 and RUNGS[rung] != "ask" and not f.finished:
+            self.wait(task, RUNGS[rung])
+
+    def wait(self, task: int, after: str) -> None:
+        """Give the task ``patience`` seconds to move after a rung, then take the next."""
+        f = self.follower
+        self.sup.loop.call_later(self.patience, self._check, task, f.generation,
+                                 f.states.state(task, self.sup.robot), after)
 
     def _key(self, task: int) -> tuple[int, int, bool]:
         """The ladder is climbed once to get a task started, once to get it finished."""
@@ -107,10 +112,11 @@ class Recovery:
 
     def unseen(self, task: int) -> list[str]:
         """The task's objects the robot does not see now (perception's *unknown*)."""
-        robot = self.sup.robot
+        robot, facts = self.sup.robot, self.sup.facts
+        holders = [robot, *self.follower.humans]  # what is held is tracked with the hand
         return [str(o) for o in self.follower.objects_of(task)
-                if not self.sup.facts.holds(robot, "sees", o)
-                and str(o) not in self.follower.humans]
+                if not facts.holds(robot, "sees", o) and str(o) not in holders
+                and not any(facts.holds(h, "isHolding", o) for h in holders)]
 
     def _look(self, task: int, why: str) -> bool:
         unseen = self.unseen(task)
