@@ -83,3 +83,15 @@ def test_a_partner_who_leaves_is_asked_for_their_task_and_the_plan_fails(tmp_pat
                     "  said: [\"Excuse me, Alice\"]\n")
     result = run_scenario(path)
     assert result.passed, result.differences
+
+
+def test_a_look_away_without_when_or_with_both_is_refused_at_its_line(tmp_path):
+    from hostile import assert_refused, run_inprocess
+
+    for when in ("{for: 2}", '{during: "Pick(pr2, green_cube)", at: 3, for: 2}'):
+        path = tmp_path / "bad.yaml"
+        path.write_text((SCENARIOS_DIR / "stack-look-back-when-due.yaml").read_text()
+                        .replace('look-away: {during: "Pick(pr2, green_cube)", for: 2}',
+                                 f"look-away: {when}"))
+        outcome = run_inprocess("validate", path)
+        assert_refused(outcome, path, message="look-away needs when: during")
