@@ -262,6 +262,7 @@ class PlanFollower:
 
     def _executed(self, task: int, *, seen: bool) -> None:
         self.executed.add(task)
+        self.recovery.over(task)
         self._tell("done", task)
         self.states.send(task, "achieved", [self.sup.robot])
         if seen:
@@ -348,6 +349,8 @@ class PlanFollower:
         self.hpm.stop()
         self.beliefs.stop()
         self.states.stop()
+        for looked in list(self.recovery.looks):
+            self.recovery.over(looked)
         self._close_abstract("cancelled", "replanned")
         self._load(new)
         self.hpm.listen()

@@ -55,6 +55,8 @@ class Recovery:
         self.patience = patience
         self.rungs: dict[tuple[int, int, bool], int] = {}
         """(plan generation, task, started) -> the next rung to try."""
+        self.looks: dict[int, list[str]] = {}
+        """Task -> the look nodes it asked for (held until they end)."""
 
     def stuck(self, task: int, why: str) -> None:
         """``task`` (a human's, due) does not move: take its next rung."""
@@ -133,8 +135,15 @@ class Recovery:
         f = self.follower
         node = self.sup.tree.add(ATOMIC, f"look at {target}", f.node(task), state="ongoing",
                                  agent=self.sup.robot)
+        self.looks.setdefault(task, []).append(node)
         f.robot.watch(target, node, priority=TASK)
         self.sup.loop.call_later(seconds, self.sup.tree.set_state, node, "done")
+
+    def over(self, task: int) -> None:
+        """``task`` is done: the looks it asked for end (the head is free for what follows)."""
+        for node in self.looks.pop(task, ()):
+            if node in self.sup.tree:
+                self.sup.tree.set_state(node, "done")
 
     def _ask(self, task: int, why: str) -> bool:
         f = self.follower
