@@ -30,7 +30,7 @@ def cmd_scenarios(args: argparse.Namespace) -> int:
 
     return listing("scenarios", [(name, load_scenario(path).doc, path)
                                  for name, path in builtin_scenarios().items()],
-                   json_mode=args.json, width=26)
+                   json_mode=args.json)
 
 
 def add_run(sub: argparse._SubParsersAction) -> None:
