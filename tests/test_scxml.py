@@ -85,6 +85,8 @@ def test_import_cli_writes_a_valid_scheme(shary, write, tmp_path):
     status, _, _ = shary("import-scxml", write("c.scxml", CHART), "-o", out)
     assert status == 0
     assert shary("validate", out)[0] == 0
+    text = out.read_text(encoding="utf-8")
+    assert "'on'" not in text and "\n    on:\n" in text  # as every scheme writes it
 
 
 def test_plain_chart_passes_when_it_reaches_pass(write, tmp_path):
