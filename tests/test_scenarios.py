@@ -308,6 +308,24 @@ def test_the_tutorial_scenario_runs():
     assert result.passed, result.differences
 
 
+def test_the_tutorial_shows_what_its_run_prints(tmp_path, capsys):
+    """docs/tutorial.md's sample output is the run's, line for line (the INTERACT session
+    included), up to the wall time."""
+    docs = Path(__file__).resolve().parent.parent / "docs"
+    text = (docs / "tutorial.md").read_text(encoding="utf-8")
+    sample = text[text.index("## 4. Run it"):].split("```")[3]
+    assert main(["run", str(docs / "tutorial" / "tidy-table.yaml"), "--out",
+                 str(tmp_path)]) == 0
+    printed = capsys.readouterr().out
+
+    def story(output: str) -> list[str]:
+        return [line.rstrip() for line in output.splitlines() if line[:9].strip()
+                .endswith("s") and line[:9].strip()[:-1].replace(".", "").isdigit()]
+
+    assert story(sample) == story(printed) and "[INTERACT] session" in sample
+    assert sample.splitlines()[-2].split(" in ")[0] == printed.splitlines()[-2].split(" in ")[0]
+
+
 def test_an_injected_fault_is_recovered_from(tmp_path):
     text = builtin_scenarios()["give-bottle"].read_text()
     path = tmp_path / "slip.yaml"
