@@ -62,23 +62,23 @@ def check(located: Located, checker: Draft202012Validator) -> list[Problem]:
     return problems
 
 
-def _keys_elsewhere(root: dict[str, Any]) -> dict[str, list[str]]:
+def _keys_elsewhere(root: dict[str, Any]) -> dict[str, list[tuple[str, Any]]]:
     """Every key the schema ``root`` knows, with the objects it is a key of ("a state",
-    "the top level", "an entry of 'people'"): a key a file puts under the wrong parent
-    is known there, and saying where beats a "did you mean" on a look-alike key."""
+    "the top level", "an entry of 'people'") and its schema there: a key a file puts
+    under the wrong parent is known there, and saying where beats a "did you mean" on a
+    look-alike key."""
     cached = _ELSEWHERE.get(id(root))
     if cached is not None and cached[0] is root:
         return cached[1]
-    places: dict[str, list[str]] = {}
+    places: dict[str, list[tuple[str, Any]]] = {}
     seen: set[int] = set()
 
     def walk(schema: Any, label: str) -> None:
         if not isinstance(schema, dict) or id(schema) in seen:
             return
         seen.add(id(schema))
-        for key in schema.get("properties") or {}:
-            if label not in places.setdefault(key, []):
-                places[key].append(label)
+        for key, sub in (schema.get("properties") or {}).items():
+            places.setdefault(key, []).append((label, sub))
         for key, sub in (schema.get("properties") or {}).items():
             walk(sub, f"'{key}'")
         for name, sub in (schema.get("$defs") or {}).items():
@@ -95,7 +95,7 @@ def _keys_elsewhere(root: dict[str, Any]) -> dict[str, list[str]]:
     return places
 
 
-_ELSEWHERE: dict[int, tuple[dict[str, Any], dict[str, list[str]]]] = {}
+_ELSEWHERE: dict[int, tuple[dict[str, Any], dict[str, list[tuple[str, Any]]]]] = {}
 """:func:`_keys_elsewhere` by schema (a hostile file may have thousands of unknown keys)."""
 
 
@@ -151,7 +151,9 @@ def _unknown_key(checker: Draft202012Validator | None, schema: dict[str, Any], k
     if close and checker is not None and checker.evolve(
             schema=schema["properties"][close[0]]).is_valid(value):
         return f"unknown key {key!r} (did you mean {close[0]!r}?)"
-    elsewhere = _keys_elsewhere(checker.schema).get(key, []) if checker is not None else []
+    elsewhere = [] if checker is None else list(dict.fromkeys(
+        label for label, sub in _keys_elsewhere(checker.schema).get(key, [])
+        if checker.evolve(schema=sub).is_valid(value)))
     if elsewhere:
         return f"{key!r} is not a key here: it is a key of {' or '.join(elsewhere[:3])}" \
             + wrong_parent
