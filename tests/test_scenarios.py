@@ -500,3 +500,25 @@ def test_files_given_together_are_checked_as_one_set(write, shary):
     assert status == 2
     assert "unknown act 'OFFER' (declared by a scheme or acts file of yours? check them " \
            "together: shary validate SCHEME.yaml PROFILE.yaml)" in err
+
+
+def test_run_and_serve_say_when_they_replace_an_earlier_run(tmp_path, shary, monkeypatch):
+    """Both write runs/SCENARIO by default, the latest run of a scenario in one known
+    place; both say so before an earlier run's files there are replaced."""
+    out = tmp_path / "refused"
+    status, first, _ = shary("run", "give-bottle-refused", "--out", out)
+    assert status == 0 and "earlier run" not in first
+    status, again, _ = shary("run", "give-bottle-refused", "--out", out)
+    assert status == 0
+    assert again.splitlines()[0].startswith(f"{out}/ holds an earlier run (of ")
+    assert again.splitlines()[0].endswith("this run replaces its files (--out DIR keeps "
+                                          "runs apart)")
+    assert shary("run", "give-bottle-refused", "--out", out, "--json")[1].find(
+        '"replaced_earlier_run": true') > 0
+
+    served = []
+    monkeypatch.setattr("shary.console.server.serve",
+                        lambda live, host, port: served.append(live.folder) or 0)
+    status, said, _ = shary("serve", "give-bottle-refused", "--out", out)
+    assert status == 0 and served == [out]
+    assert said.startswith(f"{out}/ holds an earlier run (of ")
