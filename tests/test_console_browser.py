@@ -103,13 +103,13 @@ def test_a_run_that_has_ended_offers_nothing_to_steer(browser: Any, watched: Pat
 
 def test_the_main_scheme_of_a_task_is_drawn_legibly(browser: Any, watched: Path):
     """give-object-attentive, the task's own scheme (the agent's second task, after its
-    session), is drawn with text boxes 10 px high or more (4 px before), not shrunk into
-    its column."""
-    heights = browser.execute_script(
+    session), is drawn at the session's scale: state names 11 px high, not 4 px."""
+    heights = dict(browser.execute_script(
         "return [...document.querySelectorAll('.task')].map(t => [t.querySelector('h3')"
-        ".firstChild.textContent.trim(), Math.min(...[...t.querySelectorAll('.diagram text')]"
-        ".map(x => x.getBoundingClientRect().height))])")
-    assert dict(heights)["give-object"] >= 10, heights
+        ".firstChild.textContent.trim(), Math.max(...[...t.querySelectorAll("
+        "'.diagram g.node text')].map(x => x.getBoundingClientRect().height))])"))
+    assert heights["give-object"] >= 10.5
+    assert heights["give-object"] == pytest.approx(heights["session"], abs=0.1)
 
 
 def test_the_timeline_draws_no_label_over_another(browser: Any, watched: Path):

@@ -9,7 +9,7 @@ const SVGNS = "http://www.w3.org/2000/svg";
 const MAX_LINES = 300, MAX_FACT_ROWS = 40, PX_PER_S = 14, LANE_ROW = 16, LANE_TOP = 18;
 const MIN_LABEL_PX = 64;  // the room a label of an instant (an answer, a look) has beside it
 const bench = location.search.includes("bench");
-const MAX_SCALE = 0.75, MIN_SCALE = 0.6, MIN_SUB_SCALE = 0.5;  // of a scheme as dot draws it
+const SCALE = 0.6, SUB_SCALE = 0.45;  // of a scheme as dot draws it (14 pt state names)
 
 const st = {
   ws: null, mode: null, status: {}, svgs: {}, time: 0, nextId: 1,
@@ -106,18 +106,14 @@ function drawInto(t) {
 }
 
 function fit(t) {
-  // the scheme as wide as the column, its text (dot's 14 pt, 18.7 px) between 14 px and
-  // 11 px (9 px for a subtask's): a big scheme in a narrow column scrolls rather than
-  // shrinks to unreadable text, and a small one does not swell
+  // every scheme at one scale, whatever its size: its text stays legible (state names
+  // 11 px, a subtask's 8.5 px) and two agents' schemes compare at a glance; what does not
+  // fit the column scrolls in its box
   const svg = t.diagram.querySelector("svg");
   if (!svg) return;
-  const natural = svg.width.baseVal.value;
-  const room = t.diagram.clientWidth || 400;
-  const least = t.box.classList.contains("sub") ? MIN_SUB_SCALE : MIN_SCALE;
-  const scale = Math.max(least, Math.min(MAX_SCALE, room / natural));
-  svg.style.width = (natural * scale) + "px";
+  const scale = t.box.classList.contains("sub") ? SUB_SCALE : SCALE;
+  svg.style.width = (svg.width.baseVal.value * scale) + "px";
   svg.style.height = "auto";
-  t.scale = scale;
 }
 
 function highlight(t, now, before) {
