@@ -82,7 +82,10 @@ class BodyArbiter:
         self._reached: _Aim | None = None  # the aim the head last reached
         self._told: set[str] = set()  # requests already answered (superseded)
         self._head: Any = None
-        self._arm_queue: list[tuple[Request, Reporter, Any]] = []
+        self._arm_queue: dict[str, tuple[Request, Reporter, Any]] = {}
+        """Motions waiting for the arm, by request id, oldest first: a dict, so that a
+        cancel or the next start costs the same however many wait (a supervisor with
+        thousands of tasks, benchmarks/kernel.py)."""
         self._arm_busy: Request | None = None
         self._arm_requesters: dict[str, Reporter] = {}
         self._ports: dict[int, _Port] = {}
@@ -228,7 +231,7 @@ class BodyArbiter:
         else:
             self.record("body", task=request.node, agent=request.agent, part="arm",
                         action="wait", atomic=request.atomic, behind=self._arm_busy.id)
-            self._arm_queue.append((request, reporter, inner))
+            self._arm_queue[request.id] = (request, reporter, inner)
 
     def _arm_start(self, request: Request, inner: Any) -> None:
         self._arm_busy = request
@@ -241,18 +244,17 @@ class BodyArbiter:
         if reporter is not None:
             _report(reporter, outcome)
         if self._arm_busy is None and self._arm_queue:
-            request, _, inner = self._arm_queue.pop(0)
+            request, _, inner = self._arm_queue.pop(next(iter(self._arm_queue)))
             self.record("body", task=request.node, agent=request.agent, part="arm",
                         action="serve", atomic=request.atomic)
             self._arm_start(request, inner)
 
     def cancel_move(self, request: Request, inner: Any) -> None:
-        for i, (queued, reporter, _) in enumerate(self._arm_queue):
-            if queued.id == request.id:
-                del self._arm_queue[i]
-                self._arm_requesters.pop(request.id, None)
-                reporter.cancelled(request, "cancelled before the arm was free")
-                return
+        queued = self._arm_queue.pop(request.id, None)
+        if queued is not None:
+            self._arm_requesters.pop(request.id, None)
+            queued[1].cancelled(request, "cancelled before the arm was free")
+            return
         inner.cancel(request)
 
 
