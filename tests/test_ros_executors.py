@@ -177,3 +177,55 @@ def test_a_server_killed_mid_goal_is_noticed_by_shary_s_deadline(robot, spawn):
     assert outcome.reason == "exec timeout: no result from /test/long within 3 s"
     run_until(robot.loop, lambda: any(r["state"] == "unconfirmed"
                                       for r in robot.rows_of("ros-cancel", request)))
+
+
+def test_an_act_suspended_by_its_scheme_cancels_its_goal_at_the_server(write, ros_domain,
+                                                                        spawn):
+    """give-object-attentive: Alice looks away while the arm moves towards her (a ROS
+    goal): WAIT-ATTENTION suspends REALIZE-TASK, the goal is cancelled at the server;
+    she looks back, and the act resumes with a new goal."""
+    from scripted import ScriptedExecutor
+
+    from shary.executors import ExecutorRegistry
+    from shary.facts import FactDatabase
+    from shary.io.recipes import load_library
+    from shary.ros.executors import RosExecutors
+    from shary.ros.node import RosNode
+    from shary.supervisor import Supervisor
+
+    binding = load_binding(write("arm.yaml", """\
+        binding: arm
+        robot: jido
+        codes: {alice: 30, bottle: 1}
+        tasks:
+          move-arm:
+            action: /test/long
+            type: test_msgs/action/NestedMessage
+            goal: {nested_field.int32_value: "{code:target}"}
+            deadlines: {server: 20s, exec: 60s}
+        """))
+    loop = EventLoop(WallClock())
+    facts = FactDatabase()
+    for triple in (("alice", "looksAt", "jido"), ("bottle", "isOn", "table"),
+                   ("bottle", "isReachableBy", "jido")):
+        facts.add(*triple)
+    library = load_library()
+    scripted = ScriptedExecutor(loop, durations=dict.fromkeys(library.atomic, 0.05))
+    registry = ExecutorRegistry({name: scripted for name in library.atomic})
+    node = RosNode("shary_sup", domain_id=ros_domain)
+    try:
+        node.attach(loop)
+        RosExecutors(node, binding, loop).register(registry)
+        server = spawn("tests/ros_servers.py", "long")
+        server.wait_for("clients")
+        sup = Supervisor(library, facts, robot="jido", loop=loop, executors=registry)
+        sup.start_task("give-object", {"object": "bottle", "partner": "alice"})
+        loop.run_until_idle()
+        sup.receive_act("alice", "H-AGREE")
+        run_until(loop, lambda: "goal long 30" in server.lines)
+        facts.remove("alice", "looksAt", "jido")
+        run_until(loop, lambda: "canceled long" in server.lines)
+        facts.add("alice", "looksAt", "jido")
+        run_until(loop, lambda: server.lines.count("goal long 30") == 2)
+    finally:
+        node.close()
