@@ -41,7 +41,7 @@ class Process:
 
     def __init__(self, *args: str, env: dict[str, str] | None = None):
         self.popen = subprocess.Popen([sys.executable, *args], stdout=subprocess.PIPE,
-                                      stderr=subprocess.STDOUT, text=True,
+                                      stderr=subprocess.STDOUT, stdin=subprocess.PIPE, text=True,
                                       env=ros_environment(env), cwd=HERE.parent)
         self.lines: list[str] = []
         self._reader = threading.Thread(target=self._read, daemon=True)
@@ -58,6 +58,11 @@ class Process:
             if time.monotonic() > end or self.popen.poll() is not None and line not in self.lines:
                 raise AssertionError(f"{line!r} never came; the process said: {self.lines}")
             time.sleep(0.01)
+
+    def send(self, line: str) -> None:
+        assert self.popen.stdin is not None
+        self.popen.stdin.write(line + "\n")
+        self.popen.stdin.flush()
 
     def stop(self) -> None:
         if self.popen.poll() is None:
