@@ -5,7 +5,10 @@ TEXT (``\\n`` for a new line) on TOPIC, repeated every 0.1 s (as perception
 does) until changed; ``stop TOPIC`` stops publishing there; ``once TOPIC TEXT``
 publishes TEXT once, when the topic has a subscriber (what a person says).
 Prints ``ready``, ``heard TOPIC TEXT`` for each message on the topics named
-on the command line (the robot's speech, shary's state topics).
+on the command line (the robot's speech, shary's state topics), each
+``TOPIC`` (a String), ``TOPIC=latched`` (a latched String),
+``TOPIC=DiagnosticArray`` (``NAME|LEVEL|MESSAGE`` per status) or
+``TOPIC=MarkerArray`` (the markers' texts).
 """
 
 from __future__ import annotations
@@ -26,12 +29,26 @@ def main() -> None:
     current: dict[str, str] = {}
     once: list[tuple[str, str]] = []
 
-    def listen(topic: str) -> None:
-        node.create_subscription(String, topic, lambda m: print("heard", topic, m.data,
-                                                                flush=True), 10)
+    def listen(spec: str) -> None:
+        from diagnostic_msgs.msg import DiagnosticArray
+        from rclpy.qos import DurabilityPolicy, QoSProfile
+        from visualization_msgs.msg import MarkerArray
 
-    for topic in sys.argv[1:]:
-        listen(topic)
+        topic, _, kind = spec.partition("=")
+        cls, show, qos = String, (lambda m: m.data), QoSProfile(depth=10)
+        if kind == "latched":
+            qos = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        elif kind == "DiagnosticArray":
+            cls = DiagnosticArray
+            show = lambda m: "; ".join(f"{s.name}|{s.level[0]}|{s.message}"  # noqa: E731
+                                       for s in m.status)
+        elif kind == "MarkerArray":
+            cls, show = MarkerArray, lambda m: "; ".join(k.text for k in m.markers)  # noqa: E731
+        node.create_subscription(cls, topic, lambda m: print("heard", topic, show(m),
+                                                             flush=True), qos)
+
+    for spec in sys.argv[1:]:
+        listen(spec)
 
     def publisher(topic: str):
         if topic not in publishers:

@@ -44,7 +44,7 @@ class Process:
                                       stderr=subprocess.STDOUT, stdin=subprocess.PIPE, text=True,
                                       env=ros_environment(env), cwd=HERE.parent)
         self.lines: list[str] = []
-        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader = threading.Thread(target=self._read, daemon=True, name="test-reader")
         self._reader.start()
 
     def _read(self) -> None:

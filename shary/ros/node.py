@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import queue
 import threading
+from collections import deque
 from collections.abc import Callable
 from typing import Any
 
@@ -44,6 +45,7 @@ class RosNode:
         self.node = rclpy.create_node(name, context=self.context, namespace=namespace)
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
+        self._outbox: deque[tuple[Callable[..., Any], tuple]] = deque()
         self.inbox: queue.SimpleQueue[tuple[Callable[..., Any], tuple]] = queue.SimpleQueue()
         self.waitables: list[Any] = []
         """Action clients and servers, destroyed before the node (rclpy does not)."""
@@ -64,10 +66,21 @@ class RosNode:
     # -- the two directions ----------------------------------------------------------
 
     def post(self, work: Callable[..., Any], *args: Any) -> None:
-        """Run ``work(*args)`` (a function or a coroutine function) on the executor's
-        thread: the only way the engine acts on ROS."""
+        """Run ``work(*args)`` on the executor's thread, after the work posted before it:
+        the only way the engine acts on ROS.  (The executor runs its pending tasks last
+        in, first out; the outbox keeps the engine's order: a goal's cancel after its
+        send, a state's publication after the one before.)"""
         if not self._closed:
-            self.executor.create_task(work, *args)
+            self._outbox.append((work, args))
+            self.executor.create_task(self._run_outbox)
+
+    def _run_outbox(self) -> None:
+        while self._outbox:
+            work, args = self._outbox.popleft()
+            try:
+                work(*args)
+            except Exception as err:  # noqa: BLE001 -- raised again on the engine's loop
+                self.put(_raise, err)
 
     def put(self, handler: Callable[..., Any], *args: Any) -> None:
         """From a ROS callback: have ``handler(*args)`` run on the engine's loop."""
@@ -177,3 +190,8 @@ class RosNode:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _raise(err: Exception) -> None:
+    """An error of work posted to the executor, raised where the engine sees it."""
+    raise err
