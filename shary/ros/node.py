@@ -26,9 +26,6 @@ from typing import Any
 
 from shary.ros.env import keep_on_host
 
-PUMP_SECONDS = 0.002
-"""How often the engine's loop drains the inbox (its latency to a ROS event)."""
-
 
 class RosNode:
     """One node, one executor thread, one inbox (see the module's docstring)."""
@@ -49,7 +46,6 @@ class RosNode:
         self.inbox: queue.SimpleQueue[tuple[Callable[..., Any], tuple]] = queue.SimpleQueue()
         self.waitables: list[Any] = []
         """Action clients and servers, destroyed before the node (rclpy does not)."""
-        self._timer: Any = None
         self._loop: Any = None
         self._closed = False
         self._thread = threading.Thread(target=self._spin, name=f"ros-{name}", daemon=True)
@@ -84,7 +80,11 @@ class RosNode:
 
     def put(self, handler: Callable[..., Any], *args: Any) -> None:
         """From a ROS callback: have ``handler(*args)`` run on the engine's loop."""
-        self.inbox.put((handler, args))
+        loop = self._loop
+        if loop is not None:
+            loop.call_soon_threadsafe(handler, *args)
+        else:
+            self.inbox.put((handler, args))
 
     def drain(self) -> int:
         """Run every event waiting in the inbox (on the caller's thread); how many ran."""
@@ -98,15 +98,10 @@ class RosNode:
             ran += 1
 
     def attach(self, loop: Any) -> None:
-        """Drain the inbox on ``loop`` every :data:`PUMP_SECONDS` from now on."""
+        """Deliver events to ``loop`` (an :class:`~shary.loop.EventLoop`) from now on,
+        starting with those waiting in the inbox."""
         self._loop = loop
-
-        def pump() -> None:
-            self.drain()
-            if not self._closed:
-                self._timer = loop.call_later(PUMP_SECONDS, pump)
-
-        self._timer = loop.call_later(PUMP_SECONDS, pump)
+        self.drain()
 
     def call(self, work: Callable[..., Any], *args: Any, timeout: float = 10.0) -> Any:
         """Run ``work(*args)`` on the executor's thread and wait for its value: for
@@ -169,8 +164,6 @@ class RosNode:
         """Destroy everything and join the executor's thread (idempotent)."""
         if self._closed:
             return
-        if self._timer is not None:
-            self._timer.cancel()
 
         def destroy() -> None:
             for waitable in self.waitables:
