@@ -77,5 +77,7 @@ def reexec_with_libraries() -> None:
     problem = unavailable()
     if problem is None or "not installed" in problem or os.environ.get("_SHARY_ROS_REEXEC"):
         return
+    if Path(sys.argv[0]).name not in ("shary", "__main__.py"):
+        return  # not the shary program (shary.cli.main called in-process): not ours to restart
     env = ros_environment(_SHARY_ROS_REEXEC="1")
     os.execve(sys.executable, sys.orig_argv, env)
