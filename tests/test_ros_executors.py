@@ -35,7 +35,7 @@ def _binding(write):
             action: {action}
             type: test_msgs/action/NestedMessage
             goal: {{nested_field.int32_value: "{{n}}"}}
-            deadlines: {{server: {server}, ack: 2s, exec: 3s, cancel: 1s}}
+            deadlines: {{server: {server}, ack: 5s, exec: 5s, cancel: 1s}}
             feedback: "{{nested_field.float64_value}} done"
             succeeded-if: {{nested_field.bool_value: true}}
             reason: "failure code {{nested_field.int32_value}}"
@@ -128,9 +128,9 @@ def test_a_server_that_never_acknowledges_times_out_and_one_that_never_ends_too(
                                                                                 servers):
     silent, hang = robot.start("silent"), robot.start("hang")
     assert robot.outcome(silent).reason == (
-        "ack timeout: /test/silent did not acknowledge the goal within 2 s")
+        "ack timeout: /test/silent did not acknowledge the goal within 5 s")
     outcome = robot.outcome(hang)
-    assert outcome.reason == "exec timeout: no result from /test/hang within 3 s"
+    assert outcome.reason == "exec timeout: no result from /test/hang within 5 s"
     # the timed-out goal is cancelled at the server, which accepts but never ends it
     run_until(robot.loop, lambda: "cancel-requested hang" in servers.lines)
     run_until(robot.loop, lambda: any(r["state"] == "unconfirmed"
@@ -174,7 +174,7 @@ def test_a_server_killed_mid_goal_is_noticed_by_shary_s_deadline(robot, spawn):
     run_until(robot.loop, lambda: "goal long 1" in server.lines)
     os.kill(server.popen.pid, signal.SIGKILL)
     outcome = robot.outcome(request)  # DDS still sees the server for 20 s
-    assert outcome.reason == "exec timeout: no result from /test/long within 3 s"
+    assert outcome.reason == "exec timeout: no result from /test/long within 5 s"
     run_until(robot.loop, lambda: any(r["state"] == "unconfirmed"
                                       for r in robot.rows_of("ros-cancel", request)))
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import signal
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -67,7 +68,8 @@ def cmd_ros(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     from shary.ros.env import reexec_with_libraries, unavailable
 
-    reexec_with_libraries()
+    if Path(sys.argv[0]).name in ("shary", "__main__.py"):  # the program, not main() in-process
+        reexec_with_libraries()
     problem = unavailable()
     if problem is not None:
         return error(problem)

@@ -73,11 +73,10 @@ def reexec_with_libraries() -> None:
     """Start this program again with the ROS wheels' libraries found, when they are not
     (a virtual environment over the base interpreter's wheels): the libraries must be
     on ``LD_LIBRARY_PATH`` before the process starts.  Done once (guarded by a variable);
-    a command that needs rclpy calls it before importing it."""
+    a program that needs rclpy calls it before importing it (never a library: the
+    process is not its own)."""
     problem = unavailable()
     if problem is None or "not installed" in problem or os.environ.get("_SHARY_ROS_REEXEC"):
         return
-    if Path(sys.argv[0]).name not in ("shary", "__main__.py"):
-        return  # not the shary program (shary.cli.main called in-process): not ours to restart
     env = ros_environment(_SHARY_ROS_REEXEC="1")
     os.execve(sys.executable, sys.orig_argv, env)

@@ -62,6 +62,8 @@ class _Goal:
     reported: bool = False
     cancel_wanted: bool = False
     cancel_sent: bool = False
+    attempting: bool = False
+    """A send attempt is on the executor's thread (its answer will come)."""
 
 
 class RosExecutors:
@@ -121,70 +123,88 @@ class RosExecutors:
             self._end(goal, "done", "succeeded", f"published on {task.name}")
             return
         self._goals[request.id] = goal
-        self._look_for_server(goal)
+        self._try_send(goal)
 
     def cancel(self, request: Any) -> None:
         goal = self._goals.get(request.id)
         if goal is None or goal.reported:
             return  # idempotent: an ended or cancelled goal stays as it is
         goal.cancel_wanted = True
-        if goal.phase == "running":
+        if goal.task.kind == "service":
+            self._stop_timer(goal)
+            detail = "cancelled; a service call cannot be stopped: its answer is ignored"
+        elif goal.phase == "running" and goal.handle is not None:
             self._send_cancel(goal)
             detail = f"cancelled; the cancel is sent to {goal.task.name}"
-        elif goal.phase == "ack":  # cancelled as soon as it is acknowledged (_acknowledged)
+        elif goal.phase in ("ack", "running"):  # cancelled once acknowledged (_acknowledged)
             detail = f"cancelled; the cancel reaches {goal.task.name} once it acknowledges"
-        else:
+        else:  # its server was missing: no attempt on its way, or one that may send it
             self._stop_timer(goal)
-            self._forget(goal)
-            detail = "cancelled before the goal was sent"
+            if not goal.attempting:
+                goal.phase = "over"
+                self._forget(goal)
+            detail = "cancelled before the goal was acknowledged"
         self._end(goal, "cancelled", "canceled", detail)
 
     # -- phases (on the supervisor's loop) -------------------------------------------------
 
-    def _look_for_server(self, goal: _Goal) -> None:
+    def _try_send(self, goal: _Goal) -> None:
+        """Send the goal if its server is there, in one visit to the executor's thread
+        (the server check, the send, and on acceptance the request for the result)."""
         entity = self._entities[goal.request.atomic]
-        ready = entity.server_is_ready if goal.task.kind == "action" else entity.service_is_ready
-        self.node.post(lambda: self.node.put(self._server_checked, goal, ready()))
+        node, kind = self.node, goal.task.kind
+        goal.attempting = True
 
-    def _server_checked(self, goal: _Goal, ready: bool) -> None:
-        if goal.reported:
-            return
-        if ready:
-            self._send(goal)
+        def attempt() -> None:
+            if not (entity.server_is_ready() if kind == "action" else entity.service_is_ready()):
+                node.put(self._server_missing, goal)
+                return
+            if kind == "service":
+                future = entity.call_async(goal.message)
+                future.add_done_callback(lambda f: node.put(self._responded, goal, f.result()))
+                return
+            future = entity.send_goal_async(
+                goal.message, feedback_callback=lambda f: node.put(self._feedback, goal,
+                                                                   f.feedback))
+            future.add_done_callback(acknowledged)
+
+        def acknowledged(future: Any) -> None:
+            handle = future.result()
+            node.put(self._acknowledged, goal, handle)
+            if handle.accepted:
+                handle.get_result_async().add_done_callback(
+                    lambda f: node.put(self._result, goal, f.result()))
+
+        # as if sent: the deadline of the next phase runs from the attempt (a missing
+        # server comes back as _server_missing, which takes the goal back)
+        if kind == "service":
+            goal.phase = "running"
+            goal.timer = self.loop.call_later(goal.task.deadlines["exec"], self._exec_timeout,
+                                              goal)
+        else:
+            goal.phase = "ack"
+            goal.timer = self.loop.call_later(goal.task.deadlines["ack"], self._ack_timeout,
+                                              goal)
+        node.post(attempt)
+
+    def _server_missing(self, goal: _Goal) -> None:
+        goal.attempting = False
+        self._stop_timer(goal)
+        goal.phase = "server"
+        if goal.reported:  # cancelled while its server was looked for
+            goal.phase = "over"
+            self._forget(goal)
             return
         waited = self.loop.now() - goal.since
         if waited + SERVER_POLL <= goal.task.deadlines["server"]:
-            goal.timer = self.loop.call_later(SERVER_POLL, self._look_for_server, goal)
+            goal.timer = self.loop.call_later(SERVER_POLL, self._try_send, goal)
             return
+        goal.phase = "over"
         self._forget(goal)
         self._end(goal, "failed", "server unavailable",
                   f"no {goal.task.kind} server {goal.task.name} "
                   + (f"within {goal.task.deadlines['server']:g} s"
                      if goal.task.deadlines["server"] > 0 else "(checked before sending)"))
-
-    def _send(self, goal: _Goal) -> None:
-        entity = self._entities[goal.request.atomic]
-        node = self.node
-        if goal.task.kind == "service":
-            goal.phase = "running"
-            goal.timer = self.loop.call_later(goal.task.deadlines["exec"], self._exec_timeout, goal)
-
-            def call() -> None:
-                future = entity.call_async(goal.message)
-                future.add_done_callback(lambda f: node.put(self._responded, goal, f.result()))
-
-            node.post(call)
-            return
-        goal.phase = "ack"
-        goal.timer = self.loop.call_later(goal.task.deadlines["ack"], self._ack_timeout, goal)
-
-        def send() -> None:
-            future = entity.send_goal_async(
-                goal.message, feedback_callback=lambda f: node.put(self._feedback, goal,
-                                                                   f.feedback))
-            future.add_done_callback(lambda f: node.put(self._acknowledged, goal, f.result()))
-
-        node.post(send)
 
     def _acknowledged(self, goal: _Goal, handle: Any) -> None:
         self._stop_timer(goal)
@@ -194,12 +214,6 @@ class RosExecutors:
             self._forget(goal)
             self._end(goal, "failed", "rejected", f"{goal.task.name} rejected the goal")
             return
-
-        def ask_result() -> None:
-            future = handle.get_result_async()
-            future.add_done_callback(lambda f: self.node.put(self._result, goal, f.result()))
-
-        self.node.post(ask_result)
         goal.phase = "running"
         if goal.cancel_wanted:  # cancelled or timed out before the acknowledgement
             self.record("ros-cancel", task=goal.request.node, agent=goal.request.agent,
@@ -322,5 +336,5 @@ class RosExecutors:
             goal.timer = None
 
     def _forget(self, goal: _Goal) -> None:
-        if goal.phase in ("over", "server") and self._goals.get(goal.request.id) is goal:
+        if goal.phase == "over" and self._goals.get(goal.request.id) is goal:
             del self._goals[goal.request.id]

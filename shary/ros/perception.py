@@ -28,6 +28,8 @@ from shary.ros.binding import Binding, FactSource, SpeechSource, import_interfac
 from shary.ros.node import RosNode
 
 Triple = tuple[Any, Any, Any]
+DEPTH = 1000
+"""Messages a topic may queue while the engine is busy (a burst of perception)."""
 ANSWERS = {"yes": "H-AGREE", "yes please": "H-AGREE", "ok": "H-AGREE", "okay": "H-AGREE",
            "sure": "H-AGREE", "no": "H-DISAGREE", "no thanks": "H-DISAGREE",
            "no thank you": "H-DISAGREE"}
@@ -71,7 +73,7 @@ class RosPerception:
         if cls is None:
             self.missing.append(source.topic)
             return
-        self.node.subscription(cls, source.topic, callback)
+        self.node.subscription(cls, source.topic, callback, depth=DEPTH)
 
     # -- facts (on the engine's loop) ---------------------------------------------------
 

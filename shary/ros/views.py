@@ -71,7 +71,7 @@ class RosViews:
                 run = self.view.tasks.get(change[1], {})
                 text = f"{run.get('name', '?')} {change[1]}: {', '.join(change[2]) or '-'}"
                 self.node.post(self.active_pub.publish, String(data=text))
-        if changes and not self._scheduled:
+        if not self._scheduled and any(change[0] != "time" for change in changes):
             self._scheduled = True
             self.loop.call_later(self.period, self.publish)
 
