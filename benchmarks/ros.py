@@ -68,7 +68,10 @@ def serve() -> None:
         print("goal", flush=True)
         while rclpy.ok() and not handle.is_cancel_requested:
             time.sleep(0.002)
-        handle.canceled()
+        if handle.is_cancel_requested:
+            handle.canceled()
+        else:  # shutting down
+            handle.abort()
         return NestedMessage.Result()
 
     def cancel(handle: Any) -> Any:

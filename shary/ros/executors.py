@@ -165,12 +165,16 @@ class RosExecutors:
                 return
             future = entity.send_goal_async(
                 goal.message, feedback_callback=lambda f: node.put(self._feedback, goal,
-                                                                   f.feedback))
+                                                                   f.feedback, wake=False))
             future.add_done_callback(acknowledged)
 
         def acknowledged(future: Any) -> None:
             handle = future.result()
-            node.put(self._acknowledged, goal, handle)
+            # an accepted goal needs the engine at once only if it was cancelled meanwhile
+            # (the flag is the engine's, read after the event is queued: no cancel missed)
+            node.put(self._acknowledged, goal, handle, wake=not handle.accepted)
+            if goal.cancel_wanted:
+                node.wake()
             if handle.accepted:
                 handle.get_result_async().add_done_callback(
                     lambda f: node.put(self._result, goal, f.result()))

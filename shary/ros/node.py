@@ -78,13 +78,19 @@ class RosNode:
             except Exception as err:  # noqa: BLE001 -- raised again on the engine's loop
                 self.put(_raise, err)
 
-    def put(self, handler: Callable[..., Any], *args: Any) -> None:
-        """From a ROS callback: have ``handler(*args)`` run on the engine's loop."""
+    def put(self, handler: Callable[..., Any], *args: Any, wake: bool = True) -> None:
+        """From a ROS callback: have ``handler(*args)`` run on the engine's loop (with
+        ``wake=False``, when the loop next wakes: news that can wait)."""
         loop = self._loop
         if loop is not None:
-            loop.call_soon_threadsafe(handler, *args)
+            loop.call_soon_threadsafe(handler, *args, wake=wake)
         else:
             self.inbox.put((handler, args))
+
+    def wake(self) -> None:
+        """From a ROS callback: wake the engine's loop (for events put quietly)."""
+        if self._loop is not None:
+            self._loop.wake()
 
     def drain(self) -> int:
         """Run every event waiting in the inbox (on the caller's thread); how many ran."""
