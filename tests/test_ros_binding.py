@@ -97,3 +97,17 @@ def test_a_type_that_is_not_installed_is_a_note(shary, write):
 
 def _json_line(shary, path) -> str:
     return shary("validate", path, "--json")[1]
+
+
+def test_a_name_rclpy_would_refuse_is_refused_when_validated(shary, write):
+    path = write("robot.yaml", """\
+        binding: bad
+        robot: jido
+        tasks:
+          navigate: {action: "/nav//to", type: test_msgs/action/Fibonacci}
+        speech:
+          - {topic: "/humans/{id}/speech", type: std_msgs/msg/String, text: data}
+        """)
+    status, _, err = shary("validate", path)
+    assert status == 2
+    assert [(m["line"], m["col"]) for m in problems(err)] == [("4", "22"), ("6", "13")]
