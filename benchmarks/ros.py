@@ -216,7 +216,7 @@ def measure(args: argparse.Namespace) -> dict[str, Any]:
     crowded_exec.add_node(crowded_node)
     crowded_client = ActionClient(crowded_node, NestedMessage, "/bench/instant")
     extra = [ActionClient(crowded_node, NestedMessage, f"/bench/other{i}")
-             for i in range(len(ros.executors._entities) - 1)]
+             for i in range(len(binding.tasks) - 1)]
     threading.Thread(target=crowded_exec.spin, daemon=True).start()
     crowded_client.wait_for_server(timeout_sec=30)
 

@@ -229,3 +229,22 @@ def test_an_act_suspended_by_its_scheme_cancels_its_goal_at_the_server(write, ro
         run_until(loop, lambda: server.lines.count("goal long 30") == 2)
     finally:
         node.close()
+
+
+def test_atomic_tasks_bound_to_one_action_share_its_client(write, ros_domain):
+    """Each action client hears every status and feedback message of its action: one per
+    action, or every goal would be handled as many times as tasks share it."""
+    from shary.ros.executors import RosExecutors
+    from shary.ros.node import RosNode
+
+    binding = load_binding(write("shared.yaml", """\
+        binding: shared
+        robot: robot
+        tasks:
+          succeed: {action: /test/succeed, type: test_msgs/action/NestedMessage}
+          abort: {action: /test/succeed, type: test_msgs/action/NestedMessage}
+          long: {action: /test/long, type: test_msgs/action/NestedMessage}
+        """), atomic=ATOMIC)
+    with RosNode("shary_shared", domain_id=ros_domain) as node:
+        RosExecutors(node, binding, EventLoop(WallClock()))
+        assert len(node.waitables) == 2

@@ -81,17 +81,23 @@ class RosExecutors:
         self._entities: dict[str, Any] = {}
         self._types: dict[str, Any] = {}
         self._goals: dict[str, _Goal] = {}
+        shared: dict[tuple[str, str, str], Any] = {}
+        """One client per interface: atomic tasks bound to the same action share it (each
+        client hears every status and feedback message of its action)."""
         for atomic, task in binding.tasks.items():
             cls = import_interface(task.type)
             if cls is None:
                 continue  # a type not installed here: start() says so
             self._types[atomic] = cls
-            if task.kind == "action":
-                self._entities[atomic] = node.action_client(cls, task.name)
-            elif task.kind == "service":
-                self._entities[atomic] = node.service_client(cls, task.name)
-            else:
-                self._entities[atomic] = node.publisher(cls, task.name)
+            key = (task.kind, task.name, task.type)
+            if key not in shared:
+                if task.kind == "action":
+                    shared[key] = node.action_client(cls, task.name)
+                elif task.kind == "service":
+                    shared[key] = node.service_client(cls, task.name)
+                else:
+                    shared[key] = node.publisher(cls, task.name)
+            self._entities[atomic] = shared[key]
 
     def register(self, registry: Any) -> None:
         """Fill ``registry`` (an :class:`~shary.executors.ExecutorRegistry`) with these."""
