@@ -12,7 +12,6 @@ from rosfixtures import ros_domain, spawn  # noqa: F401 -- the ROS tests' fixtur
 from shary.cli import main
 
 REPO = Path(__file__).resolve().parents[1]
-SUITES = REPO.parent / "shared" / "suites"
 PROBLEM_LINE = re.compile(r"^(?P<file>.+):(?P<line>\d+):(?P<col>\d+): error: (?P<message>.+)$")
 
 

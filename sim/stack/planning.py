@@ -16,8 +16,6 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 import planner
 from planner.conditional import explore
 from planner.policy import select
@@ -107,7 +105,7 @@ class Replanner:
         data["entities"] = entities
         with tempfile.TemporaryDirectory() as folder:
             path = Path(folder) / "replan.yaml"
-            path.write_text(yaml.safe_dump(data, sort_keys=False))
+            path.write_text(yamlsafe.dump(data), encoding="utf-8")
             try:
                 plan = _plan(path, self.names)
             except (FileError, ValueError) as err:
