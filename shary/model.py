@@ -90,11 +90,22 @@ class Raise:
 
 @dataclass(frozen=True)
 class Send:
-    """Send an event to the instance itself, after ``delay`` seconds on its clock."""
+    """Send an event after ``delay`` seconds on the instance's clock.
+
+    ``to`` is None for the instance itself, :data:`PARENT` for the scheme that
+    invoked it, or the id of an invoke of this scheme for that child: the
+    events between parent and child that SCXML's ``<send target="#_parent">``
+    and ``"#_ID"`` carry.
+    """
 
     event: str
     delay: float = 0.0
     id: str | None = None
+    to: str | None = None
+
+
+PARENT = "parent"
+"""The ``to:`` of a send that goes to the invoking scheme (no invoke id may take this name)."""
 
 
 @dataclass(frozen=True)
@@ -177,7 +188,8 @@ def _action_label(action: Action) -> str:
     if isinstance(action, Raise):
         return f"raise {action.event}"
     if isinstance(action, Send):
-        return f"send {action.event}" + (f" after {action.delay:g}s" if action.delay else "")
+        return f"send {action.event}" + (f" to {action.to}" if action.to else "") \
+            + (f" after {action.delay:g}s" if action.delay else "")
     if isinstance(action, Cancel):
         return f"cancel {action.id}"
     return f"log {action.text!r}"
