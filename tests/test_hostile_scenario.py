@@ -19,7 +19,8 @@ def test_validate_refuses(path: Path) -> None:
 @pytest.mark.parametrize("name", ["nan-within", "fault-times", "unknown-partner",
                                   "goal-million-hours", "recipes-etc-passwd",
                                   "atomic-without-executor", "expect-unknown-predicate",
-                                  "expect-unknown-thing", "goal-after-timeout"])
+                                  "expect-unknown-thing", "goal-after-timeout",
+                                  "task-starts-itself"])
 def test_run_refuses_before_running(name: str, tmp_path: Path) -> None:
     """These validated and then hung, failed or read a system file at run time."""
     path = next(p for p in CASES if p.stem == name)
