@@ -104,6 +104,9 @@ class Send:
     to: str | None = None
 
 
+IN_STATE = "in "
+"""A guard ``in STATE`` holds while STATE is active: SCXML's ``In()``, the one predicate of
+its null data model, needs no registered condition (it reads the configuration only)."""
 PARENT = "parent"
 """The ``to:`` of a send that goes to the invoking scheme (no invoke id may take this name)."""
 
@@ -166,6 +169,13 @@ class Transition:
     def condition(self) -> str | None:
         """The registered condition the guard names (without ``not``)."""
         return self.guard[4:] if self.negated else self.guard
+
+    @property
+    def in_state(self) -> str | None:
+        """The state a guard ``in STATE`` names (see :data:`IN_STATE`), else None."""
+        condition = self.condition
+        return condition[len(IN_STATE):] if condition and condition.startswith(IN_STATE) \
+            else None
 
     def matches(self, event: str | None) -> bool:
         if self.events is None or event is None:

@@ -9,9 +9,10 @@ and which need a person to judge them.
 
 Here the translation is the null data model's: the constructs that need no
 data model (``conf:targetpass``/``targetfail``, ``conf:pass``/``fail``,
-``conf:datamodel``, and ``conf:delay``, a fixed number of seconds) are
-rewritten, and a test using any other ``conf:`` construct is refused with
-those constructs named, as a chart with ``cond`` or ``<script>`` is.  The
+``conf:datamodel``, ``conf:delay``, a fixed number of seconds, and
+``conf:inState``, the null data model's ``In()``) are rewritten, and a test
+using any other ``conf:`` construct is refused with those constructs named,
+as a chart with ``cond`` or ``<script>`` is.  The
 translated charts then run as every plain chart does
 (:func:`shary.conformance.run_test`: they pass by reaching ``pass``).
 """
@@ -39,6 +40,7 @@ _REWRITES = [
     (re.compile(r"<conf:fail\s*/>"), '<final id="fail"/>'),
     (re.compile(r'\bconf:datamodel="[^"]*"'), 'datamodel="null"'),
     (re.compile(r'\bconf:delay="\s*([0-9]*\.?[0-9]+)\s*"'), r'delay="\1s"'),
+    (re.compile(r'\bconf:inState="([A-Za-z0-9_.:-]*)"'), r'cond="In(' + "'" + r'\1' + "'" + ')"'),
     (re.compile(r'\s+xmlns:conf="[^"]*"'), ""),
 ]
 _CONF = re.compile(r"\bconf:([A-Za-z_][\w.-]*)")

@@ -27,7 +27,7 @@ PARENT = f"""<?xml version="1.0"?>
   <state id="s0">
     <onentry><send event="timeout" conf:delay="2"/></onentry>
     <invoke type="http://www.w3.org/TR/scxml/" src="file:test901sub1.scxml"/>
-    <transition event="childToParent" conf:targetpass=""/>
+    <transition event="childToParent" conf:inState="s0" conf:targetpass=""/>
     <transition event="*" conf:targetfail=""/>
   </state>
   <conf:pass/>
@@ -69,6 +69,7 @@ def test_translation_rewrites_what_needs_no_data_model_and_names_the_rest():
     assert left == []
     assert 'datamodel="null"' in text and 'delay="2s"' in text and 'target="pass"' in text
     assert '<final id="pass"/>' in text and "xmlns:conf" not in text
+    assert "cond=\"In('s0')\"" in text
     _, left = translate(NEEDS_DATA)
     assert left == ["conf:expr"]
 
@@ -116,4 +117,4 @@ def test_every_w3c_test_the_null_data_model_can_express_passes():
     outcomes = list(run_irp(folder, irp_tests(folder)))
     ran = [o for o in outcomes if o.kind != REFUSED]
     assert [o for o in ran if not o.passed] == []
-    assert len(ran) == 38
+    assert len(ran) == 41

@@ -48,7 +48,7 @@ DEFAULT_ROLES = {"robot": "robot", "partner": "human"}
 
 EVENTLESS_KEY = "always"
 _AFTER = re.compile(r"^after\s+(\S+)$")
-_GUARD = re.compile(r"^(not )?[a-z][a-z0-9_-]*$")
+_GUARD = re.compile(r"^(not )?([a-z][a-z0-9_-]*|in [A-Za-z0-9_][A-Za-z0-9_.:-]*)$")
 _ACT_WORD = re.compile(r"^[A-Z][A-Z0-9]*(-[A-Z0-9]+)*$")
 _DESCRIPTOR = re.compile(r"^(\*|[A-Za-z0-9_][A-Za-z0-9_:-]*(\.[A-Za-z0-9_:-]+)*(\.\*)?)$")
 
@@ -438,7 +438,10 @@ class _Builder:
                 self.problems.append(Problem(self.located.file, *t.target_mark,
                                              f"unknown target state {name!r}"
                                              f"{did_you_mean(name, self.states)}"))
-        if t.condition is not None and self.conditions is not None \
+        if t.in_state is not None and t.in_state not in self.states:
+            self._at(at, f"guard 'in {t.in_state}' names an unknown state"
+                     f"{did_you_mean(t.in_state, self.states)}")
+        elif t.condition is not None and t.in_state is None and self.conditions is not None \
                 and t.condition not in self.conditions:
             self._at(at, f"guard names an unknown condition {t.condition!r}"
                      f"{did_you_mean(t.condition, self.conditions)}; known conditions: "

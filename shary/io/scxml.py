@@ -53,6 +53,7 @@ MAX_INVOKE_DEPTH = 8
 _Dumper = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
 """libyaml's emitter when PyYAML has it: ten times faster on a chart of thousands of states."""
 _NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.:-]*$")
+_IN = re.compile(r"""^\s*In\(\s*(['"])([A-Za-z0-9_][A-Za-z0-9_.:-]*)\1\s*\)\s*$""")
 _TIME = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*(ms|s)\s*$")
 _STATES = {"state", "parallel", "final", "history"}
 _ACTIONS = {"raise", "send", "cancel", "log"}
@@ -313,22 +314,28 @@ class _Translator:
         taken = Coverage()
         on: dict[str, Any] = {}
         for t in (c for c in element.children if c.tag == "transition"):
+            guard = None
             if "cond" in t.attrs:
-                self.refuse(t, "cond= needs a data model; use a scheme guard naming a "
-                            "registered condition instead")
-                continue
+                guard = _in_state(t.attrs["cond"])
+                if guard is None:
+                    self.refuse(t, "cond= needs a data model (only In('STATE') does not); "
+                                "use a scheme guard naming a registered condition instead")
+                    continue
             for attr in t.attrs:
-                if attr not in ("event", "target", "type"):
+                if attr not in ("event", "target", "type", "cond"):
                     self.refuse(t, f"transition attribute {attr!r} is not supported")
             events = tuple(t.attrs["event"].split()) if "event" in t.attrs else None
             if taken.covering(events) is not None:
                 continue  # an earlier transition takes all its events: it is never taken
-            taken.add(events, t)
+            if guard is None:
+                taken.add(events, t)
             targets = t.attrs.get("target", "").split()
             actions = self.actions(t)
             body: dict[str, Any] = {}
-            if len(targets) != 1 or actions or t.attrs.get("type") == "internal":
+            if len(targets) != 1 or actions or t.attrs.get("type") == "internal" or guard:
                 body["target"] = _one_or_list(targets) if targets else None
+                if guard:
+                    body["guard"] = guard
                 if t.attrs.get("type") == "internal" and targets:
                     body["type"] = "internal"
                 if actions:
@@ -336,7 +343,11 @@ class _Translator:
                 value: Any = body
             else:
                 value = _one_or_list(targets)
-            on[" ".join(events) if events is not None else "always"] = value
+            key = " ".join(events) if events is not None else "always"
+            if key in on:  # a guarded transition before it: the scheme lists both
+                on[key] = (on[key] if isinstance(on[key], list) else [on[key]]) + [value]
+            else:
+                on[key] = value
         return on
 
     def actions(self, element: Element) -> list[dict[str, Any]]:
@@ -413,11 +424,30 @@ def _prune_unreachable(document: dict[str, Any], file: str) -> list[str]:
         for name in [n for n in states if n in dead]:
             del states[name]
         for spec in states.values():
+            if isinstance(spec, dict) and isinstance(spec.get("on"), dict):
+                _drop_never_true(spec["on"], {f"in {n}" for n in dead})
             if isinstance(spec, dict) and isinstance(spec.get("states"), dict):
                 prune(spec["states"])
 
     prune(document["states"])
     return sorted(dead, key=lambda n: scheme.states[n].order)
+
+
+def _drop_never_true(on: dict[str, Any], never: set[str]) -> None:
+    """Remove the transitions guarded ``in S`` for a state S no run enters: never taken."""
+    for key in list(on):
+        items = on[key] if isinstance(on[key], list) else [on[key]]
+        kept = [t for t in items if not (isinstance(t, dict) and t.get("guard") in never)]
+        if not kept:
+            del on[key]
+        elif len(kept) != len(items):
+            on[key] = kept[0] if len(kept) == 1 else kept
+
+
+def _in_state(cond: str) -> str | None:
+    """The guard of a ``cond`` the null data model has: ``In('S')`` is ``in S``; else None."""
+    match = _IN.match(cond)
+    return None if match is None else f"in {match.group(2)}"
 
 
 def _one_or_list(items: list[str]) -> Any:
