@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import itertools
 from collections import deque
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from shary.clock import Clock, Timer
@@ -181,9 +182,18 @@ class SchemeInstance:
 
     def start(self) -> None:
         """Enter the initial states and settle (called once by ``CompiledScheme.start``)."""
+        self._complete(lambda: self._play(self.definition.initial_step,
+                                          self.definition.initial_name, None))
+
+    def _complete(self, begin: Callable[[], None]) -> None:
+        """Run ``begin`` and everything it leads to, as one busy step of this instance.
+
+        Then settle, start the invokes, take the queued outside events, and
+        hand the parent what was kept for it (:meth:`_post`).
+        """
         self._busy = True
         try:
-            self._play(self.definition.initial_step, self.definition.initial_name, None)
+            begin()
             self._settle()
             if self._to_invoke:
                 self._start_invokes()
@@ -470,18 +480,8 @@ class SchemeInstance:
             return
         if self._busy:
             self._deliver(to, Event(event))
-            return
-        self._busy = True  # a delayed send to another instance is a step of this one
-        try:
-            self._deliver(to, Event(event))
-            self._settle()  # an error.communication it raised
-            if self._to_invoke:
-                self._start_invokes()
-            self._drain()
-        finally:
-            self._busy = False
-        if self._outbox:
-            self._flush()
+        else:  # a step of this instance: it may raise error.communication
+            self._complete(lambda: self._deliver(to, Event(event)))
 
     def _deliver(self, to: str, event: Event) -> None:
         if to == PARENT:
