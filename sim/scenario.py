@@ -353,6 +353,11 @@ class _Reading:
                 full = reader.confined_path(("shared-plan", "problem"), name)
                 if full is not None:
                     shared["problem"] = str(full)
+            away = (shared.get("profile") or {}).get("look-away")
+            if away is not None and ("during" in away) == ("at" in away):
+                problem(("shared-plan", "profile", "look-away"), "look-away needs when: "
+                        "during (a robot task's label) or at (seconds after the start), "
+                        "one of them")
             shared["decision-wait"] = reader.duration(("shared-plan", "decision-wait"),
                                                       shared.get("decision-wait", 6.0))
         return Scenario(
