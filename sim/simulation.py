@@ -10,7 +10,8 @@ timeout), which is most of why a run goes far faster than real time.
 
 Contact is simulated only where it decides the outcome: :meth:`settle` steps
 PyBullet's physics after an object is let go, so it stands on a table, topples
-or falls into the bin as physics says.
+or falls into the bin as physics says (until everything that moves is at rest:
+:mod:`sim.settling`).
 """
 
 from __future__ import annotations
@@ -25,12 +26,13 @@ import networkx as nx
 from .avatar import Avatar
 from .humans import HUMAN_PLACES, TORSO_RADIUS, WAYPOINTS
 from .motion import Activity, wrap
+from .settling import settle
 from .world import BOTTLE_HEIGHT, LivingRoom, pb
 
 TICK = 0.1
 """Simulated seconds between two ticks while something moves."""
 SETTLE_SECONDS = 0.8
-"""Physics time given to an object let go."""
+"""Physics time given at most to an object let go (stepping ends once all is at rest)."""
 PERSON_CLEARANCE = TORSO_RADIUS + 0.08
 
 
@@ -111,7 +113,8 @@ class Simulation:
         self.holder.pop(obj, None)
 
     def settle(self, obj: str, at: tuple[float, float, float] | None = None) -> None:
-        """Let an object go (optionally from ``at``) and step physics until it has settled."""
+        """Let an object go (optionally from ``at``) and step physics until it has settled,
+        robots and the objects still held standing still."""
         holder = self.holder.get(obj)
         self.release(obj)
         body = self.world.body(obj)
@@ -126,7 +129,9 @@ class Simulation:
             pairs = [(robot.body, link) for link in range(-1, len(robot.links))]
         for other, link in pairs:
             self.world.call(pb.setCollisionFilterPair, other, body, link, -1, 0)
-        self.physics_steps += self.world.step(SETTLE_SECONDS)
+        free = [name for name in self.world.movables if name not in self.holder]
+        self.physics_steps += settle(self.world, free, [*self.world.robots, *self.holder],
+                                     SETTLE_SECONDS)
         for other, link in pairs:
             self.world.call(pb.setCollisionFilterPair, other, body, link, -1, 1)
 

@@ -1,0 +1,116 @@
+"""Physics after an object is let go: step until whatever moves has come to rest.
+
+The simulation moves robots, people and held objects kinematically and hands
+the world to PyBullet only when an object is let go (:meth:`Simulation.settle
+<sim.simulation.Simulation.settle>`), so that contact decides whether it stands,
+topples or falls.  What that costs is the number of 240 Hz steps times the
+bodies each step solves, and both used to be far more than the question needs:
+
+* **Robots and held objects are still.**  They are position-controlled and
+  carried kinematically everywhere else; stepped as multibodies they cost most
+  of a step (a PR2 is 27 links and motors) and their motors at the rated effort
+  do not hold an outstretched arm, which sagged by centimetres into the stack
+  it had just built, and a cube held in a hand fell out of it.  While physics
+  steps, they are obstacles of mass 0 (static for Bullet: other bodies collide
+  with them, they do not move), their masses and inertias put back after.
+* **Stepping ends when every free object is at rest**, at most after the
+  time given: an object dropped one millimetre onto a table rests within a few
+  hundredths of a second; one that falls, rolls or is knocked keeps physics
+  going until it stops too.
+* **Resting objects sleep**: one at rest for :data:`CALM_CHECKS` checks in a
+  row is put to sleep, so a step costs only what still moves.  A sleeping body
+  is still an obstacle, and Bullet wakes it the moment a moving body touches it
+  (the two are one island), so a cube dropped on a sleeping stack knocks it as
+  it would an awake one.  Every free object is woken when stepping starts (one
+  left in the air by a support picked away falls) and made wakeful again after.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Iterator, Sequence
+from contextlib import contextmanager
+from typing import Any
+
+from .world import pb
+
+CHECK_STEPS = 6
+"""Physics steps between two looks at whether the free objects are at rest (1/40 s)."""
+REST_SPEED = 0.01
+"""m/s: slower than this, an object is not going anywhere."""
+REST_SPIN = 0.1
+"""rad/s: turning slower than this, an object is not toppling."""
+CALM_CHECKS = 2
+"""Checks in a row an object must be at rest before it sleeps: a body at the top of
+a bounce is slow for an instant, never for two checks 1/40 s apart."""
+
+
+_SLEEP = pb.ACTIVATION_STATE_ENABLE_SLEEPING | pb.ACTIVATION_STATE_SLEEP
+_WAKE = pb.ACTIVATION_STATE_ENABLE_SLEEPING | pb.ACTIVATION_STATE_WAKE_UP
+_AWAKE = pb.ACTIVATION_STATE_DISABLE_SLEEPING
+"""As bodies are created: awake, and never put to sleep by Bullet."""
+
+
+def settle(world: Any, free: Sequence[str], still: Iterable[str], seconds: float) -> int:
+    """Step ``world``'s physics until the ``free`` objects are all at rest, at most
+    ``seconds``, with the ``still`` bodies (robots, held objects) as fixed obstacles;
+    return the number of steps."""
+    bodies = [world.body(name) for name in free]
+    limit = max(0, round(seconds / world.timestep))
+    calm = dict.fromkeys(bodies, 0)
+    steps = 0
+    with held_still(world, still):
+        for body in bodies:
+            world.call(pb.changeDynamics, body, -1, activationState=_WAKE)
+        try:
+            while steps < limit and not all(n >= CALM_CHECKS for n in calm.values()):
+                steps += world.step(min(CHECK_STEPS, limit - steps) * world.timestep)
+                for body in bodies:
+                    if not _at_rest(world, body):
+                        calm[body] = 0
+                        continue
+                    calm[body] += 1
+                    if calm[body] == CALM_CHECKS:
+                        world.call(pb.changeDynamics, body, -1, activationState=_SLEEP)
+        finally:
+            for body in bodies:
+                world.call(pb.changeDynamics, body, -1, activationState=_AWAKE)
+    return steps
+
+
+def _at_rest(world: Any, body: int) -> bool:
+    linear, angular = world.call(pb.getBaseVelocity, body)
+    return math.hypot(*linear) < REST_SPEED and math.hypot(*angular) < REST_SPIN
+
+
+@contextmanager
+def held_still(world: Any, names: Iterable[str]) -> Iterator[None]:
+    """The named bodies (robots, held objects) as static obstacles for the duration:
+    every link of mass 0, a robot's joint motors off (holding nothing, they would still
+    be most of a step's cost), and asleep, so that Bullet does not even run their
+    motionless dynamics until something touches them.  After, the masses and inertias
+    are put back exactly and a robot's motors hold its joints where they are, as
+    :meth:`~sim.world.LivingRoom.set_joints` leaves them."""
+    names = list(names)
+    saved: list[tuple[int, int, float, Any]] = []
+    try:
+        for name in names:
+            body = world.body(name)
+            for link in range(-1, world.call(pb.getNumJoints, body)):
+                mass, _, inertia = world.call(pb.getDynamicsInfo, body, link)[:3]
+                if mass > 0:
+                    saved.append((body, link, mass, inertia))
+                    world.call(pb.changeDynamics, body, link, mass=0.0)
+            if name in world.robots:
+                movable = list(world.robots[name].movable)
+                world.call(pb.setJointMotorControlArray, body, movable, pb.VELOCITY_CONTROL,
+                           forces=[0.0] * len(movable))
+            world.call(pb.changeDynamics, body, -1, activationState=_SLEEP)
+        yield
+    finally:
+        for body, link, mass, inertia in saved:
+            world.call(pb.changeDynamics, body, link, mass=mass, localInertiaDiagonal=inertia)
+        for name in names:
+            if name in world.robots:
+                world.set_joints(name, world.joint_positions(name))
+            world.call(pb.changeDynamics, world.body(name), -1, activationState=_AWAKE)
