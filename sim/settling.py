@@ -34,15 +34,19 @@ from typing import Any
 
 from .world import pb
 
-CHECK_STEPS = 6
-"""Physics steps between two looks at whether the free objects are at rest (1/40 s)."""
+CHECK_STEPS = 3
+"""Physics steps between two looks at whether the free objects are at rest (1/80 s)."""
 REST_SPEED = 0.01
 """m/s: slower than this, an object is not going anywhere."""
 REST_SPIN = 0.1
 """rad/s: turning slower than this, an object is not toppling."""
 CALM_CHECKS = 2
 """Checks in a row an object must be at rest before it sleeps: a body at the top of
-a bounce is slow for an instant, never for two checks 1/40 s apart."""
+a bounce is slow for an instant, never for two checks 1/80 s apart (gravity alone
+changes its speed by 0.12 m/s in that time)."""
+NEAR = 0.02
+"""m: an object whose box comes this close to where a moved object was may have
+rested on it or against it."""
 
 
 _SLEEP = pb.ACTIVATION_STATE_ENABLE_SLEEPING | pb.ACTIVATION_STATE_SLEEP
@@ -51,31 +55,68 @@ _AWAKE = pb.ACTIVATION_STATE_DISABLE_SLEEPING
 """As bodies are created: awake, and never put to sleep by Bullet."""
 
 
-def settle(world: Any, free: Sequence[str], still: Iterable[str], seconds: float) -> int:
-    """Step ``world``'s physics until the ``free`` objects are all at rest, at most
-    ``seconds``, with the ``still`` bodies (robots, held objects) as fixed obstacles;
-    return the number of steps."""
-    bodies = [world.body(name) for name in free]
-    limit = max(0, round(seconds / world.timestep))
-    calm = dict.fromkeys(bodies, 0)
-    steps = 0
-    with held_still(world, still):
-        for body in bodies:
-            world.call(pb.changeDynamics, body, -1, activationState=_WAKE)
-        try:
-            while steps < limit and not all(n >= CALM_CHECKS for n in calm.values()):
-                steps += world.step(min(CHECK_STEPS, limit - steps) * world.timestep)
-                for body in bodies:
-                    if not _at_rest(world, body):
-                        calm[body] = 0
-                        continue
-                    calm[body] += 1
-                    if calm[body] == CALM_CHECKS:
-                        world.call(pb.changeDynamics, body, -1, activationState=_SLEEP)
-        finally:
-            for body in bodies:
-                world.call(pb.changeDynamics, body, -1, activationState=_AWAKE)
-    return steps
+class Settling:
+    """A world's physics after let-gos, remembering what each one left at rest.
+
+    An object left at rest, and still where it was, starts the next settling asleep,
+    unless an object it may have rested against has moved since (picked, carried,
+    let go: its old box is the place to look): so only what a let-go can have
+    disturbed is stepped from the start, and Bullet wakes the rest on contact.
+    """
+
+    def __init__(self, world: Any):
+        self.world = world
+        self.resting: dict[str, tuple[Any, tuple[Any, Any]]] = {}
+        """Objects the last settling left at rest: their pose and bounding box."""
+
+    def settle(self, free: Sequence[str], still: Iterable[str], seconds: float) -> int:
+        """Step the physics until the ``free`` objects are all at rest, at most
+        ``seconds``, with the ``still`` bodies (robots, held objects) as fixed
+        obstacles; return the number of steps."""
+        world = self.world
+        bodies = {name: world.body(name) for name in free}
+        limit = max(0, round(seconds / world.timestep))
+        disturbed = self._disturbed(free)
+        calm = {name: 0 if name in disturbed else CALM_CHECKS for name in free}
+        steps = 0
+        with held_still(world, still):
+            for name, body in bodies.items():
+                world.call(pb.changeDynamics, body, -1,
+                           activationState=_WAKE if name in disturbed else _SLEEP)
+            try:
+                while steps < limit and not all(n >= CALM_CHECKS for n in calm.values()):
+                    steps += world.step(min(CHECK_STEPS, limit - steps) * world.timestep)
+                    for name, body in bodies.items():
+                        if not _at_rest(world, body):
+                            calm[name] = 0
+                            continue
+                        calm[name] += 1
+                        if calm[name] == CALM_CHECKS:
+                            world.call(pb.changeDynamics, body, -1, activationState=_SLEEP)
+            finally:
+                for body in bodies.values():
+                    world.call(pb.changeDynamics, body, -1, activationState=_AWAKE)
+        self.resting = {name: (self._pose(name), world.aabb(name))
+                        for name in free if calm[name] >= CALM_CHECKS}
+        return steps
+
+    def _pose(self, name: str) -> Any:
+        return self.world.call(pb.getBasePositionAndOrientation, self.world.body(name))
+
+    def _disturbed(self, free: Sequence[str]) -> set[str]:
+        """The free objects to step from the start: those not left at rest where they
+        are now, and those whose box comes near where a moved object was."""
+        moved = {name for name in free
+                 if name not in self.resting or self._pose(name) != self.resting[name][0]}
+        vacated = [box for name, (_, box) in self.resting.items()
+                   if name in moved or name not in free]
+        return moved | {name for name in free if name not in moved
+                        and any(_near(self.world.aabb(name), box) for box in vacated)}
+
+
+def _near(a: tuple[Any, Any], b: tuple[Any, Any], margin: float = NEAR) -> bool:
+    (a0, a1), (b0, b1) = a, b
+    return all(a0[i] <= b1[i] + margin and b0[i] <= a1[i] + margin for i in range(3))
 
 
 def _at_rest(world: Any, body: int) -> bool:

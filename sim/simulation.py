@@ -26,7 +26,7 @@ import networkx as nx
 from .avatar import Avatar
 from .humans import HUMAN_PLACES, TORSO_RADIUS, WAYPOINTS
 from .motion import Activity, wrap
-from .settling import settle
+from .settling import Settling
 from .world import BOTTLE_HEIGHT, LivingRoom, pb
 
 TICK = 0.1
@@ -51,6 +51,7 @@ class Simulation:
         self._ids = itertools.count(1)
         self._timer: Any = None
         self.physics_steps = 0
+        self.physics = Settling(world)
 
     # -- activities ------------------------------------------------------------
 
@@ -130,8 +131,8 @@ class Simulation:
         for other, link in pairs:
             self.world.call(pb.setCollisionFilterPair, other, body, link, -1, 0)
         free = [name for name in self.world.movables if name not in self.holder]
-        self.physics_steps += settle(self.world, free, [*self.world.robots, *self.holder],
-                                     SETTLE_SECONDS)
+        self.physics_steps += self.physics.settle(free, [*self.world.robots, *self.holder],
+                                                  SETTLE_SECONDS)
         for other, link in pairs:
             self.world.call(pb.setCollisionFilterPair, other, body, link, -1, 1)
 
