@@ -91,7 +91,8 @@ class Settling:
                             calm[name] = 0
                             continue
                         calm[name] += 1
-                        if calm[name] == CALM_CHECKS:
+                        if calm[name] == CALM_CHECKS:  # at rest: still, and asleep
+                            world.call(pb.resetBaseVelocity, body, (0, 0, 0), (0, 0, 0))
                             world.call(pb.changeDynamics, body, -1, activationState=_SLEEP)
             finally:
                 for body in bodies.values():
