@@ -31,8 +31,8 @@ _ARM_DAMPING = 0.01
 IK_ITERATIONS = 20
 """PyBullet's own iterations in one IK call.  Its answer is only a step of :func:`reach`,
 which measures where the grasp link really is and solves again; 100 iterations cost
-five times as much and reach the target in as many of those rounds (measured on the
-stack scenarios: 40 calls either way)."""
+three times as much and reach the target in as many of those rounds (stack-nominal:
+40 IK calls either way, 7.6 ms against 24.5 ms of CPU)."""
 
 
 def _angle_between(q1: Sequence[float], q2: Sequence[float]) -> float:

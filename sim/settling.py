@@ -18,11 +18,18 @@ bodies each step solves, and both used to be far more than the question needs:
   hundredths of a second; one that falls, rolls or is knocked keeps physics
   going until it stops too.
 * **Resting objects sleep**: one at rest for :data:`CALM_CHECKS` checks in a
-  row is put to sleep, so a step costs only what still moves.  A sleeping body
-  is still an obstacle, and Bullet wakes it the moment a moving body touches it
-  (the two are one island), so a cube dropped on a sleeping stack knocks it as
-  it would an awake one.  Every free object is woken when stepping starts (one
-  left in the air by a support picked away falls) and made wakeful again after.
+  row is put to sleep (and its velocity cleared), so a step costs only what
+  still moves.  A sleeping body is still an obstacle, and Bullet wakes it the
+  moment a moving body touches it (the two are one island), so a cube dropped
+  on a sleeping stack knocks it as it would an awake one.  An object the last
+  let-go left at rest starts the next one asleep if it is still where it was
+  and nothing moved away from near it; any other (the one let go, one left in
+  the air by a support picked away, one still moving when time ran out) starts
+  awake.  After stepping, every object is as it was created: awake, never put
+  to sleep by Bullet.
+
+What is left is mostly the contact solver on a stack a cube lands on: the
+whole stack is one island while the cube settles (docs/benchmarks.md).
 """
 
 from __future__ import annotations
