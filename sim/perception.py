@@ -223,10 +223,11 @@ class Perception:
 
     # -- geometry -----------------------------------------------------------------
 
-    def _camera(self) -> tuple[tuple[float, float, float], np.ndarray]:
+    def _camera(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+        """Where the head camera is, and the direction it looks in (its x axis)."""
         pos, orn = self.world.link_pose(self.sim.robot, "camera_link")
-        rot = np.array(pb.getMatrixFromQuaternion(orn)).reshape(3, 3)
-        return pos, rot[:, 0]
+        m = pb.getMatrixFromQuaternion(orn)  # row-major: the x axis is the first column
+        return pos, (m[0], m[3], m[6])
 
     @staticmethod
     def _angle(origin: Any, direction: Any, point: Any) -> float:
@@ -235,7 +236,7 @@ class Perception:
         n = math.hypot(vx, vy, vz)
         if n < 1e-9:
             return math.pi
-        dx, dy, dz = (float(c) for c in direction)
+        dx, dy, dz = direction
         return math.acos(max(-1.0, min(1.0, (vx * dx + vy * dy + vz * dz) / n)))
 
     def _visible(self, camera: Any, forward: Any, point: Any) -> bool:
