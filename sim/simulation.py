@@ -117,6 +117,10 @@ class Simulation:
         """Let an object go (optionally from ``at``) and step physics until it has settled,
         robots and the objects still held standing still."""
         holder = self.holder.get(obj)
+        if at is None and holder is not None:
+            # from the hand as it is now: a motion that ended this tick moved it after the
+            # last carry, and the object would drop from where the hand was a tick ago
+            at = self.hand_of(holder)
         self.release(obj)
         body = self.world.body(obj)
         if at is not None:

@@ -69,6 +69,21 @@ def test_an_object_held_stays_in_the_hand_while_another_settles(sim):
     assert math.dist(before, sim.world.position("b")) < 1e-6
 
 
+def test_an_object_let_go_leaves_the_hand_where_the_hand_is_now(sim):
+    world = sim.world
+    pr2 = world.robot("pr2")
+    sim.attach("a", "pr2")  # in the tucked hand, beside the table
+    world.set_joints("pr2", {pr2.joint("r_shoulder_pan_joint"): 0.0,  # over the table now,
+                             pr2.joint("r_shoulder_lift_joint"): 0.0,  # and no tick has
+                             pr2.joint("r_upper_arm_roll_joint"): 0.0,  # carried the cube
+                             pr2.joint("r_elbow_flex_joint"): -0.2})
+    hand = world.gripper("pr2")
+    sim.settle("a")
+    x, y, z = world.position("a")
+    assert math.dist((x, y), hand[:2]) < 0.03
+    assert z == pytest.approx(_resting_z(sim), abs=0.003)  # on the table, not the floor
+
+
 def test_masses_and_motors_are_back_after_settling(sim):
     world = sim.world
     body = world.body("pr2")
