@@ -2,9 +2,11 @@
 
 Each kind says how to recognise its files (a suffix, or the top-level keys of a
 YAML mapping) and how to check a batch of them with what the files before
-have declared (acts files come first, so their acts are known to schemes,
-recipes, scenarios and profiles).  The engine registers its own kinds here;
-other parts register theirs through the ``shary.file_kinds`` entry-point
+have declared: files given together are checked as one set (acts files come
+first, so their acts are known to schemes, recipes, scenarios and profiles; the
+acts a scheme declares under its ``acts:`` are known to the files after it).
+The engine registers its own kinds here; other parts register theirs through
+the ``shary.file_kinds`` entry-point
 group (``sim`` registers scenarios and profiles), since ``shary`` never
 imports ``sim``.
 
@@ -220,9 +222,11 @@ def _check_schemes(files: list[Path], context: Context) -> list[Problem]:
     problems: list[Problem] = []
     for path in files:
         try:
-            load_scheme(path, acts=context.acts, conditions=context.conditions)
+            scheme = load_scheme(path, acts=context.acts, conditions=context.conditions)
         except FileError as err:
             problems.extend(err.problems)
+        else:  # the acts a scheme declares are known to the files checked with it
+            context.acts = context.acts.extended(scheme.acts.acts)
     return problems
 
 

@@ -79,6 +79,10 @@ class Supervisor:
         self.planners = dict(planners or {})
         self.functions = dict(functions or {})
         self.tree = TaskTree(self.record if log is not None else None, prefix=f"{ids}n")
+        from shary.arbiter import BodyArbiter
+
+        self.executors.arbiter = BodyArbiter(self.tree, self.loop, self.record)
+        """One owner for the head and the arms (:mod:`shary.arbiter`)."""
         self.ids = ids
         """A prefix of node and request ids (``K-10/``): a team's robots share one log."""
         self.runs: dict[str, TaskRun] = {}

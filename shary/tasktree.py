@@ -53,6 +53,9 @@ class TaskTree:
         self._attrs: dict[str, dict[str, Any]] = {}
         self._parent: dict[str, str | None] = {}
         self._children: dict[str, dict[str, None]] = {}  # an ordered set
+        self.watchers: list[Callable[[str, str], Any]] = []
+        """Told ``(node, state)`` after a node's state changes (the body's arbiter
+        releases what an act held when the act ends)."""
 
     def add(self, kind: str, name: str, parent: str | None = None, *, state: str = PLANNED,
             **attrs: Any) -> str:
@@ -86,6 +89,8 @@ class TaskTree:
         if self._record is not None:
             extra = {"reason": reason} if reason else {}
             self._record("task-state", task=node, name=data["name"], state=state, **extra)
+        for watcher in self.watchers:
+            watcher(node, state)
 
     def node(self, node: str) -> dict[str, Any]:
         return self._attrs[node]

@@ -2,7 +2,7 @@
 
 After every tick (and every instant change) :class:`Perception` computes the
 facts the world makes true — ``isAt``, ``isOn``/``isIn``, ``isHolding``,
-``looksAt``, ``handMovingToward`` (a person's reaching hand), ``isNear``,
+``looksAt``, ``sees``, ``handMovingToward`` (a person's reaching hand), ``isNear``,
 ``isReachableBy``, ``isSeatedOn``, ``position`` —
 and publishes only the difference to the fact database, so monitors and
 chronicles hear of changes, not of ticks.
@@ -13,6 +13,11 @@ What the robot can know is limited the way SHARY's robot was:
   beliefs only when the object (or the spot where it was believed to be) is
   in the head camera's field of view — which is why Jido must go and look at
   the table after a person has been there (Fig. 12);
+* **what is out of view is unknown, not unchanged**: ``sees(robot, object)``
+  holds exactly while the object is in the camera's view; the facts about an
+  object without it are the last ones seen, which the plan managers do not
+  take as evidence that an expected effect has not happened (they look
+  first: :mod:`shary.plans.recovery`);
 * **people are tracked** (the paper's motion capture): where they are, what
   they hold and where they look is always known.
 
@@ -152,6 +157,8 @@ class Perception:
             if obj in sim.holder or self._visible(camera, forward, where_now):
                 self.belief[obj] = where_now
                 self.object_facts[obj] = tuple(self._object_facts(obj, where_now))
+                if obj not in sim.holder:
+                    yield (robot, "sees", obj)
             elif obj in self.belief and self._visible(camera, forward, self.belief[obj]):
                 # looking where it was, and it is not there any more
                 del self.belief[obj]

@@ -11,7 +11,6 @@ import pytest
 from shary.cli import main
 
 REPO = Path(__file__).resolve().parents[1]
-SUITES = REPO.parent / "shared" / "suites"
 PROBLEM_LINE = re.compile(r"^(?P<file>.+):(?P<line>\d+):(?P<col>\d+): error: (?P<message>.+)$")
 
 

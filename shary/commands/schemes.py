@@ -29,7 +29,7 @@ def cmd_schemes(args: argparse.Namespace) -> int:
     schemes = [(load_scheme(path), path) for path in builtin.files("schemes")
                if path.stem != "acts"]
     return listing("schemes", [(s.name, s.doc, path) for s, path in schemes],
-                   json_mode=args.json, width=24)
+                   json_mode=args.json)
 
 
 def add_simulate(sub: argparse._SubParsersAction) -> None:

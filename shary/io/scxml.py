@@ -33,13 +33,11 @@ import xml.parsers.expat
 from dataclasses import dataclass, field
 from typing import Any
 
-import yaml
-
 from shary.io.schemes import parse_scheme, unreachable
 from shary.model import Coverage
 from userfiles.errors import FileError, Problem
 from userfiles.reader import confine, spelled
-from userfiles.yamlsafe import Located, read_text
+from userfiles.yamlsafe import Located, dump, read_text
 
 MAX_DEPTH = 28
 """Deepest nesting of XML elements: a scheme file allows 64 levels of YAML, and each
@@ -49,8 +47,6 @@ MAX_ELEMENTS = 10_000
 MAX_INVOKE_DEPTH = 8
 """Most charts a chain of ``<invoke src>`` may go through."""
 
-_Dumper = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
-"""libyaml's emitter when PyYAML has it: ten times faster on a chart of thousands of states."""
 _NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.:-]*$")
 _TIME = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*(ms|s)\s*$")
 _STATES = {"state", "parallel", "final", "history"}
@@ -75,7 +71,7 @@ def import_scxml(path: str | os.PathLike[str]) -> str:
     budget = [MAX_ELEMENTS]
     root = _parse(read_text(name), name, budget)
     out, pruned = _Translator(name, (os.path.realpath(name),), budget).scheme(root)
-    text = yaml.dump(out, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=100)
+    text = dump(out)
     if pruned:
         text = f"# Left out, since no run can ever enter them: {', '.join(pruned)}\n" + text
     return text

@@ -17,8 +17,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 import planner
 from planner.conditional import explore
 from planner.domain import Domain, Problem
@@ -124,7 +122,7 @@ class Replanner:
         data["entities"] = entities
         with tempfile.TemporaryDirectory() as folder:
             path = Path(folder) / "replan.yaml"
-            path.write_text(yaml.safe_dump(data, sort_keys=False))
+            path.write_text(yamlsafe.dump(data), encoding="utf-8")
             try:
                 plan = _plan(planner.load_problem(path, self.domain), self.names)
             except (FileError, ValueError) as err:
