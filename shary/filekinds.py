@@ -40,6 +40,9 @@ class Context:
 
     acts: ActRegistry = field(default_factory=builtin_acts)
     conditions: ConditionRegistry = field(default_factory=ConditionRegistry.installed)
+    notes: list[Problem] = field(default_factory=list)
+    """What a kind notes without refusing the file (a robot binding's interface type
+    that is not installed here), shown as ``FILE:LINE:COL: note: …``."""
 
 
 Check = Callable[[list[Path], Context], list[Problem]]
@@ -113,17 +116,22 @@ class Report:
     problems: list[Problem]
     depends_on: list[str] = field(default_factory=list)
     """Files this one uses that have errors (it cannot be ok while they are not)."""
+    notes: list[Problem] = field(default_factory=list)
+    """What is worth knowing but not wrong (see :attr:`Context.notes`)."""
 
     @property
     def ok(self) -> bool:
         return not self.problems
 
     def as_json(self) -> dict[str, Any]:
-        return {"file": self.file, "kind": self.kind, "ok": self.ok,
-                "depends_on": self.depends_on,
-                "problems": [{"file": p.file, "line": p.line, "col": p.col,
-                              "message": p.message}
-                             for p in self.problems]}
+        report = {"file": self.file, "kind": self.kind, "ok": self.ok,
+                  "depends_on": self.depends_on,
+                  "problems": [{"file": p.file, "line": p.line, "col": p.col,
+                                "message": p.message} for p in self.problems]}
+        if self.notes:
+            report["notes"] = [{"file": p.file, "line": p.line, "col": p.col,
+                                "message": p.message} for p in self.notes]
+        return report
 
 
 def validate(paths: Sequence[str | os.PathLike[str]]) -> list[Report]:
@@ -162,7 +170,12 @@ def validate(paths: Sequence[str | os.PathLike[str]]) -> list[Report]:
     for kind in known:
         if kind.name in batches:
             problems.update(kind.check(batches[kind.name], context))
-    return _reports(paths, given, of_kind, problems)
+    reports = _reports(paths, given, of_kind, problems)
+    for report in reports:
+        full = Path(report.file).resolve()
+        report.notes = sorted(Problem(report.file, n.line, n.col, n.message)
+                              for n in context.notes if Path(n.file).resolve() == full)
+    return reports
 
 
 def _unknown(path: Path, outline: yamlsafe.Outline | None, known: list[FileKind]) -> Problem:
@@ -345,7 +358,7 @@ for _kind in (
     FileKind("recipes", _check_recipes, 2, keys="tasks:/recipes:/atomic:/predicates:",
              detect=lambda d: bool(set(d) & {"predicates", "atomic", "tasks", "recipes",
                                             "chronicles"})
-             and not set(d) & {"scenario", "profile", "problem", "scheme", "team"},
+             and not set(d) & {"scenario", "profile", "problem", "scheme", "team", "binding"},
              shipped=_shipped_recipes),
     FileKind("domain", _check_domains, 3, detect=lambda d: "domain" in d and "types" in d,
              keys="domain:", shipped=_shipped_domains),

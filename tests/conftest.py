@@ -7,6 +7,7 @@ import textwrap
 from pathlib import Path
 
 import pytest
+from rosfixtures import ros_domain, spawn  # noqa: F401 -- the ROS tests' fixtures
 
 from shary.cli import main
 
