@@ -1,0 +1,63 @@
+"""Behaviour campaigns (``shary fuzz``): the invariants on short campaigns of each family,
+Hypothesis-drawn partners for the stack, and the violations campaigns found, each
+kept as a scenario of its own (docs/fuzz.md)."""
+
+from __future__ import annotations
+
+import textwrap
+
+from sim.fuzz.campaign import judge
+from sim.run import run_scenario
+from sim.scenario import builtin_scenarios, load_scenario
+
+
+def run_text(base: str, text: str, family: str = "living-room", seed: int = 0
+             ) -> tuple[str | None, str, dict[str, str]]:
+    """Run a scenario written here, read as if it were the built-in ``base``; judge it."""
+    scenario = load_scenario(builtin_scenarios()[base], text=textwrap.dedent(text))
+    return judge(family, scenario, run_scenario(scenario, seed=seed))
+
+
+GIVE = """\
+    scenario: give-{name}
+    robot: {{name: jido, at: base}}
+    people:
+      alice:
+        at: sofa-seat
+        profile: {profile}
+    goals:
+      - {{task: give-object, with: {{object: yellow-bottle, partner: alice}}}}
+    timeout: 200s
+    expect: {{}}
+"""
+
+
+def test_a_hand_over_nobody_takes_ends_failed_with_its_reason():
+    """Found by ``shary fuzz living-room --replay 47``: she agrees but never takes what
+    is held out; the give waited for ever and the run reached its timeout."""
+    state, reason, violations = run_text("give-bottle", GIVE.format(
+        name="never-taken",
+        profile="{answers: {ASK-TASK: {reply: H-AGREE, after: 1s}}, takes: null}"))
+    assert violations == {}
+    assert state == "failed" and reason
+
+
+def test_a_robot_handed_back_takes_the_task_that_waited_for_it():
+    """Found by ``shary fuzz weld --replay 15``: IVA drives K-10 while the weld is
+    made; the inspection becomes ready then, nobody else can do it, and after the hand
+    back nothing offered it again: the run reached its timeout with the goal open."""
+    from sim.weld.scenario import load_weld_scenario
+
+    scenario = load_weld_scenario(builtin_scenarios()["weld-human-supports-robot"], text="""\
+scenario: weld-held
+site: seam-welding
+team: weld/human-supports-robot.team.yaml
+mounted: [P1, P2, P3]
+script:
+  - {at: 2s, by: IVA, take-control: K-10}
+  - {at: 30s, by: IVA, hand-back: K-10}
+timeout: 4min
+expect: {}
+""")
+    state, reason, violations = judge("weld", scenario, run_scenario(scenario))
+    assert violations == {} and state == "achieved"
