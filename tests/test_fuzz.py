@@ -61,3 +61,42 @@ expect: {}
 """)
     state, reason, violations = judge("weld", scenario, run_scenario(scenario))
     assert violations == {} and state == "achieved"
+
+
+CLEAN_UP = """\
+    scenario: clean-up-{name}
+    robot: {{name: jido, at: base}}
+    people:
+      alice:
+        at: sofa-seat
+        profile: {profile}
+    objects:
+      yellow-bottle: {{on: coffee-table, at: [{at}]}}
+    goals:
+      - {{task: clean-up, with: {{object: yellow-bottle}}}}
+    timeout: 200s
+    expect: {{}}
+"""
+
+
+def test_the_robot_asks_for_help_only_once_the_helper_looks():
+    """Found by ``shary fuzz living-room --replay 20``: Alice is on the phone when the
+    pick fails; the robot said "I could not pick the yellow bottle." to no one
+    listening.  Now it waits for her glance (as every question does), then asks."""
+    state, _, violations = run_text("clean-up-unreachable", CLEAN_UP.format(
+        name="helper-away", at="-0.35, 0.2",
+        profile="{answers: {ASK-HELP: {reply: H-AGREE, after: 1s}}, distractions: "
+                "[{when: {at: 1s}, look: phone, for: 12s}]}"))
+    assert violations == {}
+    assert state == "achieved"
+
+
+
+def test_a_goal_with_someone_who_never_comes_to_interact_is_dropped_saying_why():
+    """Found by ``shary fuzz living-room --replay 76``: Alice never looks at the robot,
+    so no session opens and the give waited for one until the run's timeout.  Now
+    the goal is cancelled after a while, the reason in its ``goal-over`` row."""
+    state, reason, violations = run_text("give-bottle", GIVE.format(
+        name="never-attends", profile="{attention: store-table}"))
+    assert violations == {}
+    assert state == "failed" and "alice" in reason

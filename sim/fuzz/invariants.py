@@ -28,11 +28,15 @@ The invariants (issue 24, "Behaviour campaigns"):
     beaded (at least unsure, 0.4: a person may vouch for such a bead); and a
     failed verdict is not one whose effects are all there (sound beads, 0.8).
 ``told-unseen``
-    Nothing is told to a person who is not looking: each robot sentence is
-    said while someone is perceived looking at the robot (``looksAt`` rows),
-    except a call for attention ("Excuse me, Alice."), the stated reason of
-    a verdict already reached (a GIVE-UP, a failed plan) and the goodbye to a
-    person walking out (FAREWELL), which are said whoever listens.  The
+    Nothing is told to a person who is not looking: each robot sentence said
+    in a task with people in its roles (the partner of a give, the helper of
+    an ask-help, the person an inform is for; the task of the robot's last
+    act) is said while one of them is perceived looking at the robot
+    (``looksAt`` rows); a task of the robot alone (a clean-up's "I have
+    cleared the yellow bottle away.") tells no one in particular.  Except a
+    call for attention ("Excuse me, Alice."), the stated reason of a verdict
+    already reached (a GIVE-UP, a failed plan) and the goodbye to a person
+    walking out (FAREWELL), which are said whoever listens.  The
     seam-welding site's people are reached through their proxies (a remote IVA
     has no gaze): not checked there.
 ``not-seen``
@@ -111,21 +115,23 @@ def _plan_verdict(run: Run) -> tuple[str | None, str]:
 
 def _goals_verdict(run: Run) -> tuple[str | None, str]:
     goals = {d["goal"]: d for _, _, _, _, d in run.of("goal-added")}
-    over = {d["goal"]: (t, task, d["outcome"]) for t, _, task, _, d in run.of("goal-over")}
+    over = {d["goal"]: (t, task, d["outcome"], str(d.get("reason") or ""))
+            for t, _, task, _, d in run.of("goal-over")}
     if not goals or set(goals) - set(over):
         return None, ""
     declined = {task for _, _, task, _, d in run.of("act-received")
                 if d.get("act") == "H-DISAGREE"}
-    failed = [(t, task) for t, task, outcome in over.values()
+    failed = [(t, task, logged) for t, task, outcome, logged in over.values()
               if outcome != "done" or task in declined]
     if not failed:
         return "achieved", ""
     reasons = []
-    for end, node in failed:
+    for end, node, logged in failed:
         acts = [t for t, _, task, a, d in run.of("act") if task == node and a == run.robot]
-        since = acts[-1] if acts else 0.0
-        reasons.append(next((d["text"] for t, _, _, a, d in run.of("speech")
-                             if a == run.robot and since - 1e-9 <= t <= end + 1e-9), ""))
+        since = acts[-1] if acts else end
+        said = next((d["text"] for t, _, _, a, d in run.of("speech")
+                     if a == run.robot and since - 1e-9 <= t <= end + 1e-9), "")
+        reasons.append(logged or said)
     return "failed", " / ".join(reasons) if all(reasons) else ""
 
 
@@ -234,21 +240,28 @@ def _facts_agree(run: Run) -> str | None:
 
 def _told_unseen(run: Run) -> str | None:
     looks: set[tuple[str, str]] = set()
-    act, plan_over = "", False
-    for t, kind, _, agent, data in run.rows:
+    roles: dict[str | None, list[str]] = {}
+    act, speaking, plan_over = "", None, False
+    for t, kind, task, agent, data in run.rows:
         if kind in ("fact-added", "fact-removed") and data.get("p") == "looksAt" \
                 and data.get("s") in run.people:
             (looks.add if kind == "fact-added" else looks.discard)((data["s"], data["o"]))
+        elif kind == "task-start":
+            roles[task] = [str(v) for v in (data.get("roles") or {}).values()
+                           if v in run.people]
         elif kind == "act" and agent == run.robot:
-            act = data.get("act", "")
+            act, speaking = data.get("act", ""), task
         elif kind == "shared-plan" and data.get("state") == "failed":
             plan_over = True
         elif kind == "speech" and agent == run.robot:
             text = str(data.get("text", ""))
-            if text.startswith(ATTENTION_CALL) or act in CLOSING_ACTS or plan_over:
+            told = roles.get(speaking, [])
+            if not told or text.startswith(ATTENTION_CALL) or act in CLOSING_ACTS \
+                    or plan_over:
                 continue
-            if not any((p, run.robot) in looks for p in run.people):
-                where = ", ".join(sorted(f"{p} at {o}" for p, o in looks)) or "nobody looking"
+            if not any((p, run.robot) in looks for p in told):
+                where = ", ".join(f"{p} looks at {o}" for p, o in sorted(looks)
+                                  if p in told) or f"{' and '.join(told)} not looking"
                 return f"said {text!r} at {t:.1f}s while {where}"
     return None
 
