@@ -6,7 +6,13 @@ from __future__ import annotations
 
 import textwrap
 
-from sim.fuzz.campaign import judge
+import pytest
+import yaml
+from hypothesis import HealthCheck, Phase, given, settings
+from hypothesis import strategies as st
+
+from sim.fuzz.behaviours import ROBOT_TASKS, draw, stack_partner
+from sim.fuzz.campaign import campaign, command, judge
 from sim.run import run_scenario
 from sim.scenario import builtin_scenarios, load_scenario
 
@@ -16,6 +22,56 @@ def run_text(base: str, text: str, family: str = "living-room", seed: int = 0
     """Run a scenario written here, read as if it were the built-in ``base``; judge it."""
     scenario = load_scenario(builtin_scenarios()[base], text=textwrap.dedent(text))
     return judge(family, scenario, run_scenario(scenario, seed=seed))
+
+
+CAMPAIGNS = [("living-room", 24, 1), ("weld", 16, 1), ("stack", 10, 1)]
+"""(family, runs, first seed): a short campaign each, a few seconds a run at most."""
+
+
+@pytest.mark.parametrize(("family", "runs", "seed"), CAMPAIGNS,
+                         ids=[c[0] for c in CAMPAIGNS])
+def test_a_short_campaign_violates_no_invariant(family, runs, seed):
+    result = campaign(family, runs, seed)
+    assert len(result.outcomes) == runs
+    assert not result.violations, "\n".join(
+        f"{command(family, o.seed)}: {name}: {what}" for o, name, what in result.violations)
+
+
+def test_a_seed_draws_one_behaviour_a_user_could_write():
+    """The same seed draws the same document, and the readers accept it as a file."""
+    for family in ("stack", "living-room", "weld"):
+        first, again = draw(family, 7), draw(family, 7)
+        assert first.text() == again.text() and first.team_text() == again.team_text()
+        assert first.load().name == f"{first.base}-fuzz-7"
+    assert draw("living-room", 7).text() != draw("living-room", 8).text()
+
+
+PARTNER = st.sampled_from(["alice", "bob", "zoe"])
+
+
+@st.composite
+def profiles(draw_from: st.DrawFn) -> dict:
+    """A stack partner's profile from the documented keys (docs/jahrvis.md)."""
+    profile = {"choices": draw_from(st.lists(st.sampled_from(
+                   ["placement_1", "placement_2", "Pick", "Place", "wait"]), max_size=4)),
+               "delay": draw_from(st.sampled_from([0, 0.5, 1, 2.5, 4]))}
+    if draw_from(st.booleans()):
+        profile["look-away"] = {"during": draw_from(st.sampled_from(ROBOT_TASKS)),
+                                "for": draw_from(st.sampled_from([0.5, 3, 6, 15, 40]))}
+    return profile
+
+
+@settings(max_examples=5, deadline=None, derandomize=True, database=None,
+          phases=(Phase.explicit, Phase.generate),
+          suppress_health_check=[HealthCheck.too_slow])
+@given(partner=PARTNER, profile=profiles(), wait=st.sampled_from([2, 4, 6]))
+def test_a_stack_partner_drawn_by_hypothesis_never_stalls_the_plan(partner, profile, wait):
+    data = stack_partner(partner, profile, wait)
+    data["scenario"] = "stack-hypothesis"
+    text = yaml.safe_dump(data, sort_keys=False)
+    state, reason, violations = run_text("stack-nominal", text, family="stack")
+    assert violations == {}, f"{violations}\nthe scenario:\n{text}"
+    assert state in ("achieved", "failed")
 
 
 GIVE = """\
@@ -100,3 +156,14 @@ def test_a_goal_with_someone_who_never_comes_to_interact_is_dropped_saying_why()
         name="never-attends", profile="{attention: store-table}"))
     assert violations == {}
     assert state == "failed" and "alice" in reason
+
+
+def test_the_robot_stops_asking_when_the_helper_walks_away():
+    """Found by ``shary fuzz living-room --replay 100``: Alice walks to the door while
+    the robot says "I could not pick the yellow bottle."; it went on with "Can you give
+    me the yellow bottle?" after she had looked away.  Now it waits for her again."""
+    state, reason, violations = run_text("clean-up-unreachable", CLEAN_UP.format(
+        name="helper-leaves", at="-0.35, 0.2",
+        profile="{speed: 1.27, script: [{at: 4.1s, leave: true}]}"))
+    assert violations == {}
+    assert state == "failed" and reason

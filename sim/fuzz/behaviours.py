@@ -46,7 +46,7 @@ from userfiles import yamlsafe
 
 from ..scenario import builtin_scenarios, load_scenario
 
-__all__ = ["FAMILIES", "Variation", "draw"]
+__all__ = ["FAMILIES", "Variation", "draw", "stack_partner"]
 
 FAMILIES = ("stack", "living-room", "weld")
 
@@ -140,8 +140,20 @@ def _span(rng: random.Random, low: float, high: float) -> list[str]:
 
 # ------------------------------------------------------------------------------ stack
 
-def _stack(rng: random.Random, seed: int) -> Variation:
+def stack_partner(partner: str, profile: dict[str, Any], decision_wait: float = 6.0
+                  ) -> dict[str, Any]:
+    """``stack-nominal`` with another partner, following the plan as ``profile`` says
+    (the keys of ``shared-plan: profile:``, docs/jahrvis.md)."""
     data = _base("stack-nominal")
+    data["people"] = {partner: {"at": "coffee-north", "profile": "cooperative"}}
+    data["shared-plan"] = {"problem": "stack", "partner": partner,
+                           "decision-wait": f"{decision_wait:g}s", "profile": profile}
+    data["timeout"] = "300s"
+    data["expect"] = {}
+    return data
+
+
+def _stack(rng: random.Random, seed: int) -> Variation:
     partner = rng.choice(PARTNERS)
     told = [partner]
     choices = []
@@ -163,15 +175,12 @@ def _stack(rng: random.Random, seed: int) -> Variation:
         after = rng.choice(HUMAN_TASKS).format(h=partner)
         profile["leave"] = {"after": after}
         told.append(f"leaves after {after}…")
-    data["people"] = {partner: {"at": "coffee-north", "profile": "cooperative"}}
-    data["shared-plan"] = {"problem": "stack", "partner": partner,
-                           "decision-wait": f"{_seconds(rng, 2, 8):g}s", "profile": profile}
+    data = stack_partner(partner, profile, _seconds(rng, 2, 8))
     _noise(rng, data, told, ("isHolding", "looksAt"))
     if rng.random() < 0.2:
         action, times = rng.choice(["pick", "place"]), rng.randint(1, 3)
         data["faults"] = [{"action": action, "reason": f"the {action} slipped", "times": times}]
         told.append(f"{action} fails {times}x")
-    data["timeout"] = "300s"
     return _finish("stack", seed, "stack-nominal", data, told)
 
 

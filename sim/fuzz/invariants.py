@@ -19,7 +19,7 @@ The invariants (issue 24, "Behaviour campaigns"):
 ``no-ongoing``
     Nothing is left under way: no plan task ONGOING in any view, every task
     started ended (the interaction ``session`` aside: it lasts as long as the
-    people are there), no team task still running or offered.
+    people are there), no team task still running.
 ``facts``
     The world agrees with the verdict: an achieved stack stands (both red
     cubes on the placements, the stick across them, a blue cube, the green
@@ -174,12 +174,13 @@ def _nothing_ongoing(run: Run) -> str | None:
         started.pop(task, None)
     left += [f"task {name} ({node}) never ended" for node, name in started.items()]
     team: dict[str, str] = {}
-    for _, kind, task, _, _ in run.of("task-offered", "task-running", "task-done",
-                                      "task-failed", "task-given-up", "respawn", "agent-lost"):
+    for _, kind, task, _, _ in run.of("task-running", "task-done", "task-failed",
+                                      "task-given-up", "task-retry", "task-unassigned",
+                                      "respawn", "agent-lost"):
         if task is not None:
             team[task] = kind
-    left += [f"team task {task} left {kind[5:]}" for task, kind in team.items()
-             if kind in ("task-offered", "task-running")]
+    left += [f"team task {task} left running" for task, kind in team.items()
+             if kind == "task-running"]
     return "; ".join(left[:3]) + (f" (+{len(left) - 3})" if len(left) > 3 else "") \
         if left else None
 
