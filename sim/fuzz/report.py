@@ -42,6 +42,11 @@ def print_campaign(out: Any, result: Campaign) -> None:
         summary.add_column(column, justify=justify)  # type: ignore[arg-type]
     for invariant, counts in zip(INVARIANTS, document["invariants"], strict=True):
         checked, violated = counts["checked"], counts["violated"]
+        if not checked:  # not an invariant of this family
+            summary.add_row(f"[dim]{invariant.name}[/dim]",
+                            f"[dim]{escape(invariant.says)} (not for {family})[/dim]",
+                            "[dim]—[/dim]", "[dim]—[/dim]", "[dim]—[/dim]")
+            continue
         summary.add_row(invariant.name, escape(invariant.says), str(checked),
                         str(checked - violated),
                         f"[red]{violated}[/red]" if violated else "[green]0[/green]")
