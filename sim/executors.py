@@ -441,8 +441,11 @@ class RobotExecutors:
                          Wait(TAKE_WITHIN, until=lambda: bool(taken) or bool(running.failure),
                               label="wait for the take"),
                          Instant(not_taken, "taken?"),
-                         Instant(release, "release"), self._home()], f"give {object}",
-                        running.failed)
+                         Instant(release, "release"),
+                         # given once taken: the arm's way back is not part of the give
+                         # (a person who looks away now does not undo it)
+                         Instant(lambda: self._finished(running), "given"),
+                         self._home()], f"give {object}", running.failed)
 
     def take_from(self, person: str, obj: str, done: Callable[[], Any]) -> bool:
         """A person holds ``obj`` out: reach their hand and grasp (the receiving side).

@@ -167,3 +167,44 @@ def test_the_robot_stops_asking_when_the_helper_walks_away():
         profile="{speed: 1.27, script: [{at: 4.1s, leave: true}]}"))
     assert violations == {}
     assert state == "failed" and reason
+
+
+def test_a_person_who_looks_away_once_she_has_the_object_was_given_it():
+    """Found by ``shary fuzz living-room --replay 206``: Alice takes the bottle and
+    looks at her phone while the arm goes back; the robot waited for her attention,
+    gave up and said "You are busy, so I will not give you the yellow bottle." while
+    she held it.  The give is done once she has taken it."""
+    text = GIVE.format(name="taken-then-away", profile=(
+        "{answers: {ASK-TASK: {reply: H-AGREE, after: [2.2s, 3.3s]}}, takes: {after: "
+        "[2.4s, 3s]}, speed: 1.13, distractions: [{when: {at: 27.6s}, after: 0.9s, "
+        "look: away, for: never}]}")) + "    noise: {hold: 0.8s, flicker: {isHolding: 0.17}}\n"
+    state, _, violations = run_text("give-bottle", text, seed=206)
+    assert violations == {}
+    assert state == "achieved"
+
+
+def test_no_answer_to_a_no_is_said_to_someone_who_is_not_looking():
+    """Found by ``shary fuzz living-room --replay 248``: Alice says no, and the robot's
+    perception no longer sees her look at it (her gaze flickers): it said "I will not
+    give you the yellow bottle." all the same.  Now it says so only to her face."""
+    text = GIVE.format(name="no-then-away", profile=(
+        "{answers: {ASK-TASK: {reply: H-DISAGREE, after: 0.7s}}, speed: 0.95}")) + \
+        "    noise: {hold: 0s, flicker: {looksAt: 0.14}}\n"
+    state, _, violations = run_text("give-bottle", text, seed=248)
+    assert violations == {}
+    assert state == "failed"
+
+
+def test_thanks_are_said_to_a_helper_who_looks():
+    """Found by ``shary fuzz living-room --replay 96``: "Thank you for the yellow
+    bottle." said while the robot did not see Alice look at it."""
+    state, _, violations = run_text("clean-up-unreachable", CLEAN_UP.format(
+        name="thanks", at="-0.35, 0.2", profile=(
+            "{answers: {ASK-TASK: [{reply: H-AGREE, after: [0.7s, 2.4s]}], ASK-HELP: "
+            "[{reply: H-AGREE, after: [1.4s, 2.3s]}, {reply: H-AGREE, after: [1.7s, 2.5s]}]}, "
+            "distractions: [{when: {at: 38.4s}, after: 0.7s, look: away, for: 13.1s}], "
+            "takes: {after: [2.8s, 3.2s]}, helps: true, speed: 1.29}"
+        )) + "    noise: {hold: 0s, flicker: {looksAt: 0.07}}\n",
+        seed=96)
+    assert violations == {}
+    assert state == "achieved"

@@ -15,7 +15,8 @@ The invariants (issue 24, "Behaviour campaigns"):
     act; a team task ``task-given-up`` with its reason).  A goal the person
     declined (``H-DISAGREE``) ends ``done`` in the task tree, as SHARY's
     END-TASK does, but it is not achieved: it counts as failed, its reason
-    what the robot says ("I will not give you the yellow bottle.").
+    what the robot says ("I will not give you the yellow bottle.") or, when it
+    says nothing (she no longer looks), her no.
 ``no-ongoing``
     Nothing is left under way: no plan task ONGOING in any view, every task
     started ended (the interaction ``session`` aside: it lasts as long as the
@@ -119,7 +120,7 @@ def _goals_verdict(run: Run) -> tuple[str | None, str]:
             for t, _, task, _, d in run.of("goal-over")}
     if not goals or set(goals) - set(over):
         return None, ""
-    declined = {task for _, _, task, _, d in run.of("act-received")
+    declined = {task: f"{who} said no" for _, _, task, who, d in run.of("act-received")
                 if d.get("act") == "H-DISAGREE"}
     failed = [(t, task, logged) for t, task, outcome, logged in over.values()
               if outcome != "done" or task in declined]
@@ -131,7 +132,7 @@ def _goals_verdict(run: Run) -> tuple[str | None, str]:
         since = acts[-1] if acts else end
         said = next((d["text"] for t, _, _, a, d in run.of("speech")
                      if a == run.robot and since - 1e-9 <= t <= end + 1e-9), "")
-        reasons.append(logged or said)
+        reasons.append(logged or said or declined.get(node, ""))
     return "failed", " / ".join(reasons) if all(reasons) else ""
 
 
