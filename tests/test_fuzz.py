@@ -24,7 +24,7 @@ def run_text(base: str, text: str, family: str = "living-room", seed: int = 0
     return judge(family, scenario, run_scenario(scenario, seed=seed))
 
 
-CAMPAIGNS = [("living-room", 16, 1), ("weld", 10, 1), ("stack", 8, 5)]
+CAMPAIGNS = [("living-room", 30, 1), ("weld", 24, 1), ("stack", 24, 5)]
 """(family, runs, first seed): a short campaign each, a few seconds a run at most."""
 
 
@@ -61,7 +61,7 @@ def profiles(draw_from: st.DrawFn) -> dict:
     return profile
 
 
-@settings(max_examples=3, deadline=None, derandomize=True, database=None,
+@settings(max_examples=6, deadline=None, derandomize=True, database=None,
           phases=(Phase.explicit, Phase.generate),
           suppress_health_check=[HealthCheck.too_slow])
 @given(partner=PARTNER, profile=profiles(), wait=st.sampled_from([2, 4, 6]))
