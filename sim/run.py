@@ -415,11 +415,15 @@ class _Run:
         self.sup.agenda.add(goal.task, goal.args, priority=goal.priority)
 
     def _quiet(self) -> bool:
-        return (not self.sup.runs and self.sup.agenda.active is None
-                and not any(g.state not in OVER for g in self.sup.agenda.goals)
-                and not self.sim.busy and self.loop.clock.next_due() is None
-                and not any(p.pending for p in self.people.values())
-                and not (self.stack is not None and self.stack.busy))
+        if (self.sup.runs or self.sup.agenda.active is not None
+                or any(g.state not in OVER for g in self.sup.agenda.goals)
+                or self.sim.busy or any(p.pending for p in self.people.values())):
+            return False
+        if self.stack is not None:
+            if self.stack.busy:
+                return False
+            self.stack.settle()
+        return self.loop.clock.next_due() is None
 
     # -- after the run --------------------------------------------------------------
 

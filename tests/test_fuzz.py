@@ -208,3 +208,77 @@ def test_thanks_are_said_to_a_helper_who_looks():
         seed=96)
     assert violations == {}
     assert state == "achieved"
+
+
+STACK = """\
+    scenario: stack-{name}
+    robot: {{name: pr2, model: pr2like, at: coffee-area}}
+    people:
+      {partner}: {{at: coffee-north, profile: cooperative}}
+    action-models: [stack]
+    shared-plan:
+      problem: stack
+      partner: {partner}
+      decision-wait: {wait}
+      profile: {profile}
+    timeout: 300s
+    expect: {{}}
+"""
+
+
+def test_a_partner_who_never_looks_back_does_not_keep_the_run_going():
+    """Found by ``shary fuzz stack --replay 9``: Bob looks away for ten minutes as the
+    robot places the last cube; the plan is achieved, the robot calls him and gives up
+    telling him, and the run went on until its timeout waiting for his glance.  Now it
+    ends there, the untold inform in a ``belief`` row."""
+    text = STACK.format(name="never-looks-back", partner="bob", wait="6s", profile=(
+        "{choices: [Place, Place, Place], delay: 4.0, "
+        "look-away: {during: 'Place(pr2, blue_cube', for: 600}}"))
+    scenario = load_scenario(builtin_scenarios()["stack-nominal"], text=textwrap.dedent(text))
+    result = run_scenario(scenario, seed=9)
+    state, _, violations = judge("stack", scenario, result)
+    assert violations == {}
+    assert state == "achieved" and result.simulated_seconds < 100
+    assert any(kind == "belief" and data.get("why") == "untold"
+               for _, kind, _, _, data in result.events)
+
+
+def test_what_a_partner_who_left_missed_is_tried_once_the_plan_is_over():
+    """Found by ``shary fuzz stack --replay 128``: Carol walks to the door after her
+    last pick; the robot's last actions are NOT_SEEN in her view, it calls her at the
+    end of the plan and gives up.  That is all it can do: the invariant now reads the
+    ``belief ... why=untold`` row the end's inform writes (it counted only a failed
+    plan as over)."""
+    state, _, violations = run_text("stack-nominal", STACK.format(
+        name="partner-left", partner="carol", wait="4.4s", profile=(
+            "{choices: [placement_2], delay: 3.9, "
+            "leave: {after: 'Pick(carol, blue_cube_2)'}}")), family="stack", seed=128)
+    assert violations == {}
+    assert state == "achieved"
+
+
+def test_an_inform_is_not_said_to_a_partner_who_looks_away_as_it_starts():
+    """Found by ``shary fuzz stack --replay 155``: Carol's gaze flickers; she looked
+    away while the robot turned to her and it said "I placed the blue cube on the green
+    cube." all the same.  A look-away before the sentence starts now sends the inform
+    back to waiting for her attention (``recipes/dialogue.yaml``: ``until: speak``)."""
+    text = STACK.format(name="inform-flicker", partner="carol", wait="2.3s", profile=(
+        "{choices: [placement_1, placement_2, Place], delay: 2.2}")) + \
+        "    noise: {hold: 0s, flicker: {looksAt: 0.09}}\n"
+    state, _, violations = run_text("stack-nominal", text, family="stack", seed=155)
+    assert violations == {}
+    assert state == "achieved"
+
+
+def test_a_replan_keeps_the_partner_s_top_blue_cube():
+    """Found by ``shary fuzz stack --replay 58``: the robot's place failed twice, the
+    plan was made again, Bob left the first blue cube to the robot, and the new plan
+    ended with no blue cube on the green one: its agendas lacked ``HumanTopBlue``,
+    which the old branch had found already done (no primitive task).  The replan's
+    agendas now keep such tasks (``shary/plans/replan.py``)."""
+    text = STACK.format(name="replan-top-blue", partner="bob", wait="6.3s", profile=(
+        "{choices: [placement_1, wait], delay: 3.6}")) + \
+        "    faults: [{action: place, reason: the place slipped, times: 2}]\n"
+    state, _, violations = run_text("stack-nominal", text, family="stack", seed=58)
+    assert violations == {}
+    assert state == "achieved"

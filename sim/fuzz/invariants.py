@@ -42,7 +42,9 @@ The invariants (issue 24, "Behaviour campaigns"):
     has no gaze): not checked there.
 ``not-seen``
     Every task NOT_SEEN in a person's view becomes EXECUTED in it later (the
-    robot told them), or the plan failed (stack only).
+    robot told them), or the plan failed, or the plan ended and the robot's inform
+    to them after its end gave up (a ``belief`` row ``why=untold``: they did not
+    attend, e.g. they had left) (stack only).
 """
 
 from __future__ import annotations
@@ -271,8 +273,9 @@ def _told_unseen(run: Run) -> str | None:
 def _not_seen_told(run: Run) -> str | None:
     pending: dict[tuple[str | None, str | None], tuple[float, str]] = {}
     failed = any(d.get("state") == "failed" for _, _, _, _, d in run.of("shared-plan"))
+    untold = {agent for _, _, _, agent, d in run.of("belief") if d.get("why") == "untold"}
     for t, _, task, agent, data in run.of("plan-task"):
-        if agent == run.robot:
+        if agent == run.robot or agent in untold:
             continue
         if data.get("state") == "NOT_SEEN":
             pending.setdefault((agent, task), (t, data.get("name", "")))
@@ -292,6 +295,6 @@ INVARIANTS = (
     Invariant("facts", "the world's facts agree with the verdict", _facts_agree),
     Invariant("told-unseen", "nothing told to a person who is not looking", _told_unseen,
               ("stack", "living-room")),
-    Invariant("not-seen", "every NOT_SEEN is told, or the plan failed", _not_seen_told,
-              ("stack",)),
+    Invariant("not-seen", "every NOT_SEEN is told, or the plan ended and telling failed",
+              _not_seen_told, ("stack",)),
 )
