@@ -14,7 +14,7 @@ The track is the public repository ``panda-planner-dev/ipc2020-domains``
 
     python benchmarks/ipc_track.py ~/ipc2020-domains/total-order \\
         --verifier ~/pandaPIparser/pandaPIparser [--cutoff 30] [--only Towers,Transport]
-        [--problems 'pfile_1*'] [--json]
+        [--problems 'pfile_1*'] [--every 10] [--verify-timeout 120] [--json]
 
 A problem is every ``*.hddl`` file of a domain's folder whose name does not
 contain ``domain``; its domain is ``domain.hddl`` beside it, or
@@ -88,6 +88,8 @@ def main() -> int:
                         help="seconds the verifier may take for one plan")
     parser.add_argument("--only", default="", help="domains (folder names), comma-separated")
     parser.add_argument("--problems", default="*", help="problem names (a glob on the stem)")
+    parser.add_argument("--every", type=int, default=1,
+                        help="a sample: the first problem of each domain, then every Nth")
     parser.add_argument("--json", action="store_true", help="one JSON document at the end")
     args = parser.parse_args()
     shary = shutil.which("shary") or str(Path(sys.executable).with_name("shary"))
@@ -97,7 +99,7 @@ def main() -> int:
         for domain_dir in sorted(p for p in args.track.iterdir() if p.is_dir()):
             if chosen and domain_dir.name not in chosen:
                 continue
-            found = problems(domain_dir, args.problems)
+            found = problems(domain_dir, args.problems)[::max(1, args.every)]
             if not found:
                 continue
             outcome = results.setdefault(domain_dir.name, {})

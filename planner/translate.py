@@ -119,7 +119,7 @@ class _Translator:
                         for adding in (True, False)
                         for pred, _ in _effect_atoms(action.effect, adding)}
         """The predicates some action's effect may change (the others are static)."""
-        self._touched: dict[str, frozenset[str]] | None = None
+        self._touched: dict[str, frozenset[tuple[str, tuple[str, ...]]]] | None = None
         self._entry: dict[str, list[hddl.Formula]] = {}
 
     def problem(self) -> Problem:
@@ -254,13 +254,18 @@ class _Translator:
 
     # -- entry conditions ---------------------------------------------------------------
 
-    def touched(self, task: str) -> frozenset[str]:
-        """The predicates ``task`` may add or delete, through every method below it."""
+    def touched(self, task: str) -> frozenset[tuple[str, tuple[str, ...]]]:
+        """The facts ``task`` may add or delete, through every method below it: each a
+        predicate and the types of its arguments, as the actions declare them (a
+        quantifier's variable counts as ``object``).  Transport's ``get_to ?v`` moves
+        vehicles: it may change ``(at vehicle location)``, never a package's ``at``."""
         if self._touched is None:
-            found: dict[str, set[str]] = {
-                name: {pred for adding in (True, False)
-                       for pred, _ in _effect_atoms(action.effect, adding)}
-                for name, action in self.hdomain.actions.items()}
+            found: dict[str, set[tuple[str, tuple[str, ...]]]] = {}
+            for name, action in self.hdomain.actions.items():
+                kinds = dict(action.params)
+                found[name] = {(pred, tuple(self.kind(t, kinds) for t in terms))
+                               for adding in (True, False)
+                               for pred, terms in _effect_atoms(action.effect, adding)}
             changed = True
             while changed:
                 changed = False
@@ -309,6 +314,32 @@ class _Translator:
         self._entry[task] = found
         return found
 
+    def kind(self, term: str, kinds: dict[str, str]) -> str:
+        """The type of a term: a variable's declared type, a constant's own."""
+        if is_variable(term):
+            return kinds.get(term, "object")
+        return self.objects.get(term, "object")
+
+    def may_change(self, formula: hddl.Formula, kinds: dict[str, str],
+                   touched: set[tuple[str, tuple[str, ...]]]) -> bool:
+        """Whether a fact ``formula`` reads may be one of ``touched`` (a predicate and
+        argument types that may overlap: one type is the other or below it)."""
+        for part in formula.walk():
+            if part.kind != "pred":
+                continue
+            pred, terms = part.children
+            mine = [self.kind(t, kinds) for t in terms]
+            for other, types in touched:
+                if other == pred and all(self.overlap(a, b)
+                                         for a, b in zip(mine, types, strict=True)):
+                    return True
+        return False
+
+    def overlap(self, a: str, b: str) -> bool:
+        """Whether an object may be of both types ``a`` and ``b``."""
+        return (a == b or a in hddl.supertypes(self.hdomain, b)
+                or b in hddl.supertypes(self.hdomain, a))
+
     def method_entry(self, method: hddl.HMethod) -> list[hddl.Formula]:
         """The literals over a method's variables that must hold where it is entered: its
         precondition's, and each subtask's entry conditions that none of the subtasks
@@ -323,15 +354,16 @@ class _Translator:
         the subtask (Freecell's ``M241`` binds a card that ``SENDTOFREE-B``, three
         bookkeeping tasks later, needs clear and at the bottom of a column)."""
         out: list[hddl.Formula] = []
-        changed: set[str] = set()
+        kinds = dict(method.params)
+        changed: set[tuple[str, tuple[str, ...]]] = set()
         for sub in method.subtasks:
             params = (self.hdomain.actions[sub.name].params if sub.name in self.hdomain.actions
                       else self.hdomain.tasks.get(sub.name, ()))
             rename = {p: t for (p, _), t in zip(params, sub.args, strict=True)}
             for formula in self.entry(sub.name):
-                if not any(f.kind == "pred" and f.children[0] in changed
-                           for f in formula.walk()):
-                    out.append(_rename(formula, rename))
+                renamed = _rename(formula, rename)
+                if not self.may_change(renamed, kinds, changed):
+                    out.append(renamed)
             changed |= self.touched(sub.name)
         return out
 

@@ -75,11 +75,13 @@ CARDS_PROBLEM = """\
 """
 
 
-def _bindings(problem, method: str) -> list[dict]:
+def _bindings(problem, method: str, **task_args: str) -> list[dict]:
+    """The bindings a method's binder proposes in the initial state, for the task's
+    arguments ``task_args`` (by parameter name, without '?')."""
     decomposition = next(d for m in problem.domain.methods.values()
                          for d in m.decompositions if d.name == method)
     state = FactState(dict(problem.initial), problem.domain.patterns)
-    return list(decomposition.bind({}, state))
+    return list(decomposition.bind(task_args, state))
 
 
 def test_a_binder_checks_what_a_later_subtask_needs_when_nothing_before_changes_it(write):
@@ -154,3 +156,45 @@ def test_a_deep_enough_first_pass_needs_no_other(write, monkeypatch, depth):
     monkeypatch.setattr(depthfirst, "MAX_DEPTH", depth)
     problem = _load(write, COUNT, COUNT_PROBLEM)
     assert len(plan(problem, 5_000, first=True).plan.actions) == 11
+
+
+def _haul(mover: str) -> str:
+    """``at`` says where vehicles and packages are; ``move`` moves a ``mover``."""
+    return f"""\
+(define (domain haul)
+  (:requirements :typing :hierarchy)
+  (:types vehicle package - thing place)
+  (:predicates (at ?x - thing ?l - place) (in ?p - package ?v - vehicle))
+  (:task deliver :parameters (?p - package))
+  (:method m-deliver
+    :parameters (?p - package ?v - vehicle ?l - place)
+    :task (deliver ?p)
+    :ordered-subtasks (and (move ?v ?l) (pick ?v ?p ?l)))
+  (:action move :parameters (?v - {mover} ?l - place) :effect (at ?v ?l))
+  (:action pick :parameters (?v - vehicle ?p - package ?l - place)
+    :precondition (at ?p ?l) :effect (and (not (at ?p ?l)) (in ?p ?v))))
+"""
+
+
+HAUL_PROBLEM = """\
+(define (problem p) (:domain haul)
+  (:objects truck - vehicle box - package depot port yard - place)
+  (:htn :ordered-subtasks (and (deliver box)))
+  (:init (at truck depot) (at box yard)))
+"""
+
+
+def test_a_condition_on_facts_of_another_type_than_those_changed_is_required(write):
+    problem = _load(write, _haul("vehicle"), HAUL_PROBLEM)
+    # 'move' changes where vehicles are, never where a package is: (at box ?l) holds at
+    # the method's entry, so ?l is the yard at once.
+    assert _bindings(problem, "m-deliver", p="box") == [{"?p": "box", "?v": "truck", "?l": "yard"}]
+    result = plan(problem, 5_000, first=True)
+    assert [str(a) for a in result.plan.actions] == ["move(truck, yard)",
+                                                     "pick(truck, box, yard)"]
+
+
+def test_a_condition_on_facts_of_an_overlapping_type_is_not_required(write):
+    problem = _load(write, _haul("thing"), HAUL_PROBLEM)
+    # Here 'move' may move any thing, a package too: every place is proposed.
+    assert len(_bindings(problem, "m-deliver", p="box")) == 3
