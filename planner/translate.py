@@ -233,19 +233,19 @@ class _Translator:
         text = f"task {call}, {whole or '()'}"
         reads = {f.children[0] for f in whole.walk() if f.kind == "pred"} if whole else set()
         pre = Expr(text, matches, frozenset(dict(method.params)), frozenset(reads), "bool")
-        tests = [self.test(f) for f in _conjuncts(whole)]
+        conditions = list(_conjuncts(whole))
         for position, sub in enumerate(method.subtasks):
             action = domain.actions.get(sub.name)
             if action is None:
                 continue
             rename = {p: t for (p, _), t in zip(action.params, sub.args, strict=True)}
-            tests += [self.test(_rename(f, rename)) for f in _conjuncts(action.precondition)
-                      if position == 0 or self.static(f)]
-        known = {str(f) for f in _conjuncts(whole)}
-        for formula in self.hoisted(method):
-            if str(formula) not in known:
-                known.add(str(formula))
-                tests.append(self.test(formula))
+            conditions += [_rename(f, rename) for f in _conjuncts(action.precondition)
+                           if position == 0 or self.static(f)]
+        conditions += self.hoisted(method)
+        unique: dict[str, hddl.Formula] = {}
+        for formula in conditions:  # each once, at its first place
+            unique.setdefault(str(formula), formula)
+        tests = [self.test(f) for f in unique.values()]
         bind, patterns = compile_binder(dict(method.params), head, tests, self.typed)
         subtasks = tuple(Subtask(s.name, tuple(_term(t) for t in s.args),
                                  f"({' '.join((s.name, *s.args))})", args_of(s.args))
