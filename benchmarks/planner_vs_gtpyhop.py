@@ -37,6 +37,7 @@ import gc
 import importlib.util
 import io
 import json
+import os
 import statistics
 import sys
 import time
@@ -48,7 +49,9 @@ import _first  # noqa: F401  (this folder after the packages: see _first.py)
 
 from planner import load_hddl, plan, validate
 
-SUITE = Path(__file__).resolve().parents[1].parent / "shared" / "suites" / "ipc2020"
+SUITE = Path(os.environ.get("SHARY_SUITES")
+             or Path(__file__).resolve().parents[1].parent / "shared" / "suites") / "ipc2020"
+"""The suite, where the README's "External suites" puts it (``$SHARY_SUITES`` moves it)."""
 DOMAINS = {"Blocksworld-GTOHP": ("on", 30), "Childsnack": ("served", 30)}
 """Each domain: the attribute of GTPyhop's goal Multigoal, and how many instances."""
 SLOW_S = 2.0
@@ -143,7 +146,9 @@ def main() -> int:
     args = parser.parse_args()
     total = args.suite / "total-order"
     if not total.is_dir():
-        print(f"the IPC 2020 suite is not at {args.suite}", file=sys.stderr)
+        print(f"the IPC 2020 suite is not at {args.suite}: git clone --depth 1 "
+              f"https://github.com/panda-planner-dev/ipc2020-domains {args.suite} (the "
+              f"README's 'External suites'), or give --suite", file=sys.stderr)
         return 2
     gtpyhop, packages = gtpyhop_bundle()
     rows = []

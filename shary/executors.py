@@ -27,6 +27,9 @@ class Request:
     args: dict[str, Any]
     agent: str
     node: str
+    priority: int = 2
+    """Who asks, for a part of the body several ask for at once (:mod:`shary.arbiter`):
+    1 a plan watching, 2 a task's step (the default), 3 a robot action's own look."""
 
 
 @dataclass(frozen=True)
@@ -70,12 +73,18 @@ class ExecutorRegistry:
 
     def __init__(self, executors: dict[str, Executor] | None = None):
         self._executors: dict[str, Executor] = dict(executors or {})
+        self.arbiter: Any = None
+        """The body's arbiter (:class:`shary.arbiter.BodyArbiter`), which the supervisor
+        puts in front of the executors that move the head or an arm."""
 
     def register(self, atomic: str, executor: Executor) -> None:
         self._executors[atomic] = executor
 
     def get(self, atomic: str) -> Executor | None:
-        return self._executors.get(atomic)
+        found = self._executors.get(atomic)
+        if found is None or self.arbiter is None:
+            return found
+        return self.arbiter.port(atomic, found)
 
     def names(self) -> list[str]:
         return sorted(self._executors)

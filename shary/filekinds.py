@@ -2,9 +2,11 @@
 
 Each kind says how to recognise its files (a suffix, or the top-level keys of a
 YAML mapping) and how to check a batch of them with what the files before
-have declared (acts files come first, so their acts are known to schemes,
-recipes, scenarios and profiles).  The engine registers its own kinds here;
-other parts register theirs through the ``shary.file_kinds`` entry-point
+have declared: files given together are checked as one set (acts files come
+first, so their acts are known to schemes, recipes, scenarios and profiles; the
+acts a scheme declares under its ``acts:`` are known to the files after it).
+The engine registers its own kinds here; other parts register theirs through
+the ``shary.file_kinds`` entry-point
 group (``sim`` registers scenarios and profiles), since ``shary`` never
 imports ``sim``.
 
@@ -38,6 +40,9 @@ class Context:
 
     acts: ActRegistry = field(default_factory=builtin_acts)
     conditions: ConditionRegistry = field(default_factory=ConditionRegistry.installed)
+    notes: list[Problem] = field(default_factory=list)
+    """What a kind notes without refusing the file (a robot binding's interface type
+    that is not installed here), shown as ``FILE:LINE:COL: note: …``."""
 
 
 Check = Callable[[list[Path], Context], list[Problem]]
@@ -111,17 +116,22 @@ class Report:
     problems: list[Problem]
     depends_on: list[str] = field(default_factory=list)
     """Files this one uses that have errors (it cannot be ok while they are not)."""
+    notes: list[Problem] = field(default_factory=list)
+    """What is worth knowing but not wrong (see :attr:`Context.notes`)."""
 
     @property
     def ok(self) -> bool:
         return not self.problems
 
     def as_json(self) -> dict[str, Any]:
-        return {"file": self.file, "kind": self.kind, "ok": self.ok,
-                "depends_on": self.depends_on,
-                "problems": [{"file": p.file, "line": p.line, "col": p.col,
-                              "message": p.message}
-                             for p in self.problems]}
+        report = {"file": self.file, "kind": self.kind, "ok": self.ok,
+                  "depends_on": self.depends_on,
+                  "problems": [{"file": p.file, "line": p.line, "col": p.col,
+                                "message": p.message} for p in self.problems]}
+        if self.notes:
+            report["notes"] = [{"file": p.file, "line": p.line, "col": p.col,
+                                "message": p.message} for p in self.notes]
+        return report
 
 
 def validate(paths: Sequence[str | os.PathLike[str]]) -> list[Report]:
@@ -160,7 +170,12 @@ def validate(paths: Sequence[str | os.PathLike[str]]) -> list[Report]:
     for kind in known:
         if kind.name in batches:
             problems.update(kind.check(batches[kind.name], context))
-    return _reports(paths, given, of_kind, problems)
+    reports = _reports(paths, given, of_kind, problems)
+    for report in reports:
+        full = Path(report.file).resolve()
+        report.notes = sorted(Problem(report.file, n.line, n.col, n.message)
+                              for n in context.notes if Path(n.file).resolve() == full)
+    return reports
 
 
 def _unknown(path: Path, outline: yamlsafe.Outline | None, known: list[FileKind]) -> Problem:
@@ -220,9 +235,11 @@ def _check_schemes(files: list[Path], context: Context) -> list[Problem]:
     problems: list[Problem] = []
     for path in files:
         try:
-            load_scheme(path, acts=context.acts, conditions=context.conditions)
+            scheme = load_scheme(path, acts=context.acts, conditions=context.conditions)
         except FileError as err:
             problems.extend(err.problems)
+        else:  # the acts a scheme declares are known to the files checked with it
+            context.acts = context.acts.extended(scheme.acts.acts)
     return problems
 
 
@@ -341,7 +358,7 @@ for _kind in (
     FileKind("recipes", _check_recipes, 2, keys="tasks:/recipes:/atomic:/predicates:",
              detect=lambda d: bool(set(d) & {"predicates", "atomic", "tasks", "recipes",
                                             "chronicles"})
-             and not set(d) & {"scenario", "profile", "problem", "scheme", "team"},
+             and not set(d) & {"scenario", "profile", "problem", "scheme", "team", "binding"},
              shipped=_shipped_recipes),
     FileKind("domain", _check_domains, 3, detect=lambda d: "domain" in d and "types" in d,
              keys="domain:", shipped=_shipped_domains),

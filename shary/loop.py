@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import gc
 import random
+import threading
 import time
 from collections import deque
 from collections.abc import Callable
@@ -60,6 +61,8 @@ class EventLoop:
         self._ready: deque[tuple[Callable[..., Any], tuple]] = deque()
         self._soon = self.call_soon  # one bound method for every timer, not one each
         self._settled = False
+        self._from_threads: deque[tuple[Callable[..., Any], tuple]] = deque()
+        self._wake = threading.Event()
         self.idle_hooks: list[Callable[[], Any]] = []
         """Called each time the loop becomes idle after work (the context log's flush)."""
 
@@ -90,10 +93,33 @@ class EventLoop:
         """Run ``callback(*args)`` ``delay`` seconds from now (cancel with ``.cancel()``)."""
         return self.clock.call_later(delay, self._soon, callback, *args)
 
+    def call_soon_threadsafe(self, callback: Callable[..., Any], *args: Any,
+                             wake: bool = True) -> None:
+        """From another thread (a middleware's, e.g. ROS 2's executor): run
+        ``callback(*args)`` on this loop soon, waking it if it sleeps in :meth:`run_for`
+        (with ``wake=False``, the next time it wakes or goes round: news that can wait,
+        spared a thread switch).  Such callbacks run in the order they were given, before
+        the timers due at the same time.  The only entry that is safe from another thread."""
+        self._from_threads.append((callback, args))
+        if wake:
+            self._wake.set()
+
+    def wake(self) -> None:
+        """From another thread: wake the loop if it sleeps (to run what was given quietly)."""
+        self._wake.set()
+
+    def _take_from_threads(self) -> None:
+        self._wake.clear()
+        taken, ready = self._from_threads, self._ready
+        while taken:
+            ready.append(taken.popleft())
+
     def run_until_idle(self) -> int:
         """Run ready callbacks until none is left; return how many ran."""
         ran = 0
         ready = self._ready
+        if self._from_threads:
+            self._take_from_threads()
         while ready:
             callback, args = ready.popleft()
             callback(*args)
@@ -120,13 +146,17 @@ class EventLoop:
         self.run_until_idle()
 
     def run_for(self, seconds: float) -> None:
-        """Real time: run for ``seconds``, sleeping between timers."""
+        """Real time: run for ``seconds``, sleeping between timers (woken early by
+        :meth:`call_soon_threadsafe`)."""
         end = self.clock.now() + seconds
         self.run_until_idle()
         while self.clock.now() < end:
             due = self.clock.next_due() if isinstance(self.clock, SimulatedClock) else None
             wake = end if due is None else min(due, end)
-            time.sleep(max(0.0, wake - self.clock.now()))
+            if not self._from_threads:
+                self._wake.wait(max(0.0, wake - self.clock.now()))
+            if self._from_threads:  # before the timers now due: a goal's answer that came
+                self._take_from_threads()  # before its deadline counts
             if isinstance(self.clock, SimulatedClock):
                 self.clock.advance_to(self.clock.now())
             self.run_until_idle()

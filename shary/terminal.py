@@ -94,8 +94,7 @@ def add_json_flag(parser: Any, what: str = "the result") -> None:
                         "(docs/cli.md gives its shape)")
 
 
-def listing(key: str, entries: Sequence[tuple[str, str, Any]], *, json_mode: bool,
-            width: int) -> int:
+def listing(key: str, entries: Sequence[tuple[str, str, Any]], *, json_mode: bool) -> int:
     """A one-line-each list of named documents (``shary schemes``, ``shary scenarios``):
     ``entries`` are (name, doc, file); with ``--json``, one document under ``key``."""
     listed = [{"name": name, "summary": first_sentence(doc), "doc": " ".join(doc.split()),
@@ -103,9 +102,16 @@ def listing(key: str, entries: Sequence[tuple[str, str, Any]], *, json_mode: boo
     if json_mode:
         emit_json({key: listed})
         return 0
+    # the summaries in one column, after the longest name (up to a limit: past it, a
+    # name too long for any column pushes its own summary only)
+    width = max((min(len(item["name"]), MAX_NAME_COLUMN) for item in listed), default=0)
     for item in listed:
-        out.print(f"[bold]{item['name']:<{width}}[/bold] {escape(item['summary'])}")
+        out.print(f"[bold]{escape(item['name']):<{width}}[/bold] {escape(item['summary'])}")
     return 0
+
+
+MAX_NAME_COLUMN = 40
+"""The widest name column :func:`listing` makes."""
 
 
 def first_sentence(doc: str) -> str:

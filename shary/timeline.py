@@ -74,6 +74,7 @@ MARGIN = 16
 MIN_WIDTH = 800        # the whole picture, however short the run
 MAX_PLOT_WIDTH = 6000  # past this, labels are truncated rather than the picture widened
 PX_PER_SECOND = (40.0, 160.0)  # the range of the default scale: see _preferred_scale
+WIDE_PLOT = 2000       # the default scale widens a run's plot past this only to 40 px/s
 ROW = 22               # one row of acts or actions
 LOOK_ROW = 18          # one row of attention
 LANE_PAD = 6
@@ -103,7 +104,8 @@ def render_timeline(events: Iterable[LogEvent], title: str = "", *, robot: str |
     tl = collect(events, robot)
     span = max(tl.t_max - tl.t_min, 1e-9)
     scale = px_per_second or max((MIN_WIDTH - NAME_WIDTH - 2 * MARGIN) / span,
-                                 min(_preferred_scale(tl), MAX_PLOT_WIDTH / span))
+                                 min(_preferred_scale(tl), MAX_PLOT_WIDTH / span,
+                                     max(PX_PER_SECOND[0], WIDE_PLOT / span)))
     step = _tick_step(scale)
     t0 = math.floor(tl.t_min / step) * step
     end = max(t0 + step, math.ceil(tl.t_max / step - 1e-9) * step)
@@ -464,7 +466,10 @@ def _preferred_scale(tl: Timeline) -> float:
 
     Actions are the shortest bars that carry labels, so sizing the scale on
     them keeps most labels whole; the range keeps one odd run from drawing
-    a minute as a few pixels or an instant as a page.
+    a minute as a few pixels or an instant as a page, and :data:`WIDE_PLOT`
+    keeps a run of many short actions (the PR2 looking at each cube in turn)
+    from a picture four screens wide: their labels go beside them, or whole in
+    their tooltips.
     """
     needs = sorted((text_width(i.label, FONT) + 10) / (i.end - i.start) for i in tl.items
                    if i.row == "action" and i.end is not None and i.end > i.start)

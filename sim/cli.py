@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import re
+import time
 from pathlib import Path
 from typing import Any
 
@@ -30,7 +31,7 @@ def cmd_scenarios(args: argparse.Namespace) -> int:
 
     return listing("scenarios", [(name, load_scenario(path).doc, path)
                                  for name, path in builtin_scenarios().items()],
-                   json_mode=args.json, width=26)
+                   json_mode=args.json)
 
 
 def add_run(sub: argparse._SubParsersAction) -> None:
@@ -74,6 +75,9 @@ def cmd_run(args: argparse.Namespace) -> int:
     except KeyError as err:
         return error(err.args[0], json_mode=args.json)
     out = args.out or Path("runs") / _name_of(path)
+    replacing = earlier_run(out)
+    if replacing and not (args.quiet or args.json):
+        _out.print(f"[dim]{escape(replacing)}[/dim]")
     try:
         result = run_scenario(path, seed=args.seed, out=out, snapshots=args.snapshots,
                               gui=args.gui,
@@ -83,6 +87,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.json:
         document: dict[str, Any] = result.summary()
         document["out"] = str(out)
+        document["replaced_earlier_run"] = replacing is not None
         emit_json(document)
         return 0 if result.passed else 1
     verdict = "[bold green]PASSED[/bold green]" if result.passed else "[bold red]FAILED[/bold red]"
@@ -97,6 +102,18 @@ def cmd_run(args: argparse.Namespace) -> int:
                   if "snapshots" in result.outputs else "") + "[/dim]")
     return 0 if result.passed else 1
 
+
+
+def earlier_run(out: Path) -> str | None:
+    """What to say when ``out`` holds an earlier run that a new one will replace (``shary
+    run`` and ``shary serve`` both write to runs/SCENARIO by default, the latest run of
+    each scenario in one known place); None when there is none."""
+    log = out / "log.sqlite"
+    if not log.is_file():
+        return None
+    when = time.strftime("%Y-%m-%d %H:%M", time.localtime(log.stat().st_mtime))
+    return (f"{out}/ holds an earlier run (of {when}): this run replaces its files "
+            f"(--out DIR keeps runs apart)")
 
 
 def add_serve(sub: argparse._SubParsersAction) -> None:
@@ -141,7 +158,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
     if args.team is not None:
         live = team_run(args.team, out=args.out, seed=args.seed, speed=args.speed,
                         paused=args.paused)
-        return live if isinstance(live, int) else serve(live, args.host, args.port)
+        return live if isinstance(live, int) else _serve_live(live, args.host, args.port)
     from sim.scenario import find_scenario
 
     try:
@@ -150,7 +167,17 @@ def cmd_serve(args: argparse.Namespace) -> int:
         return error(err.args[0])
     live = live_run(path, out=args.out, seed=args.seed, snapshots=args.snapshots,
                     speed=args.speed, paused=args.paused)
-    return serve(live, args.host, args.port)
+    return _serve_live(live, args.host, args.port)
+
+
+def _serve_live(live: Any, host: str, port: int) -> int:
+    """Serve a live run, first saying whether it will replace an earlier run's files."""
+    from shary.console.server import serve
+
+    replacing = earlier_run(live.folder) if live.folder is not None else None
+    if replacing:
+        _out.print(escape(replacing))
+    return serve(live, host, port)
 
 
 def live_run(path: Path, *, out: Path | None = None, seed: int = 0, snapshots: bool = False,

@@ -84,6 +84,20 @@ def spoken(text: str) -> str:
     return _NAME.sub(lambda m: m.group(1).replace("-", " "), text)
 
 
+class _HeadTurn(Activity):
+    """A head motion that ends as soon as a newer one has started (see ``_head_turn``)."""
+
+    label = "look"
+
+    def __init__(self, executors: RobotExecutors, turn: int, motion: Activity):
+        self.executors = executors
+        self.turn = turn
+        self.motion = motion
+
+    def advance(self, dt: float) -> bool:
+        return self.turn != self.executors._head_turn or self.motion.advance(dt)
+
+
 class RobotExecutors:
     """The robot's executors (see the module's docstring)."""
 
@@ -103,6 +117,10 @@ class RobotExecutors:
         """Object -> where it was picked: its position, its furniture, the robot's place."""
         self._running: dict[str, _Running] = {}
         self.speaking = False
+        self._head_turn = 0
+        """The latest head motion's number: an older one still under way gives way
+        (a place turns the head to its spot while a look-at may be turning it too;
+        two motions of the same joints would fight and neither would end)."""
 
     # -- the executor port ---------------------------------------------------------
 
@@ -247,7 +265,9 @@ class RobotExecutors:
             down = math.atan2(hz - tz, math.hypot(tx - hx, ty - hy))
             goal = {pan: min(max(rel, r.limits[pan][0]), r.limits[pan][1]),
                     tilt: min(max(down, r.limits[tilt][0]), r.limits[tilt][1])}
-            return JointMotion(self.world, self.robot, goal, HEAD_SPEED)
+            self._head_turn += 1
+            turn, motion = self._head_turn, JointMotion(self.world, self.robot, goal, HEAD_SPEED)
+            return _HeadTurn(self, turn, motion)
 
         return Lazy(build, "look")
 

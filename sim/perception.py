@@ -2,7 +2,7 @@
 
 After every tick (and every instant change) :class:`Perception` computes the
 facts the world makes true — ``isAt``, ``isOn``/``isIn``, ``isHolding``,
-``looksAt``, ``handMovingToward`` (a person's reaching hand), ``isNear``,
+``looksAt``, ``sees``, ``handMovingToward`` (a person's reaching hand), ``isNear``,
 ``isReachableBy``, ``isSeatedOn``, ``position`` —
 and publishes only the difference to the fact database, so monitors and
 chronicles hear of changes, not of ticks.
@@ -13,6 +13,11 @@ What the robot can know is limited the way SHARY's robot was:
   beliefs only when the object (or the spot where it was believed to be) is
   in the head camera's field of view — which is why Jido must go and look at
   the table after a person has been there (Fig. 12);
+* **what is out of view is unknown, not unchanged**: ``sees(robot, object)``
+  holds exactly while the object is in the camera's view; the facts about an
+  object without it are the last ones seen, which the plan managers do not
+  take as evidence that an expected effect has not happened (they look
+  first: :mod:`shary.plans.recovery`);
 * **people are tracked** (the paper's motion capture): where they are, what
   they hold and where they look is always known.
 
@@ -126,7 +131,8 @@ class Perception:
         self.update()
 
     def _lost(self, entity: str, now: float) -> bool:
-        return any(e == entity and t0 <= now < t1 for e, t0, t1 in self.noise.lost)
+        return bool(self.noise.lost) and any(e == entity and t0 <= now < t1
+                                             for e, t0, t1 in self.noise.lost)
 
     def _facts(self, now: float) -> Iterable[Fact]:
         world, sim = self.world, self.sim
@@ -151,6 +157,8 @@ class Perception:
             if obj in sim.holder or self._visible(camera, forward, where_now):
                 self.belief[obj] = where_now
                 self.object_facts[obj] = tuple(self._object_facts(obj, where_now))
+                if obj not in sim.holder:
+                    yield (robot, "sees", obj)
             elif obj in self.belief and self._visible(camera, forward, self.belief[obj]):
                 # looking where it was, and it is not there any more
                 del self.belief[obj]
@@ -222,18 +230,21 @@ class Perception:
 
     # -- geometry -----------------------------------------------------------------
 
-    def _camera(self) -> tuple[tuple[float, float, float], np.ndarray]:
+    def _camera(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+        """Where the head camera is, and the direction it looks in (its x axis)."""
         pos, orn = self.world.link_pose(self.sim.robot, "camera_link")
-        rot = np.array(pb.getMatrixFromQuaternion(orn)).reshape(3, 3)
-        return pos, rot[:, 0]
+        m = pb.getMatrixFromQuaternion(orn)  # row-major: the x axis is the first column
+        return pos, (m[0], m[3], m[6])
 
     @staticmethod
     def _angle(origin: Any, direction: Any, point: Any) -> float:
-        v = np.asarray(point, dtype=float) - np.asarray(origin, dtype=float)
-        n = float(np.linalg.norm(v))
+        # plain floats: numpy's overhead on three numbers was a third of a tick's cost
+        vx, vy, vz = point[0] - origin[0], point[1] - origin[1], point[2] - origin[2]
+        n = math.hypot(vx, vy, vz)
         if n < 1e-9:
             return math.pi
-        return math.acos(max(-1.0, min(1.0, float(np.dot(v, direction)) / n)))
+        dx, dy, dz = direction
+        return math.acos(max(-1.0, min(1.0, (vx * dx + vy * dy + vz * dz) / n)))
 
     def _visible(self, camera: Any, forward: Any, point: Any) -> bool:
         return (math.dist(camera, point) <= CAMERA_RANGE

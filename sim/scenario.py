@@ -160,9 +160,11 @@ def _domain_attributes() -> frozenset[str]:
 
 def load_profile(name: str | Path, things: set[str] = frozenset(),
                  acts: set[str] = frozenset(), atomic: set[str] = frozenset()) -> Profile:
-    """A profile, by name (``sim/profiles/NAME.yaml``) or file, checked; the names, acts
+    """A profile, by name (``sim/profiles/NAME.yaml``) or file (a path, or a string
+    ending in ``.yaml``), checked; the names, acts
     and atomic tasks given (when given) are what its targets and answers may name."""
-    path = name if isinstance(name, Path) else PROFILES_DIR / f"{name}.yaml"
+    path = Path(name) if isinstance(name, Path) or name.endswith((".yaml", ".yml")) \
+        else PROFILES_DIR / f"{name}.yaml"
 
     def meaning(reader: Reader) -> Profile:
         _check_profile(reader, (), reader.data, things, acts, atomic)
@@ -353,6 +355,11 @@ class _Reading:
                 full = reader.confined_path(("shared-plan", "problem"), name)
                 if full is not None:
                     shared["problem"] = str(full)
+            away = (shared.get("profile") or {}).get("look-away")
+            if away is not None and ("during" in away) == ("at" in away):
+                problem(("shared-plan", "profile", "look-away"), "look-away needs when: "
+                        "during (a robot task's label) or at (seconds after the start), "
+                        "one of them")
             shared["decision-wait"] = reader.duration(("shared-plan", "decision-wait"),
                                                       shared.get("decision-wait", 6.0))
         return Scenario(
@@ -421,16 +428,27 @@ class _Reading:
                     f"{', '.join(HUMAN_PLACES)}")
         raw = spec.get("profile", "cooperative")
         if isinstance(raw, str):
-            names = sorted(p.stem for p in PROFILES_DIR.glob("*.yaml"))
-            if raw not in names:
-                problem(("people", name, "profile"), f"unknown profile {raw!r}"
-                        f"{did_you_mean(raw, names)}; profiles: {', '.join(names)}")
-                return None
+            source: str | Path = raw
+            if raw.endswith((".yaml", ".yml")):  # a file of the user's, like recipes:
+                full = self.reader.confined_path(("people", name, "profile"), raw)
+                if full is None:
+                    return None
+                source = spelled(full, like=self.reader.file)
+            else:
+                names = sorted(p.stem for p in PROFILES_DIR.glob("*.yaml"))
+                if raw not in names:
+                    problem(("people", name, "profile"), f"unknown profile {raw!r}"
+                            f"{did_you_mean(raw, names)}; profiles: {', '.join(names)} "
+                            "(or a profile file of your own: NAME.yaml)")
+                    return None
             if raw not in self.profiles:
                 try:
-                    self.profiles[raw] = load_profile(raw, things, acts, atomic)
+                    self.profiles[raw] = load_profile(source, things, acts, atomic)
                 except FileError as err:
                     self.reader.problems.extend(err.problems)
+                    if source != raw:  # the user's file: point at the line naming it
+                        problem(("people", name, "profile"), f"depends on {source}, "
+                                "which has errors")
                     self.profiles[raw] = None
             profile = self.profiles[raw]
             if profile is None:
@@ -507,8 +525,11 @@ def _check_profile(reader: Reader, where: tuple, raw: dict[str, Any], things: se
                 f"{did_you_mean(attention, looks)}")
     for act, given in (raw.get("answers") or {}).items():
         if acts and act not in acts:
-            problem(where + ("answers", act), f"unknown act {act!r}{did_you_mean(act, acts)}",
-                    True)
+            alone = "" if where or did_you_mean(act, acts) else (
+                " (declared by a scheme or acts file of yours? check them together: "
+                "shary validate SCHEME.yaml PROFILE.yaml)")
+            problem(where + ("answers", act),
+                    f"unknown act {act!r}{did_you_mean(act, acts)}{alone}", True)
         listed = isinstance(given, list)
         for i, answer in enumerate(given if listed else [given]):
             at = where + ("answers", act) + ((i,) if listed else ())

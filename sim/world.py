@@ -36,8 +36,10 @@ from typing import Any
 
 import numpy as np
 
+from userfiles.outputs import write_output
+
 from .objects import NewObject
-from .png import caption_height, with_caption, write_png
+from .png import caption_height, encode_png, with_caption
 from .quiet import silenced
 from .room import (  # noqa: F401 (the room's data, also named through sim.world)
     BOTTLE_HEIGHT,
@@ -672,9 +674,17 @@ class LivingRoom:
         """Write a PNG of what ``camera`` sees (``overview``, ``top``, a robot's name or
         a :class:`Camera`), ``width`` x ``height`` in all: with a ``caption``, its
         lines are written in a strip along the bottom of the picture."""
+        path = Path(path)
+        write_output(path, self.picture(width, height, camera, caption))
+        return path
+
+    def picture(self, width: int = 320, height: int = 240, camera: str | Camera = "overview",
+                caption: list[str] = ()) -> bytes:
+        """The PNG bytes :meth:`snapshot` writes: a picture that travels without a file
+        (a question's, sent to whoever answers whether or not the run keeps files)."""
         if not caption:
-            return write_png(path, width, height, self.image(width, height, camera))
+            return encode_png(width, height, self.image(width, height, camera))
         band = caption_height(len(caption), height)
         pixels = self.image(width, height - band, camera)
-        return write_png(path, width, height, with_caption(pixels, width, height - band,
-                                                           caption, band))
+        return encode_png(width, height, with_caption(pixels, width, height - band,
+                                                      caption, band))

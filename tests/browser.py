@@ -27,7 +27,7 @@ if not (Path(CHROMIUM).exists() and Path(DRIVER).exists()):
 from selenium.webdriver.chrome.service import Service  # noqa: E402
 from selenium.webdriver.common.by import By  # noqa: E402
 
-__all__ = ["By", "chromium", "status", "wait"]
+__all__ = ["By", "chromium", "offered", "overlapping_labels", "status", "wait"]
 
 
 def chromium(width: int = 1400, height: int = 1000) -> Iterator[Any]:
@@ -58,3 +58,30 @@ def wait(what: Callable[[], Any], seconds: float = 90, message: str = "") -> Any
 def status(driver: Any) -> str:
     """The page's status line (paused, running, ended …)."""
     return driver.find_element(By.ID, "status").text
+
+
+def offered(driver: Any) -> list[str]:
+    """The buttons a person could press now: shown and not disabled."""
+    return driver.execute_script(
+        "return [...document.querySelectorAll('button')]"
+        ".filter(b => b.offsetParent !== null && !b.disabled).map(b => b.textContent)")
+
+
+def overlapping_labels(driver: Any) -> list[list[str]]:
+    """Pairs of the timeline's texts that cover each other, or a text and another item's
+    bar it covers, by their boxes on the page (a pixel of slack)."""
+    return driver.execute_script("""
+        const boxes = [...document.querySelectorAll('#timeline text:not(.lane-name)')]
+          .filter(t => t.textContent).map(t => [t, t.getBoundingClientRect()]);
+        const bars = [...document.querySelectorAll('#timeline rect')]
+          .map(r => [r, r.getBoundingClientRect()]);
+        const meet = (a, b) => a.left < b.right - 1 && b.left < a.right - 1 &&
+                               a.top < b.bottom - 1 && b.top < a.bottom - 1;
+        const found = [];
+        boxes.forEach(([t, a], i) => {
+          for (const [u, b] of boxes.slice(i + 1)) if (meet(a, b))
+            found.push([t.textContent, u.textContent]);
+          for (const [r, b] of bars) if (r !== t.previousElementSibling && meet(a, b))
+            found.push([t.textContent, 'the bar of ' + (r.textContent || r.getAttribute('class'))]);
+        });
+        return found;""")

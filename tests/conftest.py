@@ -7,11 +7,11 @@ import textwrap
 from pathlib import Path
 
 import pytest
+from rosfixtures import ros_domain, spawn  # noqa: F401 -- the ROS tests' fixtures
 
 from shary.cli import main
 
 REPO = Path(__file__).resolve().parents[1]
-SUITES = REPO.parent / "shared" / "suites"
 PROBLEM_LINE = re.compile(r"^(?P<file>.+):(?P<line>\d+):(?P<col>\d+): error: (?P<message>.+)$")
 
 

@@ -50,3 +50,22 @@ def test_the_ipc_track_benchmark_counts_plans_the_verifier_accepts(tmp_path):
     assert "Own: 1/1" not in done.stdout and "Own: 1/2" in done.stdout
     assert "Shared: 1/1" in done.stdout
     assert '"p2.hddl": "unsolved"' in done.stdout
+
+
+def test_the_scenarios_benchmark_stops_at_a_scenario_that_fails(tmp_path):
+    """A scenario that does not do its job has no time worth reporting: the benchmark
+    stops, exit status 1, and says which scenario failed and how."""
+    import shutil
+
+    folder = shutil.copytree(ROOT / "docs" / "tutorial", tmp_path / "tutorial")
+    scenario = folder / "tidy-table.yaml"
+    scenario.write_text(scenario.read_text(encoding="utf-8").replace("within: 60s",
+                                                                     "within: 1s"),
+                        encoding="utf-8")
+    done = subprocess.run([sys.executable, "benchmarks/scenarios.py", "--only", str(scenario),
+                           "--repeat", "1", "--json"], cwd=ROOT, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 1, done.stderr
+    assert "scenario " + str(scenario) + " failed" in done.stderr
+    assert "expected the run to be over within 1s" in done.stderr
+    assert done.stdout == ""

@@ -23,6 +23,18 @@ def test_schemes_lists_the_builtins(shary):
                      "shared-plan-task", "task-requested"]
 
 
+@pytest.mark.parametrize("command", ["schemes", "scenarios"])
+def test_a_listing_keeps_its_columns_whatever_the_names(shary, command):
+    """Every summary starts in one column, after the longest name (stack-human-leaves-
+    it-to-robot is longer than the column these listings used to have)."""
+    status, out, _ = shary(command)
+    assert status == 0
+    lines = out.splitlines()
+    starts = {len(line) - len(line[len(line.split()[0]):].lstrip()) for line in lines}
+    assert len(starts) == 1, out
+    assert starts.pop() == max(len(line.split()[0]) for line in lines) + 1
+
+
 def test_simulate_runs_a_script_of_events_and_waits(shary):
     status, out, _ = shary("simulate", "give-object-attentive", "H-AGREE", "reached",
                            "attention-lost", "10s", "attention-back", "done", "done")

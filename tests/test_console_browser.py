@@ -15,7 +15,14 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from browser import By, chromium, status, wait  # skips this module without a browser
+from browser import (  # skips this module without a browser
+    By,
+    chromium,
+    offered,
+    overlapping_labels,
+    status,
+    wait,
+)
 
 from shary.console.replay import Replay, named_schemes
 from shary.console.server import serving
@@ -87,6 +94,26 @@ def test_a_screenshot_at_the_breakpoint_shows_the_key_elements(browser: Any, wat
     assert "[WAIT-ATTENTION] give-object" in text and "[END-TASK]" not in text
     for selector in ("#agents .agent", "#tree li", "#timeline rect", "#facts tr", "#agenda tr"):
         assert browser.find_elements(By.CSS_SELECTOR, selector), selector
+
+
+def test_a_run_that_has_ended_offers_nothing_to_steer(browser: Any, watched: Path):
+    assert status(browser) == "ended"
+    assert offered(browser) == []  # no cancel, H-AGREE, take-control … of a run that is over
+
+
+def test_the_main_scheme_of_a_task_is_drawn_legibly(browser: Any, watched: Path):
+    """give-object-attentive, the task's own scheme (the agent's second task, after its
+    session), is drawn at the session's scale: state names 11 px high, not 4 px."""
+    heights = dict(browser.execute_script(
+        "return [...document.querySelectorAll('.task')].map(t => [t.querySelector('h3')"
+        ".firstChild.textContent.trim(), Math.max(...[...t.querySelectorAll("
+        "'.diagram g.node text')].map(x => x.getBoundingClientRect().height))])"))
+    assert heights["give-object"] >= 10.5
+    assert heights["give-object"] == pytest.approx(heights["session"], abs=0.1)
+
+
+def test_the_timeline_draws_no_label_over_another(browser: Any, watched: Path):
+    assert overlapping_labels(browser) == []
 
 
 def test_an_answer_from_the_page_changes_the_outcome(browser: Any, tmp_path: Path):

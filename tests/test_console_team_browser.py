@@ -17,7 +17,14 @@ from collections.abc import Iterator
 from typing import Any
 
 import pytest
-from browser import By, chromium, status, wait  # skips this module without a browser
+from browser import (  # skips this module without a browser
+    By,
+    chromium,
+    offered,
+    overlapping_labels,
+    status,
+    wait,
+)
 from selenium.webdriver.support.ui import Select
 
 from shary.console.server import serving
@@ -163,3 +170,9 @@ def test_a_screenshot_at_the_question_shows_the_key_elements(steered: dict):
     colours = {c for _, c in shot.getcolors(1_000_000)}
     assert (0xff, 0xf8, 0xdc) in colours  # the question's box
     assert (0x1f, 0x4e, 0x79) in colours  # the header and the delegations' share bars
+
+
+def test_the_team_timeline_draws_no_label_over_another_and_ends_offering_nothing(
+        browser: Any, steered: dict):
+    assert overlapping_labels(browser) == []
+    assert offered(browser) == []

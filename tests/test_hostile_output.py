@@ -119,6 +119,29 @@ def test_a_folder_the_system_will_not_let_us_write(name: str, inputs: dict[str, 
                               "writing here)$")
 
 
+@pytest.mark.parametrize("name", FILE_COMMANDS)
+def test_a_folder_whose_entries_the_system_makes_up(name: str, inputs: dict[str, Path]):
+    """/proc takes no new entry, not even root's (ENOENT, "no such file"): the message
+    says so, not that a folder on the way is missing."""
+    if not os.path.isdir("/proc/self"):
+        pytest.skip("no /proc here")
+    for out in (Path(f"/proc/shary-test{FILE_COMMANDS[name][0]}"),
+                Path(f"/proc/shary-test/out{FILE_COMMANDS[name][0]}")):
+        assert_output_refused(run_command(name, inputs, out), out,
+                              "^(nothing can be made in /proc: the system makes up what is "
+                              "in it|no permission to write here)$")
+
+
+@pytest.mark.parametrize("name", FILE_COMMANDS)
+def test_a_link_that_leads_nowhere(name: str, inputs: dict[str, Path], tmp_path: Path):
+    link = tmp_path / "gone"
+    link.symlink_to(tmp_path / "nowhere")
+    for out in (link / f"out{FILE_COMMANDS[name][0]}", link / "sub" / "out"):
+        assert_output_refused(run_command(name, inputs, out), out,
+                              f"^{link} is a link to {tmp_path / 'nowhere'}, which does not "
+                              f"exist$")
+
+
 @contextmanager
 def mounted(folder: Path, options: str) -> Iterator[Path]:
     """A tmpfs at ``folder`` (root can mount; others skip), unmounted afterwards."""
@@ -181,6 +204,17 @@ def test_run_out_through_a_file_and_in_a_read_only_folder(tmp_path: Path):
             assert_output_refused(run_inprocess("run", "give-bottle", "--out", out, "--quiet"),
                                   out, "^(the file system is read-only|no permission to "
                                   "write here)$")
+
+
+def test_run_out_in_proc_or_through_a_broken_link(tmp_path: Path):
+    link = tmp_path / "gone"
+    link.symlink_to(tmp_path / "nowhere")
+    for out in (Path("/proc/forbidden"), link, link / "run"):
+        if out.parts[1] == "proc" and not os.path.isdir("/proc/self"):
+            continue
+        assert_output_refused(run_inprocess("run", "give-bottle", "--out", out, "--quiet"),
+                              out, "^(nothing can be made in /proc|.* is a link to .*, which "
+                              "does not exist$|no permission to write here$)")
 
 
 LIMITED = """

@@ -8,6 +8,7 @@ passes.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -24,3 +25,18 @@ def test_every_package_folder_is_listed_in_pyproject():
              for top in ("userfiles", "planner", "sim", "shary")
              for init in (REPO / top).rglob("__init__.py")}
     assert found - listed == set(), "add these to [tool.setuptools] packages"
+
+
+def test_no_file_names_a_folder_of_one_machine():
+    """A path under ``/work`` or a home folder exists on one machine: the checkout is read
+    relative to itself, and the external suites through ``tests/suites.py``."""
+    machine = re.compile(r"(?<![\w.:/])/(?:work|home/\w+|Users/\w+|root)/")
+    found = [f"{path.relative_to(REPO)}:{number}: {line.strip()}"
+             for top in ("tests", "benchmarks", "shary", "sim", "planner", "userfiles", "docs")
+             for path in sorted((REPO / top).rglob("*"))
+             if path.suffix in (".py", ".md", ".yaml", ".json", ".txt") and path.is_file()
+             and path.stat().st_size < 1_000_000
+             for number, line in enumerate(path.read_text(encoding="utf-8", errors="replace")
+                                           .splitlines(), 1)
+             if machine.search(line)]
+    assert found == [], "\n".join(found)

@@ -1,7 +1,8 @@
 """The HDDL reader (planner/hddl/): tokens, S-expressions, the checked tree, the IPC 2020 suite.
 
-The suite is read where it lies (/work/shared/suites/ipc2020, never copied here); the
-tests that need it are skipped, saying so, when it is absent.
+The suite is read where it lies (``ipc2020`` in the external suites' folder, see
+``tests/suites.py``; never copied here); the tests that need it are skipped, saying how
+to get it, when it is absent.
 
 Every feature test of the suite reads: ``sortof-domain.hddl``'s method ``donothing`` has
 ``:constraints (and (sortof ?b - A))``, which narrows ``?b`` to type ``A``.
@@ -18,7 +19,7 @@ import re
 from pathlib import Path
 
 import pytest
-from conftest import SUITES
+from suites import absent, needs, suite
 
 from planner import hddl
 from planner.hddl import (
@@ -35,10 +36,10 @@ from planner.hddl import (
 )
 from userfiles.errors import FileError
 
-IPC = SUITES / "ipc2020"
+IPC = suite("ipc2020")
 FEATURES = IPC / "tests" / "ipc2020-feature-tests"
 TOTAL = IPC / "total-order"
-MISSING = f"the IPC 2020 HDDL suite is not at {IPC}"
+MISSING = absent("ipc2020")
 
 
 def _suite(folder: Path, pattern: str) -> list:
@@ -48,7 +49,7 @@ def _suite(folder: Path, pattern: str) -> list:
     return [pytest.param(path, id=path.name) for path in sorted(folder.glob(pattern))]
 
 
-needs_suite = pytest.mark.skipif(not IPC.is_dir(), reason=MISSING)
+needs_suite = needs("ipc2020")
 
 
 def _at(text: str, needle: str, nth: int = 0) -> tuple[int, int]:

@@ -1,9 +1,9 @@
 """The IPC 2020 HTN suite (total order): feature tests, Blocksworld-GTOHP, Childsnack.
 
-The suite is read where it lies (``../shared/suites/ipc2020``); without it these
-tests are skipped with a message.  To keep the suite short, only the first
-instances of each domain are planned here; ``benchmarks/planner_vs_gtpyhop.py``
-runs all thirty of each.
+The suite is read where it lies (``ipc2020`` in the external suites' folder, see
+``tests/suites.py``); without it these tests are skipped, saying how to get it.  To keep
+the suite short, only the first instances of each domain are planned here;
+``benchmarks/planner_vs_gtpyhop.py`` runs all thirty of each.
 """
 
 from __future__ import annotations
@@ -11,17 +11,17 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from conftest import SUITES, problems
+from conftest import problems
+from suites import needs, suite
 
 from planner import load_hddl, plan, validate
 from planner.ipc import read_ipc, shape, write_ipc
 
-SUITE = SUITES / "ipc2020"
+SUITE = suite("ipc2020")
 FEATURES = SUITE / "tests" / "ipc2020-feature-tests"
 TOTAL = SUITE / "total-order"
 
-pytestmark = pytest.mark.skipif(not SUITE.is_dir(),
-                                reason=f"the IPC 2020 suite is not at {SUITE}")
+pytestmark = needs("ipc2020")
 
 EXPECTED = {
     "abort-iteration": ["noop(a)"],

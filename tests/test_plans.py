@@ -49,6 +49,8 @@ class Robot:
         self.table = table
         self.faults: dict[str, int] = {}
         self.said: list[str] = []
+        self.hang: set[str] = set()
+        """Atomic tasks that never end (an executor that hangs)."""
 
     def start(self, request, reporter) -> None:
         loop, facts, robot = self.table.loop, self.table.facts, self.table.robot
@@ -66,8 +68,12 @@ class Robot:
                 facts.add(args["object"], "isOn", args["on"])
             elif request.atomic == "speak":
                 self.said.append(args["text"])
+            elif request.atomic == "look-at" and args["target"] in self.table.hidden:
+                facts.add(*self.table.hidden.pop(args["target"]))  # seen once looked at
             reporter.done(request)
 
+        if request.atomic in self.hang:
+            return
         loop.call_later({"look-at": 0.2, "speak": 1.0}.get(request.atomic, 1.5), finish)
 
     def cancel(self, request) -> None:
@@ -83,6 +89,10 @@ class Human:
         self.table, self.name = table, name
         self.choices = list(choices or [])
         self.done: set[int] = set()
+        self.skip: tuple[str, ...] = ()
+        """Tasks (label prefixes) they never do."""
+        self.unseen: tuple[str, ...] = ()
+        """Places (label prefixes) whose result the robot sees only once it looks there."""
 
     def on(self, kind: str, task: Any, agent: Any, data: dict) -> None:
         if kind == "plan-task" and agent == self.table.robot and data["state"] == "TODO":
@@ -107,11 +117,14 @@ class Human:
             self.act(labels[0])
 
     def act(self, label: str) -> None:
+        if label.startswith(self.skip or ("-",)):
+            return
         name, args = label.rstrip(")").split("(")
         params = [a.strip() for a in args.split(",")][1:]
-        self.do(name, *params)
+        self.do(name, *params, hidden=label.startswith(self.unseen or ("-",)))
 
-    def do(self, name: str, *params: str, look_away: bool = False) -> None:
+    def do(self, name: str, *params: str, look_away: bool = False, hidden: bool = False
+           ) -> None:
         loop, facts, h = self.table.loop, self.table.facts, self.name
         if name == "Pick":
             loop.call_later(0.3, facts.add, h, "handMovingToward", params[0])
@@ -120,7 +133,10 @@ class Human:
         else:  # Place, PlaceStick: onto the first support
             loop.call_later(0.3, facts.add, h, "handMovingToward", params[1])
             loop.call_later(1.0, facts.remove, h, "isHolding", params[0])
-            loop.call_later(1.1, facts.add, params[0], "isOn", params[1])
+            if hidden:
+                self.table.hidden[params[1]] = (params[0], "isOn", params[1])
+            else:
+                loop.call_later(1.1, facts.add, params[0], "isOn", params[1])
             loop.call_later(1.2, facts.remove, h, "handMovingToward", params[1])
 
 
@@ -134,6 +150,8 @@ class Table:
         self.facts = FactDatabase()
         self.log = Log()
         self.robot = "robot"
+        self.hidden: dict[str, tuple[str, str, str]] = {}
+        """Support -> an effect out of the camera's view until the robot looks there."""
         self.executor = Robot(self)
         self.sup = Supervisor(load_library(), self.facts, robot=self.robot,
                               loop=self.loop, log=self.log,
@@ -251,7 +269,8 @@ def test_a_place_that_fails_twice_fails_the_plan_which_is_replanned():
     assert "max_attempts (2)" in failed[0]["reason"]
     states = [d["state"] for _, d in table.log.of("shared-plan")]
     assert states[:3] == ["started", "replan", "started"] or "replan" in states
-    assert table.follower.replans == 1
+    reasons = [d.get("reason") for _, d in table.log.of("shared-plan") if d["state"] == "replan"]
+    assert reasons[0].startswith("Place(robot, red_cube_1, placement_2) failed: max_attempts")
     # what was left: the failed place's abstract task whole, not the robot's first pick
     assert table.agendas[0]["robot"][0] == "PlaceRed(robot, red_cube_1)"
     assert table.agendas[0]["human"][0] == "Pick(human, stick)"
@@ -301,3 +320,76 @@ def test_an_agentx_plan_chooses_its_actor_and_its_cube_when_the_step_starts():
     queries = [d for _, d in table.log.of("plan-query")]
     assert queries[0]["answers"] == ["blue_cube_2"] and queries[0]["bound"] == "robot"
     assert table.facts.holds("blue_cube_2", "isOn", "green_cube")
+
+
+def test_a_task_the_human_never_does_is_looked_for_asked_for_then_taken_over():
+    """NOT_STARTING leads somewhere: look (nothing is seen here), ask, and, since the robot
+    can reach the stick, take the task over; the plan is achieved."""
+    table = Table(choices=["0", "0"])
+    table.human.skip = ("Pick(human, stick)", "PlaceStick(human")
+    table.run(300)
+    assert table.outcome == ["achieved"]
+    rungs = [d["rung"] for _, d in table.log.of("plan-recover")
+             if d["name"] == "Pick(human, stick)"]
+    assert rungs == ["look", "ask", "take-over"]
+    assert any("pick the stick" in text for text in table.executor.said), table.executor.said
+    assert table.states("robot")["Pick(human, stick)"] == "EXECUTED"
+    assert "stick" in [d["params"]["Pickable"] for _, d in table.log.of("robot-action")
+                       if d["state"] == "started" and d["action"] == "pick"]
+
+
+def test_a_task_nobody_else_can_do_climbs_the_ladder_and_the_plan_ends_with_a_reason():
+    """Out of the robot's reach, the stick cannot be taken over: replan; once the replans
+    are spent the plan fails and the robot says why, instead of waiting forever."""
+    table = Table(choices=["0", "0"])
+    table.facts.remove("stick", "isReachableBy", "robot")
+    table.human.skip = ("Pick(human, stick)",)
+    table.run(900)
+    assert table.outcome == ["failed"]
+    rungs = [d["rung"] for _, d in table.log.of("plan-recover")
+             if d["name"] == "Pick(human, stick)"]
+    assert rungs[:2] == ["look", "ask"] and "replan" in rungs
+    assert any("pick the stick" in text for text in table.executor.said), table.executor.said
+    assert any("so I stop here" in text for text in table.executor.said), \
+        table.executor.said
+    (end,) = [d for _, d in table.log.of("shared-plan") if d["state"] == "failed"]
+    assert "did not get done (nothing moved within 8s after the ask)" in end["reason"]
+    # the fake replanner gives the start's plan back: the first replan was for the stick
+    first = next(d for _, d in table.log.of("shared-plan") if d["state"] == "replan")
+    assert first["reason"].startswith("Pick(human, stick) did not get done")
+
+
+def test_a_place_whose_result_is_out_of_view_is_looked_at_and_recognized():
+    """The human's place ends where the camera does not look: the robot looks there
+    (perception's unknown is not 'not done') and recognizes it."""
+    table = Table(choices=["0", "0"])
+    table.human.unseen = ("Place(human, blue_cube_2",)
+    table.run()
+    assert table.outcome == ["achieved"]
+    looks = [d["why"] for _, d in table.log.of("plan-recover")
+             if d["rung"] == "look" and d["name"] == "Place(human, blue_cube_2, stick)"]
+    assert looks == ["under way out of view"]
+    assert table.states("robot")["Place(human, blue_cube_2, stick)"] == "EXECUTED"
+
+
+def test_a_robot_action_that_never_ends_fails_when_not_finished_and_the_plan_ends():
+    table = Table(choices=["0", "0"])
+    table.executor.hang = {"pick"}
+    table.run(300)
+    replans = [d["reason"] for _, d in table.log.of("shared-plan") if d["state"] == "replan"]
+    assert replans[0] == "Pick(robot, red_cube_1) never ended (NOT_FINISHED in the plan)"
+    assert table.outcome == ["failed"]  # every new plan starts with the same hanging pick
+
+
+def test_the_watchdog_acts_when_nothing_in_the_plan_progresses():
+    """A plan in which nothing happens (the robot waits for a human who holds the cube
+    it must pick, and she never lets go) is not left waiting: the watchdog says so
+    and replans."""
+    table = Table(choices=["0", "0"])
+    table.facts.add("human", "isHolding", "red_cube_1")  # the robot's first pick's cube
+    table.run(900)
+    dogs = [d for _, d in table.log.of("watchdog")]
+    assert dogs and dogs[0]["action"] == "replan"
+    assert dogs[0]["due"] == ["Pick(robot, red_cube_1)"]
+    assert dogs[0]["why"] == "nothing in the plan progressed for 45s"
+    assert table.outcome == ["failed"]

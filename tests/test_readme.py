@@ -7,7 +7,10 @@ this process (:func:`shary.cli.main`: the same parser and code as the
 installed script, without paying for an interpreter per command), the Python
 block in a fresh interpreter.  ``pip install …`` and ``pytest`` are
 what set this environment up and what runs this test, so they are not re-run.
-Commands that read ``../shared/suites`` are skipped when it is absent.
+The commands that fetch the external suites (``mkdir``, ``git clone``, ``ln``) need the
+network and write beside the checkout, so they are not run either; the commands that
+read ``../shared/suites`` are skipped, saying how to get the suites, when it is absent
+(:mod:`suites`).
 """
 
 from __future__ import annotations
@@ -20,11 +23,14 @@ import sys
 from pathlib import Path
 
 import pytest
-from conftest import REPO, SUITES
+from conftest import REPO
+from suites import SUITES, absent
 
 from shary.cli import main
 
 BLOCK = re.compile(r"^```(?P<lang>sh|python)\n(?P<body>.*?)^```", re.M | re.S)
+SUITE_SETUP = ("mkdir", "git", "ln")
+"""The README's commands that fetch the external suites."""
 COPY_IGNORED = shutil.ignore_patterns(".git", ".venv", "build", "dist", "runs", "out",
                                       "__pycache__", "*.egg-info", ".pytest_cache",
                                       ".ruff_cache", ".benchmarks")
@@ -71,6 +77,18 @@ def test_the_readme_shows_commands_of_every_kind():
     assert sum(word == "shary" for word in words) >= 15
 
 
+def test_the_readme_says_where_to_get_the_suites_its_commands_read():
+    """A clone has no ``../shared/suites``: the README fetches each suite a command reads
+    to the path the command reads it from (the tests' default, :data:`suites.SUITES`)."""
+    fetched = {what[-1] for language, what in COMMANDS if language == "sh" and what[0] == "git"}
+    linked = {what[-1] for language, what in COMMANDS if language == "sh" and what[0] == "ln"}
+    read = {word.split("/")[3] for language, what in COMMANDS if language == "sh"
+            and what[0] == "shary" for word in what if word.startswith("../shared/suites/")}
+    assert read and read <= {path.split("/")[3] for path in fetched | linked}
+    assert "https://github.com/jbeard4/scxml-test-framework" in " ".join(
+        " ".join(what) for language, what in COMMANDS if language == "sh")
+
+
 @pytest.mark.parametrize("command", COMMANDS, ids=[_shown(c) for c in COMMANDS])
 def test_readme_command_works_as_written(checkout, command, monkeypatch, capsys):
     language, what = command
@@ -81,9 +99,14 @@ def test_readme_command_works_as_written(checkout, command, monkeypatch, capsys)
         return
     if what[0] in ("pip", "pytest"):
         pytest.skip("set-up of this environment; it is what runs this test")
+    if what[0] in SUITE_SETUP:
+        assert any(word.startswith("../shared/suites") for word in what), what
+        pytest.skip("fetches the external suites (the network); tests/suites.py reads them")
     assert what[0] == "shary", f"the README shows a command that is not shary's: {what}"
-    if any("../shared/suites" in word for word in what) and not SUITES.is_dir():
-        pytest.skip(f"{SUITES} is absent")
+    for name in ("scion", "ipc2020"):
+        if any(f"../shared/suites/{name}" in word for word in what) and not (
+                SUITES / name).is_dir():
+            pytest.skip(absent(name))
     monkeypatch.chdir(checkout)
     try:
         status = main(what[1:])

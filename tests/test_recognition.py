@@ -63,6 +63,30 @@ def test_a_pick_then_a_place_are_started_by_moves_and_achieved_by_their_effects(
     assert not world.recognizer.possibly_started and not world.recognizer.possibly_progressing
 
 
+def test_a_cube_is_not_placed_on_itself(world):
+    """Holding cube-1 and moving toward it (to put it down) binds Support and Pickable to
+    one cube: no candidate places a thing on itself."""
+    world.facts.add("cube-1", "type", "Support")
+    world.at(1, "add", "alice", "isHolding", "cube-1")
+    world.at(2, "add", "alice", "handMovingToward", "cube-1")
+    assert ("started", "place", "alice", "cube-1", "cube-1") not in world.seen()
+
+
+def test_a_gesture_achieved_as_one_action_is_no_other_action(world):
+    """Alice, holding cube-2, moves her hand toward cube-1 and puts cube-2 on it: the pick
+    of cube-1 the same move started ends with the place, instead of running on."""
+    world.facts.add("cube-1", "type", "Support")  # a cube in a stack holds the next one
+    world.at(1, "add", "alice", "isHolding", "cube-2")
+    world.at(2, "add", "alice", "handMovingToward", "cube-1")
+    world.at(3, "remove", "alice", "isHolding", "cube-2")
+    world.at(3.2, "add", "cube-2", "isOn", "cube-1")
+    seen = world.seen()
+    assert ("started", "pick", "alice", "cube-1") in seen
+    assert ("achieved", "place", "alice", "cube-2", "cube-1") in seen
+    assert seen[-1] == ("abandoned", "pick", "alice", "cube-1")
+    assert not world.recognizer.possibly_started
+
+
 def test_a_hold_flickering_ten_times_during_a_place_is_one_place(world):
     world.at(1, "add", "alice", "isHolding", "cube-1")
     world.at(3, "add", "alice", "handMovingToward", "base-1")

@@ -308,6 +308,24 @@ def test_the_tutorial_scenario_runs():
     assert result.passed, result.differences
 
 
+def test_the_tutorial_shows_what_its_run_prints(tmp_path, capsys):
+    """docs/tutorial.md's sample output is the run's, line for line (the INTERACT session
+    included), up to the wall time."""
+    docs = Path(__file__).resolve().parent.parent / "docs"
+    text = (docs / "tutorial.md").read_text(encoding="utf-8")
+    sample = text[text.index("## 4. Run it"):].split("```")[3]
+    assert main(["run", str(docs / "tutorial" / "tidy-table.yaml"), "--out",
+                 str(tmp_path)]) == 0
+    printed = capsys.readouterr().out
+
+    def story(output: str) -> list[str]:
+        return [line.rstrip() for line in output.splitlines() if line[:9].strip()
+                .endswith("s") and line[:9].strip()[:-1].replace(".", "").isdigit()]
+
+    assert story(sample) == story(printed) and "[INTERACT] session" in sample
+    assert sample.splitlines()[-2].split(" in ")[0] == printed.splitlines()[-2].split(" in ")[0]
+
+
 def test_an_injected_fault_is_recovered_from(tmp_path):
     text = builtin_scenarios()["give-bottle"].read_text()
     path = tmp_path / "slip.yaml"
@@ -413,3 +431,94 @@ def test_a_new_object_is_built_seen_and_handed_over(runs):
     failed = _told("give-red-cup", "failed", "jido")
     assert any("wooden-box is too big to grasp: 15 cm wide, the gripper opens to 8 cm" in f
                for f in failed)
+
+
+def _tutorial_with_profile(folder: Path, profile: str) -> Path:
+    """The tutorial's scenario copied into ``folder``, Alice with ``profile``."""
+    import shutil
+
+    shutil.copytree(Path(__file__).resolve().parent.parent / "docs" / "tutorial", folder)
+    scenario = folder / "tidy-table.yaml"
+    scenario.write_text(scenario.read_text(encoding="utf-8").replace(
+        "profile: cooperative", f"profile: {profile}"), encoding="utf-8")
+    return scenario
+
+
+def test_a_scenario_names_a_profile_file_of_its_own(tmp_path, shary):
+    """``profile: my-partner.yaml`` is a file below the scenario's folder, as ``recipes:``
+    files are: read, checked, run with."""
+    scenario = _tutorial_with_profile(tmp_path / "mine", "people/my-partner.yaml")
+    (tmp_path / "mine" / "people").mkdir()
+    (tmp_path / "mine" / "people" / "my-partner.yaml").write_text(
+        "profile: my-partner\ndoc: Agrees at once.\n"
+        "answers:\n  ASK-TASK: {reply: H-AGREE, after: 0.5s}\nattention: robot\n",
+        encoding="utf-8")
+    assert shary("validate", scenario)[0] == 0
+    loaded = load_scenario(scenario)
+    assert loaded.people[0].profile.answers["ASK-TASK"][0].reply == "H-AGREE"
+    assert run_scenario(scenario).passed
+
+
+def test_a_scenarios_profile_file_is_confined_and_checked(tmp_path, shary):
+    outside = tmp_path / "elsewhere.yaml"
+    outside.write_text("profile: x\ndoc: x.\n", encoding="utf-8")
+    scenario = _tutorial_with_profile(tmp_path / "mine", "../elsewhere.yaml")
+    status, _, err = shary("validate", scenario)
+    assert status == 2 and "'../elsewhere.yaml' is outside the folder of tidy-table.yaml" in err
+    scenario = _tutorial_with_profile(tmp_path / "bad", "bad.yaml")
+    (tmp_path / "bad" / "bad.yaml").write_text("profile: bad\ndoc: x.\nanswers:\n"
+                                               "  ASK-TASSK: {reply: H-AGREE}\n",
+                                               encoding="utf-8")
+    status, _, err = shary("validate", scenario)
+    assert status == 2
+    assert "bad.yaml:4:3: error: unknown act 'ASK-TASSK' (did you mean 'ASK-TASK'?)" in err
+    assert "tidy-table.yaml:6:35: error: depends on" in err and "bad.yaml, which has errors" in err
+
+
+def test_files_given_together_are_checked_as_one_set(write, shary):
+    """A profile answering an act that a scheme declares is checked with that scheme."""
+    scheme = write("offer.yaml", """\
+        scheme: offer
+        acts:
+          OFFER: {doc: Offers something., answers: [AGREE, DISAGREE]}
+        initial: offer
+        states:
+          offer:
+            act: OFFER
+            on: {H-AGREE: end, H-DISAGREE: end}
+          end: {act: END-TASK, final: true}
+        """)
+    profile = write("taker.yaml", """\
+        profile: taker
+        doc: Takes every offer.
+        answers:
+          OFFER: {reply: H-AGREE, after: 1s}
+        """)
+    status, out, err = shary("validate", scheme, profile)
+    assert status == 0, err
+    status, _, err = shary("validate", profile)
+    assert status == 2
+    assert "unknown act 'OFFER' (declared by a scheme or acts file of yours? check them " \
+           "together: shary validate SCHEME.yaml PROFILE.yaml)" in err
+
+
+def test_run_and_serve_say_when_they_replace_an_earlier_run(tmp_path, shary, monkeypatch):
+    """Both write runs/SCENARIO by default, the latest run of a scenario in one known
+    place; both say so before an earlier run's files there are replaced."""
+    out = tmp_path / "refused"
+    status, first, _ = shary("run", "give-bottle-refused", "--out", out)
+    assert status == 0 and "earlier run" not in first
+    status, again, _ = shary("run", "give-bottle-refused", "--out", out)
+    assert status == 0
+    assert again.splitlines()[0].startswith(f"{out}/ holds an earlier run (of ")
+    assert again.splitlines()[0].endswith("this run replaces its files (--out DIR keeps "
+                                          "runs apart)")
+    assert shary("run", "give-bottle-refused", "--out", out, "--json")[1].find(
+        '"replaced_earlier_run": true') > 0
+
+    served = []
+    monkeypatch.setattr("shary.console.server.serve",
+                        lambda live, host, port: served.append(live.folder) or 0)
+    status, said, _ = shary("serve", "give-bottle-refused", "--out", out)
+    assert status == 0 and served == [out]
+    assert said.startswith(f"{out}/ holds an earlier run (of ")

@@ -13,10 +13,30 @@ from sim.scenario import SCENARIOS_DIR
 STACK = sorted(p.stem for p in SCENARIOS_DIR.glob("stack-*.yaml"))
 
 
-def test_the_seven_stack_scenarios_are_shipped():
+def test_the_seven_stack_scenarios_and_the_regressions_are_shipped():
     assert STACK == ["stack-flicker", "stack-human-chooses-placement",
                      "stack-human-leaves-it-to-robot", "stack-human-unexpected-action",
+                     "stack-inform-during-pick", "stack-look-back-when-due",
                      "stack-nominal", "stack-not-seen", "stack-place-fails-twice"]
+
+
+LOOK_BACK_AT = [2.0 * i for i in range(12)]
+"""When the partner looks away (for two seconds), over the nominal run's 22 s."""
+
+
+@pytest.mark.parametrize("at", LOOK_BACK_AT)
+def test_the_partner_may_look_back_at_any_moment_and_the_plan_is_achieved(tmp_path, at):
+    """Whatever the robot does when she looks back (its own action, her next action
+    due, an inform under way), the head ends up where the plan needs it."""
+    path = tmp_path / "stack-look-back.yaml"
+    text = (SCENARIOS_DIR / "stack-nominal.yaml").read_text()
+    path.write_text(text.replace("profile: {choices: [placement_1, Pick], delay: 1}",
+                                 "profile: {choices: [placement_1, Pick], delay: 1, "
+                                 f"look-away: {{at: {at}, for: 2}}}}")
+                    .split("expect:")[0] + "expect:\n  plan: [started, achieved]\n"
+                    "  facts: [[blue_cube_1, isOn, green_cube]]\n")
+    result = run_scenario(path)
+    assert result.passed, result.differences
 
 
 @pytest.mark.parametrize("name", [s for s in STACK if s != "stack-not-seen"])
@@ -63,3 +83,15 @@ def test_a_partner_who_leaves_is_asked_for_their_task_and_the_plan_fails(tmp_pat
                     "  said: [\"Excuse me, Alice\"]\n")
     result = run_scenario(path)
     assert result.passed, result.differences
+
+
+def test_a_look_away_without_when_or_with_both_is_refused_at_its_line(tmp_path):
+    from hostile import assert_refused, run_inprocess
+
+    for when in ("{for: 2}", '{during: "Pick(pr2, green_cube)", at: 3, for: 2}'):
+        path = tmp_path / "bad.yaml"
+        path.write_text((SCENARIOS_DIR / "stack-look-back-when-due.yaml").read_text()
+                        .replace('look-away: {during: "Pick(pr2, green_cube)", for: 2}',
+                                 f"look-away: {when}"))
+        outcome = run_inprocess("validate", path)
+        assert_refused(outcome, path, message="look-away needs when: during")

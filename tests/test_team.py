@@ -505,3 +505,21 @@ def test_the_same_help_asked_twice_is_served_once_and_both_hear(tmp_path: Path) 
               if e.data["atomic"] == "aim-light"]
     assert len(lights) == 1
     team.start()  # a started team does not start again
+
+
+def test_a_task_that_never_ends_is_withdrawn_by_the_watchdog_and_the_goal_ends(
+        tmp_path: Path) -> None:
+    """Nothing progresses while the weld runs forever: the Task Manager's watchdog
+    withdraws it (a row that says why), it is retried, and once its attempts are spent
+    the goal fails instead of running until the caller's limit."""
+    team, log, _ = build(tmp_path, durations={"drive": 2.0, "weld": 1e6, "scan": 3.0,
+                                              "aim-light": 1.0})
+    assert team.run(3000) == "failed"
+    log.close()
+    path = tmp_path / "run.sqlite"
+    dogs = kinds(path, "watchdog")
+    assert dogs and dogs[0].data["action"] == "withdraw"
+    assert dogs[0].data["running"] == ["weld-P1-P2"]
+    assert dogs[0].time >= team.tasks.watchdog
+    (given_up,) = kinds(path, "task-given-up")
+    assert given_up.task == "weld-P1-P2" and "said nothing" in given_up.data["reason"]

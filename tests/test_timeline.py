@@ -275,3 +275,19 @@ def test_plan_marks_count_their_steps_in_words():
     root = parse(render_timeline(events))
     labels = ["".join(g.find(f"{SVG}text").itertext()) for g in groups(root, "plan")]
     assert labels == ["plan: 1 step", "new plan: 2 steps"]
+
+
+def test_a_run_of_many_short_actions_is_not_drawn_screens_wide():
+    """The PR2 looking at one cube after another (0.2 s each, long labels) for 30 s: the
+    default scale stops at a 2,000 px plot (labels beside or in their tooltips) instead of
+    the 160 px/s that would show each label inside its bar, 4,800 px."""
+    events, n = [], 0
+    for k in range(150):
+        n += 1
+        events.append(event(n, k * 0.2, "exec-request", "n1", "pr2", atomic="look-at",
+                            request=f"r{k}", args={"target": f"blue_cube_{k % 3}"}))
+        n += 1
+        events.append(event(n, k * 0.2 + 0.15, "exec-result", "n1", "pr2", request=f"r{k}",
+                            status="done"))
+    root = parse(render_timeline(events))
+    assert 2000 <= float(root.get("width")) <= 2400

@@ -79,6 +79,27 @@ def test_unknown_key_with_did_you_mean(shary, write):
     assert "unknown key 'initail'" in msg and "did you mean 'initial'" in msg
 
 
+def test_a_key_under_the_wrong_parent_is_said_to_be_there(shary, write):
+    """An event beside ``on:`` instead of under it, or a state's key at the top level, is
+    not a typo of a look-alike key ('done' is not 'on'): the message says where it fits."""
+    beside = write("beside.yaml", GOOD.replace("        on: {H-AGREE: done, H-DISAGREE: done}",
+                                                "        on: {H-AGREE: done}\n"
+                                                "        H-DISAGREE: done"))
+    ((line, col, msg),) = _messages(shary, beside)
+    assert (line, col) == (7, 5) and "did you mean" not in msg
+    assert msg == ("'H-DISAGREE' is not a key here: it reads as an entry of 'on' (indented "
+                   "under the wrong parent?)")
+    done = write("done.yaml", GOOD.replace("H-DISAGREE: done}", "H-DISAGREE: done}\n"
+                                           "        done: ask"))
+    ((_, _, msg),) = _messages(shary, done)
+    assert "did you mean 'on'" not in msg and "an entry of 'on'" in msg
+    top = write("top.yaml", GOOD + "final: true\n")
+    ((line, col, msg),) = _messages(shary, top)
+    assert (line, col) == (8, 1)
+    assert msg == ("'final' is not a key here: it is a key of a state (indented under the "
+                   "wrong parent?)")
+
+
 def test_unknown_act_and_act_word(shary, write):
     path = write("a.yaml", GOOD.replace("ASK-TASK", "ASK-TASKS").replace("H-AGREE", "H-AGRE"))
     found = _messages(shary, path)

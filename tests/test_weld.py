@@ -147,6 +147,15 @@ def test_human_supports_robot_asks_with_an_image_and_respawns_the_weld(tmp_path:
     assert any(p.label == "respawn weld-P2-P3" for p in timeline.plans)
 
 
+@pytest.mark.parametrize("name", ["weld-question-expires"])
+def test_a_run_without_files_is_judged_as_one_with_them(name: str) -> None:
+    """The Python entry point with no output folder (the benchmarks') gives the verdict
+    ``shary run`` gives: the question's picture is taken either way."""
+    result = run_scenario(builtin_scenarios()[name])
+    assert result.passed, result.differences
+    assert not result.outputs
+
+
 def test_robot_supports_human_lights_the_corner_from_the_speakers_side(tmp_path: Path) -> None:
     name = "weld-robot-supports-human"
     _run(name, tmp_path)

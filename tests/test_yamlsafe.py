@@ -167,3 +167,14 @@ def test_positions_inside_strings():
     assert where("b", 4) == (2, 9)
     assert where("c", 5) == (3, 4)
     assert where("d", 2) == (4, 4)
+
+
+def test_what_dump_writes_load_reads_back_plain_where_it_can():
+    """The project's one YAML writer quotes a string only where the loader (YAML 1.2's
+    booleans) would read something else: ``on`` and ``yes`` stay plain."""
+    data = {"on": {"H-AGREE": "end", "no": "off"}, "yes": ["true", "null", "1.5", "on"],
+            "flag": True, "n": 3, "none": None, "text": "a: b"}
+    text = yamlsafe.dump(data)
+    assert "on:\n  H-AGREE: end\n  no: off\n" in text and "yes:\n" in text
+    assert "'on'" not in text and "'true'" in text
+    assert yamlsafe.load_text(text, "t.yaml").data == data

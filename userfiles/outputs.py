@@ -45,7 +45,7 @@ _REASONS: dict[int, tuple[str, str]] = {
                   "choose a folder you can write to"),
     errno.ENAMETOOLONG: ("the name is too long", "choose a shorter path"),
     errno.EISDIR: ("this is a folder, not a file", "name a file inside it"),
-    errno.ENOENT: ("a folder on the way does not exist (a broken link?)",
+    errno.ENOENT: ("a folder on the way does not exist",
                    "create the folder, or choose another path"),
     errno.EIO: ("the disk reported an input/output error",
                 "check the disk, or write somewhere else"),
@@ -62,16 +62,36 @@ class OutputError(Exception):
 
 def refused(path: str | Path, err: OSError) -> OutputError:
     """The :class:`OutputError` for an ``OSError`` met while writing ``path``."""
+    if err.errno == errno.ENOENT:
+        return OutputError(path, *_not_found(Path(path)))
     message, hint = _REASONS.get(err.errno or 0, (
         err.strerror or str(err), "choose another place to write"))
     return OutputError(path, message, hint)
+
+
+def _not_found(path: Path) -> tuple[str, str]:
+    """What "no such file or directory" means when writing ``path``: a link on the way
+    that leads nowhere, or a folder that refuses new entries whatever the permissions
+    (a file system the kernel makes up, as ``/proc`` and ``/sys``)."""
+    for ancestor in [path, *path.parents]:
+        if ancestor.is_symlink() and not ancestor.exists():
+            return (f"{ancestor} is a link to {os.readlink(ancestor)}, which does not exist",
+                    "fix the link, or choose another path")
+        if ancestor.is_dir():
+            return (f"nothing can be made in {ancestor}: the system makes up what is in it",
+                    "choose a folder on a disk")
+    return _REASONS[errno.ENOENT]
 
 
 def output_folder(path: str | Path) -> Path:
     """Make sure ``path`` is a folder this process can write into (creating it and its
     parents if needed) and return it; otherwise raise :class:`OutputError`."""
     folder = Path(path)
-    if folder.exists() or folder.is_symlink():
+    broken = next((a for a in [folder, *folder.parents] if a.is_symlink() and not a.exists()),
+                  None)
+    if broken is not None:
+        raise OutputError(path, *_not_found(broken))
+    if folder.exists():
         if not folder.is_dir():
             raise OutputError(path, "this is a file, not a folder",
                               "name a folder, or move the file away")

@@ -58,8 +58,45 @@ def check(located: Located, checker: Draft202012Validator) -> list[Problem]:
     """Every violation of a schema in ``located`` (and its loading problems)."""
     problems: list[Problem] = list(located.problems)
     for error in checker.iter_errors(located.data):
-        problems.extend(_explain(located, error))
+        problems.extend(_explain(located, error, checker))
     return problems
+
+
+def _keys_elsewhere(root: dict[str, Any]) -> dict[str, list[tuple[str, Any]]]:
+    """Every key the schema ``root`` knows, with the objects it is a key of ("a state",
+    "the top level", "an entry of 'people'") and its schema there: a key a file puts
+    under the wrong parent is known there, and saying where beats a "did you mean" on a
+    look-alike key."""
+    cached = _ELSEWHERE.get(id(root))
+    if cached is not None and cached[0] is root:
+        return cached[1]
+    places: dict[str, list[tuple[str, Any]]] = {}
+    seen: set[int] = set()
+
+    def walk(schema: Any, label: str) -> None:
+        if not isinstance(schema, dict) or id(schema) in seen:
+            return
+        seen.add(id(schema))
+        for key, sub in (schema.get("properties") or {}).items():
+            places.setdefault(key, []).append((label, sub))
+        for key, sub in (schema.get("properties") or {}).items():
+            walk(sub, f"'{key}'")
+        for name, sub in (schema.get("$defs") or {}).items():
+            walk(sub, _article(name.replace("_", " ")))
+        for sub in [*(schema.get("patternProperties") or {}).values(),
+                    schema.get("additionalProperties"), schema.get("items")]:
+            walk(sub, f"an entry of {label}" if label.startswith("'") else label)
+        for name in ("anyOf", "oneOf", "allOf"):
+            for sub in schema.get(name) or []:
+                walk(sub, label)
+
+    walk(root, "the top level")
+    _ELSEWHERE[id(root)] = (root, places)
+    return places
+
+
+_ELSEWHERE: dict[int, tuple[dict[str, Any], dict[str, list[tuple[str, Any]]]]] = {}
+""":func:`_keys_elsewhere` by schema (a hostile file may have thousands of unknown keys)."""
 
 
 def size_limits(checker: Draft202012Validator) -> dict[tuple, int]:
@@ -82,7 +119,63 @@ def size_limits(checker: Draft202012Validator) -> dict[tuple, int]:
     return limits
 
 
-def _explain(located: Located, error: ValidationError) -> list[Problem]:
+def _entry_of(checker: Draft202012Validator, schema: dict[str, Any], key: str,
+              value: Any) -> list[str]:
+    """The properties of ``schema`` under which ``key: value`` would be a valid entry
+    (an event under a state's ``on``): where a key one level too high belongs."""
+    found = []
+    for name, sub in (schema.get("properties") or {}).items():
+        ref = sub.get("$ref") if isinstance(sub, dict) else None
+        if isinstance(ref, str) and ref.startswith("#/"):
+            sub = _local(checker.schema, ref)
+        if not isinstance(sub, dict) or sub.get("type") not in ("object", None):
+            continue
+        entries = [v for p, v in (sub.get("patternProperties") or {}).items() if _matches(p, key)]
+        if isinstance(sub.get("additionalProperties"), dict):
+            entries.append(sub["additionalProperties"])
+        if any(checker.evolve(schema=entry).is_valid(value) for entry in entries):
+            found.append(f"'{name}'")
+    return found
+
+
+def _unknown_key(checker: Draft202012Validator | None, schema: dict[str, Any], key: str,
+                 value: Any) -> str:
+    """Why ``key: value`` is refused in an object of ``schema``, in the order a user
+    most likely erred: a typo of a key here whose value fits (``method`` for
+    ``methods``), a key of another object (put under the wrong parent), an entry of a
+    child mapping one level too high (an event beside ``on:`` instead of under it), a
+    look-alike key, else the keys here."""
+    known = list(schema.get("properties", {}))
+    wrong_parent = " (indented under the wrong parent?)"
+    close = difflib.get_close_matches(key, known, n=1, cutoff=0.6)
+    if close and checker is not None and checker.evolve(
+            schema=schema["properties"][close[0]]).is_valid(value):
+        return f"unknown key {key!r} (did you mean {close[0]!r}?)"
+    elsewhere = [] if checker is None else list(dict.fromkeys(
+        label for label, sub in _keys_elsewhere(checker.schema).get(key, [])
+        if checker.evolve(schema=sub).is_valid(value)))
+    if elsewhere:
+        return f"{key!r} is not a key here: it is a key of {' or '.join(elsewhere[:3])}" \
+            + wrong_parent
+    below = _entry_of(checker, schema, key, value) if checker is not None else []
+    if below:
+        return f"{key!r} is not a key here: it reads as an entry of {' or '.join(below)}" \
+            + wrong_parent
+    if close:
+        return f"unknown key {key!r} (did you mean {close[0]!r}?)"
+    return f"unknown key {key!r}" + (f"; expected one of: {', '.join(known)}" if known else "")
+
+
+def _local(root: dict[str, Any], ref: str) -> Any:
+    """What a local ``$ref`` (``#/$defs/on``) names in ``root``."""
+    target: Any = root
+    for part in ref[2:].split("/"):
+        target = target.get(part) if isinstance(target, dict) else None
+    return target
+
+
+def _explain(located: Located, error: ValidationError,
+             checker: Draft202012Validator | None = None) -> list[Problem]:
     path = tuple(error.absolute_path)
     if error.validator in ("anyOf", "oneOf") and error.context:
         # A branch that fails on the type of the value itself was not the one meant.
@@ -90,7 +183,7 @@ def _explain(located: Located, error: ValidationError) -> list[Problem]:
                  if not (e.validator == "type" and not e.relative_path)]
         # An error inside the value (a list item) beats a branch that failed at its root.
         inside = [e for e in meant if e.relative_path]
-        return _explain(located, best_match(inside or meant or error.context))
+        return _explain(located, best_match(inside or meant or error.context), checker)
     if error.validator == "additionalProperties" and isinstance(error.instance, dict):
         known = list(error.schema.get("properties", {}))
         allowed = set(known)
@@ -99,10 +192,8 @@ def _explain(located: Located, error: ValidationError) -> list[Problem]:
         for key in error.instance:
             if key in allowed or any(_matches(p, key) for p in patterns):
                 continue
-            hint = did_you_mean(key, known)
-            expected = f"; expected one of: {', '.join(known)}" if known and not hint else ""
-            out.append(located.problem(path + (key,), f"unknown key {key!r}{hint}{expected}",
-                                       key=True))
+            out.append(located.problem(path + (key,), _unknown_key(
+                checker, error.schema, key, error.instance[key]), key=True))
         return out
     if error.validator == "required":
         return [located.problem(path, error.message.replace("is a required property",

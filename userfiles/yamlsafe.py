@@ -74,6 +74,24 @@ _Loader.add_implicit_resolver("tag:yaml.org,2002:bool",
                               re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"),
                               list("tTfF"))
 
+_SafeDumper = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
+
+
+class _Dumper(_SafeDumper):  # type: ignore[misc, valid-type]
+    """PyYAML's safe dumper (libyaml's emitter when there) that quotes a string only
+    where :class:`_Loader` would read something else: ``on:`` stays plain, as every
+    scheme writes it, where YAML 1.1's rules would write ``'on':``."""
+
+
+_Dumper.yaml_implicit_resolvers = _Loader.yaml_implicit_resolvers
+
+
+def dump(data: Any) -> str:
+    """``data`` as YAML text that :func:`load_text` reads back as ``data``: keys in their
+    order, Unicode as is, lines up to 100 characters."""
+    return yaml.dump(data, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=100)
+
+
 _CORE_TAGS = {
     "tag:yaml.org,2002:" + name
     for name in ("str", "int", "float", "bool", "null", "map", "seq")

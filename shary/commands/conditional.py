@@ -14,12 +14,11 @@ from __future__ import annotations
 import argparse
 import time
 
-import yaml
-
 from planner.conditional import MAX_STEPS
 from shary.commands.schemes import draw
 from shary.terminal import emit_json, error, escape
 from shary.terminal import out as _out
+from userfiles import yamlsafe
 
 
 def plan_conditional(args: argparse.Namespace, problem) -> int:  # type: ignore[no-untyped-def]
@@ -46,7 +45,7 @@ def plan_conditional(args: argparse.Namespace, problem) -> int:  # type: ignore[
     if args.json:
         emit_json(document)
     elif args.yaml:
-        print(yaml.safe_dump(document, sort_keys=False, allow_unicode=True), end="")
+        print(yamlsafe.dump(document), end="")
     else:
         _print(problem, policy, exploration, errors, elapsed)
     if policy.root is not None and args.render:

@@ -35,6 +35,8 @@ def cmd_validate(args: argparse.Namespace) -> int:
     reports = validate(paths)
     for report in reports:
         print_problems(report.problems)
+        for note in report.notes:
+            _err.print(escape(f"{note.file}:{note.line}:{note.col}: note: {note.message}"))
     bad = [r for r in reports if not r.ok]
     if args.json:
         emit_json({"files": [r.as_json() for r in reports]})

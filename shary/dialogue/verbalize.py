@@ -17,6 +17,7 @@ act                sentence (the robot speaks to Alice)
 ``request``        Please place the blue cube on the stick.
 ``question``       Can you place the blue cube on the stick?
 ``ask-done``       Did you place the blue cube on the stick?
+``ask-going``      Are you going to place the blue cube on the stick? (a task not finished)
 ``propose``        Shall I place …? / Would you like to place …?
 =================  =======================================================
 
@@ -44,7 +45,7 @@ from dataclasses import dataclass
 __all__ = ["ACTS", "Label", "Verbalizer", "conjugate", "humanize", "verbalize"]
 
 ACTS = ("inform-done", "inform-ongoing", "inform-planned", "inform-failed", "inform-dropped",
-        "request", "question", "ask-done", "propose")
+        "request", "question", "ask-done", "ask-going", "propose")
 """The communicative acts a sentence can carry out (see the module's table)."""
 
 _TOKEN = re.compile(r"\{([^{}\s]+)\}|@([A-Za-z][\w-]*)|([^\s{}@]+)")
@@ -204,6 +205,8 @@ def verbalize(label: str | Label, bindings: Mapping[str, object], act: str, *,
         sentence = f"Can {subject} {phrase('VB')}?"
     elif act == "ask-done":
         sentence = f"Did {subject} {phrase('VB')}?"
+    elif act == "ask-going":
+        sentence = f"{conjugate('be', 'VBP', person)} {subject} going to {phrase('VB')}?"
     elif person == 2:  # propose
         sentence = f"Would you like to {phrase('VB')}?"
     else:

@@ -53,8 +53,12 @@ class HumanBeliefs:
     def robot_did(self, task: int) -> None:
         """The robot achieved ``task``: in each human's view, seen or missed."""
         states = self.follower.states
+        robot = self.follower.robot
+        model = robot.model_for(self.follower.plan.primitive[task].name, robot.models.robot)
         for human in self.follower.humans:
-            if self.watching(human, task):
+            if model is not None and model.executor is None:  # a wait: nothing to miss
+                states.send(task, "achieved", [human])
+            elif self.watching(human, task):
                 states.send(task, "achieved", [human])
             else:
                 states.send(task, "achieved-unseen", [human])

@@ -27,6 +27,7 @@ from typing import Any
 
 from shary.plans.beliefs import HumanBeliefs
 from shary.plans.human import HumanPlanManager
+from shary.plans.recovery import Recovery, Watchdog
 from shary.plans.replan import remaining_agendas
 from shary.plans.robot import RobotPlanManager
 from shary.plans.states import TaskStates
@@ -51,7 +52,7 @@ class PlanFollower:
     def __init__(self, sup: Any, plan: SharedPlan, *, humans: list[str] | None = None,
                  replan: Callable[[dict[str, list[str]]], SharedPlan | None] | None = None,
                  done: Callable[[str], Any] | None = None, decision_wait: float = 6.0,
-                 max_replans: int = 3, name: str = "shared-plan"):
+                 max_replans: int = 3, name: str = "shared-plan", watchdog: float = 45.0):
         if sup.robot_actions is None:
             raise ValueError("the supervisor has no action models: call recognize() first")
         self.sup = sup
@@ -65,6 +66,10 @@ class PlanFollower:
         self.finished: str | None = None
         self.robot = RobotPlanManager(sup, sup.robot_actions.models)
         self.hpm = HumanPlanManager(self, decision_wait)
+        self.progress_count = 0
+        """Grows with every sign of progress (a task state, a recognition, a rung)."""
+        self.recovery = Recovery(self)
+        self.watchdog = Watchdog(self, idle=watchdog)
         self.watchers: list[Callable[[str, int], Any]] = []
         """Told ``(event, task)``: a task ``due``, ``started`` by the robot, ``done``
         (what a simulated partner follows)."""
@@ -99,13 +104,25 @@ class PlanFollower:
                         decisions=len(self.plan.decisions))
         self.sup.tree.set_state(self.root, "ongoing")
         self.hpm.listen()
+        self.watchdog.start()
         self._advance(None)
 
-    def _finish(self, outcome: str, reason: str = "") -> None:
+    def progressed(self) -> None:
+        """Something moved (what the watchdog waits for)."""
+        self.progress_count += 1
+
+    def end_failed(self, why: str) -> None:
+        """The plan cannot go on (the watchdog's last word)."""
+        self._finish("failed", why)
+
+    def _finish(self, outcome: str, reason: str = "", task: int | None = None) -> None:
         if self.finished is not None:
             return
         self.finished = outcome
+        self.watchdog.stop()
         self.hpm.stop()
+        if outcome == "failed":
+            self._say_why(task)
         self._close_abstract("done" if outcome == "achieved" else "failed", reason)
         for human in self.humans:  # the end of the task: what they missed, they need now
             self.beliefs.needs(human)
@@ -115,6 +132,25 @@ class PlanFollower:
                         reason=reason or None, replans=self.replans)
         if self.on_done is not None:
             self.on_done(outcome)
+
+    def _say_why(self, task: int | None) -> None:
+        """A plan that fails says so to its partners, with the task it failed on."""
+        from shary.dialogue.attention import tell
+
+        for human in self.humans:
+            text = "I cannot go on with our task, so I stop here."
+            if task is not None:
+                spec = self.plan.primitive[task]
+                agent = str(self.agents.get(task, spec.agent))
+                about = f"{spec.name}({', '.join([agent, *map(str, self.objects_of(task))])})"
+                try:
+                    failed = self.sup.speech.say({"act": "inform-failed", "about": about,
+                                                  "to": human}, self.sup.robot)
+                    text = f"{failed} I cannot go on with our task, so I stop here."
+                except (ValueError, KeyError):
+                    pass
+            self.sup.record("plan-end", agent=human, text=text)
+            tell(self.sup, human, text)
 
     # -- what is due -----------------------------------------------------------------
 
@@ -217,15 +253,16 @@ class PlanFollower:
             if status == "done":
                 self._executed(task, seen=False)
                 self._advance(task)
-            elif status == "failed":
+            else:  # failed, or cancelled by nobody in the plan: the plan decides
                 self.states.send(task, "failed", reason=reason)
-                self.replan(f"{self.plan.primitive[task].label()} failed: {reason}")
+                self.replan(f"{self.plan.primitive[task].label()} failed: {reason}", task)
 
         self.robot.perform(self.plan.primitive[task], self.node(task), self.objects_of(task),
                            over)
 
     def _executed(self, task: int, *, seen: bool) -> None:
         self.executed.add(task)
+        self.recovery.over(task)
         self._tell("done", task)
         self.states.send(task, "achieved", [self.sup.robot])
         if seen:
@@ -281,14 +318,19 @@ class PlanFollower:
 
     # -- failures ------------------------------------------------------------------------
 
-    def replan(self, reason: str) -> None:
+    def taken_over(self, task: int) -> None:
+        """The robot did a human's task (a rung of the recovery): done, on to the next."""
+        self._executed(task, seen=False)
+        self._advance(task)
+
+    def replan(self, reason: str, task: int | None = None) -> None:
         """The plan failed at its level: suspend, ask for a new plan, follow it."""
         if self.finished:
             return
         old = self.plan
         pending = [t for t in old.primitive if t not in self.executed]
-        for task in pending:
-            self.states.send(task, "suspend", reason=reason)
+        for waiting in pending:
+            self.states.send(waiting, "suspend", reason=reason)
         if self.robot.busy is not None:
             self.robot.cancel(self.node(self.robot.busy))
             self.robot.busy = None
@@ -299,14 +341,16 @@ class PlanFollower:
             self.replans += 1
             new = self.replanner(remaining_agendas(old, self.current, self.executed,
                                                    self.agents))
-        for task in pending:
-            self.states.send(task, "drop", reason="replanned" if new else reason)
+        for waiting in pending:
+            self.states.send(waiting, "drop", reason="replanned" if new else reason)
         if new is None:
-            self._finish("failed", reason)
+            self._finish("failed", reason, task)
             return
         self.hpm.stop()
         self.beliefs.stop()
         self.states.stop()
+        for looked in list(self.recovery.looks):
+            self.recovery.over(looked)
         self._close_abstract("cancelled", "replanned")
         self._load(new)
         self.hpm.listen()
@@ -337,16 +381,19 @@ class PlanFollower:
             self.sup.tree.set_state(node, state, reason or None)
 
     def _changed(self, task: int, view: str, state: str) -> None:
+        self.progressed()
         if view == self.sup.robot and task in self._nodes:
             self.sup.tree.set_state(self._nodes[task], _TREE_STATE[state], state)
-        if view == self.sup.robot and state == "NOT_STARTING" and \
+        if view == self.sup.robot and state in ("NOT_STARTING", "NOT_FINISHED") and \
                 self.agents.get(task) in self.humans:
-            self.sup.loop.call_soon(self.hpm.late, task)
+            self.sup.loop.call_soon(self.recovery.stuck, task, f"{state} in the plan")
+        elif view == self.sup.robot and state == "NOT_FINISHED" and self.robot.busy == task:
+            self.sup.loop.call_soon(self.recovery.robot_stuck, task, f"{state} in the plan")
 
     def partner_absent(self, task: int, human: str) -> None:
         """Asked for their task, ``human`` never attended: the shared plan fails."""
         self._finish("failed", f"{human} is not there to do "
-                               f"{self.plan.primitive[task].label()}")
+                               f"{self.plan.primitive[task].label()}", task)
 
 
 def _outline(plan: SharedPlan, prefix: str, views: list[str]) -> dict[str, Any]:

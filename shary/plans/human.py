@@ -19,10 +19,14 @@ A human's wait (``WaitForCube``) is no movement and no effect: when nothing
 of theirs starts within ``decision_wait`` seconds of it being due, it is
 taken as done (the leave-it-to-the-robot branch of a decision).
 
-A human's task that becomes NOT_STARTING (due too long) is asked for ("Can
-you pick the stick?") through an ``inform`` task, which waits for their
-attention; if they never attend (they left), the plan fails: its partner is
-not there to do their part.
+A human's task that becomes NOT_STARTING (due too long) or NOT_FINISHED
+(started, never ended) climbs :mod:`shary.plans.recovery`'s ladder: look at
+what the robot cannot see, ask them ("Please pick the stick.", "Are you going
+to place the stick?") through an ``inform`` task, which waits for their
+attention (if they never attend, they left, and the plan fails: its partner
+is not there to do their part), take it over, replan.  A task under way
+whose objects are out of the camera's view is looked at before its effect is
+needed.
 """
 
 from __future__ import annotations
@@ -77,8 +81,10 @@ class HumanPlanManager:
         wait = self.ontology.action_class("wait")
         return cls is not None and wait is not None and self.ontology.is_a(cls, wait)
 
-    def late(self, task: int) -> None:
-        """The human's task is NOT_STARTING: ask them for it (see the module)."""
+    def ask(self, task: int, act: str = "request") -> None:
+        """Ask the human for their task: ``request`` one not started ("Please pick the
+        stick."), ``ask-going`` one not finished ("Are you going to place the stick?");
+        see the module, and :mod:`shary.plans.recovery` for when."""
         from shary.dialogue.attention import tell
 
         follower = self.follower
@@ -86,7 +92,7 @@ class HumanPlanManager:
         human = str(follower.agents.get(task, spec.agent))
         values = [human, *map(str, follower.objects_of(task))]
         try:
-            text = self.sup.speech.say({"act": "request", "about":
+            text = self.sup.speech.say({"act": act, "about":
                                         f"{spec.name}({', '.join(values)})", "to": human},
                                        self.sup.robot)
         except (ValueError, KeyError):
@@ -95,9 +101,13 @@ class HumanPlanManager:
         generation = follower.generation
 
         def asked(run: Any) -> None:
-            if run.outcome != "done" and generation == follower.generation \
-                    and task in follower.current and not follower.finished:
+            if generation != follower.generation or task not in follower.current \
+                    or follower.finished:
+                return
+            if run.outcome != "done":
                 follower.partner_absent(task, human)
+            else:  # heard: they have the ladder's patience to act on it
+                follower.recovery.wait(task, "ask")
 
         tell(self.sup, human, text, on_finish=asked)
 
@@ -105,8 +115,27 @@ class HumanPlanManager:
 
     def recognized(self, recognition: Any) -> None:
         """The recognizer's listener: queue the work on the loop (it runs in fact delivery)."""
+        self.follower.progressed()
         if recognition.state in ("started", "achieved") and recognition.agent is not None:
             self.sup.loop.call_soon(self._match, recognition)
+        elif recognition.state == "progressing" and recognition.agent is not None:
+            self.sup.loop.call_soon(self._progressing, recognition)
+
+    def _progressing(self, recognition: Any) -> None:
+        """A due task under way whose end the robot cannot see (its objects out of the
+        camera's view): look at them now, before its effect is needed."""
+        follower = self.follower
+        if follower.finished:
+            return
+        for task in follower.current:
+            if self.matches(task, recognition):
+                unseen = follower.recovery.unseen(task)
+                if unseen:
+                    self.sup.record("plan-recover", task=follower.states.fact_name(task),
+                                    agent=recognition.agent, rung="look", objects=unseen,
+                                    why="under way out of view", name=follower.plan.
+                                    primitive[task].label())
+                    follower.recovery.look(task, unseen[-1], follower.recovery.patience)
 
     def matches(self, task: int, recognition: Any, any_agent: bool = False) -> bool:
         """Whether ``recognition`` is ``task`` (its class, its objects; its agent too

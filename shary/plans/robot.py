@@ -18,6 +18,7 @@ import re
 from collections.abc import Callable
 from typing import Any
 
+from shary.arbiter import WATCH
 from shary.executors import Outcome, Reporter, Request, record_outcome
 from shary.plans.tasks import PrimitiveTask, is_open
 
@@ -134,15 +135,16 @@ class RobotPlanManager:
     def cancel(self, node: str) -> None:
         self.sup.robot_actions.cancel(node)
 
-    def watch(self, target: Any, node: str) -> None:
-        """Turn the head to what the human's next expected action is about."""
+    def watch(self, target: Any, node: str, priority: int = WATCH) -> None:
+        """Turn the head to what the human's next expected action is about (held, at
+        the plan's priority, as long as ``node`` is not over: :mod:`shary.arbiter`)."""
         if target is not None:
-            self.request("look-at", {"target": str(target)}, node)
+            self.request("look-at", {"target": str(target)}, node, priority=priority)
 
     def request(self, atomic: str, args: dict[str, Any], node: str,
-                done: Callable[[Outcome], Any] | None = None) -> None:
+                done: Callable[[Outcome], Any] | None = None, priority: int = WATCH) -> None:
         """An atomic task of the robot's own (look, speak), logged like every other."""
-        request = Request(f"p{next(self._ids)}", atomic, args, self.sup.robot, node)
+        request = Request(f"p{next(self._ids)}", atomic, args, self.sup.robot, node, priority)
         if done is not None:
             self._waiting[request.id] = done
         self.sup.executors.dispatch(request, self._reporter, self.sup.record)

@@ -21,6 +21,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from shary.arbiter import ACT
 from shary.executors import Outcome, Reporter, Request, record_outcome
 from shary.recognition.models import ActionModels, RobotActionModel
 
@@ -90,7 +91,8 @@ class RobotActions:
 
     def _request(self, running: _Running, atomic: str, args: dict[str, Any], *,
                  looking: bool) -> None:
-        request = Request(f"a{next(self._ids)}", atomic, args, self.sup.robot, running.node)
+        request = Request(f"a{next(self._ids)}", atomic, args, self.sup.robot, running.node,
+                          ACT)
         running.request, running.looking = request, looking
         self._pending[request.id] = running
         self.sup.executors.dispatch(request, self._reporter, self.sup.record,
@@ -101,10 +103,12 @@ class RobotActions:
         running = self._pending.pop(outcome.request.id, None)
         if running is None:
             return
-        if outcome.status == "cancelled" or running.cancelled:
+        if running.cancelled:
             self._finish(running, "cancelled", outcome.reason or "cancelled")
         elif running.looking:
-            self._attempt(running)  # looked (or could not): act all the same
+            self._attempt(running)  # looked, could not, or the head was needed: act all the same
+        elif outcome.status == "cancelled":
+            self._finish(running, "cancelled", outcome.reason or "cancelled")
         elif outcome.status == "done":
             self._finish(running, "done")
         elif running.attempts < running.model.max_attempts:

@@ -31,8 +31,9 @@ context log (kind ``recognition``, read by ``shary log`` and drawn as the
 human's lane of the timeline) and handed to the listeners (the human plan
 manager will be one).  Candidates that neither move on nor end within
 ``forget`` are dropped (``abandoned``); when a candidate is achieved, the
-agent's other candidates of the same action on the same entities are dropped
-with it (they were the same gesture seen two ways).
+agent's other candidates on an entity of it, of any action, are dropped with it
+(they were the same gesture seen two ways).  The roles of one action are played
+by different entities (a stick is never placed on itself).
 """
 
 from __future__ import annotations
@@ -412,7 +413,7 @@ class Recognizer:
             results = extended
         return [r for r in results
                 if all(self._is(v, classes[role]) for role, v in r.items()
-                       if role != model.agent and v is not None)]
+                       if role != model.agent and v is not None) and _distinct(r, model)]
 
     def _attribute(self, model: HumanActionModel, binding: dict[str, Any],
                    now: float) -> tuple[Any, str]:
@@ -489,17 +490,20 @@ class Recognizer:
     # -- ends -------------------------------------------------------------------------------------
 
     def _drop_siblings(self, achieved: Candidate, now: float) -> None:
-        """The agent's other live candidates of the same action on the same entities."""
+        """The agent's other live candidates, of any action, on an entity of the achieved
+        one: the gesture toward it was this action, seen another way too (the hand that
+        went to the stick to put a cube on it was not picking the stick)."""
         values = {v for role, v in achieved.binding.items()
                   if role != achieved.model.agent and v is not None}
-        live = self.candidates[achieved.model.name]
-        for key, other in list(live.items()):
-            if other is achieved or other.agent not in (achieved.agent, None):
-                continue
-            if values & {v for role, v in other.binding.items() if role != other.model.agent}:
-                del live[key]
-                other.state = "abandoned"
-                self._emit(other, "achieved-other", None, now)
+        for live in self.candidates.values():
+            for key, other in list(live.items()):
+                if other is achieved or other.agent not in (achieved.agent, None):
+                    continue
+                if values & {v for role, v in other.binding.items()
+                             if role != other.model.agent}:
+                    del live[key]
+                    other.state = "abandoned"
+                    self._emit(other, "achieved-other", None, now)
 
     def _sweep(self, now: float) -> None:
         """Drop candidates untouched for ``forget`` seconds, and forget old vanished facts."""
@@ -556,6 +560,13 @@ class Recognizer:
                         cause=cause, fact=shown or None)
         for listener in self.listeners:
             listener(recognition)
+
+
+def _distinct(binding: dict[str, Any], model: HumanActionModel) -> bool:
+    """Whether the roles of an action are played by different entities: a stick is not
+    placed on itself, however the hand moving toward it while holding it reads."""
+    values = [v for role, v in binding.items() if role != model.agent and v is not None]
+    return len(values) == len(set(values))
 
 
 def _shown(fact: Fact, binding: dict[str, Any]) -> str:

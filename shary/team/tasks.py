@@ -16,6 +16,14 @@ next.  A task that fails is tried again (``attempts``); a task with
 everything between them pending again, so the weld is redone and then
 inspected again.  Every agent's progress comes back as ``Progress``
 messages, all logged.
+
+A **watchdog** keeps the goal from stalling silently: when nothing has
+progressed for ``watchdog`` seconds (no task made ready, offered, accepted,
+done or failed), it writes a ``watchdog`` row (what is running, what is
+ready, what it does) and acts: a running task whose holder has said nothing
+since is withdrawn (retried, respawned or given up as the team file says);
+a ready task that no agent could ever take (none capable, or all lost) ends
+the goal failed; so does a goal with nothing running, offered or ready.
 """
 
 from __future__ import annotations
@@ -70,8 +78,13 @@ class TaskManager:
 
     address = "tasks"
 
-    def __init__(self, team: Team, tasks: dict[str, TaskSpec]):
+    def __init__(self, team: Team, tasks: dict[str, TaskSpec], watchdog: float = 300.0):
         self.team = team
+        self.watchdog = watchdog
+        """Seconds without progress after which the watchdog acts (see the module)."""
+        self.progress = 0
+        self._watch_mark = -1
+        self._watch_timer: Timer | None = None
         self.tasks = {name: TeamTask(spec) for name, spec in tasks.items()}
         self._after: dict[str, list[str]] = {name: [] for name in tasks}
         for spec in tasks.values():
@@ -96,10 +109,44 @@ class TaskManager:
         for task in self.tasks.values():
             self._maybe_ready(task)
         self.team.loop.call_soon(self.dispatch)
+        self._watch()
+
+    # -- the watchdog ----------------------------------------------------------------
+
+    def _watch(self) -> None:
+        self._watch_mark = self.progress
+        self._watch_timer = self.team.loop.call_later(self.watchdog, self._idle)
+
+    def _idle(self) -> None:
+        self._watch_timer = None
+        if self.outcome is not None:
+            return
+        if self.progress != self._watch_mark:
+            self._watch()
+            return
+        running = [t for t in self.tasks.values() if t.state == RUNNING]
+        ready = [t for t in self.tasks.values() if t.state in (READY, OFFERED)]
+        hopeless = [t for t in ready if t.state == READY and not any(
+            self.team.agents[a.name].current != LOST for a in self._capable(t))]
+        why = f"nothing progressed for {self.watchdog:g}s"
+        action = ("withdraw" if running else "end" if hopeless or not ready else "wait")
+        self.team.record("watchdog", idle=self.watchdog, action=action, why=why,
+                         running=[t.name for t in running] or None,
+                         ready=[t.name for t in ready] or None)
+        if action == "withdraw":
+            for task in running:
+                self.withdraw(task.name, f"{task.agent} said nothing of it: {why}")
+        elif action == "end":
+            reason = (f"no agent can do {', '.join(t.name for t in hopeless)}" if hopeless
+                      else "nothing is running, offered or ready")
+            self._over("failed", f"{reason} ({why})")
+        if self.outcome is None:
+            self._watch()
 
     def _maybe_ready(self, task: TeamTask) -> None:
         if task.state == PENDING and all(self.tasks[b].state == DONE for b in task.spec.after):
             task.state = READY
+            self.progress += 1
             task.refused.clear()
             self._ready.append(task)
             self.team.record("task-ready", task=task.name, skill=task.spec.skill)
@@ -145,6 +192,7 @@ class TaskManager:
         if agent is None:
             return False
         self.delegations += 1
+        self.progress += 1
         task.state = OFFERED
         task.agent = agent.name
         agent.current = task.name
@@ -240,6 +288,7 @@ class TaskManager:
     def handle(self, message: Message) -> None:
         if not isinstance(message, Progress):
             return
+        self.progress += 1
         task = self.tasks.get(message.task)
         if task is None or task.agent != message.sender:
             holder = self.team.agents.get(message.sender)
@@ -319,11 +368,14 @@ class TaskManager:
         if all(t.state == DONE for t in self.tasks.values()):
             self._over("done")
 
-    def _over(self, outcome: str) -> None:
+    def _over(self, outcome: str, reason: str | None = None) -> None:
         if self.outcome is not None:
             return
         self.outcome = outcome
-        self.team.record("goal-over", outcome=outcome,
+        if self._watch_timer is not None:
+            self._watch_timer.cancel()
+            self._watch_timer = None
+        self.team.record("goal-over", outcome=outcome, reason=reason,
                          done=sum(t.state == DONE for t in self.tasks.values()),
                          tasks=len(self.tasks))
         for listener in self.listeners:

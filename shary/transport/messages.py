@@ -227,10 +227,11 @@ with the question to whoever answers, on any machine; logs keep its path (``imag
 
 
 def loggable(data: dict[str, Any]) -> dict[str, Any]:
-    """``data`` without the bulky bytes a log row does not need (a picture's)."""
+    """``data`` without the bulky bytes a log row does not need (a picture's): the row
+    says a picture went (``picture: true``) and keeps its path (``image``) if it has one."""
     if PICTURE not in data:
         return data
-    return {k: v for k, v in data.items() if k != PICTURE}
+    return {**{k: v for k, v in data.items() if k != PICTURE}, "picture": True}
 
 
 def summary(message: Message) -> dict[str, Any]:

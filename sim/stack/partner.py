@@ -9,7 +9,9 @@ to do).  Its profile (a scenario's ``shared-plan: partner:``) says:
   (``placement_2``, ``place``) or ``wait`` (leave it to the robot);
 * ``delay``: how long they take before acting on a task that is due;
 * ``look-away``: ``{during: TASK, for: SECONDS}``, look away when the robot's
-  task whose label starts with TASK begins, and look back after SECONDS;
+  task whose label starts with TASK begins, and look back after SECONDS; or
+  ``{at: SECONDS, for: SECONDS}``, look away that long after the plan starts
+  (whatever is under way then);
 * ``before``: ``{TASK: [[Pick, obj], [Place, obj, support]]}``, actions of their
   own they do when the task TASK is due, before it (the robot's turn taken, an
   unexpected action);
@@ -44,6 +46,8 @@ class StackPartner:
         self.queue: list[list[str]] = []
         self.handled: set[int] = set()
         follower.watchers.append(self.plan_event)
+        if self.look_away and "at" in self.look_away:
+            self.sim.loop.call_later(float(self.look_away["at"]), self._look_away)
 
     @property
     def name(self) -> str:
@@ -52,16 +56,21 @@ class StackPartner:
     def plan_event(self, event: str, task: int) -> None:
         """The follower's news: a task ``due`` or ``started`` by the robot, ``done``."""
         label = self.follower.plan.primitive[task].label()
-        if event == "started" and self.look_away and \
-                label.startswith(str(self.look_away.get("during"))):
-            self.person.look("away")
-            seconds = float(self.look_away.get("for", 5.0))
-            self.sim.loop.call_later(seconds, self.person.look, "robot")
-            self.look_away = None
+        if event == "started" and self.look_away and "during" in self.look_away and \
+                label.startswith(str(self.look_away["during"])):
+            self._look_away()
         elif event == "done" and self.leave and label.startswith(str(self.leave)):
             self.sim.loop.call_later(self.delay, self._leave)
         elif event == "due":
             self.sim.loop.call_later(self.delay, self._consider)
+
+    def _look_away(self) -> None:
+        if self.look_away is None:
+            return
+        self.person.look("away")
+        seconds = float(self.look_away.get("for", 5.0))
+        self.sim.loop.call_later(seconds, self.person.look, "robot")
+        self.look_away = None
 
     def _consider(self) -> None:
         follower = self.follower

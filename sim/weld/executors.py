@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from shary.executors import Reporter, Request
+from userfiles.outputs import write_output
 
 from ..avatar import Avatar
 from ..kinematics import reach
@@ -237,12 +238,22 @@ class SiteActions:
     def snapshot(self, robot: str, label: str, caption: str) -> str | None:
         """A PNG of what ``robot``'s camera sees, named after the time and ``label``;
         its path, or None when the run writes no files."""
+        return self.keep(robot, label, self.picture(robot, caption)) \
+            if self.snapshot_dir is not None else None
+
+    def picture(self, robot: str, caption: str) -> bytes:
+        """The PNG bytes of what ``robot``'s camera sees now, captioned with the time."""
+        return self.site.picture(480, 360, robot, [f"{self.sim.loop.now():.1f} s   {caption}"])
+
+    def keep(self, robot: str, label: str, png: bytes) -> str | None:
+        """Write a picture into the run's folder, named after the time and ``label``; its
+        path, or None when the run writes no files."""
         if self.snapshot_dir is None:
             return None
-        now = self.sim.loop.now()
-        name = f"{robot.lower()}-{len(self.snapshots) + 1:02d}-{now:06.1f}s-{label}.png"
+        name = (f"{robot.lower()}-{len(self.snapshots) + 1:02d}-"
+                f"{self.sim.loop.now():06.1f}s-{label}.png")
         path = self.snapshot_dir / name
-        self.site.snapshot(path, 480, 360, robot, [f"{now:.1f} s   {caption}"])
+        write_output(path, png)
         self.snapshots.append(name)
         return str(path)
 

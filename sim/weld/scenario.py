@@ -262,7 +262,7 @@ def judge(expect: WeldExpect, rows: list[Row], outcome: str | None, end: float) 
             differences.append(f"unexpected {event!r} at {hits[0]:.1f}s")
     images = sum(1 for _, kind, _, _, data in rows
                  if kind == "question" and isinstance(data.get("data"), dict)
-                 and data["data"].get("image"))
+                 and (data["data"].get("picture") or data["data"].get("image")))
     if images < expect.images:
         differences.append(f"expected at least {expect.images} question(s) with an image, "
                            f"saw {images}")

@@ -194,21 +194,21 @@ class WeldWorld:
         """What a question of ``topic`` carries: for ``seam-okay``, a picture of the seam
         from the robot's camera (its head still aimed at it), and which seam.
 
-        The picture travels in the question (base64 PNG, :data:`PICTURE`) besides its
-        path: whoever answers may be on another machine, where the path means nothing.
+        The picture travels in the question (base64 PNG, :data:`PICTURE`), taken whether
+        or not the run keeps files (so a run judges the same either way), besides its path
+        when it does: whoever answers may be on another machine, where a path means nothing.
         A 480x360 picture is 12-25 kB, far inside a message's 1 MiB; a larger one
         would go as its path only."""
         if topic != SEAM_QUESTION:
             return {}
         found = self.scenario.team.tasks.get(task or "")
         seam = str(found.args.get("seam")) if found is not None else None
-        image = self.actions.snapshot(robot, f"question-{seam or 'seam'}",
-                                      f"{robot}: is this seam okay? ({seam})")
+        picture = self.actions.picture(robot, f"{robot}: is this seam okay? ({seam})")
+        image = self.actions.keep(robot, f"question-{seam or 'seam'}", picture)
         data: dict[str, Any] = {k: v for k, v in (("image", image), ("seam", seam)) if v}
-        if image is not None:
-            png = base64.b64encode(Path(image).read_bytes()).decode("ascii")
-            if len(png) < MAX_BYTES // 2:
-                data[PICTURE] = png
+        png = base64.b64encode(picture).decode("ascii")
+        if len(png) < MAX_BYTES // 2:
+            data[PICTURE] = png
         return data
 
 

@@ -7,7 +7,9 @@
 const $ = (id) => document.getElementById(id);
 const SVGNS = "http://www.w3.org/2000/svg";
 const MAX_LINES = 300, MAX_FACT_ROWS = 40, PX_PER_S = 14, LANE_ROW = 16, LANE_TOP = 18;
+const MIN_LABEL_PX = 64;  // the room a label of an instant (an answer, a look) has beside it
 const bench = location.search.includes("bench");
+const SCALE = 0.6, SUB_SCALE = 0.45;  // of a scheme as dot draws it (14 pt state names)
 
 const st = {
   ws: null, mode: null, status: {}, svgs: {}, time: 0, nextId: 1,
@@ -85,6 +87,8 @@ function task(node, who, name, scheme, roles) {
   }
   const diagram = el("div", "diagram"), config = el("div", "config");
   box.append(h, diagram, config);
+  const n = st.nodes.get(node);
+  if (n && n.parent) box.classList.add("sub");
   a.tasks.append(box);
   const t = { box, diagram, config, scheme, agent: who, name, active: [], marks: null };
   st.tasks.set(node, t);
@@ -95,9 +99,21 @@ function drawInto(t) {
   const svg = st.svgs[t.scheme];
   if (!svg || t.marks) return;
   t.diagram.innerHTML = svg;
+  fit(t);
   t.marks = new Map();
   for (const g of t.diagram.querySelectorAll("g[data-state]")) t.marks.set(g.dataset.state, g);
   highlight(t, t.active, []);
+}
+
+function fit(t) {
+  // every scheme at one scale, whatever its size: its text stays legible (state names
+  // 11 px, a subtask's 8.5 px) and two agents' schemes compare at a glance; what does not
+  // fit the column scrolls in its box
+  const svg = t.diagram.querySelector("svg");
+  if (!svg) return;
+  const scale = t.box.classList.contains("sub") ? SUB_SCALE : SCALE;
+  svg.style.width = (svg.width.baseVal.value * scale) + "px";
+  svg.style.height = "auto";
 }
 
 function highlight(t, now, before) {
@@ -143,6 +159,8 @@ function node(id, parent, kind, name, state) {
   }
   ul.append(li);
   st.nodes.set(id, { li, ul: null, parent: p ? parent : null, kind });
+  const t = st.tasks.get(id);
+  if (t && p && !t.box.classList.contains("sub")) { t.box.classList.add("sub"); fit(t); }
 }
 
 function nodeState(id, state) {
@@ -198,7 +216,7 @@ function item(id, laneName, t0, label, cls) {
   text.setAttribute("x", x(t0) + 3); text.setAttribute("y", y + 10);
   text.textContent = label;
   l.g.append(rect, text);
-  st.items.set(id, { rect, t0, l, row });
+  st.items.set(id, { rect, text, label: label || "", t0, l, row });
   st.open.add(id);
   widen(t0);
 }
@@ -220,11 +238,29 @@ function growLane(l, by) {
 function itemEnd(id, t1, cls) {
   const it = st.items.get(id);
   if (!it) return;
-  it.rect.setAttribute("width", Math.max(2, (t1 - it.t0) * PX_PER_S));
+  const bar = Math.max(2, (t1 - it.t0) * PX_PER_S);
+  it.rect.setAttribute("width", bar);
   it.rect.setAttribute("class", cls);
   it.rect.firstChild.textContent += " to " + t1.toFixed(1) + " s (" + cls + ")";
-  it.l.rows[it.row] = t1;
+  // the label, cut to its bar (or to a short word beside an instant), holds its row as
+  // long as the bar: the next item of the row starts after both, never on top of them
+  const used = shorten(it.text, it.label, Math.max(bar, MIN_LABEL_PX) - 4);
+  it.l.rows[it.row] = used ? it.t0 + Math.max(bar, used + 6) / PX_PER_S : t1;
   st.open.delete(id);
+}
+
+function shorten(text, label, room) {
+  // the text's width once it fits in room pixels, cut with an ellipsis (the whole label
+  // stays in the bar's tooltip)
+  let width = text.getComputedTextLength();
+  if (width <= room) return width;
+  let keep = Math.max(0, Math.floor(label.length * room / width));
+  do {
+    text.textContent = keep ? label.slice(0, keep) + "…" : "";
+    width = keep ? text.getComputedTextLength() : 0;
+    keep--;
+  } while (width > room && keep >= 0);
+  return width;
 }
 
 function widen(t) {
@@ -346,7 +382,8 @@ function status(s) {
   if (s.mode === "live") {
     $("run-controls").hidden = false;
     const over = s.state === "ended" || s.state === "error";
-    for (const id of ["pause", "resume", "step", "speed", "bp-add"]) $(id).disabled = over;
+    for (const id of ["pause", "resume", "step", "speed", "bp-add", "bp-act"]) $(id).disabled = over;
+    document.body.classList.toggle("run-over", over);
     $("speed").value = String(s.speed);
     const chips = $("breakpoints");
     chips.textContent = "";

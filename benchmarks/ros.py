@@ -1,0 +1,352 @@
+"""shary's ROS 2 bridge against a bare rclpy client and its goals (issue 23), in one run.
+
+A child process (this script with ``--serve``) serves two
+``test_msgs/action/NestedMessage`` actions, ``/bench/instant`` (succeeds at
+once) and ``/bench/long`` (runs until cancelled, printing when a cancel request
+arrives, with its wall time), and publishes ``std_msgs/String`` perception
+messages on request.  Against it, in this process:
+
+- per-goal overhead: ``--goals`` sequential goals (send -> result) through a bare
+  rclpy ``ActionClient`` (one node, a ``SingleThreadedExecutor`` in a thread, the
+  goal sent with ``create_task``, the main thread waiting on an event) and through
+  shary's :class:`~shary.ros.executors.RosExecutors` (request -> outcome on the
+  engine's loop), alternated in blocks of 25; p50 and p99 of each, and the ratios
+  (goal: within 1.25 x of bare);
+- cancel latency: give-object-attentive with move-arm on ``/bench/long``: the time
+  from removing "alice looksAt jido" from the facts to the cancel request reaching
+  the server (the scheme suspends REALIZE-TASK, the act's goal is cancelled), over
+  ``--cancels`` suspensions; p50, p99 (goal: p99 <= 50 ms);
+- topic messages into facts: ``--messages`` messages published at ``--rate`` per
+  second, each a line ``bench stamp TIME``; messages turned into facts per second
+  and the time from publication to the fact (goal: >= 5,000 msg/s, p99 <= 5 ms).
+
+    python benchmarks/ros.py [--json] [--goals 400] [--cancels 30] [--messages 20000]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+HERE = Path(__file__).resolve().parent
+
+
+def _pct(values: list[float], q: float) -> float:
+    ordered = sorted(values)
+    return ordered[min(len(ordered) - 1, int(q * len(ordered)))]
+
+
+# -- the child: servers and a publisher -----------------------------------------------------
+
+
+def serve() -> None:
+    import rclpy
+    from rclpy.action import ActionServer, CancelResponse
+    from rclpy.callback_groups import ReentrantCallbackGroup
+    from rclpy.executors import MultiThreadedExecutor
+    from std_msgs.msg import String
+    from test_msgs.action import NestedMessage
+
+    rclpy.init()
+    node = rclpy.create_node("bench_robot")
+    group = ReentrantCallbackGroup()
+
+    def instant(handle: Any) -> Any:
+        handle.succeed()
+        return NestedMessage.Result()
+
+    def long(handle: Any) -> Any:
+        print("goal", flush=True)
+        while rclpy.ok() and not handle.is_cancel_requested:
+            time.sleep(0.002)
+        if handle.is_cancel_requested:
+            handle.canceled()
+        else:  # shutting down
+            handle.abort()
+        return NestedMessage.Result()
+
+    def cancel(handle: Any) -> Any:
+        print("cancel", time.time(), flush=True)
+        return CancelResponse.ACCEPT
+
+    servers = [ActionServer(node, NestedMessage, "/bench/instant", instant, callback_group=group),
+               ActionServer(node, NestedMessage, "/bench/long", long, cancel_callback=cancel,
+                            callback_group=group)]
+    publisher = node.create_publisher(String, "/bench/facts", 1000)
+
+    def commands() -> None:
+        for line in sys.stdin:
+            words = line.split()
+            if words and words[0] == "publish":
+                count, rate = int(words[1]), float(words[2])
+                while not publisher.get_subscription_count():
+                    time.sleep(0.01)
+                time.sleep(0.5)
+                start = time.perf_counter()
+                for i in range(count):
+                    ahead = start + i / rate - time.perf_counter()
+                    if ahead > 0:
+                        time.sleep(ahead)
+                    publisher.publish(String(data=f"bench stamp {time.time():.6f}"))
+                print("published", flush=True)
+        rclpy.try_shutdown()
+
+    threading.Thread(target=commands, daemon=True).start()
+    executor = MultiThreadedExecutor(num_threads=4)
+    executor.add_node(node)
+    print("ready", flush=True)
+    try:
+        executor.spin()
+    except Exception:  # noqa: BLE001 -- shutting down
+        pass
+    for server in servers:
+        server.destroy()
+
+
+class Child:
+    def __init__(self) -> None:
+        from shary.ros.env import ros_environment
+
+        self.popen = subprocess.Popen([sys.executable, __file__, "--serve"], text=True,
+                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                      env=ros_environment())
+        self.lines: list[str] = []
+        threading.Thread(target=self._read, daemon=True).start()
+        self.wait(lambda: "ready" in self.lines)
+
+    def _read(self) -> None:
+        assert self.popen.stdout is not None
+        for line in self.popen.stdout:
+            self.lines.append(line.strip())
+
+    def wait(self, condition: Any, timeout: float = 60.0, loop: Any = None) -> None:
+        end = time.monotonic() + timeout
+        while not condition():
+            if time.monotonic() > end:
+                raise RuntimeError(f"the benchmark's robot did not answer: {self.lines[-5:]}")
+            if loop is not None:
+                loop.run_for(0.02)
+            else:
+                time.sleep(0.001)
+
+    def send(self, line: str) -> None:
+        assert self.popen.stdin is not None
+        self.popen.stdin.write(line + "\n")
+        self.popen.stdin.flush()
+
+    def stop(self) -> None:
+        self.popen.terminate()
+        self.popen.wait(10)
+
+
+# -- the measures ---------------------------------------------------------------------------
+
+
+BINDING = """\
+binding: bench
+robot: jido
+codes: {alice: 30, bottle: 1}
+tasks:
+  speak: {topic: /bench/say, type: std_msgs/msg/String, goal: {data: "{text}"}}
+  move-arm: {action: /bench/long, type: test_msgs/action/NestedMessage,
+             goal: {nested_field.int32_value: "{code:target}"}, deadlines: {server: 20s, ack: 10s}}
+"""
+FACTS = """\
+facts:
+  - {topic: /bench/facts, type: std_msgs/msg/String, lines: data}
+"""
+INSTANT = "  {name}: {{action: /bench/instant, type: test_msgs/action/NestedMessage, " \
+          "deadlines: {{server: 20s, ack: 10s}}}}\n"
+
+
+def measure(args: argparse.Namespace) -> dict[str, Any]:
+    import rclpy
+    from rclpy.action import ActionClient
+    from test_msgs.action import NestedMessage
+
+    from shary.executors import ExecutorRegistry, Reporter, Request
+    from shary.facts import FactDatabase
+    from shary.io.recipes import load_library
+    from shary.loop import EventLoop, WallClock
+    from shary.ros.binding import load_binding
+    from shary.ros.bridge import Fanout, RosSupervision
+    from shary.ros.node import RosNode
+    from shary.supervisor import Supervisor
+
+    os.environ.setdefault("ROS_DOMAIN_ID", str(50 + os.getpid() % 40))
+    child = Child()
+    library = load_library()
+    text = BINDING + "".join(INSTANT.format(name=name) for name in library.atomic
+                             if name not in ("speak", "move-arm", "say")) + FACTS
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "bench.yaml"
+        path.write_text(text)
+        binding = load_binding(path)
+    loop, facts = EventLoop(WallClock()), FactDatabase()
+    for triple in (("alice", "looksAt", "jido"), ("bottle", "isOn", "table"),
+                   ("bottle", "isReachableBy", "jido")):
+        facts.add(*triple)
+    fanout = Fanout()
+    sup = Supervisor(library, facts, robot="jido", loop=loop, log=fanout,
+                     executors=ExecutorRegistry())
+    node = RosNode("shary_bench")
+    ros = RosSupervision(sup, binding, node, fanout=fanout)
+
+    # the bare client: its own node and executor thread, as rclpy's documentation shows
+    rclpy.init(args=None)
+    bare_node = rclpy.create_node("bare_bench")
+    bare_exec = rclpy.executors.SingleThreadedExecutor()
+    bare_exec.add_node(bare_node)
+    bare_client = ActionClient(bare_node, NestedMessage, "/bench/instant")
+    threading.Thread(target=bare_exec.spin, daemon=True).start()
+    bare_client.wait_for_server(timeout_sec=30)
+    # the peer's peer: a bare client on a node with as many action clients as shary's
+    # (rclpy's executor walks every entity of its nodes each time it wakes)
+    crowded_node = rclpy.create_node("crowded_bench")
+    crowded_exec = rclpy.executors.SingleThreadedExecutor()
+    crowded_exec.add_node(crowded_node)
+    crowded_client = ActionClient(crowded_node, NestedMessage, "/bench/instant")
+    extra = [ActionClient(crowded_node, NestedMessage, f"/bench/other{i}")
+             for i in range(len(binding.tasks) - 1)]
+    threading.Thread(target=crowded_exec.spin, daemon=True).start()
+    crowded_client.wait_for_server(timeout_sec=30)
+
+    def bare_goal(client: Any = bare_client, executor: Any = bare_exec) -> float:
+        done = threading.Event()
+
+        def send() -> None:
+            future = client.send_goal_async(NestedMessage.Goal())
+            future.add_done_callback(lambda f: f.result().get_result_async()
+                                     .add_done_callback(lambda _: done.set()))
+
+        start = time.perf_counter()
+        executor.create_task(send)
+        done.wait(10)
+        return time.perf_counter() - start
+
+    outcomes: dict[str, Any] = {}
+    reporter = Reporter(lambda o: outcomes.__setitem__(o.request.id, (o, time.perf_counter())),
+                        loop.call_soon)
+
+    def shary_goal(i: int) -> float:
+        request = Request(f"b{i}", "navigate", {"place": "x"}, "jido", f"n{i}")
+        start = time.perf_counter()
+        ros.executors.start(request, reporter)
+        while request.id not in outcomes:
+            loop.run_for(0.05)  # the time is taken when the outcome is delivered
+        outcome, end = outcomes[request.id]
+        if outcome.status != "done":
+            raise RuntimeError(outcome.reason)
+        return end - start
+
+    for i in range(20):  # warm them up (discovery, first-goal costs)
+        bare_goal()
+        bare_goal(crowded_client, crowded_exec)
+        shary_goal(-i - 1)
+    bare, crowded, shary = [], [], []
+    for block in range(0, args.goals, 25):
+        bare += [bare_goal() for _ in range(25)]
+        crowded += [bare_goal(crowded_client, crowded_exec) for _ in range(25)]
+        shary += [shary_goal(block + i) for i in range(25)]
+
+    # cancel latency: a fact change suspends the act, whose goal is cancelled
+    sup.start_task("give-object", {"object": "bottle", "partner": "alice"})
+    loop.run_until_idle()
+    sup.receive_act("alice", "H-AGREE")
+    cancels: list[float] = []
+    for k in range(args.cancels):
+        child.wait(lambda k=k: child.lines.count("goal") > k, loop=loop)
+        loop.run_for(0.05)
+        changed = time.time()
+        facts.remove("alice", "looksAt", "jido")
+        child.wait(lambda k=k: sum(1 for x in child.lines if x.startswith("cancel")) > k,
+                   loop=loop)
+        cancels.append(float([x for x in child.lines if x.startswith("cancel")][k].split()[1])
+                       - changed)
+        facts.add("alice", "looksAt", "jido")
+
+    # topic messages into facts
+    delays: list[float] = []
+    arrived: list[float] = []
+
+    def on_fact(event: Any) -> None:
+        if event.subject == "bench" and event.kind == "added":
+            now = time.time()
+            arrived.append(now)
+            delays.append(now - float(event.object))
+
+    facts.subscribe(on_fact)
+    child.send(f"publish {args.messages} {args.rate}")
+    child.wait(lambda: "published" in child.lines, timeout=120, loop=loop)
+    loop.run_for(0.5)
+    node.close()
+    for client in (bare_client, crowded_client, *extra):
+        client.destroy()
+    bare_exec.shutdown()
+    crowded_exec.shutdown()
+    rclpy.try_shutdown()
+    child.stop()
+    span = arrived[-1] - arrived[0] if len(arrived) > 1 else float("inf")
+    ms = 1000.0
+    return {
+        "goals": args.goals, "bare_p50_ms": statistics.median(bare) * ms,
+        "bare_p99_ms": _pct(bare, 0.99) * ms, "shary_p50_ms": statistics.median(shary) * ms,
+        "shary_p99_ms": _pct(shary, 0.99) * ms, "action_clients": len(extra) + 1,
+        "crowded_p50_ms": statistics.median(crowded) * ms,
+        "crowded_p99_ms": _pct(crowded, 0.99) * ms,
+        "ratio_p50": statistics.median(shary) / statistics.median(bare),
+        "ratio_p99": _pct(shary, 0.99) / _pct(bare, 0.99),
+        "cancels": len(cancels), "cancel_p50_ms": statistics.median(cancels) * ms,
+        "cancel_p99_ms": _pct(cancels, 0.99) * ms,
+        "messages_sent": args.messages, "messages_to_facts": len(arrived),
+        "topic_msgs_per_s": (len(arrived) - 1) / span,
+        "topic_p50_ms": statistics.median(delays) * ms, "topic_p99_ms": _pct(delays, 0.99) * ms,
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--json", action="store_true", help="print the figures as JSON")
+    parser.add_argument("--goals", type=int, default=400)
+    parser.add_argument("--cancels", type=int, default=30)
+    parser.add_argument("--messages", type=int, default=20000)
+    parser.add_argument("--rate", type=float, default=6000.0, help="messages per second")
+    parser.add_argument("--serve", action="store_true", help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.serve:
+        serve()
+        return
+    from shary.ros.env import reexec_with_libraries
+
+    reexec_with_libraries()
+    figures = measure(args)
+    if args.json:
+        print(json.dumps({k: round(v, 3) if isinstance(v, float) else v
+                          for k, v in figures.items()}, indent=2))
+        return
+    print(f"goal round trip, {figures['goals']} goals: bare p50 {figures['bare_p50_ms']:.2f} ms "
+          f"p99 {figures['bare_p99_ms']:.2f} ms; shary p50 {figures['shary_p50_ms']:.2f} ms "
+          f"p99 {figures['shary_p99_ms']:.2f} ms; ratio p50 {figures['ratio_p50']:.2f} "
+          f"p99 {figures['ratio_p99']:.2f} (goal <= 1.25); a bare client on a node with "
+          f"{figures['action_clients']} action clients: p50 {figures['crowded_p50_ms']:.2f} ms "
+          f"p99 {figures['crowded_p99_ms']:.2f} ms")
+    print(f"fact change -> cancel at the server, {figures['cancels']} suspensions: "
+          f"p50 {figures['cancel_p50_ms']:.1f} ms, p99 {figures['cancel_p99_ms']:.1f} ms "
+          "(goal p99 <= 50 ms)")
+    print(f"topic -> facts: {figures['messages_to_facts']} of {figures['messages_sent']} "
+          f"messages, {figures['topic_msgs_per_s']:.0f} msg/s, p50 "
+          f"{figures['topic_p50_ms']:.2f} ms, p99 {figures['topic_p99_ms']:.2f} ms "
+          "(goal >= 5,000 msg/s, p99 <= 5 ms)")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,11 @@
+"""shary on ROS 2: a node that drives a robot's actions, reads its perception and
+people, and shows its state to ROS tools (docs/ros2.md).
+
+Only this package imports rclpy (the ``ros`` extra: ``pip install '.[ros]'``);
+the engine, the planner and the simulator never do.  Its modules, one per
+concept: :mod:`~shary.ros.env` (the wheels' libraries, traffic kept on this
+host), :mod:`~shary.ros.binding` (the robot binding file), :mod:`~shary.ros.node`
+(the one node, its executor thread and the inbox), :mod:`~shary.ros.executors`
+(atomic tasks as actions, services and topics), :mod:`~shary.ros.perception`
+(topics into facts and person acts).
+"""

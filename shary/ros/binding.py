@@ -1,0 +1,311 @@
+"""The robot binding file: shary's atomic tasks, facts and speech on a robot's ROS 2 interfaces.
+
+A binding (``binding:`` at the top, schema ``shary/schemas/robot-binding.schema.json``)
+says, for one robot:
+
+* ``tasks``: each atomic task (navigate, pick, give, speak …) as an action, a
+  service or a topic, by name and type; the goal's fields built from the
+  task's parameters and the facts (``{place}``, ``{code:place}``,
+  ``{fact:place:position:0}``); deadlines per phase (server, acknowledgement,
+  execution, cancel); a progress text per feedback; when a result counts as a
+  success and what the failure's reason reads;
+* ``facts``: topics whose messages become facts of the robot's perspective
+  (templates over the message's fields, once per element of a sequence with
+  ``each``), dropped when the topic has been silent for ``stale``;
+* ``speech``: topics that carry what people say, each sentence read by the
+  communication manager's requests grammar.
+
+``codes`` numbers names for interfaces whose goals carry only numbers (the
+simulated Jido's, built from the message packages that are on PyPI).
+
+Loading checks the file's shape, then its meaning: each task is an atomic task
+of the recipe library and its templates name only that task's parameters;
+each type is imported, and when it is, every field path is checked against it.
+A type that cannot be imported here (``nav2_msgs`` is not on PyPI) is a
+*note* ("not installed"), not an error: the binding is meant for a robot that
+has it.  Importing a message package never imports rclpy.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from userfiles.errors import Problem
+from userfiles.reader import Reader, read
+
+DEFAULT_DEADLINES = {"server": 0.0, "ack": 1.0, "exec": 300.0, "cancel": 2.0}
+"""Seconds per phase when a binding does not say: fail at once without a server
+(BehaviorTree.ROS2's behaviour), 1 s for the acknowledgement (its default), 5 min of
+execution, 2 s for a cancelled goal to end."""
+
+TEMPLATE = re.compile(r"\{([^{}]*)\}")
+_PARAM = re.compile(r"^(?:(code):([A-Za-z_][\w-]*)|(fact):([A-Za-z_][\w-]*):([A-Za-z_][\w-]*)"
+                    r"(?::(\d+))?|([A-Za-z_][\w-]*))$")
+_FIELD = re.compile(r"^(item|[a-z][a-z0-9_]*)(\.[a-z][a-z0-9_]*)*$")
+
+
+@dataclass(frozen=True)
+class TaskBinding:
+    """One atomic task on one ROS 2 interface."""
+
+    atomic: str
+    kind: str
+    """``action``, ``service`` or ``topic``."""
+    name: str
+    type: str
+    goal: dict[str, Any] = field(default_factory=dict)
+    deadlines: dict[str, float] = field(default_factory=lambda: dict(DEFAULT_DEADLINES))
+    feedback: str = ""
+    succeeded_if: dict[str, Any] = field(default_factory=dict)
+    reason: str = ""
+
+
+@dataclass(frozen=True)
+class FactSource:
+    """A topic whose messages become facts."""
+
+    topic: str
+    type: str
+    facts: tuple[tuple[Any, Any, Any], ...] = ()
+    each: str = ""
+    lines: str = ""
+    stale: float | None = None
+
+
+@dataclass(frozen=True)
+class SpeechSource:
+    """A topic that carries what people say."""
+
+    topic: str
+    type: str
+    text: str
+    speaker: str = ""
+
+
+@dataclass
+class Binding:
+    """A robot binding, loaded and checked (see the module's docstring)."""
+
+    name: str
+    robot: str
+    file: str
+    tasks: dict[str, TaskBinding]
+    facts: list[FactSource] = field(default_factory=list)
+    speech: list[SpeechSource] = field(default_factory=list)
+    codes: dict[str, int] = field(default_factory=dict)
+    doc: str = ""
+    notes: list[Problem] = field(default_factory=list)
+    """Types that cannot be imported here, each at its place in the file."""
+
+
+def import_interface(name: str) -> Any | None:
+    """The Python class of ``package/msg|srv|action/Name``, or None when its package is
+    not installed here."""
+    package, kind, cls = name.split("/")
+    try:
+        module = importlib.import_module(f"{package}.{kind}")
+    except ImportError:
+        return None
+    return getattr(module, cls, None)
+
+
+def field_type(cls: Any, path: str) -> str | None:
+    """The type of field ``a.b.c`` of a message class (as rosidl names it), or None
+    when it has no such field."""
+    current, kind = cls, None
+    for part in path.split("."):
+        if current is None:
+            return None
+        fields = current.get_fields_and_field_types()
+        if part not in fields:
+            return None
+        kind = fields[part]
+        current = _nested(kind)
+    return kind
+
+
+def _nested(kind: str) -> Any | None:
+    """The class of a nested message type ``pkg/Name`` (None for a primitive or sequence)."""
+    if "/" not in kind or kind.startswith("sequence<"):
+        return None
+    package, name = kind.split("/")
+    return import_interface(f"{package}/msg/{name}")
+
+
+def templates(value: Any) -> list[str]:
+    """The templates (the text between braces) of a binding value."""
+    return TEMPLATE.findall(value) if isinstance(value, str) else []
+
+
+def load_binding(path: str | os.PathLike[str], *, atomic: dict[str, tuple[str, ...]] | None = None
+                 ) -> Binding:
+    """Read and check a binding (raises :class:`~userfiles.errors.FileError` with every
+    problem).  ``atomic`` is the recipe library's atomic tasks and their parameters
+    (the built-in library's by default)."""
+    from shary.io import schema
+
+    if atomic is None:
+        atomic = builtin_atomic()
+    return read(path, schema.validator("robot-binding"),
+                lambda reader: _meaning(reader, atomic))
+
+
+def builtin_atomic() -> dict[str, tuple[str, ...]]:
+    """The built-in recipe library's atomic tasks and their parameters."""
+    from shary.io.recipes import load_library
+
+    return {name: tuple(task.params) for name, task in load_library().atomic.items()}
+
+
+def _meaning(reader: Reader, atomic: dict[str, tuple[str, ...]]) -> Binding:
+    data = reader.data
+    notes: list[Problem] = []
+    codes = dict(data.get("codes") or {})
+    tasks: dict[str, TaskBinding] = {}
+    for name, raw in (data.get("tasks") or {}).items():
+        where = ("tasks", name)
+        if name not in atomic:
+            from userfiles.schema import did_you_mean
+            reader.problem(where, f"{name!r} is not an atomic task of the recipe library "
+                           f"({', '.join(sorted(atomic))}){did_you_mean(name, atomic)}", key=True)
+            continue
+        kind = next(k for k in ("action", "service", "topic") if k in raw)
+        deadlines = dict(DEFAULT_DEADLINES)
+        for phase, value in (raw.get("deadlines") or {}).items():
+            deadlines[phase] = reader.duration((*where, "deadlines", phase), value)
+        cls = _interface(reader, notes, (*where, "type"), raw["type"], kind)
+        goal_cls = _part(cls, kind, "Goal" if kind == "action" else "Request")
+        for key, value in (raw.get("goal") or {}).items():
+            _check_goal_value(reader, (*where, "goal", key), value, atomic[name], codes)
+            if goal_cls is not None and field_type(goal_cls, key) is None:
+                reader.problem((*where, "goal", key), f"{raw['type']} has no goal field {key!r}",
+                               key=True)
+        if kind != "action" and "feedback" in raw:
+            reader.problem((*where, "feedback"), f"a {kind} has no feedback: only an action has",
+                           key=True)
+        result_cls = _part(cls, kind, "Result" if kind == "action" else "Response")
+        feedback_cls = _part(cls, kind, "Feedback")
+        _check_fields(reader, (*where, "feedback"), raw.get("feedback", ""), feedback_cls)
+        _check_fields(reader, (*where, "reason"), raw.get("reason", ""), result_cls)
+        for key in raw.get("succeeded-if") or {}:
+            if result_cls is not None and field_type(result_cls, key) is None:
+                reader.problem((*where, "succeeded-if", key),
+                               f"{raw['type']} has no result field {key!r}", key=True)
+        tasks[name] = TaskBinding(name, kind, raw[kind], raw["type"], dict(raw.get("goal") or {}),
+                                  deadlines, raw.get("feedback", ""),
+                                  dict(raw.get("succeeded-if") or {}), raw.get("reason", ""))
+    facts = []
+    for i, raw in enumerate(data.get("facts") or []):
+        where = ("facts", i)
+        cls = _interface(reader, notes, (*where, "type"), raw["type"], "msg")
+        if raw.get("each") and cls is not None and field_type(cls, raw["each"]) is None:
+            reader.problem((*where, "each"), f"{raw['type']} has no field {raw['each']!r}")
+        if raw.get("lines") and cls is not None and field_type(cls, raw["lines"]) != "string":
+            reader.problem((*where, "lines"), f"{raw['type']} has no string field "
+                           f"{raw['lines']!r}")
+        for j, triple in enumerate(raw.get("facts") or []):
+            for k, part in enumerate(triple):
+                _check_fields(reader, (*where, "facts", j, k), part, cls, each=raw.get("each"))
+        stale = reader.duration((*where, "stale"), raw["stale"]) if "stale" in raw else None
+        facts.append(FactSource(raw["topic"], raw["type"],
+                                tuple(tuple(t) for t in raw.get("facts") or []),
+                                raw.get("each", ""), raw.get("lines", ""), stale))
+    speech = []
+    for i, raw in enumerate(data.get("speech") or []):
+        where = ("speech", i)
+        cls = _interface(reader, notes, (*where, "type"), raw["type"], "msg")
+        if cls is not None and field_type(cls, raw["text"]) != "string":
+            reader.problem((*where, "text"), f"{raw['type']} has no string field {raw['text']!r}")
+        _check_fields(reader, (*where, "speaker"), raw.get("speaker", ""), cls)
+        speech.append(SpeechSource(raw["topic"], raw["type"], raw["text"], raw.get("speaker", "")))
+    return Binding(data["binding"], data["robot"], reader.file, tasks, facts, speech, codes,
+                   data.get("doc", ""), notes)
+
+
+def _interface(reader: Reader, notes: list[Problem], where: tuple, name: str,
+               kind: str) -> Any | None:
+    """The type's class, a problem when it is of the wrong kind, a note when absent here."""
+    expected = {"action": "action", "service": "srv", "topic": "msg", "msg": "msg"}[kind]
+    if name.split("/")[1] != expected:
+        reader.problem(where, f"{name} is not a {expected} type (a {kind} needs "
+                       f"package/{expected}/Name)")
+        return None
+    cls = import_interface(name)
+    if cls is None:
+        notes.append(reader.located.problem(where, f"{name} is not installed here (package "
+                                                   f"{name.split('/')[0]!r}): its fields are "
+                                                   "checked on a machine that has it"))
+    return cls
+
+
+def _part(cls: Any, kind: str, part: str) -> Any | None:
+    if cls is None:
+        return None
+    if kind == "topic":
+        return cls if part in ("Goal", "Request") else None
+    return getattr(cls, part, None)
+
+
+def _check_goal_value(reader: Reader, where: tuple, value: Any, params: tuple[str, ...],
+                      codes: dict[str, int]) -> None:
+    for text in templates(value):
+        m = _PARAM.match(text)
+        if m is None:
+            reader.problem(where, f"{{{text}}} is not a template (write {{PARAM}}, "
+                           "{code:PARAM} or {fact:PARAM:PREDICATE[:INDEX]})")
+            continue
+        param = m.group(2) or m.group(4) or m.group(7)
+        if param not in params:
+            reader.problem(where, f"{{{text}}} names {param!r}, which is not a parameter of "
+                           f"the task ({', '.join(params) or 'it has none'})")
+        if m.group(1) and not codes:
+            reader.problem(where, f"{{{text}}} needs the names numbered in 'codes:'")
+
+
+def _check_fields(reader: Reader, where: tuple, value: Any, cls: Any, *,
+                  each: str | None = None) -> None:
+    for text in templates(value):
+        if not _FIELD.match(text):
+            reader.problem(where, f"{{{text}}} is not a field path (a.b.c)")
+        elif text.split(".")[0] == "item":
+            if not each:
+                reader.problem(where, f"{{{text}}} needs 'each:' (the sequence it is an "
+                               "element of)")
+        elif cls is not None and field_type(cls, text) is None:
+            reader.problem(where, f"the message has no field {text!r}")
+
+
+def shipped_bindings() -> list[Path]:
+    """The example bindings that ship with shary (``shary/ros/bindings/``)."""
+    return sorted((Path(__file__).parent / "bindings").glob("*.yaml"))
+
+
+def _check_bindings(files: list[Path], context: Any) -> list[Problem]:
+    from userfiles.errors import FileError
+
+    problems: list[Problem] = []
+    for path in files:
+        try:
+            binding = load_binding(path)
+        except FileError as err:
+            problems.extend(err.problems)
+            continue
+        context.notes.extend(binding.notes)
+    return problems
+
+
+def _kinds() -> tuple[Any, ...]:
+    from shary.filekinds import FileKind
+
+    return (FileKind("robot-binding", _check_bindings, 5, detect=lambda d: "binding" in d,
+                     keys="binding:", shipped=shipped_bindings),)
+
+
+KINDS = _kinds()
+"""The kind of file ``shary validate`` learns from this module (entry point
+``shary.file_kinds``)."""

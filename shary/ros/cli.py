@@ -1,0 +1,105 @@
+"""``shary ros BINDING``: run the supervisor on a robot, reaching it only through ROS 2.
+
+The supervisor runs on the wall clock with the built-in recipe library; its
+executors, perception and speech are the binding's (:mod:`shary.ros.bridge`);
+other nodes ask it for tasks over ``~/run_task`` and it shows its state on
+``~/snapshot``, ``~/active_state``, ``/diagnostics`` and ``~/markers``
+(docs/ros2.md).  ``--task`` starts one task at once; ``--facts`` loads what
+the robot knows beforehand (a Turtle file: places' positions, kinds of
+things).  Ctrl-C (or SIGTERM) stops it cleanly: the node's entities destroyed,
+its thread joined, the log written.
+"""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+from pathlib import Path
+from typing import Any
+
+from shary.terminal import EXIT_BAD_INPUT, error, print_problems
+from shary.terminal import out as _out
+
+
+def add_ros(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("ros", help="run the supervisor on a ROS 2 robot described by a "
+                       "binding file (pip install '.[ros]')",
+                       description="Run the supervisor as a ROS 2 node: the binding's actions, "
+                       "services and topics perform atomic tasks and bring facts and speech; "
+                       "other nodes ask for tasks on ~/run_task.")
+    p.add_argument("binding", type=Path, metavar="BINDING", help="a robot binding (.yaml)")
+    p.add_argument("--task", metavar="NAME", help="start this task at once")
+    p.add_argument("--with", dest="params", action="append", default=[], metavar="PARAM=VALUE",
+                   help="a parameter of --task (repeat for each)")
+    p.add_argument("--facts", type=Path, metavar="FILE.ttl",
+                   help="what the robot knows beforehand (Turtle)")
+    p.add_argument("--log", type=Path, metavar="LOG.sqlite", help="write the context log here")
+    p.add_argument("--seconds", type=float, metavar="S",
+                   help="stop after S seconds (default: run until Ctrl-C)")
+    p.add_argument("--node-name", default="shary", metavar="NAME", help="the node's name")
+    p.set_defaults(func=cmd_ros)
+
+
+def cmd_ros(args: argparse.Namespace) -> int:
+    from shary.facts import FactDatabase
+    from shary.io.recipes import load_library
+    from shary.log import ContextLog
+    from shary.loop import EventLoop, WallClock
+    from shary.ros.binding import load_binding
+    from shary.ros.bridge import Fanout, RosSupervision
+    from shary.ros.node import RosNode
+    from shary.supervisor import Supervisor
+    from userfiles.errors import FileError
+
+    params: dict[str, Any] = {}
+    for item in args.params:
+        key, sep, value = item.partition("=")
+        if not sep or not key:
+            return error(f"--with {item!r}: write PARAM=VALUE")
+        params[key] = value
+    try:
+        binding = load_binding(args.binding)
+        facts = FactDatabase()
+        if args.facts is not None:
+            facts.load_turtle(args.facts)
+    except FileError as err:
+        print_problems(err.problems)
+        return EXIT_BAD_INPUT
+    from shary.ros.env import reexec_with_libraries, unavailable
+
+    if Path(sys.argv[0]).name in ("shary", "__main__.py"):  # the program, not main() in-process
+        reexec_with_libraries()
+    problem = unavailable()
+    if problem is not None:
+        return error(problem)
+    library = load_library()
+    if args.task is not None and args.task not in library.tasks:
+        return error(f"no task {args.task!r} (known: {', '.join(sorted(library.tasks))})")
+    log = ContextLog(args.log) if args.log is not None else None
+    fanout = Fanout(log)
+    loop = EventLoop(WallClock())
+    sup = Supervisor(library, facts, robot=binding.robot, loop=loop, log=fanout)
+    facts.log_changes(sup.record)
+    node = RosNode(args.node_name)
+    stopping: list[int] = []
+    previous = signal.signal(signal.SIGTERM, lambda *_: stopping.append(1))
+    try:
+        RosSupervision(sup, binding, node, fanout=fanout)
+        _out.print(f"shary is node /{args.node_name} on robot {binding.robot} "
+                   f"({binding.name}); Ctrl-C stops it")
+        if args.task is not None:
+            sup.start_task(args.task, params)
+        end = loop.now() + args.seconds if args.seconds is not None else None
+        while not stopping and (end is None or loop.now() < end):
+            loop.run_for(0.1)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+        node.close()
+        if log is not None:
+            log.flush()
+            log.close()
+    _out.print("shary stopped")
+    return 0

@@ -1,0 +1,350 @@
+"""Executors that perform atomic tasks as ROS 2 actions, services and topics.
+
+:class:`RosExecutors` fills shary's executor port (``start(request,
+reporter)``, ``cancel(request)``) from a robot binding.  Each goal ends in one
+ROS outcome, logged as a ``ros-goal`` row and given to the supervisor as done,
+failed (the outcome first in the reason) or cancelled:
+
+``succeeded``           the result is SUCCEEDED (and matches ``succeeded-if``);
+``aborted``             the server aborted it, or its result says it failed;
+``canceled``            the server cancelled it without being asked;
+``rejected``            the server refused the goal;
+``server unavailable``  no server within the ``server`` deadline (0: checked
+                        once, before sending: fail fast, as BehaviorTree.ROS2);
+``ack timeout``         no acceptance within the ``ack`` deadline;
+``exec timeout``        no result within the ``exec`` deadline;
+``invalid goal``        the goal cannot be built (a fact the robot lacks).
+
+shary owns every deadline: a goal sent to an absent server hangs without an
+error, and a server killed with SIGKILL still looks ready for 20 s (the DDS
+lease) while its result never comes (docs/ros2.md).
+
+Cancelling (a scheme stops or suspends the act) reports ``cancelled`` at once
+and reaches the server: a goal that is running is cancelled now, one not yet
+acknowledged is cancelled as soon as it is (the orphaned goals of Nav2 and
+BehaviorTree.ROS2), and a goal that timed out is cancelled too.  Cancelling is
+idempotent.  Whether the server confirmed is logged (``ros-cancel`` rows: the
+server's answer, then ``confirmed`` or ``unconfirmed`` after the ``cancel``
+deadline).  Feedback becomes ``exec-progress`` rows.
+
+All rclpy calls run on the node's executor thread (:meth:`RosNode.post`); the
+engine-side methods below run on the supervisor's loop only.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from shary.ros import messages
+from shary.ros.binding import Binding, TaskBinding, import_interface
+from shary.ros.node import RosNode
+
+SERVER_POLL = 0.05
+"""Seconds between two looks for a server while the ``server`` deadline runs."""
+SUCCEEDED, CANCELED, ABORTED = 4, 5, 6
+"""``action_msgs/GoalStatus`` codes."""
+
+
+@dataclass(eq=False)
+class _Goal:
+    request: Any
+    reporter: Any
+    task: TaskBinding
+    message: Any
+    since: float
+    phase: str = "server"
+    """``server``, ``ack``, ``running``, then ``over`` once ROS has nothing more to say."""
+    handle: Any = None
+    """The rclpy goal handle: only touched on the executor's thread."""
+    timer: Any = None
+    reported: bool = False
+    cancel_wanted: bool = False
+    cancel_sent: bool = False
+    attempting: bool = False
+    """A send attempt is on the executor's thread (its answer will come)."""
+
+
+class RosExecutors:
+    """The robot's atomic tasks on the interfaces of a binding (see the module's docstring)."""
+
+    def __init__(self, node: RosNode, binding: Binding, loop: Any, *,
+                 record: Callable[..., Any] | None = None,
+                 fact: Callable[[str, str], Any] | None = None):
+        self.node = node
+        self.binding = binding
+        self.loop = loop
+        self.record = record or (lambda *args, **data: None)
+        self.fact = fact
+        """``fact(subject, predicate)``: what goals' ``{fact:…}`` templates read."""
+        self._entities: dict[str, Any] = {}
+        self._types: dict[str, Any] = {}
+        self._goals: dict[str, _Goal] = {}
+        shared: dict[tuple[str, str, str], Any] = {}
+        """One client per interface: atomic tasks bound to the same action share it (each
+        client hears every status and feedback message of its action)."""
+        for atomic, task in binding.tasks.items():
+            cls = import_interface(task.type)
+            if cls is None:
+                continue  # a type not installed here: start() says so
+            self._types[atomic] = cls
+            key = (task.kind, task.name, task.type)
+            if key not in shared:
+                if task.kind == "action":
+                    shared[key] = node.action_client(cls, task.name)
+                elif task.kind == "service":
+                    shared[key] = node.service_client(cls, task.name)
+                else:
+                    shared[key] = node.publisher(cls, task.name)
+            self._entities[atomic] = shared[key]
+
+    def register(self, registry: Any) -> None:
+        """Fill ``registry`` (an :class:`~shary.executors.ExecutorRegistry`) with these."""
+        for atomic in self.binding.tasks:
+            registry.register(atomic, self)
+
+    # -- the executor port -------------------------------------------------------------
+
+    def start(self, request: Any, reporter: Any) -> None:
+        task = self.binding.tasks.get(request.atomic)
+        if request.agent != self.binding.robot or task is None:
+            reporter.failed(request, f"the binding {self.binding.name} has no "
+                            f"{request.atomic} for {request.agent}")
+            return
+        if request.atomic not in self._types:
+            reporter.failed(request, f"server unavailable: {task.type} is not installed here")
+            return
+        cls = self._types[request.atomic]
+        part = {"action": "Goal", "service": "Request"}.get(task.kind)
+        try:
+            message = messages.build(getattr(cls, part) if part else cls, task.goal,
+                                     request.args, codes=self.binding.codes, fact=self.fact)
+        except (messages.TemplateError, ValueError, TypeError, AssertionError) as err:
+            reporter.failed(request, f"invalid goal: {err}")
+            return
+        goal = _Goal(request, reporter, task, message, self.loop.now())
+        if task.kind == "topic":
+            self.node.post(self._entities[request.atomic].publish, message)
+            self._end(goal, "done", "succeeded", f"published on {task.name}")
+            return
+        self._goals[request.id] = goal
+        self._try_send(goal)
+
+    def cancel(self, request: Any) -> None:
+        goal = self._goals.get(request.id)
+        if goal is None or goal.reported:
+            return  # idempotent: an ended or cancelled goal stays as it is
+        goal.cancel_wanted = True
+        if goal.task.kind == "service":
+            self._stop_timer(goal)
+            detail = "cancelled; a service call cannot be stopped: its answer is ignored"
+        elif goal.phase == "running" and goal.handle is not None:
+            self._send_cancel(goal)
+            detail = f"cancelled; the cancel is sent to {goal.task.name}"
+        elif goal.phase in ("ack", "running"):  # cancelled once acknowledged (_acknowledged)
+            detail = f"cancelled; the cancel reaches {goal.task.name} once it acknowledges"
+        else:  # its server was missing: no attempt on its way, or one that may send it
+            self._stop_timer(goal)
+            if not goal.attempting:
+                goal.phase = "over"
+                self._forget(goal)
+            detail = "cancelled before the goal was acknowledged"
+        self._end(goal, "cancelled", "canceled", detail)
+
+    # -- phases (on the supervisor's loop) -------------------------------------------------
+
+    def _try_send(self, goal: _Goal) -> None:
+        """Send the goal if its server is there, in one visit to the executor's thread
+        (the server check, the send, and on acceptance the request for the result)."""
+        entity = self._entities[goal.request.atomic]
+        node, kind = self.node, goal.task.kind
+        goal.attempting = True
+
+        def attempt() -> None:
+            if not (entity.server_is_ready() if kind == "action" else entity.service_is_ready()):
+                node.put(self._server_missing, goal)
+                return
+            if kind == "service":
+                future = entity.call_async(goal.message)
+                future.add_done_callback(lambda f: node.put(self._responded, goal, f.result()))
+                return
+            future = entity.send_goal_async(
+                goal.message, feedback_callback=lambda f: node.put(self._feedback, goal,
+                                                                   f.feedback, wake=False))
+            future.add_done_callback(acknowledged)
+
+        def acknowledged(future: Any) -> None:
+            handle = future.result()
+            # an accepted goal needs the engine at once only if it was cancelled meanwhile
+            # (the flag is the engine's, read after the event is queued: no cancel missed)
+            node.put(self._acknowledged, goal, handle, wake=not handle.accepted)
+            if goal.cancel_wanted:
+                node.wake()
+            if handle.accepted:
+                handle.get_result_async().add_done_callback(
+                    lambda f: node.put(self._result, goal, f.result()))
+
+        # as if sent: the deadline of the next phase runs from the attempt (a missing
+        # server comes back as _server_missing, which takes the goal back)
+        if kind == "service":
+            goal.phase = "running"
+            goal.timer = self.loop.call_later(goal.task.deadlines["exec"], self._exec_timeout,
+                                              goal)
+        else:
+            goal.phase = "ack"
+            goal.timer = self.loop.call_later(goal.task.deadlines["ack"], self._ack_timeout,
+                                              goal)
+        node.post(attempt)
+
+    def _server_missing(self, goal: _Goal) -> None:
+        goal.attempting = False
+        self._stop_timer(goal)
+        goal.phase = "server"
+        if goal.reported:  # cancelled while its server was looked for
+            goal.phase = "over"
+            self._forget(goal)
+            return
+        waited = self.loop.now() - goal.since
+        if waited + SERVER_POLL <= goal.task.deadlines["server"]:
+            goal.timer = self.loop.call_later(SERVER_POLL, self._try_send, goal)
+            return
+        goal.phase = "over"
+        self._forget(goal)
+        self._end(goal, "failed", "server unavailable",
+                  f"no {goal.task.kind} server {goal.task.name} "
+                  + (f"within {goal.task.deadlines['server']:g} s"
+                     if goal.task.deadlines["server"] > 0 else "(checked before sending)"))
+
+    def _acknowledged(self, goal: _Goal, handle: Any) -> None:
+        self._stop_timer(goal)
+        goal.handle = handle  # kept for the executor's thread, which alone uses it
+        if not handle.accepted:
+            goal.phase = "over"
+            self._forget(goal)
+            self._end(goal, "failed", "rejected", f"{goal.task.name} rejected the goal")
+            return
+        goal.phase = "running"
+        if goal.cancel_wanted:  # cancelled or timed out before the acknowledgement
+            self.record("ros-cancel", task=goal.request.node, agent=goal.request.agent,
+                        request=goal.request.id, action=goal.task.name,
+                        state="sent after the acknowledgement")
+            self._send_cancel(goal)
+            return
+        goal.timer = self.loop.call_later(goal.task.deadlines["exec"], self._exec_timeout, goal)
+
+    def _feedback(self, goal: _Goal, feedback: Any) -> None:
+        if goal.reported or not goal.task.feedback:
+            return
+        self.record("exec-progress", task=goal.request.node, agent=goal.request.agent,
+                    request=goal.request.id, text=messages.text(goal.task.feedback, feedback))
+
+    def _result(self, goal: _Goal, wrapped: Any) -> None:
+        self._stop_timer(goal)
+        goal.phase = "over"
+        self._forget(goal)
+        status, result = wrapped.status, wrapped.result
+        if goal.reported:  # cancelled or timed out earlier: say how it ended at the server
+            if goal.cancel_sent:
+                self.record("ros-cancel", task=goal.request.node, agent=goal.request.agent,
+                            request=goal.request.id, action=goal.task.name,
+                            state="confirmed" if status == CANCELED else f"ended {status}")
+            return
+        self._judge(goal, status, result)
+
+    def _responded(self, goal: _Goal, response: Any) -> None:
+        self._stop_timer(goal)
+        goal.phase = "over"
+        self._forget(goal)
+        if not goal.reported:
+            self._judge(goal, SUCCEEDED, response)
+
+    def _judge(self, goal: _Goal, status: int, result: Any) -> None:
+        task = goal.task
+        why = messages.text(task.reason, result) if task.reason else ""
+        if status == SUCCEEDED:
+            wrong = messages.matches(result, task.succeeded_if)
+            if not wrong:
+                self._end(goal, "done", "succeeded", "")
+            else:
+                self._end(goal, "failed", "aborted", why or f"{task.name} answered "
+                          f"{', '.join(wrong)}")
+        elif status == ABORTED:
+            self._end(goal, "failed", "aborted", why or f"{task.name} aborted the goal")
+        elif status == CANCELED:
+            self._end(goal, "failed", "canceled", f"{task.name} cancelled the goal")
+        else:
+            self._end(goal, "failed", "aborted", f"{task.name} ended the goal with status "
+                      f"{status}")
+
+    def _ack_timeout(self, goal: _Goal) -> None:
+        goal.timer = None
+        if goal.reported or goal.phase != "ack":
+            return
+        goal.cancel_wanted = True  # should it be accepted after all, it is cancelled then
+        self._end(goal, "failed", "ack timeout", f"{goal.task.name} did not acknowledge the "
+                  f"goal within {goal.task.deadlines['ack']:g} s")
+
+    def _exec_timeout(self, goal: _Goal) -> None:
+        goal.timer = None
+        if goal.reported or goal.phase != "running":
+            return
+        if goal.task.kind == "action":
+            self._send_cancel(goal)
+        self._end(goal, "failed", "exec timeout", f"no result from {goal.task.name} within "
+                  f"{goal.task.deadlines['exec']:g} s")
+
+    def _send_cancel(self, goal: _Goal) -> None:
+        if goal.cancel_sent:
+            return
+        goal.cancel_sent = True
+        self._stop_timer(goal)
+
+        def cancel() -> None:
+            if goal.handle is None:
+                return
+            future = goal.handle.cancel_goal_async()
+            future.add_done_callback(lambda f: self.node.put(self._cancel_answered, goal,
+                                                             f.result()))
+
+        self.node.post(cancel)
+        goal.timer = self.loop.call_later(goal.task.deadlines["cancel"], self._unconfirmed, goal)
+
+    def _cancel_answered(self, goal: _Goal, response: Any) -> None:
+        self.record("ros-cancel", task=goal.request.node, agent=goal.request.agent,
+                    request=goal.request.id, action=goal.task.name,
+                    state="accepted" if response.goals_canceling else
+                    f"refused (code {response.return_code})")
+
+    def _unconfirmed(self, goal: _Goal) -> None:
+        goal.timer = None
+        if goal.phase != "over":
+            self.record("ros-cancel", task=goal.request.node, agent=goal.request.agent,
+                        request=goal.request.id, action=goal.task.name, state="unconfirmed")
+
+    # -- bookkeeping ---------------------------------------------------------------------
+
+    def _end(self, goal: _Goal, status: str, outcome: str, detail: str) -> None:
+        """Report the goal's one outcome (later news of it is only logged)."""
+        if goal.reported:
+            return
+        goal.reported = True
+        request, reporter = goal.request, goal.reporter
+        reason = f"{outcome}: {detail}" if detail and status == "failed" else detail
+        self.record("ros-goal", task=request.node, agent=request.agent, request=request.id,
+                    interface=goal.task.name, outcome=outcome, reason=reason or None)
+        if status == "done":
+            reporter.done(request)
+        elif status == "failed":
+            reporter.failed(request, reason)
+        else:
+            reporter.cancelled(request, detail)
+
+    def _stop_timer(self, goal: _Goal) -> None:
+        if goal.timer is not None:
+            goal.timer.cancel()
+            goal.timer = None
+
+    def _forget(self, goal: _Goal) -> None:
+        if goal.phase == "over" and self._goals.get(goal.request.id) is goal:
+            del self._goals[goal.request.id]

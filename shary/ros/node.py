@@ -1,0 +1,196 @@
+"""The one ROS 2 node of a shary process, its executor thread and its inbox.
+
+Threading follows what was measured with the Jazzy wheels (docs/ros2.md): one
+``Node`` and one ``SingleThreadedExecutor`` spinning in a daemon thread of its
+own.  The engine's loop never touches an rclpy object: it *posts* work to the
+executor (:meth:`RosNode.post`, which is ``executor.create_task``, the
+executor's thread-safe entry), and every ROS callback only *puts an event* on
+the inbox, a ``queue.Queue`` of ``(function, args)`` that the engine's loop
+drains (:meth:`RosNode.attach`).  Goals are then sent and answered on one
+thread, which avoids the wheels' races between threads (rclpy#1123 in Jazzy's
+``ActionClient``); ``EventsExecutor`` is not used (it deadlocked here).
+
+Shutdown is ordered as rclpy needs it: action clients and servers destroyed on
+the executor's thread (``destroy_node`` does not destroy them), then the node,
+the executor stopped, the context shut down, and the thread joined, so that no
+thread is left behind.
+"""
+
+from __future__ import annotations
+
+import queue
+import threading
+from collections import deque
+from collections.abc import Callable
+from typing import Any
+
+from shary.ros.env import keep_on_host
+
+
+class RosNode:
+    """One node, one executor thread, one inbox (see the module's docstring)."""
+
+    def __init__(self, name: str = "shary", *, domain_id: int | None = None,
+                 namespace: str | None = None):
+        keep_on_host()
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+
+        self._rclpy = rclpy
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context, domain_id=domain_id)
+        self.node = rclpy.create_node(name, context=self.context, namespace=namespace)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self._outbox: deque[tuple[Callable[..., Any], tuple]] = deque()
+        self.inbox: queue.SimpleQueue[tuple[Callable[..., Any], tuple]] = queue.SimpleQueue()
+        self.waitables: list[Any] = []
+        """Action clients and servers, destroyed before the node (rclpy does not)."""
+        self._loop: Any = None
+        self._closed = False
+        self._thread = threading.Thread(target=self._spin, name=f"ros-{name}", daemon=True)
+        self._thread.start()
+
+    def _spin(self) -> None:
+        from rclpy.executors import ExternalShutdownException
+
+        try:
+            self.executor.spin()
+        except (ExternalShutdownException, KeyboardInterrupt):
+            pass
+
+    # -- the two directions ----------------------------------------------------------
+
+    def post(self, work: Callable[..., Any], *args: Any) -> None:
+        """Run ``work(*args)`` on the executor's thread, after the work posted before it:
+        the only way the engine acts on ROS.  (The executor runs its pending tasks last
+        in, first out; the outbox keeps the engine's order: a goal's cancel after its
+        send, a state's publication after the one before.)"""
+        if not self._closed:
+            self._outbox.append((work, args))
+            self.executor.create_task(self._run_outbox)
+
+    def _run_outbox(self) -> None:
+        while self._outbox:
+            work, args = self._outbox.popleft()
+            try:
+                work(*args)
+            except Exception as err:  # noqa: BLE001 -- raised again on the engine's loop
+                self.put(_raise, err)
+
+    def put(self, handler: Callable[..., Any], *args: Any, wake: bool = True) -> None:
+        """From a ROS callback: have ``handler(*args)`` run on the engine's loop (with
+        ``wake=False``, when the loop next wakes: news that can wait)."""
+        loop = self._loop
+        if loop is not None:
+            loop.call_soon_threadsafe(handler, *args, wake=wake)
+        else:
+            self.inbox.put((handler, args))
+
+    def wake(self) -> None:
+        """From a ROS callback: wake the engine's loop (for events put quietly)."""
+        if self._loop is not None:
+            self._loop.wake()
+
+    def drain(self) -> int:
+        """Run every event waiting in the inbox (on the caller's thread); how many ran."""
+        ran = 0
+        while True:
+            try:
+                handler, args = self.inbox.get_nowait()
+            except queue.Empty:
+                return ran
+            handler(*args)
+            ran += 1
+
+    def attach(self, loop: Any) -> None:
+        """Deliver events to ``loop`` (an :class:`~shary.loop.EventLoop`) from now on,
+        starting with those waiting in the inbox."""
+        self._loop = loop
+        self.drain()
+
+    def call(self, work: Callable[..., Any], *args: Any, timeout: float = 10.0) -> Any:
+        """Run ``work(*args)`` on the executor's thread and wait for its value: for
+        set-up and shutdown (creating entities), never from the engine's running loop."""
+        done = threading.Event()
+        box: list[Any] = []
+
+        def run() -> None:
+            try:
+                box.append((True, work(*args)))
+            except BaseException as err:  # noqa: BLE001 -- handed back to the caller
+                box.append((False, err))
+            finally:
+                done.set()
+
+        self.post(run)
+        if not done.wait(timeout):
+            raise TimeoutError(f"the ROS executor did not run {work!r} within {timeout:g} s")
+        ok, value = box[0]
+        if not ok:
+            raise value
+        return value
+
+    # -- entities (created on the executor's thread) ------------------------------------
+
+    def action_client(self, cls: Any, name: str) -> Any:
+        from rclpy.action import ActionClient
+
+        client = self.call(ActionClient, self.node, cls, name)
+        self.waitables.append(client)
+        return client
+
+    def action_server(self, cls: Any, name: str, **callbacks: Any) -> Any:
+        from rclpy.action import ActionServer
+
+        server = self.call(lambda: ActionServer(self.node, cls, name, **callbacks))
+        self.waitables.append(server)
+        return server
+
+    def service_client(self, cls: Any, name: str) -> Any:
+        return self.call(self.node.create_client, cls, name)
+
+    def publisher(self, cls: Any, topic: str, *, latched: bool = False, depth: int = 10) -> Any:
+        from rclpy.qos import DurabilityPolicy, QoSProfile
+
+        qos = QoSProfile(depth=1 if latched else depth)
+        if latched:
+            qos.durability = DurabilityPolicy.TRANSIENT_LOCAL
+        return self.call(self.node.create_publisher, cls, topic, qos)
+
+    def subscription(self, cls: Any, topic: str, callback: Callable[[Any], Any], *,
+                     depth: int = 100) -> Any:
+        """A subscription whose callback runs on the executor's thread (it must only
+        :meth:`put` events)."""
+        return self.call(self.node.create_subscription, cls, topic, callback, depth)
+
+    # -- shutdown -----------------------------------------------------------------------
+
+    def close(self, timeout: float = 5.0) -> None:
+        """Destroy everything and join the executor's thread (idempotent)."""
+        if self._closed:
+            return
+
+        def destroy() -> None:
+            for waitable in self.waitables:
+                waitable.destroy()
+            self.node.destroy_node()
+
+        try:
+            self.call(destroy, timeout=timeout)
+        finally:
+            self._closed = True
+            self.executor.shutdown(timeout_sec=timeout)
+            self._rclpy.try_shutdown(context=self.context)
+            self._thread.join(timeout)
+
+    def __enter__(self) -> RosNode:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _raise(err: Exception) -> None:
+    """An error of work posted to the executor, raised where the engine sees it."""
+    raise err

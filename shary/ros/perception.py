@@ -1,0 +1,134 @@
+"""Perception and people from ROS 2 topics: facts, staleness, and what people say.
+
+:class:`RosPerception` subscribes to a binding's ``facts`` and ``speech``
+topics.  Each message of a fact topic gives the topic's whole current set of
+facts (templates over its fields, once per element with ``each``, or lines
+``SUBJECT PREDICATE OBJECT``); only the difference with the topic's previous
+set is written to the fact database, in the robot's perspective, so monitors
+and chronicles hear of changes, not of messages (as the simulator's
+perception does).  A topic silent for longer than its ``stale`` time has its
+facts removed: a person no longer tracked is no longer perceived.
+
+A sentence on a speech topic is a person's act: *yes* or *no* is an answer
+(H-AGREE, H-DISAGREE) to the task that expects one; anything else goes to the
+communication manager's requests grammar (``hear``: a request becomes the
+person's ASK-TASK).
+
+Callbacks only put the message on the node's inbox; everything else runs on
+the engine's loop.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from shary.ros import messages
+from shary.ros.binding import Binding, FactSource, SpeechSource, import_interface
+from shary.ros.node import RosNode
+
+Triple = tuple[Any, Any, Any]
+DEPTH = 1000
+"""Messages a topic may queue while the engine is busy (a burst of perception)."""
+ANSWERS = {"yes": "H-AGREE", "yes please": "H-AGREE", "ok": "H-AGREE", "okay": "H-AGREE",
+           "sure": "H-AGREE", "no": "H-DISAGREE", "no thanks": "H-DISAGREE",
+           "no thank you": "H-DISAGREE"}
+"""Sentences that answer the robot's question rather than ask for something."""
+
+
+class RosPerception:
+    """Facts and speech from a binding's topics (see the module's docstring)."""
+
+    def __init__(self, node: RosNode, binding: Binding, facts: Any, loop: Any, *,
+                 perspective: str = "robot",
+                 act: Callable[[str, str], Any] | None = None,
+                 hear: Callable[[str, str], Any] | None = None,
+                 record: Callable[..., Any] | None = None):
+        self.node = node
+        self.facts = facts
+        self.loop = loop
+        self.perspective = perspective
+        self.act = act or (lambda agent, act: None)
+        """``act(agent, act)``: a person's answer (the supervisor's ``receive_act``)."""
+        self.hear = hear or (lambda agent, sentence: None)
+        """``hear(agent, sentence)``: anything else said (the dialogue's ``Initiative.hear``)."""
+        self.record = record or (lambda *args, **data: None)
+        self.published: dict[int, set[Triple]] = {}
+        self.heard_at: dict[int, float] = {}
+        self.messages = 0
+        self.missing: list[str] = []
+        """Topics whose type is not installed here (not subscribed)."""
+        for index, source in enumerate(binding.facts):
+            self._subscribe(source, lambda msg, i=index, s=source: node.put(self._facts, i, s,
+                                                                            msg))
+        for source in binding.speech:
+            self._subscribe(source, lambda msg, s=source: node.put(self._speech, s, msg))
+        stale = [s.stale for s in binding.facts if s.stale is not None]
+        if stale:
+            self._period = min(stale) / 4
+            loop.call_later(self._period, self._check_stale, list(binding.facts))
+
+    def _subscribe(self, source: FactSource | SpeechSource, callback: Callable) -> None:
+        cls = import_interface(source.type)
+        if cls is None:
+            self.missing.append(source.topic)
+            return
+        self.node.subscription(cls, source.topic, callback, depth=DEPTH)
+
+    # -- facts (on the engine's loop) ---------------------------------------------------
+
+    def _facts(self, index: int, source: FactSource, message: Any) -> None:
+        self.messages += 1
+        self.heard_at[index] = self.loop.now()
+        self._publish(index, self.triples(source, message))
+
+    @staticmethod
+    def triples(source: FactSource, message: Any) -> set[Triple]:
+        """The facts one message of ``source`` states."""
+        if source.lines:
+            found = set()
+            for line in str(messages.read_field(message, source.lines) or "").splitlines():
+                parts = line.split(maxsplit=2)
+                if len(parts) == 3:
+                    found.add((parts[0], parts[1], parts[2]))
+            return found
+        items = messages.read_field(message, source.each) if source.each else [None]
+        return {tuple(_part(p, message, item) for p in template)  # type: ignore[misc]
+                for item in items or () for template in source.facts}
+
+    def _publish(self, index: int, now: set[Triple]) -> None:
+        before = self.published.get(index, set())
+        for triple in before - now:
+            self.facts.remove(*triple, perspective=self.perspective)
+        for triple in now - before:
+            self.facts.add(*triple, perspective=self.perspective)
+        self.published[index] = now
+
+    def _check_stale(self, sources: list[FactSource]) -> None:
+        now = self.loop.now()
+        for index, source in enumerate(sources):
+            if (source.stale is not None and self.published.get(index)
+                    and now - self.heard_at.get(index, now) > source.stale):
+                self.record("stale", topic=source.topic, facts=len(self.published[index]))
+                self._publish(index, set())
+        self.loop.call_later(self._period, self._check_stale, sources)
+
+    # -- speech ---------------------------------------------------------------------------
+
+    def _speech(self, source: SpeechSource, message: Any) -> None:
+        sentence = str(messages.read_field(message, source.text) or "").strip()
+        if not sentence:
+            return  # an empty final: nothing was said
+        speaker = messages.text(source.speaker, message) if source.speaker else "someone"
+        answer = ANSWERS.get(sentence.lower().strip(" .!"))
+        if answer is not None:
+            self.record("heard", agent=speaker, text=sentence)
+            self.act(speaker, answer)
+        else:
+            self.hear(speaker, sentence)
+
+
+def _part(template: Any, message: Any, item: Any) -> Any:
+    if not isinstance(template, str) or "{" not in template:
+        return template
+    return messages.text(template, message, item)

@@ -1,0 +1,119 @@
+"""The body's arbiter: one head aim served at a time by priority, the previous aim
+restored, superseded requests told cancelled, one arm motion at a time."""
+
+from __future__ import annotations
+
+from scripted import ScriptedExecutor
+
+from shary.arbiter import ACT, TASK, WATCH, BodyArbiter
+from shary.executors import ExecutorRegistry, Reporter, Request
+from shary.loop import EventLoop
+from shary.tasktree import ACT as ACT_NODE
+from shary.tasktree import ATOMIC, TaskTree
+
+
+class Body:
+    """A tree, a loop, a scripted head and arm behind an arbiter, and what came back."""
+
+    def __init__(self, look: float = 0.5, pick: float = 2.0):
+        self.loop = EventLoop()
+        self.tree = TaskTree()
+        self.rows: list[dict] = []
+        self.executor = ScriptedExecutor(self.loop, {"look-at": look, "pick": pick})
+        self.registry = ExecutorRegistry({"look-at": self.executor, "pick": self.executor})
+        self.registry.arbiter = BodyArbiter(self.tree, self.loop,
+                                            lambda kind, **row: self.rows.append(row))
+        self.results: list[tuple[float, str, str]] = []
+        self._reporter = Reporter(lambda o: self.results.append(
+            (self.loop.now(), o.request.id, o.status)), self.loop.call_soon)
+        self._ids = iter(range(1, 1000))
+
+    def node(self, under_act: bool = False) -> str:
+        parent = self.tree.add(ACT_NODE, "an act", state="ongoing") if under_act else None
+        return self.tree.add(ATOMIC, "a step", parent, state="ongoing")
+
+    def ask(self, atomic: str, target: str, node: str, priority: int) -> str:
+        request = Request(f"q{next(self._ids)}", atomic, {"target": target, "object": target},
+                          "pr2", node, priority)
+        self.registry.dispatch(request, self._reporter, lambda *a, **k: None)
+        return request.id
+
+    def looks(self) -> list[str]:
+        return [args["target"] for _, atomic, args in self.executor.started
+                if atomic == "look-at"]
+
+
+def test_a_higher_aim_is_served_and_the_previous_one_restored_when_it_ends():
+    body = Body()
+    watch = body.node()
+    body.ask("look-at", "stick", watch, WATCH)
+    body.loop.advance(1.0)
+    act = body.tree.parent(speak := body.node(under_act=True))
+    body.ask("look-at", "alice", speak, TASK)
+    body.loop.advance(1.0)
+    assert body.looks() == ["stick", "alice"]
+    body.tree.set_state(act, "done")  # the act that looked, then spoke, is over
+    body.loop.advance(1.0)
+    assert body.looks() == ["stick", "alice", "stick"]
+    assert [r["action"] for r in body.rows] == ["serve", "serve", "release", "restore"]
+    assert [s for _, _, s in body.results] == ["done", "done"]  # a restore has no requester
+
+
+def test_a_request_superseded_while_the_head_moves_is_told_cancelled():
+    body = Body(look=1.0)
+    first = body.ask("look-at", "green_cube", body.node(), ACT)
+    body.loop.advance(0.2)
+    speak = body.node(under_act=True)
+    second = body.ask("look-at", "alice", speak, ACT)  # as high, and newer
+    body.loop.advance(2.0)
+    assert (first, "cancelled") in [(i, s) for _, i, s in body.results]
+    assert (second, "done") in [(i, s) for _, i, s in body.results]
+    assert any(r["action"] == "supersede" for r in body.rows)
+
+
+def test_a_lower_request_waits_for_the_higher_aim_then_gets_its_result():
+    body = Body()
+    acting = body.node()
+    body.ask("look-at", "green_cube", acting, ACT)  # a robot action looks, then acts
+    body.loop.advance(1.0)
+    lower = body.ask("look-at", "alice", body.node(under_act=True), TASK)
+    body.loop.advance(5.0)
+    assert lower not in [i for _, i, _ in body.results]  # no answer while the action holds
+    body.tree.set_state(acting, "done")
+    body.loop.advance(1.0)
+    assert (lower, "done") in [(i, s) for _, i, s in body.results]
+    assert [r["action"] for r in body.rows][:2] == ["serve", "wait"]
+
+
+def test_a_waiting_request_whose_task_ends_is_told_cancelled():
+    body = Body()
+    body.ask("look-at", "green_cube", body.node(), ACT)
+    step = body.node(under_act=True)
+    lower = body.ask("look-at", "alice", step, TASK)
+    body.loop.advance(1.0)
+    body.tree.set_state(body.tree.parent(step), "cancelled")
+    body.loop.advance(1.0)
+    assert (lower, "cancelled") in [(i, s) for _, i, s in body.results]
+
+
+def test_one_arm_motion_at_a_time():
+    body = Body(pick=2.0)
+    first = body.ask("pick", "red_cube_1", body.node(), TASK)
+    second = body.ask("pick", "blue_cube_1", body.node(), TASK)
+    body.loop.advance(1.0)
+    assert [a for _, a, _ in body.executor.started] == ["pick"]  # the second waits
+    body.loop.advance(5.0)
+    assert [i for _, i, s in body.results] == [first, second]
+    starts = [t for t, a, _ in body.executor.started]
+    assert starts[1] >= 2.0
+
+
+def test_a_waiting_arm_motion_cancelled_is_told_so_and_never_starts():
+    body = Body(pick=2.0)
+    body.ask("pick", "red_cube_1", body.node(), TASK)
+    request = Request("late", "pick", {"object": "blue_cube_1"}, "pr2", body.node(), TASK)
+    body.registry.dispatch(request, body._reporter, lambda *a, **k: None)
+    body.registry.get("pick").cancel(request)
+    body.loop.advance(5.0)
+    assert ("late", "cancelled") in [(i, s) for _, i, s in body.results]
+    assert len(body.executor.started) == 1

@@ -1,0 +1,113 @@
+"""The robot binding file: ``shary validate`` checks its shape and meaning, positioned,
+and notes interface types that are not installed here without refusing the file."""
+
+from __future__ import annotations
+
+import json
+
+from conftest import problems
+
+from shary.ros.binding import load_binding, shipped_bindings
+
+
+def test_the_shipped_bindings_are_valid(shary):
+    status, out, err = shary("validate", *shipped_bindings())
+    assert status == 0, err
+    assert out.count("ok") == 2
+    # nav2_msgs, tts_msgs and hri_msgs are not on PyPI: named, as notes, not errors
+    assert "nav2_msgs/action/NavigateToPose is not installed here" in err
+    assert "hri_msgs/msg/LiveSpeech is not installed here" in err
+    assert not problems(err)
+
+
+def test_a_binding_is_loaded_with_its_deadlines_and_templates():
+    jido = load_binding(next(p for p in shipped_bindings() if p.name == "jido-sim.yaml"))
+    navigate = jido.tasks["navigate"]
+    assert (navigate.kind, navigate.name, navigate.type) == (
+        "action", "/jido/navigate", "test_msgs/action/NestedMessage")
+    assert navigate.deadlines["exec"] == 60 and navigate.deadlines["ack"] == 1
+    assert navigate.goal == {"nested_field.int32_value": "{code:place}"}
+    assert jido.tasks["speak"].kind == "topic"
+    assert jido.codes["coffee-area"] == 2 and not jido.notes
+
+
+def test_meaning_errors_are_positioned(shary, write):
+    path = write("robot.yaml", """\
+        binding: bad
+        robot: jido
+        tasks:
+          navigate:
+            action: /nav
+            type: test_msgs/action/Fibonacci
+            goal: {order: "{where}", nothing: 3}
+            deadlines: {exec: 3s}
+          fly:
+            action: /fly
+            type: test_msgs/action/Fibonacci
+          speak:
+            topic: /say
+            type: std_msgs/srv/String
+            feedback: "{data}"
+        facts:
+          - topic: /people
+            type: std_msgs/msg/String
+            facts: [["{item}", type, Human]]
+        """)
+    status, _, err = shary("validate", path)
+    assert status == 2
+    found = {(int(m["line"]), int(m["col"])): m["message"] for m in problems(err)}
+    assert "'where', which is not a parameter of the task (place)" in found[(7, 19)]
+    assert "no goal field 'nothing'" in found[(7, 30)]
+    assert "'fly' is not an atomic task" in found[(9, 3)]
+    assert "std_msgs/srv/String is not a msg type" in found[(14, 11)]
+    assert "a topic has no feedback" in found[(15, 5)]
+    assert "needs 'each:'" in found[(19, 14)]
+    report = json.loads(_json_line(shary, path))
+    assert report["files"][0]["ok"] is False
+
+
+def test_a_schema_error_is_positioned(shary, write):
+    path = write("robot.yaml", """\
+        binding: bad
+        robot: jido
+        tasks:
+          navigate: {action: /nav, type: test_msgs/action/Fibonacci, deadlines: {exec: forever}}
+        """)
+    status, _, err = shary("validate", path)
+    assert status == 2
+    [found] = problems(err)
+    assert (found["line"], found["col"]) == ("4", "80") and "a duration" in found["message"]
+
+
+def test_a_type_that_is_not_installed_is_a_note(shary, write):
+    path = write("robot.yaml", """\
+        binding: hri
+        robot: jido
+        tasks:
+          speak:
+            action: /tts
+            type: tts_msgs/action/TTS
+            goal: {input: "{text}"}
+        """)
+    status, out, err = shary("validate", path)
+    assert status == 0, err
+    assert f"{path}:6:11: note: tts_msgs/action/TTS is not installed here" in err.replace(
+        "\n", "")
+
+
+def _json_line(shary, path) -> str:
+    return shary("validate", path, "--json")[1]
+
+
+def test_a_name_rclpy_would_refuse_is_refused_when_validated(shary, write):
+    path = write("robot.yaml", """\
+        binding: bad
+        robot: jido
+        tasks:
+          navigate: {action: "/nav//to", type: test_msgs/action/Fibonacci}
+        speech:
+          - {topic: "/humans/{id}/speech", type: std_msgs/msg/String, text: data}
+        """)
+    status, _, err = shary("validate", path)
+    assert status == 2
+    assert [(m["line"], m["col"]) for m in problems(err)] == [("4", "22"), ("6", "13")]

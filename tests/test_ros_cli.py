@@ -1,0 +1,29 @@
+"""``shary ros BINDING``: a bad binding is refused with positioned errors; the node runs
+until Ctrl-C and then stops cleanly (no traceback, exit 0)."""
+
+from __future__ import annotations
+
+import signal
+
+from conftest import problems
+from rosfixtures import needs_ros
+
+BINDING = "shary/ros/bindings/jido-sim.yaml"
+
+
+def test_a_bad_binding_is_refused_with_its_position(shary, write):
+    path = write("bad.yaml", "binding: bad\nrobot: jido\ntasks:\n  fly: {topic: /f, type: x}\n")
+    status, _, err = shary("ros", path)
+    assert status == 2
+    assert [(m["line"], m["col"]) for m in problems(err)] == [("4", "26")]
+
+
+@needs_ros
+def test_the_node_stops_cleanly_on_ctrl_c(spawn):
+    process = spawn("-m", "shary", "ros", BINDING)
+    process.wait_for("shary is node /shary on robot jido (jido-sim); Ctrl-C stops it")
+    process.popen.send_signal(signal.SIGINT)
+    assert process.popen.wait(20) == 0
+    process._reader.join(5)
+    assert process.lines[-1] == "shary stopped"
+    assert not any("Traceback" in line for line in process.lines)

@@ -1,0 +1,79 @@
+"""Perception, people and speech through ROS 2 topics, against a robot in another process:
+facts in (only changes reach the database), stale topics, a person's answer and request,
+and the robot's speech out."""
+
+from __future__ import annotations
+
+from rosfixtures import needs_ros, run_until
+
+from shary.executors import Reporter, Request
+from shary.facts import FactDatabase
+from shary.loop import EventLoop, WallClock
+from shary.ros.binding import FactSource, load_binding
+from shary.ros.perception import RosPerception
+
+pytestmark = needs_ros
+
+BINDING = """\
+    binding: test
+    robot: jido
+    tasks:
+      speak: {topic: /robot/say, type: std_msgs/msg/String, goal: {data: "{text}"}}
+    facts:
+      - {topic: /robot/facts, type: std_msgs/msg/String, lines: data, stale: 500ms}
+    speech:
+      - {topic: /robot/heard/alice, type: std_msgs/msg/String, text: data, speaker: alice}
+    """
+
+
+def test_facts_in_stale_facts_out_speech_in_and_out(write, ros_domain, spawn):
+    from shary.ros.executors import RosExecutors
+    from shary.ros.node import RosNode
+
+    binding = load_binding(write("binding.yaml", BINDING))
+    robot = spawn("tests/ros_robot.py", "/robot/say")
+    robot.wait_for("ready")
+    loop, facts = EventLoop(WallClock()), FactDatabase()
+    changes, acts, heard, rows = [], [], [], []
+    facts.subscribe(lambda event: changes.append(event))
+    with RosNode("shary_perception", domain_id=ros_domain) as node:
+        node.attach(loop)
+        RosPerception(node, binding, facts, loop, act=lambda *a: acts.append(a),
+                      hear=lambda *a: heard.append(a),
+                      record=lambda kind, **data: rows.append((kind, data)))
+        executors = RosExecutors(node, binding, loop)
+        robot.send(r"pub /robot/facts alice looksAt jido\nalice isAt sofa-area")
+        run_until(loop, lambda: facts.holds("alice", "looksAt", "jido"))
+        loop.run_for(0.3)  # three more identical messages: no change reaches the database
+        assert len(changes) == 2
+        robot.send("pub /robot/facts alice isAt sofa-area")  # she looks away
+        run_until(loop, lambda: not facts.holds("alice", "looksAt", "jido"))
+        assert facts.holds("alice", "isAt", "sofa-area") and len(changes) == 3
+        robot.send("stop /robot/facts")  # no longer tracked: no longer perceived
+        run_until(loop, lambda: not facts.holds("alice", "isAt", "sofa-area"))
+        assert ("stale", {"topic": "/robot/facts", "facts": 1}) in rows
+
+        robot.send("once /robot/heard/alice Yes.")
+        run_until(loop, lambda: acts == [("alice", "H-AGREE")])
+        robot.send("once /robot/heard/alice bring me the yellow bottle")
+        run_until(loop, lambda: heard == [("alice", "bring me the yellow bottle")])
+
+        outcomes = []
+        executors.start(Request("r1", "speak", {"text": "Here is your bottle."}, "jido", "n1"),
+                        Reporter(outcomes.append, loop.call_soon))
+        run_until(loop, lambda: "heard /robot/say Here is your bottle." in robot.lines)
+        assert [o.status for o in outcomes] == ["done"]
+
+
+def test_templates_make_one_fact_per_element_of_a_sequence():
+    from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
+
+    source = FactSource("/gaze", "diagnostic_msgs/msg/DiagnosticStatus",
+                        (("{item.key}", "looksAt", "{item.value}"),
+                         ("{name}", "sees", "{item.key}")), each="values")
+    message = DiagnosticStatus(name="camera", values=[KeyValue(key="alice", value="jido"),
+                                                      KeyValue(key="bob", value="tv")])
+    assert RosPerception.triples(source, message) == {
+        ("alice", "looksAt", "jido"), ("bob", "looksAt", "tv"),
+        ("camera", "sees", "alice"), ("camera", "sees", "bob")}
+
