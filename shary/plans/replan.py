@@ -46,7 +46,7 @@ def remaining_agendas(plan: SharedPlan, current: list[int], executed: set[int],
         if task in executed:
             continue
         for hollow in empty.get(task, ()):
-            _emit_abstract(plan, hollow, [hollow, *_chain(plan, hollow)], begun, emitted, out)
+            _emit_abstract(plan, hollow, [hollow, *plan.ancestors(hollow)], begun, emitted, out)
         if spec.kind != ACTION:
             continue
         agent = agents.get(task, spec.agent)
@@ -63,15 +63,6 @@ def remaining_agendas(plan: SharedPlan, current: list[int], executed: set[int],
             call = _call(spec.name, spec.params)
         if call is not None and isinstance(agent, str):
             out.setdefault(agent, []).append(call)
-    return out
-
-
-def _chain(plan: SharedPlan, abstract: int) -> list[int]:
-    """The abstract tasks ``abstract`` was decomposed from, nearest first."""
-    out, parent = [], plan.abstract[abstract].decomposition
-    while parent is not None and parent in plan.abstract:
-        out.append(parent)
-        parent = plan.abstract[parent].decomposition
     return out
 
 
