@@ -282,3 +282,18 @@ def test_a_replan_keeps_the_partner_s_top_blue_cube():
     state, _, violations = run_text("stack-nominal", text, family="stack", seed=58)
     assert violations == {}
     assert state == "achieved"
+
+
+def test_a_partner_cannot_take_a_cube_out_of_the_robot_s_hand():
+    """Found by ``shary fuzz stack --replay 140``: Dana means to do the robot's next
+    step (pick the green cube, put it on her blue one) but is late; the simulator let
+    her pull the green cube out of the robot's gripper while she held her blue cube,
+    and the plan waited 45 s for a place the robot could not do, then failed.  A
+    person's pick of something another agent holds now does nothing (sim/people.py)."""
+    state, _, violations = run_text("stack-nominal", STACK.format(
+        name="snatch", partner="dana", wait="2.3s", profile=(
+            "{choices: [], delay: 2.8, before: {'Pick(pr2, green_cube)': "
+            "[[Pick, green_cube], [Place, green_cube, blue_cube_2]]}}")),
+        family="stack", seed=140)
+    assert violations == {}
+    assert state == "achieved"
