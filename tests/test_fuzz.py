@@ -297,3 +297,41 @@ def test_a_partner_cannot_take_a_cube_out_of_the_robot_s_hand():
         family="stack", seed=140)
     assert violations == {}
     assert state == "achieved"
+
+
+def weld_killed(base: str, member: str, at: float) -> tuple[tuple, list]:
+    """Run the built-in weld scenario ``base`` with ``member`` killed ``at`` seconds in
+    (as a weld campaign draws it); its judgement and its log rows."""
+    from sim.weld.run import run_weld
+    from sim.weld.scenario import load_weld_scenario
+
+    scenario = load_weld_scenario(builtin_scenarios()[base])
+    result = run_weld(scenario, kill=(member, at))
+    return judge("weld", scenario, result), result.events
+
+
+def test_a_robot_killed_mid_task_falls_silent_and_its_task_is_taken_back():
+    """K-10 is killed while it drives to its first inspection: it stops (no message
+    from it, its position no longer changes), the Task Manager takes the inspection
+    back (``agent-lost``) as a distributed conductor would, and since nobody else can
+    inspect, the watchdog ends the goal failed saying so, well before the timeout."""
+    (state, reason, violations), rows = weld_killed("weld-nominal", "K-10", 3.0)
+    assert [(r[2], r[4].get("state")) for r in rows if r[1] == "agent-lost"] == \
+        [("inspect-P1-P2", "running")]
+    assert not [r for r in rows if r[0] > 3.0 and r[1] == "message" and r[3] == "K-10"]
+    moved = [r for r in rows if r[0] > 3.2 and r[1] == "fact-added"
+             and r[4].get("s") == "K-10" and r[4].get("p") in ("x", "y")]
+    assert not moved, moved[:3]
+    assert violations == {} and state == "failed"
+    assert "inspect-P1-P2" in reason and "no agent can do" in reason
+
+
+def test_a_person_killed_has_her_panel_offered_to_the_other_astronaut():
+    """EVA2 is killed while offered the mount of P4: the task is taken back and EVA1
+    mounts it; the weld goes on to the end."""
+    (state, reason, violations), rows = weld_killed("weld-nominal", "EVA2", 0.5)
+    lost = [r[2] for r in rows if r[1] == "agent-lost"]
+    assert lost == ["mount-P4"]
+    done = {r[2]: r[3] for r in rows if r[1] == "task-done"}
+    assert done["mount-P4"] == "EVA1"
+    assert violations == {} and state == "achieved"

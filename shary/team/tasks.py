@@ -83,7 +83,8 @@ class TaskManager:
         self.watchdog = watchdog
         """Seconds without progress after which the watchdog acts (see the module)."""
         self.progress = 0
-        self._watch_mark = -1
+        self._progress_at = 0.0
+        """When ``progress`` last grew: the watchdog acts ``watchdog`` seconds after it."""
         self._watch_timer: Timer | None = None
         self.tasks = {name: TeamTask(spec) for name, spec in tasks.items()}
         self._after: dict[str, list[str]] = {name: [] for name in tasks}
@@ -113,16 +114,20 @@ class TaskManager:
 
     # -- the watchdog ----------------------------------------------------------------
 
+    def _progressed(self) -> None:
+        self.progress += 1
+        self._progress_at = self.team.loop.now()
+
     def _watch(self) -> None:
-        self._watch_mark = self.progress
-        self._watch_timer = self.team.loop.call_later(self.watchdog, self._idle)
+        left = self._progress_at + self.watchdog - self.team.loop.now()
+        self._watch_timer = self.team.loop.call_later(max(left, 0.0), self._idle)
 
     def _idle(self) -> None:
         self._watch_timer = None
         if self.outcome is not None:
             return
-        if self.progress != self._watch_mark:
-            self._watch()
+        if self.team.loop.now() < self._progress_at + self.watchdog - 1e-9:
+            self._watch()  # it progressed meanwhile: `watchdog` seconds from then
             return
         running = [t for t in self.tasks.values() if t.state == RUNNING]
         ready = [t for t in self.tasks.values() if t.state in (READY, OFFERED)]
@@ -141,12 +146,13 @@ class TaskManager:
                       else "nothing is running, offered or ready")
             self._over("failed", f"{reason} ({why})")
         if self.outcome is None:
+            self._progress_at = self.team.loop.now()  # the next look, `watchdog` from now
             self._watch()
 
     def _maybe_ready(self, task: TeamTask) -> None:
         if task.state == PENDING and all(self.tasks[b].state == DONE for b in task.spec.after):
             task.state = READY
-            self.progress += 1
+            self._progressed()
             task.refused.clear()
             self._ready.append(task)
             self.team.record("task-ready", task=task.name, skill=task.spec.skill)
@@ -173,8 +179,9 @@ class TaskManager:
             if not candidates:
                 waiting.append(task)  # all busy: wait for one to be free
             elif all(a.name in task.refused for a in candidates):
-                if all(a.name in task.refused for a in self._capable(task)):
-                    self._nobody(task)
+                if all(a.name in task.refused or a.current == LOST
+                       for a in self._capable(task)):
+                    self._nobody(task)  # not waiting for the lost: they may never be back
                 else:
                     waiting.append(task)  # a busy one that has not refused may take it
             elif not self.delegate(task, candidates):
@@ -192,7 +199,7 @@ class TaskManager:
         if agent is None:
             return False
         self.delegations += 1
-        self.progress += 1
+        self._progressed()
         task.state = OFFERED
         task.agent = agent.name
         agent.current = task.name
@@ -288,7 +295,7 @@ class TaskManager:
     def handle(self, message: Message) -> None:
         if not isinstance(message, Progress):
             return
-        self.progress += 1
+        self._progressed()
         task = self.tasks.get(message.task)
         if task is None or task.agent != message.sender:
             holder = self.team.agents.get(message.sender)

@@ -174,6 +174,20 @@ class Team:
         self.port.send(Act(human, robot, act=TELEOPERATE, data={"atomic": atomic,
                                                                 "args": dict(args)}))
 
+    # -- a member killed ----------------------------------------------------------------
+
+    def kill(self, name: str) -> None:
+        """``name``'s process dies, in this process: it falls silent (the port drops what
+        it sends and what is sent to it, :attr:`MessagePort.down`), and the managers
+        react as a distributed team's conductor makes them react to a lost liveliness
+        token (:mod:`shary.transport.distributed`): the Task Manager takes back the task
+        it was offered or ran (``agent-lost``) and the Interaction Manager reroutes the
+        questions it held and the help it gave."""
+        self.record("agent-killed", agent=name)
+        self.port.down.add(name)
+        self.tasks.agent_lost(name)
+        self.interaction.agent_lost(name)
+
     # -- running ------------------------------------------------------------------------
 
     def start(self) -> None:

@@ -94,6 +94,13 @@ class WorldLink:
             self.team.port.send(Act(self.agent, self.world, id=request.id, act=CANCEL,
                                     task=request.node))
 
+    def cut(self) -> None:
+        """The agent's process is gone: what it asked the world to do stops (a robot's
+        motion is cancelled), and the replies to come are nobody's."""
+        for request_id in list(self.waiting):
+            self.team.port.send(Act(self.agent, self.world, id=request_id, act=CANCEL))
+        self.waiting.clear()
+
     # -- a person's work on site ------------------------------------------------------
 
     def performer(self, proxy: HumanProxy) -> Callable[[Assignment], None]:

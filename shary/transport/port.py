@@ -71,6 +71,9 @@ class MessagePort:
         self.faults = faults
         self._fault_random = random.Random(faults.seed if faults else 0)
         self.sent = 0
+        self.down: set[str] = set()
+        """Members killed in this process (:meth:`shary.team.Team.kill`): what they send
+        goes nowhere, what is sent to them is lost, as when their own process is gone."""
 
     def subscribe(self, address: str, handler: Handler) -> None:
         self._handlers[address] = handler
@@ -96,6 +99,8 @@ class MessagePort:
 
     def send(self, message: Message) -> None:
         """Deliver ``message`` to its addressee after the current callback."""
+        if message.sender in self.down:
+            return  # a dead process sends nothing
         self.sent += 1
         known = self.reaches(message.to)
         if self._record is not None:
@@ -123,7 +128,7 @@ class MessagePort:
 
     def reaches(self, address: str) -> bool:
         """Whether a message to ``address`` goes anywhere (here: a local handler)."""
-        return address in self._handlers
+        return address in self._handlers and address not in self.down
 
     def route(self, message: Message) -> None:
         """Hand ``message`` on towards its addressee (here: on this loop)."""
@@ -135,7 +140,11 @@ class MessagePort:
         if handler is None:
             handler = self._handlers.get(message.to)
         if handler is not None:
-            self.loop.call_soon(handler, message)
+            self.loop.call_soon(self._hand, handler, message)
+
+    def _hand(self, handler: Handler, message: Message) -> None:
+        if message.to not in self.down:  # not killed since it was sent
+            handler(message)
 
     def close(self) -> None:
         """Release what the port holds (nothing, in process)."""

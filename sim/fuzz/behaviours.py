@@ -23,8 +23,13 @@ written:
 * **weld** (docs/teams.md, ``behaviour:``): each person's reply to
   assignments (accept, refuse, ignore) and to questions (answer, refuse,
   ignore) and its delay, their answers, how long they work, the quality of
-  each weld the torch lays (a bad one fails its inspection), and an operator
-  taking control of a robot for a while (``script``).
+  each weld the torch lays (a bad one fails its inspection), an operator
+  taking control of a robot for a while (``script``), and, in one run in six,
+  a member (robot or person) killed at a random time: no file key says that
+  (in a file, a kill is a process stopped, ``shary team up``), so it is the
+  variation's :attr:`Variation.kill`, done in process through the path a
+  distributed team takes when a member's process dies
+  (:meth:`shary.team.Team.kill`).
 
 The document is checked by the same readers as a file (schema and meaning),
 read as if it were the base scenario (:func:`sim.scenario.load_scenario`'s
@@ -73,6 +78,8 @@ BEFORE = (
 LIVING_BASES = ("give-bottle", "give-bottle", "clean-up-unreachable", "clean-up")
 ROBOT_ACTIONS = ("navigate", "pick", "move-arm", "give", "put-back", "dump", "look-at")
 LOOKS = ("phone", "away", "store-table")
+KILL_CHANCE = 1 / 6
+"""How often a weld run has a member killed (robot or person, at 1–60 s)."""
 WELD_BASES = ("weld-nominal", "weld-human-refuses", "weld-human-supports-robot",
               "weld-question-expires")
 
@@ -90,6 +97,8 @@ class Variation:
     """A weld scenario's team document (drawn behaviours), read as if it were its file."""
     story: str
     """The behaviour drawn, in a few words (for the tables)."""
+    kill: tuple[str, float] | None = None
+    """A weld team member killed, and when (seconds into the run), or None."""
 
     @property
     def path(self) -> Path:
@@ -195,11 +204,12 @@ def _noise(rng: random.Random, data: dict[str, Any], told: list[str],
 
 
 def _finish(family: str, seed: int, base: str, data: dict[str, Any], told: list[str],
-            team: dict[str, Any] | None = None) -> Variation:
+            team: dict[str, Any] | None = None,
+            kill: tuple[str, float] | None = None) -> Variation:
     data["scenario"] = f"{base}-fuzz-{seed}"
     data["doc"] = f"shary fuzz {family} --seed {seed}: " + "; ".join(told)
     data["expect"] = {}  # a campaign checks its invariants, not a scenario's outcome
-    return Variation(family, seed, base, data, team, "; ".join(told))
+    return Variation(family, seed, base, data, team, "; ".join(told), kill)
 
 
 # ------------------------------------------------------------------------ living room
@@ -305,4 +315,9 @@ def _weld(rng: random.Random, seed: int) -> Variation:
                           {"at": f"{back:g}s", "by": "IVA", "hand-back": "K-10"}]
         told.append(f"IVA holds K-10 {at:g}-{back:g}s")
     data["timeout"] = "8min"
-    return _finish("weld", seed, base, data, told, team)
+    kill = None
+    if rng.random() < KILL_CHANCE:
+        members = [n for n, spec in agents.items() if spec.get("kind") in ("robot", "human")]
+        kill = (rng.choice(members), _seconds(rng, 1, 60))
+        told.append(f"{kill[0]} killed at {kill[1]:g}s")
+    return _finish("weld", seed, base, data, told, team, kill)

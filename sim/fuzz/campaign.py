@@ -107,7 +107,13 @@ def run_one(family: str, seed: int, *, out: Path | None = None, report: Any = No
     wall = time.perf_counter()
     try:
         scenario = variation.load()
-        result = run_scenario(scenario, seed=seed, out=out, report=report)
+        if variation.kill is not None:
+            from ..weld.run import run_weld
+
+            result = run_weld(scenario, seed=seed, out=out, report=report,
+                              kill=variation.kill)
+        else:
+            result = run_scenario(scenario, seed=seed, out=out, report=report)
     except Exception as err:  # a crash is a finding, reported like the others
         where = traceback.extract_tb(err.__traceback__)[-1]
         what = (f"raised {type(err).__name__}: {err} "

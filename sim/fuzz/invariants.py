@@ -20,14 +20,16 @@ The invariants (issue 24, "Behaviour campaigns"):
 ``no-ongoing``
     Nothing is left under way: no plan task ONGOING in any view, every task
     started ended (the interaction ``session`` aside: it lasts as long as the
-    people are there), no team task still running.
+    people are there; and a killed member's own tasks, which end with its
+    process), no team task still running.
 ``facts``
     The world agrees with the verdict: an achieved stack stands (both red
     cubes on the placements, the stick across them, a blue cube, the green
     cube, the other blue cube), a given object is in the person's hand, a
     cleaned-up one in the trash, mounted panels on the frame and welded seams
     beaded (at least unsure, 0.4: a person may vouch for such a bead); and a
-    failed verdict is not one whose effects are all there (sound beads, 0.8).
+    failed verdict is not one whose effects are all there (sound beads, 0.8),
+    unless a task the site cannot show (an inspection) was left undone.
 ``told-unseen``
     Nothing is told to a person who is not looking: each robot sentence said
     in a task with people in its roles (the partner of a give, the helper of
@@ -139,14 +141,16 @@ def _goals_verdict(run: Run) -> tuple[str | None, str]:
 
 
 def _team_verdict(run: Run) -> tuple[str | None, str]:
-    over = [d["outcome"] for _, _, _, _, d in run.of("goal-over")
+    over = [d for _, _, _, _, d in run.of("goal-over")
             if "tasks" in d]  # the team's goal (a robot's own agenda logs its goals too)
     if not over:
         return None, ""
-    if over[-1] == "done":
+    if over[-1]["outcome"] == "done":
         return "achieved", ""
     given_up = [f"{task}: {d.get('reason', '')}" for _, _, task, _, d in run.of("task-given-up")
                 if d.get("reason")]
+    if over[-1].get("reason"):  # the watchdog's: nothing a task said
+        given_up.append(str(over[-1]["reason"]))
     return "failed", "; ".join(given_up)
 
 
@@ -171,8 +175,11 @@ def _nothing_ongoing(run: Run) -> str | None:
         states[(agent, task)] = (data.get("state", ""), data.get("name", ""))
     left += [f"{name} ONGOING in {agent}'s view" for (agent, _), (state, name)
              in states.items() if state == "ONGOING"]
-    started = {task: d["name"] for _, _, task, _, d in run.of("task-start")
-               if d.get("name") != "session"}
+    killed = {agent for _, _, _, agent, _ in run.of("agent-killed")}
+    # a killed member's own tasks end with its process: nobody is left to end them (the
+    # team task it held was taken back, ``agent-lost``)
+    started = {task: d["name"] for _, _, task, agent, d in run.of("task-start")
+               if d.get("name") != "session" and agent not in killed}
     for _, _, task, _, _ in run.of("task-end"):
         started.pop(task, None)
     left += [f"task {name} ({node}) never ended" for node, name in started.items()]
@@ -237,9 +244,26 @@ def _facts_agree(run: Run) -> str | None:
     missing = _effects(run)
     if state == "achieved" and missing:
         return "achieved, but " + "; ".join(missing)
-    if state == "failed" and not _effects(run, strict=True):
+    if state == "failed" and not _effects(run, strict=True) and not _unseen_undone(run):
         return "failed, but everything it was to do is done"
     return None
+
+
+PHYSICAL = ("mount-panel", "weld-seam")
+"""The weld team's skills whose work the site shows (an inspection leaves no trace)."""
+
+
+def _unseen_undone(run: Run) -> list[str]:
+    """The weld team's tasks left undone whose work the world cannot show (an inspection
+    nobody was left to make): a failure over them is not contradicted by the site."""
+    if run.family != "weld":
+        return []
+    last: dict[str, str] = {}
+    for _, kind, task, _, _ in run.of("task-done", "task-ready", "task-given-up"):
+        if task is not None:
+            last[task] = kind
+    return [name for name, task in run.scenario.team.tasks.items()
+            if task.skill not in PHYSICAL and last.get(name) != "task-done"]
 
 
 def _told_unseen(run: Run) -> str | None:

@@ -13,7 +13,11 @@ messages to the world.  Beside them:
   (:meth:`shary.team.spatial.SpatialReasoner.service`), which K-10's
   ``point-light`` queries through the message port (:func:`offer_spatial`);
 - the scenario's script (take control, teleoperate, hand back:
-  :func:`schedule_script`).
+  :func:`schedule_script`);
+- a member killed at a given time (``kill``, drawn by a behaviour campaign,
+  :mod:`sim.fuzz.behaviours`): it falls silent and the managers react as to a
+  lost process (:meth:`shary.team.Team.kill`); a robot's motion in the world
+  stops with it.
 
 It runs until the goal is over and nothing moves, or the timeout, judges the
 log against ``expect``, and writes to the output folder: ``log.sqlite``,
@@ -51,13 +55,15 @@ VIEWED = ("question", "answer", "respawn", "associate", "release", "control", "s
 
 def run_weld(path: str | Path | WeldScenario, *, seed: int = 0, out: str | Path | None = None,
              snapshots: bool = False, gui: bool = False,
-             report: Report | None = None, console: Any = None) -> RunResult:
+             report: Report | None = None, console: Any = None,
+             kill: tuple[str, float] | None = None) -> RunResult:
     """Run one seam-welding scenario (see the module's docstring).  Pictures from K-10's
     camera are written whenever there is an output folder (they go with its questions);
     ``snapshots`` adds a view of the whole site at the end.  ``console`` (a
     :class:`shary.console.live.Attachment`) is given the team, sees every logged event and
     is called between two steps of the clock, as in :func:`sim.run.run_scenario`.
-    ``path`` may be a scenario already loaded."""
+    ``path`` may be a scenario already loaded; ``kill`` (member, seconds) kills that
+    member's process then, in this process (see the module's docstring)."""
     scenario = path if isinstance(path, WeldScenario) else load_weld_scenario(path)
     out_dir = Path(out) if out is not None else None
     log_path = None
@@ -76,7 +82,7 @@ def run_weld(path: str | Path | WeldScenario, *, seed: int = 0, out: str | Path 
             told.listeners.append(console.observe)
         try:
             run = _WeldRun(scenario, site, told, seed, out_dir, views=snapshots,
-                           console=console)
+                           console=console, kill=kill)
             setup = time.perf_counter() - wall
             wall = time.perf_counter()
             end = run.go()
@@ -162,7 +168,8 @@ class _WeldRun:
     """One run's parts, wired together: the world agent and the team on one loop."""
 
     def __init__(self, scenario: WeldScenario, site: WeldSite, log: Told, seed: int,
-                 out_dir: Path | None, views: bool = False, console: Any = None):
+                 out_dir: Path | None, views: bool = False, console: Any = None,
+                 kill: tuple[str, float] | None = None):
         self.scenario = scenario
         self.site = site
         self.out_dir = out_dir
@@ -178,9 +185,19 @@ class _WeldRun:
                                out_dir)
         self.sim = self.world.sim
         self.actions = self.world.actions
-        connect_world(self.team)
+        self.links = connect_world(self.team)
         offer_spatial(self.team)
         schedule_script(self.team, scenario)
+        if kill is not None:  # a process that outlives the goal is no longer killed
+            timer = self.loop.call_later(kill[1], self._kill, kill[0])
+            self.team.tasks.listeners.append(lambda outcome: timer.cancel())
+
+    def _kill(self, name: str) -> None:
+        """``name``'s process dies: what it asked the world stops, then it falls silent."""
+        link = self.links.get(name)
+        if link is not None:
+            link.cut()
+        self.team.kill(name)
 
     # -- running ----------------------------------------------------------------------
 
