@@ -1,0 +1,179 @@
+"""A scenario with the robot reached only through ROS 2: both processes' commands.
+
+``shary world --ros SCENARIO`` serves the scenario's living room as the
+simulated Jido (:mod:`sim.rosworld`); ``shary run SCENARIO --ros`` runs the
+supervisor in another process, on the wall clock, with the scenario's recipe
+library, planner and goals, its ports filled by the Jido binding
+(:class:`shary.ros.bridge.RosSupervision`): it waits for the robot's first
+facts and its action servers, adds the goals, runs until nothing is left to
+do, and judges the run against the scenario's expectations exactly as a run
+in one process is judged (:func:`sim.run.happened`, :func:`sim.scenario.judge`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import signal
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+from shary.terminal import error
+from shary.terminal import out as _out
+
+WAIT_FOR_ROBOT = 30.0
+"""Wall seconds ``shary run --ros`` waits for the robot's facts and action servers."""
+SETTLE = 1.0
+"""Wall seconds with nothing left to do before the run is over (an answer on its way)."""
+
+
+def _ros_ready() -> str | None:
+    """Why ROS 2 cannot be used here, after restarting the program with the wheels'
+    libraries found if it must."""
+    from shary.ros.env import reexec_with_libraries, unavailable
+
+    if Path(sys.argv[0]).name in ("shary", "__main__.py"):  # the program, not main() in-process
+        reexec_with_libraries()
+    return unavailable()
+
+
+def cmd_world_ros(args: argparse.Namespace, path: Path) -> int:
+    """``shary world --ros SCENARIO``: serve the living room until Ctrl-C or --seconds."""
+    from shary.ros.binding import load_binding
+    from userfiles.errors import FileError
+
+    from .narration import ConsoleReport
+    from .world import LivingRoom
+
+    problem = _ros_ready()
+    if problem is not None:
+        return error(problem)
+    from shary.ros.node import RosNode
+
+    from .rosworld import JIDO_BINDING, RosWorld
+
+    try:
+        binding = load_binding(JIDO_BINDING)
+    except FileError as err:
+        return error(str(err))
+    stopping: list[int] = []
+    previous = signal.signal(signal.SIGTERM, lambda *_: stopping.append(1))
+    node = RosNode("jido_sim")
+    try:
+        with LivingRoom(gui=False, robot=None) as world:
+            try:
+                served = RosWorld(path, world, node, binding, seed=args.seed,
+                                  report=None if args.quiet else ConsoleReport(_out))
+            except ValueError as err:
+                return error(str(err))
+            _out.print(f"the simulated {served.scenario.robot} of {served.scenario.name} is on "
+                       f"ROS 2 ({binding.name}); Ctrl-C stops it")
+            served.serve(args.seconds, stopping)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+        node.close()
+    _out.print("the world stopped")
+    return 0
+
+
+def cmd_run_ros(args: argparse.Namespace, path: Path, out: Path) -> int:
+    """``shary run SCENARIO --ros``: the supervisor of a scenario whose world is on ROS 2."""
+    problem = _ros_ready()
+    if problem is not None:
+        return error(problem, json_mode=args.json)
+    result = run_over_ros(path, out, wait=args.wait)
+    if isinstance(result, str):
+        return error(result, json_mode=args.json)
+    if args.json:
+        _out.print(json.dumps(result, indent=2), markup=False)
+    else:
+        verdict = "[bold green]PASSED[/bold green]" if result["passed"] else \
+            "[bold red]FAILED[/bold red]"
+        _out.print(f"{verdict} {result['scenario']} over ROS 2: {result['seconds']:.1f} s")
+        for difference in result["differences"]:
+            _out.print(f"  - {difference}", markup=False)
+        _out.print(f"[dim]wrote {out}/: log.sqlite, summary.json[/dim]")
+    return 0 if result["passed"] else 1
+
+
+def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict[str, Any] | str:
+    """Run the scenario's supervisor against the robot on ROS 2 (see the module's
+    docstring): the summary written to ``out``, or why it could not start."""
+    from shary.agenda import OVER, ChronicleRecognizer
+    from shary.dialogue.sessions import Sessions
+    from shary.log import ContextLog, read_events
+    from shary.loop import EventLoop, WallClock
+    from shary.planning import HatpPlanner
+    from shary.ros.binding import load_binding
+    from shary.ros.bridge import Fanout, RosSupervision
+    from shary.ros.node import RosNode
+    from shary.supervisor import Supervisor
+    from userfiles.outputs import output_folder, write_output
+
+    from .rosworld import JIDO_BINDING
+    from .run import happened, load
+    from .scenario import judge
+
+    scenario, library, domain = load(path)
+    if scenario.shared_plan:
+        return f"{scenario.name}: a shared-plan scenario does not run behind ROS 2 yet"
+    binding = load_binding(JIDO_BINDING)
+    output_folder(out)
+    log_path = out / "log.sqlite"
+    if log_path.exists():
+        log_path.unlink()
+    log = ContextLog(log_path)
+    fanout = Fanout(log)
+    loop = EventLoop(WallClock())
+    from shary.facts import FactDatabase
+
+    facts = FactDatabase()
+    sup = Supervisor(library, facts, robot=binding.robot, loop=loop, log=fanout,
+                     planners={"living-room": HatpPlanner(domain, budget_ms=300)})
+    facts.log_changes(sup.record)
+    node = RosNode("shary")
+    try:
+        ros = RosSupervision(sup, binding, node, fanout=fanout)
+        deadline = time.monotonic() + wait
+        while not (ros.perception.messages and node.call(ros.executors.ready)):
+            if time.monotonic() > deadline:
+                return (f"no simulated robot answered on ROS 2 within {wait:g} s (its facts on "
+                        f"{binding.facts[0].topic}, its action servers): start it with "
+                        f"'shary world --ros {scenario.name}' in the same ROS domain")
+            loop.run_for(0.1)
+        start = loop.now()
+        for goal in scenario.goals:
+            loop.call_later(goal.at, lambda g=goal: sup.agenda.add(g.task, g.args,
+                                                                   priority=g.priority))
+        if library.chronicles:
+            ChronicleRecognizer(sup)
+        Sessions(sup).start()
+        quiet_since = None
+        end = start + scenario.timeout
+        while loop.now() < end:
+            loop.run_for(0.1)
+            quiet = (not sup.runs and sup.agenda.active is None
+                     and all(g.state in OVER for g in sup.agenda.goals)
+                     and loop.now() - start > max((g.at for g in scenario.goals), default=0))
+            quiet_since = (quiet_since or loop.now()) if quiet else None
+            if quiet_since is not None and loop.now() - quiet_since >= SETTLE:
+                break
+        elapsed = loop.now() - start
+        sup.record("run-end", scenario=scenario.name)
+    finally:
+        node.close()
+    log.flush()
+    events = [(e.time - start, e.kind, e.task, e.agent, e.data) for e in read_events(log_path)]
+    log.close()
+    differences = judge(scenario.expect, happened(events, facts, binding.robot, elapsed))
+    if elapsed >= scenario.timeout - 1e-9:
+        differences.append(f"the run was still going at the timeout ({scenario.timeout:g}s)")
+    summary = {"scenario": scenario.name, "passed": not differences,
+               "outcome": "passed" if not differences else "failed",
+               "differences": differences, "seconds": round(elapsed, 2), "over": "ros2"}
+    write_output(out / "summary.json", json.dumps(summary, indent=2) + "\n")
+    return summary
