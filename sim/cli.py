@@ -48,6 +48,9 @@ def add_run(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--ros", action="store_true",
                    help="run only the supervisor, reaching the robot through ROS 2: the world "
                    "runs in another process ('shary world --ros SCENARIO')")
+    p.add_argument("--world", action="store_true",
+                   help="with --ros: start the world too ('shary world --ros SCENARIO'), as a "
+                   "process of its own, in a ROS domain of its own unless ROS_DOMAIN_ID is set")
     p.add_argument("--wait", type=float, default=30.0, metavar="S",
                    help="with --ros: how long to wait for the robot (default 30 s)")
     add_json_flag(p, "the verdict, the figures and the files written (no progress lines)")

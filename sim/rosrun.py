@@ -14,8 +14,11 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import signal
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 from typing import Any
@@ -81,13 +84,16 @@ def cmd_world_ros(args: argparse.Namespace, path: Path) -> int:
 
 
 def cmd_run_ros(args: argparse.Namespace, path: Path, out: Path) -> int:
-    """``shary run SCENARIO --ros``: the supervisor of a scenario whose world is on ROS 2."""
+    """``shary run SCENARIO --ros``: the supervisor of a scenario whose world is on ROS 2
+    (with ``--world``, both started here as processes of their own)."""
+    if args.world:
+        return _with_world(args, path, out)
     problem = _ros_ready()
     if problem is not None:
         return error(problem, json_mode=args.json)
     result = run_over_ros(path, out, wait=args.wait)
     if isinstance(result, str):
-        return error(result, json_mode=args.json)
+        return error(result, json_mode=args.json, status=1)
     if args.json:
         _out.print(json.dumps(result, indent=2), markup=False)
     else:
@@ -98,6 +104,43 @@ def cmd_run_ros(args: argparse.Namespace, path: Path, out: Path) -> int:
             _out.print(f"  - {difference}", markup=False)
         _out.print(f"[dim]wrote {out}/: log.sqlite, summary.json[/dim]")
     return 0 if result["passed"] else 1
+
+
+def _with_world(args: argparse.Namespace, path: Path, out: Path) -> int:
+    """Start ``shary world --ros`` and ``shary run --ros`` as two processes that meet only
+    on ROS 2, in a domain of their own unless ``ROS_DOMAIN_ID`` says which; the
+    supervisor's exit status.  This process does not use ROS itself, so it needs no
+    libraries found (a fresh shell, a test calling ``main``)."""
+    from shary.ros.env import ros_environment
+
+    env = ros_environment()
+    env.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 100))
+    shary = [sys.executable, "-m", "shary"]
+    problems = tempfile.TemporaryFile("w+")  # what the world says only if it fails
+    world = subprocess.Popen([*shary, "world", "--ros", str(path), "--quiet",
+                              "--seed", str(args.seed)], env=env,
+                             stdout=subprocess.DEVNULL, stderr=problems, text=True)
+    if not (args.quiet or args.json):
+        _out.print(f"[dim]the world runs in process {world.pid}, the supervisor in another, "
+                   f"in ROS domain {env['ROS_DOMAIN_ID']}[/dim]")
+    try:
+        run = subprocess.run([*shary, "run", str(path), "--ros", "--out", str(out),
+                              "--wait", str(args.wait),
+                              *(["--json"] if args.json else []),
+                              *(["--quiet"] if args.quiet else [])], env=env, check=False)
+    finally:
+        world.send_signal(signal.SIGINT)
+        try:
+            world.wait(15)
+        except subprocess.TimeoutExpired:
+            world.kill()
+            world.wait()
+    with problems:
+        problems.seek(0)
+        said = problems.read().strip()
+    if world.returncode not in (0, -signal.SIGINT) and said:
+        _out.print(said, markup=False)
+    return run.returncode
 
 
 def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict[str, Any] | str:

@@ -1,0 +1,39 @@
+"""A scenario with the robot reached only through ROS 2: ``shary world --ros SCENARIO``
+in one process (the PyBullet living room serving the Jido binding), ``shary run SCENARIO
+--ros`` in another (the supervisor), judged with the scenario's own expectations.  Each
+scenario takes its simulated duration in wall time (about 35 s for give-bottle)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from rosfixtures import needs_ros
+
+pytestmark = needs_ros
+
+
+def over_ros(spawn, tmp_path, scenario: str) -> dict:
+    world = spawn("-m", "shary", "world", "--ros", scenario, "--quiet")
+    run = spawn("-m", "shary", "run", scenario, "--ros", "--out", str(tmp_path / "run"),
+                "--quiet")
+    status = run.popen.wait(200)
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert status == (0 if summary["passed"] else 1), run.lines
+    assert world.popen.poll() is None, world.lines  # served to the end
+    return summary
+
+
+@pytest.mark.parametrize("scenario", ["give-bottle"])
+def test_a_scenario_passes_with_its_world_in_another_process(spawn, tmp_path, scenario):
+    summary = over_ros(spawn, tmp_path, scenario)
+    assert summary["differences"] == []
+    assert summary["passed"] and summary["over"] == "ros2"
+
+
+def test_the_supervisor_says_when_no_robot_answers(spawn, tmp_path):
+    run = spawn("-m", "shary", "run", "give-bottle", "--ros", "--wait", "1", "--out",
+                str(tmp_path / "run"))
+    assert run.popen.wait(60) == 1
+    assert any("no simulated robot answered on ROS 2 within 1 s" in line
+               and "shary world --ros give-bottle" in line for line in run.lines), run.lines
