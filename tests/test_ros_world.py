@@ -1,7 +1,8 @@
 """A scenario with the robot reached only through ROS 2: ``shary world --ros SCENARIO``
 in one process (the PyBullet living room serving the Jido binding), ``shary run SCENARIO
 --ros`` in another (the supervisor), judged with the scenario's own expectations.  Each
-scenario takes its simulated duration in wall time (about 35 s for give-bottle)."""
+scenario takes its simulated duration in wall time (about 35 s each: give-bottle, the
+same with the goal cancelled and resumed, clean-up-unreachable)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,8 @@ import json
 
 import pytest
 from rosfixtures import needs_ros
+
+from shary.log import read_events
 
 pytestmark = needs_ros
 
@@ -24,11 +27,20 @@ def over_ros(spawn, tmp_path, scenario: str) -> dict:
     return summary
 
 
-@pytest.mark.parametrize("scenario", ["give-bottle"])
+@pytest.mark.parametrize("scenario", ["give-bottle", "give-bottle-distracted",
+                                      "clean-up-unreachable"])
 def test_a_scenario_passes_with_its_world_in_another_process(spawn, tmp_path, scenario):
     summary = over_ros(spawn, tmp_path, scenario)
     assert summary["differences"] == []
     assert summary["passed"] and summary["over"] == "ros2"
+    rows = [(e.kind, e.data) for e in read_events(tmp_path / "run" / "log.sqlite")]
+    assert any(kind == "ros-goal" and data["interface"] == "/jido/give"
+               and data["outcome"] == "succeeded" for kind, data in rows) \
+        or scenario == "clean-up-unreachable"
+    cancels = [data["action"] for kind, data in rows
+               if kind == "ros-cancel" and data["state"] == "confirmed"]
+    # Alice's phone call stops the arm: its goal is cancelled at the world's server
+    assert cancels == (["/jido/move_arm"] if scenario == "give-bottle-distracted" else [])
 
 
 def test_the_supervisor_says_when_no_robot_answers(spawn, tmp_path):
