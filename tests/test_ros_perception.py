@@ -77,3 +77,21 @@ def test_templates_make_one_fact_per_element_of_a_sequence():
         ("alice", "looksAt", "jido"), ("bob", "looksAt", "tv"),
         ("camera", "sees", "alice"), ("camera", "sees", "bob")}
 
+
+
+def test_lines_carry_truth_values_numbers_and_text_literals_as_such():
+    from rdflib import Literal
+    from std_msgs.msg import String
+
+    source = FactSource("/jido/facts", "std_msgs/msg/String", lines="data")
+    message = String(data='yellow-bottle robot_reach false\njido move_cost 2\n'
+                          'alice position "0.12 0.00 0.56"\nalice looksAt jido\n'
+                          'yellow-bottle color "yellow"')
+    found = RosPerception.triples(source, message)
+    assert found == {("yellow-bottle", "robot_reach", False), ("jido", "move_cost", 2),
+                     ("alice", "position", Literal("0.12 0.00 0.56")),
+                     ("alice", "looksAt", "jido"), ("yellow-bottle", "color", Literal("yellow"))}
+    facts = FactDatabase()
+    for triple in found:  # each one a fact the database takes
+        facts.add(*triple)
+    assert facts.objects("yellow-bottle", "robot_reach") == [False]
