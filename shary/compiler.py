@@ -30,7 +30,7 @@ from transitions import Transition as FlatTransition
 
 from shary.clock import Clock, SimulatedClock
 from shary.conditions import ConditionRegistry
-from shary.model import Invoke, Scheme, Transition, descriptor_matches
+from shary.model import IN_STATE, Invoke, Scheme, Transition, descriptor_matches
 from shary.statechart import Semantics, Snapshot, Step
 
 EVENTLESS = "<eventless>"
@@ -137,7 +137,8 @@ class CompiledScheme:
         self.scheme = scheme
         self.conditions = conditions or ConditionRegistry()
         missing = sorted({t.condition for s in scheme.states.values() for t in s.transitions
-                          if t.condition is not None and t.condition not in self.conditions})
+                          if t.condition is not None and t.in_state is None
+                          and t.condition not in self.conditions})
         if missing:
             raise KeyError(f"scheme {scheme.name!r} uses conditions that are not registered: "
                            f"{', '.join(missing)}")
@@ -189,6 +190,10 @@ class CompiledScheme:
         return any(descriptor_matches(d, event) for d in self.descriptors())
 
     def condition(self, name: str) -> Any:
+        """The function of a guard's condition: registered, or ``in STATE``."""
+        if name.startswith(IN_STATE):
+            state = name[len(IN_STATE):]
+            return lambda instance, event: state in instance.active
         return self.conditions[name]
 
     def flat_state(self, snapshot: Snapshot) -> ConfigurationState:

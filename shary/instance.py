@@ -13,11 +13,12 @@ from __future__ import annotations
 
 import itertools
 from collections import deque
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from shary.clock import Clock, Timer
 from shary.compiler import EVENTLESS
-from shary.model import Cancel, Invoke, Log, Raise, Send, State
+from shary.model import PARENT, Cancel, Invoke, Log, Raise, Send, State
 from shary.statechart import ACTIONS, ENTER, INVOKE, RAISE, Step
 from userfiles.errors import Problem
 
@@ -97,7 +98,7 @@ class SchemeInstance:
 
     __slots__ = ("definition", "state", "clock", "listener", "context", "finished", "parent",
                  "invoke_id", "_internal", "_external", "_busy", "_timers", "_frozen",
-                 "_to_invoke", "_invoked", "_echoes", "_echo_at", "__weakref__")
+                 "_to_invoke", "_invoked", "_echoes", "_echo_at", "_outbox", "__weakref__")
 
     def __init__(self, definition: CompiledScheme, clock: Clock, listener: Any = None,
                  context: Any = None):
@@ -119,6 +120,8 @@ class SchemeInstance:
         self._invoked: dict[str, list[tuple[Invoke, SchemeInstance]]] | None = None
         self._echoes = 0
         self._echo_at = -1.0
+        self._outbox: deque[Event] | None = None
+        """Events for the parent, sent while it was idle: delivered when this step ends."""
 
     # -- queries ---------------------------------------------------------
 
@@ -169,7 +172,7 @@ class SchemeInstance:
         """Restart the timeouts stopped by :meth:`freeze`, with their remaining time."""
         frozen, self._frozen = self._frozen or {}, None
         for key, (remaining, args) in frozen.items():
-            self._start_timer(key, remaining, args[1])
+            self._start_timer(key, remaining, args[1], args[2])
         for child in self._children():
             child.thaw()
 
@@ -179,15 +182,26 @@ class SchemeInstance:
 
     def start(self) -> None:
         """Enter the initial states and settle (called once by ``CompiledScheme.start``)."""
+        self._complete(lambda: self._play(self.definition.initial_step,
+                                          self.definition.initial_name, None))
+
+    def _complete(self, begin: Callable[[], None]) -> None:
+        """Run ``begin`` and everything it leads to, as one busy step of this instance.
+
+        Then settle, start the invokes, take the queued outside events, and
+        hand the parent what was kept for it (:meth:`_post`).
+        """
         self._busy = True
         try:
-            self._play(self.definition.initial_step, self.definition.initial_name, None)
+            begin()
             self._settle()
             if self._to_invoke:
                 self._start_invokes()
             self._drain()
         finally:
             self._busy = False
+        if self._outbox:
+            self._flush()
 
     def send(self, name: str, data: Any = None) -> None:
         """Deliver an outside event and run to completion (queued if the instance is busy)."""
@@ -202,6 +216,8 @@ class SchemeInstance:
             self._drain()
         finally:
             self._busy = False
+        if self._outbox:
+            self._flush()
 
     def _drain(self) -> None:
         external = self._external
@@ -311,6 +327,8 @@ class SchemeInstance:
                     self._to_invoke = []
                 self._to_invoke.append(item)
             else:
+                if item.on_exit:  # SCXML leaves the final configuration when it ends
+                    self._run(item.on_exit)
                 self._stop()
                 if listener is not None:
                     listener.finished(self, item)
@@ -371,10 +389,59 @@ class SchemeInstance:
                     self._invoked[name] = kept  # type: ignore[index]
                 else:
                     del self._invoked[name]  # type: ignore[union-attr]
-                self._send_self(f"done.invoke.{child.invoke_id}.{state.outcome}",
-                                {"invoke": child.invoke_id, "outcome": state.outcome,
-                                 "state": state.name})
+                child._post(Event(f"done.invoke.{child.invoke_id}.{state.outcome}",
+                                  {"invoke": child.invoke_id, "outcome": state.outcome,
+                                   "state": state.name}))
                 return
+
+    def _to_parent(self, event: Event) -> None:
+        """A send ``to: parent``: the invoking instance's external queue.
+
+        A child that was cancelled (its invoking state left) is never heard
+        from again, not even from the ``on_exit`` actions its cancelling runs;
+        at the top, with no parent, the send fails as SCXML's does, with
+        ``error.communication`` on the internal queue.
+        """
+        parent = self.parent
+        if parent is None:
+            self._internal.append(Event("error.communication", {"to": PARENT}))
+        elif not parent.finished and any(c is self for kids in (parent._invoked or {}).values()
+                                         for _, c in kids):
+            self._post(event)
+
+    def _post(self, event: Event) -> None:
+        """Queue an event for the parent, or keep it until this step ends if the parent is idle.
+
+        Keeping it means the parent never runs in the middle of one of its
+        child's steps (which could cancel the child half-way), and events
+        reach it in the order they were sent, ``done.invoke`` last.
+        """
+        parent = self.parent
+        assert parent is not None
+        if parent._busy:
+            parent._echo(event.name)
+            parent._external.append(event)
+            return
+        if self._outbox is None:
+            self._outbox = deque()
+        self._outbox.append(event)
+
+    def _flush(self) -> None:
+        """Deliver the events kept for the parent (see :meth:`_post`)."""
+        outbox, parent = self._outbox, self.parent
+        while outbox and parent is not None and not parent.finished:
+            event = outbox.popleft()
+            parent._send_self(event.name, event.data)
+        self._outbox = None
+
+    def _to_child(self, ident: str, event: Event) -> None:
+        """A send ``to: ID``: the running child of that invoke id, or ``error.communication``."""
+        for children in (self._invoked or {}).values():
+            for invoke, child in children:
+                if invoke.id == ident and not child.finished:
+                    child.send(event.name, event.data)
+                    return
+        self._internal.append(Event("error.communication", {"to": ident}))
 
     def cancel(self) -> None:
         """Stop an invoked child because its invoking state was left.
@@ -387,6 +454,7 @@ class SchemeInstance:
         if self.finished:
             return
         self._stop()
+        self._outbox = None
         snapshot = self.definition.machine.states[self.state].snapshot
         for state in sorted(snapshot.active, key=lambda s: s.order, reverse=True):
             if state.on_exit:
@@ -396,18 +464,30 @@ class SchemeInstance:
         self._internal.clear()
         self._external.clear()
 
-    def _start_timer(self, key: str, delay: float, event: str) -> None:
+    def _start_timer(self, key: str, delay: float, event: str, to: str | None = None) -> None:
         if self._timers is None:
             self._timers = {}
         previous = self._timers.pop(key, None)
         if previous is not None:
             previous.cancel()
-        self._timers[key] = self.clock.call_later(delay, self._fire, key, event)
+        self._timers[key] = self.clock.call_later(delay, self._fire, key, event, to)
 
-    def _fire(self, key: str, event: str) -> None:
+    def _fire(self, key: str, event: str, to: str | None) -> None:
         if self._timers is not None:
             self._timers.pop(key, None)
-        self._send_self(event)
+        if to is None:
+            self._send_self(event)
+            return
+        if self._busy:
+            self._deliver(to, Event(event))
+        else:  # a step of this instance: it may raise error.communication
+            self._complete(lambda: self._deliver(to, Event(event)))
+
+    def _deliver(self, to: str, event: Event) -> None:
+        if to == PARENT:
+            self._to_parent(event)
+        else:
+            self._to_child(to, event)
 
     def _run(self, actions: tuple) -> None:
         for action in actions:
@@ -416,7 +496,9 @@ class SchemeInstance:
             elif isinstance(action, Send):
                 if action.delay > 0:
                     key = action.id or f"send-{next(_send_ids)}"
-                    self._start_timer(key, action.delay, action.event)
+                    self._start_timer(key, action.delay, action.event, action.to)
+                elif action.to is not None:
+                    self._deliver(action.to, Event(action.event))
                 else:
                     self._echo(action.event)
                     self._external.append(Event(action.event))

@@ -467,6 +467,10 @@ def _bad_event(path: str | Path, bad: BadEvent) -> FileError:
 
 _out = Console(highlight=False, soft_wrap=True)
 _err = Console(stderr=True, highlight=False, soft_wrap=True)
+TERMINAL_PAGE = 1000
+"""Events ``shary log`` lists on a terminal without ``--limit`` before it says how to see
+more: a terminal draws a few thousand lines a second, and a long run logs millions (into
+a pipe or a file every event is written, at about a hundred thousand a second)."""
 _LINES_PER_PRINT = 1000  # one print per line through rich is ten times slower
 _CONTROL = re.compile(r"[\x00-\x1f]")  # what JSON escapes
 _BARE = re.compile(r"[^\s\"'=,\[\]{}\x00-\x1f]+")
@@ -526,18 +530,34 @@ def cmd_log(args: argparse.Namespace) -> int:
             count = _write_jsonl(events, stream)
         _out.print(f"wrote {count} event(s) to {escape(str(args.jsonl))}")
         return 0
+    page = TERMINAL_PAGE if args.limit is None and not args.json and _out.is_terminal \
+        else None
+    if page is not None:
+        filters["limit"] = page + 1  # one more tells whether there are more
     with merged_events(args.file, **filters) as events:
         try:
             if args.json:
                 _write_jsonl(events, sys.stdout)
             else:
-                _print_table(events)
+                stream = iter(events)
+                _print_table(islice(stream, page) if page is not None else stream)
+                if page is not None and next(stream, None) is not None:
+                    _err.print(_more_hint(args, page), highlight=False)
             sys.stdout.flush()
         except BrokenPipeError:
             # The reader went away (| head): not an error. Python would complain
             # again when it flushes stdout at exit, so point stdout at nothing.
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
     return 0
+
+
+def _more_hint(args: argparse.Namespace, page: int) -> Text:
+    """How to see the events after the first page, or fewer of them."""
+    hint = (f"… more events after these {page}: the next ones with --offset "
+            f"{args.offset + page} --limit {page}; fewer with --kind K ('fact-*'), --task T, "
+            "--agent A, --since S, --until S; all of them with --limit N or through a pipe "
+            f"(shary log {' '.join(str(f) for f in args.file)} | less)")
+    return Text(hint, style="dim")
 
 
 @contextmanager

@@ -90,11 +90,25 @@ class Raise:
 
 @dataclass(frozen=True)
 class Send:
-    """Send an event to the instance itself, after ``delay`` seconds on its clock."""
+    """Send an event after ``delay`` seconds on the instance's clock.
+
+    ``to`` is None for the instance itself, :data:`PARENT` for the scheme that
+    invoked it, or the id of an invoke of this scheme for that child: the
+    events between parent and child that SCXML's ``<send target="#_parent">``
+    and ``"#_ID"`` carry.
+    """
 
     event: str
     delay: float = 0.0
     id: str | None = None
+    to: str | None = None
+
+
+IN_STATE = "in "
+"""A guard ``in STATE`` holds while STATE is active: SCXML's ``In()``, the one predicate of
+its null data model, needs no registered condition (it reads the configuration only)."""
+PARENT = "parent"
+"""The ``to:`` of a send that goes to the invoking scheme (no invoke id may take this name)."""
 
 
 @dataclass(frozen=True)
@@ -156,6 +170,13 @@ class Transition:
         """The registered condition the guard names (without ``not``)."""
         return self.guard[4:] if self.negated else self.guard
 
+    @property
+    def in_state(self) -> str | None:
+        """The state a guard ``in STATE`` names (see :data:`IN_STATE`), else None."""
+        condition = self.condition
+        return condition[len(IN_STATE):] if condition and condition.startswith(IN_STATE) \
+            else None
+
     def matches(self, event: str | None) -> bool:
         if self.events is None or event is None:
             return self.events is None and event is None
@@ -177,7 +198,8 @@ def _action_label(action: Action) -> str:
     if isinstance(action, Raise):
         return f"raise {action.event}"
     if isinstance(action, Send):
-        return f"send {action.event}" + (f" after {action.delay:g}s" if action.delay else "")
+        return f"send {action.event}" + (f" to {action.to}" if action.to else "") \
+            + (f" after {action.delay:g}s" if action.delay else "")
     if isinstance(action, Cancel):
         return f"cancel {action.id}"
     return f"log {action.text!r}"

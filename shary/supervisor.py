@@ -45,6 +45,7 @@ from shary.recipes import (
     Term,
 )
 from shary.tasktree import CANCELLED, DONE, FAILED, ONGOING, SUSPENDED, TASK, TaskTree
+from userfiles.errors import FileError, Problem
 
 
 class Planner(Protocol):
@@ -160,6 +161,7 @@ class Supervisor:
         scheme's roles the task does not fill; a ``background`` task is kept
         apart from :attr:`runs` (see :attr:`background`)."""
         task_type = self.library.tasks[name]
+        _check_nesting(name, parent)
         missing = [p for p in task_type.params if p not in args]
         extra = [a for a in args if a not in task_type.params and a != ROBOT_PARAM]
         if missing or extra:
@@ -304,6 +306,25 @@ class Supervisor:
     def missing_executors(self) -> list[str]:
         """Atomic tasks the library declares that no executor performs."""
         return [a for a in self.library.atomic if self.executors.get(a) is None]
+
+
+MAX_TASK_DEPTH = 64
+"""Tasks one task may be nested in.  A recipe that starts its own task first, whatever its
+``when:`` (the facts are the same at the same instant), nests it without end: the run
+stops at this depth, at the recipe's line, rather than at Python's stack limit."""
+
+
+def _check_nesting(name: str, parent: ActTask | None) -> None:
+    """Refuse a subtask :data:`MAX_TASK_DEPTH` tasks deep (:class:`FileError` at the recipe)."""
+    depth, act = 1, parent
+    while act is not None and depth <= MAX_TASK_DEPTH:
+        depth, act = depth + 1, act.run.parent
+    recipe = parent.recipe if parent is not None else None
+    if depth > MAX_TASK_DEPTH and recipe is not None:
+        raise FileError([Problem(recipe.file, *recipe.mark, f"task {name!r} is nested more "
+                                 f"than {MAX_TASK_DEPTH} tasks deep by recipe {recipe.name!r}: "
+                                 "a recipe that starts its own task again before anything "
+                                 "ends it never stops (the run was stopped)")])
 
 
 class TaskRun(SchemeListener):

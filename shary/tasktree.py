@@ -30,6 +30,7 @@ FINISHED = frozenset({DONE, FAILED, CANCELLED})
 
 TASK, ACT, ATOMIC = "task", "act", "atomic"
 """Node kinds: a task, an act x task, an atomic task."""
+NODE_KINDS = (TASK, ACT, ATOMIC)
 
 Recorder = Callable[..., Any]
 
@@ -154,9 +155,12 @@ class TaskTree:
         ``node``, ``task-state`` and ``node-removed`` events of a context log.
 
         The events' shapes are checked by the log's reader (``shary.logrows``);
-        what only the tree can see, a node added twice, is a :class:`BadEvent`.
-        A node whose parent is not in the tree becomes a root.  Nothing here
-        recurses, so a tree of any depth replays.
+        what only the tree can see is a :class:`BadEvent`, refused at its row
+        rather than drawn: a node added twice, a node kind the tree has not, a
+        node of its own parent, a state change or removal of a node that is
+        not in the tree (the writer only changes and removes nodes it has).  A
+        node whose parent is not in the tree becomes a root (its parent may
+        have been cut).  Nothing here recurses, so a tree of any depth replays.
         """
         tree = cls()
         attrs = tree._attrs
@@ -172,10 +176,23 @@ class TaskTree:
                 if event.agent:
                     data["agent"] = event.agent
                 node_kind = data.pop("node_kind")
+                if node_kind not in NODE_KINDS:
+                    raise BadEvent(event, f"data.node_kind is {node_kind[:40]!r}, not one of "
+                                   f"{', '.join(NODE_KINDS)}")
+                if not node or parent == node:
+                    raise BadEvent(event, "task is empty, not a node id" if not node else
+                                   f"node {node} is its own parent")
                 tree._insert(node, parent, {**data, "kind": node_kind})
-            elif event.kind == "task-state" and event.task in attrs:
+            elif event.kind == "task-state":
+                if event.task not in attrs:
+                    raise BadEvent(event, f"node {event.task[:40]} changes state, but it is not "
+                                   "in the tree")
                 attrs[event.task]["state"] = event.data["state"]
             elif event.kind == "node-removed":
+                missing = next((n for n in event.data["nodes"] if n not in attrs), None)
+                if missing is not None:
+                    raise BadEvent(event, f"node {missing[:40]} is removed, but it is not in "
+                                   "the tree")
                 tree._remove(event.data["nodes"])
         return tree
 

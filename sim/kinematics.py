@@ -28,6 +28,11 @@ from .world import LivingRoom, pb
 # prefers the arm's own joints.
 _FROZEN_DAMPING = 100.0
 _ARM_DAMPING = 0.01
+IK_ITERATIONS = 20
+"""PyBullet's own iterations in one IK call.  Its answer is only a step of :func:`reach`,
+which measures where the grasp link really is and solves again; 100 iterations cost
+three times as much and reach the target in as many of those rounds (stack-nominal:
+40 IK calls either way, 7.6 ms against 24.5 ms of CPU)."""
 
 
 def _angle_between(q1: Sequence[float], q2: Sequence[float]) -> float:
@@ -89,7 +94,7 @@ def reach(world: LivingRoom, robot: str, target_xyz: Sequence[float],
 
     def solve(with_limits: bool) -> np.ndarray:
         """One IK call from the current joints; the arm's answer, clipped to its limits."""
-        options: dict = dict(orientation, jointDamping=damping, maxNumIterations=100,
+        options: dict = dict(orientation, jointDamping=damping, maxNumIterations=IK_ITERATIONS,
                              residualThreshold=1e-6)
         if with_limits:
             current = world.joint_positions(robot)

@@ -10,7 +10,8 @@ timeout), which is most of why a run goes far faster than real time.
 
 Contact is simulated only where it decides the outcome: :meth:`settle` steps
 PyBullet's physics after an object is let go, so it stands on a table, topples
-or falls into the bin as physics says.
+or falls into the bin as physics says (until everything that moves is at rest:
+:mod:`sim.settling`).
 """
 
 from __future__ import annotations
@@ -25,12 +26,13 @@ import networkx as nx
 from .avatar import Avatar
 from .humans import HUMAN_PLACES, TORSO_RADIUS, WAYPOINTS
 from .motion import Activity, wrap
+from .settling import Settling
 from .world import BOTTLE_HEIGHT, LivingRoom, pb
 
 TICK = 0.1
 """Simulated seconds between two ticks while something moves."""
 SETTLE_SECONDS = 0.8
-"""Physics time given to an object let go."""
+"""Physics time given at most to an object let go (stepping ends once all is at rest)."""
 PERSON_CLEARANCE = TORSO_RADIUS + 0.08
 
 
@@ -49,6 +51,7 @@ class Simulation:
         self._ids = itertools.count(1)
         self._timer: Any = None
         self.physics_steps = 0
+        self.physics = Settling(world)
 
     # -- activities ------------------------------------------------------------
 
@@ -111,8 +114,13 @@ class Simulation:
         self.holder.pop(obj, None)
 
     def settle(self, obj: str, at: tuple[float, float, float] | None = None) -> None:
-        """Let an object go (optionally from ``at``) and step physics until it has settled."""
+        """Let an object go (optionally from ``at``) and step physics until it has settled,
+        robots and the objects still held standing still."""
         holder = self.holder.get(obj)
+        if at is None and holder is not None:
+            # from the hand as it is now: a motion that ended this tick moved it after the
+            # last carry, and the object would drop from where the hand was a tick ago
+            at = self.hand_of(holder)
         self.release(obj)
         body = self.world.body(obj)
         if at is not None:
@@ -126,7 +134,9 @@ class Simulation:
             pairs = [(robot.body, link) for link in range(-1, len(robot.links))]
         for other, link in pairs:
             self.world.call(pb.setCollisionFilterPair, other, body, link, -1, 0)
-        self.physics_steps += self.world.step(SETTLE_SECONDS)
+        free = [name for name in self.world.movables if name not in self.holder]
+        self.physics_steps += self.physics.settle(free, [*self.world.robots, *self.holder],
+                                                  SETTLE_SECONDS)
         for other, link in pairs:
             self.world.call(pb.setCollisionFilterPair, other, body, link, -1, 1)
 

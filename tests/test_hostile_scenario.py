@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from hostile import assert_refused, run_inprocess, run_subprocess
+from hostile import HOSTILE, assert_refused, run_inprocess, run_subprocess
 from hostile_files import blamable, corpus, expected
 
 CASES = corpus("scenario")
@@ -19,13 +19,23 @@ def test_validate_refuses(path: Path) -> None:
 @pytest.mark.parametrize("name", ["nan-within", "fault-times", "unknown-partner",
                                   "goal-million-hours", "recipes-etc-passwd",
                                   "atomic-without-executor", "expect-unknown-predicate",
-                                  "expect-unknown-thing", "goal-after-timeout"])
+                                  "expect-unknown-thing", "goal-after-timeout",
+                                  "task-starts-itself"])
 def test_run_refuses_before_running(name: str, tmp_path: Path) -> None:
     """These validated and then hung, failed or read a system file at run time."""
     path = next(p for p in CASES if p.stem == name)
     outcome = run_inprocess("run", path, "--out", tmp_path / "out", "--quiet")
     assert_refused(outcome, *blamable(path), message=expected(path))
     assert not (tmp_path / "out" / "log.sqlite").exists()
+
+
+def test_a_task_that_nests_itself_at_run_time_is_stopped_at_its_recipe(tmp_path: Path) -> None:
+    """A valid file (its recipe's condition could be false) that nests its task without end
+    once run: before, ``shary run`` ended in "maximum recursion depth exceeded"."""
+    path = HOSTILE / "scenario" / "run" / "task-nests-itself-when.yaml"
+    assert run_inprocess("validate", path).status == 0
+    outcome = run_inprocess("run", path, "--out", tmp_path / "out", "--quiet")
+    assert_refused(outcome, path.parent / "recipes-nest-when.yaml", message=expected(path))
 
 
 def test_system_file_never_quoted() -> None:

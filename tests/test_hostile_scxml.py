@@ -24,7 +24,7 @@ TRACES = HOSTILE / "trace"
 EXPECTED = {
     "invoke-parent-folder": "is outside the folder of invoke-parent-folder.scxml",
     "invoke-absolute": "is outside the folder of invoke-absolute.scxml",
-    "invoke-file-url": "no file 'file:///etc/hostname'",
+    "invoke-file-url": "'/etc/hostname' is outside the folder of invoke-file-url.scxml",
     "invoke-cycle": r"invoke cycle: invoke-cycle.scxml -> invoke-cycle.scxml",
     "invoke-missing": "no file 'no-such-chart.scxml'",
     "invoke-both-sources": "either src= or one <content>",

@@ -49,7 +49,13 @@ def test_import_translates_and_prunes(write):
 @pytest.mark.parametrize("fragment, message", [
     ('<transition event="e" cond="x &gt; 1" target="a"/>', "cond= needs a data model"),
     ("<onentry><script>x = 1</script></onentry>", "<script> needs a data model"),
-    ('<onentry><send event="e" target="#_parent"/></onentry>', "another target"),
+    ('<onentry><send event="e" target="http://example.org/"/></onentry>', "nowhere else"),
+    ('<onentry><send event="e" type="http://www.w3.org/TR/scxml/#BasicHTTPEventProcessor"/>'
+     '</onentry>', "only SCXML's own event processor"),
+    ('<invoke src="http://example.org/c.scxml"/>', "only a relative path or a file: URI"),
+    ('<invoke src="file://host/c.scxml"/>', "only a relative path or a file: URI"),
+    ('<invoke src="file:../x.scxml"/>', "is outside the folder of u.scxml"),
+    ('<invoke src="file:///etc/c.scxml"/>', "u.scxml"),
     ('<invoke src="../x.scxml"/>', "is outside the folder of u.scxml"),
     ('<invoke srcexpr="x"/>', "needs a data model"),
     ('<onentry><send event="e" delay="soon"/></onentry>', "is not a time"),

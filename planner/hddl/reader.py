@@ -15,9 +15,9 @@ from userfiles.errors import FileError, Problem
 MAX_PROBLEMS = 200
 """At most this many problems are reported for one file (then a count of the rest)."""
 KEPT_PROBLEMS = 10 * MAX_PROBLEMS
-"""Problems kept while reading (the first :data:`MAX_PROBLEMS` by position are reported;
-a file is read in a few passes, so more are kept than reported); the others are only
-counted, so that a file with a million mistakes costs no more than one with a thousand."""
+"""Problems found before reading stops (the first :data:`MAX_PROBLEMS` by position are
+reported; a file is read in a few passes, so more are kept than reported): a file with
+a million mistakes costs no more to refuse than one with a thousand."""
 MAX_HINTS = 20
 """At most this many "did you mean" hints are looked for in one file: each compares a
 word with every name it could have been (a thousand names at most), and a hostile file
@@ -130,8 +130,6 @@ class _Reader:
         self.object_word = "constant"
         self.hints = 0
         """How many hints were looked for (see :data:`MAX_HINTS`)."""
-        self.dropped = 0
-        """Problems found beyond :data:`KEPT_PROBLEMS`, counted only."""
 
     # -- problems
 
@@ -147,22 +145,26 @@ class _Reader:
         return f" (did you mean '{close[0]}'?)" if close else ""
 
     def error(self, at: Node | Token | Subtask, message: str) -> None:
-        if len(self.problems) < KEPT_PROBLEMS:
-            self.problems.append(Problem(self.file, at.line, at.col, message))
-        else:
-            self.dropped += 1
+        """Record a problem; at the :data:`KEPT_PROBLEMS`-th, stop reading (raise them)."""
+        self.problems.append(Problem(self.file, at.line, at.col, message))
+        if len(self.problems) >= KEPT_PROBLEMS:
+            self.finish(stopped_at=(at.line, at.col))
 
-    def finish(self) -> None:
+    def finish(self, stopped_at: tuple[int, int] | None = None) -> None:
         """Raise every problem found, first in the file first (at most :data:`MAX_PROBLEMS`,
-        then a count of the others)."""
+        then a count of the others, and where reading stopped if it did)."""
         if not self.problems:
             return
         found = sorted(set(self.problems), key=lambda p: (p.line, p.col, p.message))
-        more = len(found) - MAX_PROBLEMS + self.dropped
+        more = len(found) - MAX_PROBLEMS
         if more > 0:
             rest = found[min(MAX_PROBLEMS, len(found) - 1)]
             found = [*found[:MAX_PROBLEMS],
                      Problem(self.file, rest.line, rest.col, f"... and {more} more problems")]
+        if stopped_at is not None:
+            found.append(Problem(self.file, *stopped_at, f"reading stopped here, after "
+                                 f"{KEPT_PROBLEMS} problems: the rest of the file is not "
+                                 "checked (correct these first)"))
         raise FileError(found)
 
     # -- names

@@ -203,7 +203,9 @@ def cmd_import_scxml(args: argparse.Namespace) -> int:
 
 
 def add_conformance(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("conformance", help="run SCION-style statechart tests found under DIR")
+    p = sub.add_parser("conformance", help="run the statechart tests found under DIR: SCION "
+                       "pairs and plain charts, or the W3C IRP's tests (a DIR with its "
+                       "manifest.xml) on the null data model")
     p.add_argument("folder", type=Path, metavar="DIR")
     p.add_argument("--only", type=Path, metavar="LIST",
                    help="run only the charts named in this file (paths relative to DIR), e.g. "
@@ -213,18 +215,20 @@ def add_conformance(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_conformance(args: argparse.Namespace) -> int:
+    from shary import w3c
     from shary.conformance import find_tests, run_test
 
     folder: Path = args.folder
     if not folder.is_dir():
         return error(f"{folder} is not a folder", json_mode=args.json)
-    charts = find_tests(folder)
+    irp = w3c.is_irp(folder)
+    charts = w3c.irp_tests(folder) if irp else find_tests(folder)
     if args.only is not None:
         wanted = set(yamlsafe.read_text(args.only).split())
         charts = [c for c in charts if str(c.relative_to(folder)) in wanted]
     outcomes = []
-    for chart in charts:
-        outcome = run_test(chart, folder)
+    for outcome in (w3c.run_irp(folder, charts) if irp
+                    else (run_test(chart, folder) for chart in charts)):
         outcomes.append(outcome)
         if not outcome.passed and not args.json:
             _out.print(f"[red]FAIL[/red] {escape(outcome.name)}: {escape(outcome.reason)}")

@@ -88,6 +88,7 @@ def load_library(paths: list[str | os.PathLike[str]] | None = None, *,
     for reader in documents:
         if reader.shape_ok:
             builder.define(reader)
+    builder.check_starts()
     for reader in documents:
         problems.extend(reader.problems)
     if problems:
@@ -101,6 +102,8 @@ class _Builder:
         self.acts = acts
         self.library = RecipeLibrary()
         self.schemes: dict[str, Scheme | None] = {}
+        self.starts = nx.DiGraph()
+        """Task -> the subtask an unconditional recipe of it starts first, with where."""
 
     # -- first pass: the vocabulary ----------------------------------------
 
@@ -145,7 +148,8 @@ class _Builder:
         else:
             options = [(path + ("scheme", i, "scheme"), c.get("scheme"),
                         path + ("scheme", i, "when"), c.get("when"))
-                       for i, c in enumerate(raw or []) if isinstance(c, dict)]
+                       for i, c in enumerate(raw if isinstance(raw, list) else [])
+                       if isinstance(c, dict)]
         choices = []
         for where, scheme_name, when_path, when in options:
             scheme = self._scheme(reader, where, scheme_name)
@@ -267,6 +271,8 @@ class _Builder:
                                    f"of task {task_name!r} enters {act} on {event!r}"
                                    f"{did_you_mean(event, entering)}; events: "
                                    f"{', '.join(sorted(entering)) or 'none'}")
+        if not when and task is not ANY:
+            self._note_starts(reader, path, task_name, spec.get("steps"))
         rank = len(self.library.recipes_for(task_name, act)) + 1
         name = spec.get("name") or f"{task_name}/{act}#{rank}"
         self.library.recipes.append(Recipe(
@@ -274,6 +280,33 @@ class _Builder:
             spec.get("function") if isinstance(spec.get("function"), str) else None,
             monitors, retry, spec.get("doc", "") or "", reader.file,
             reader.located.key_at(path), on))
+
+    def _note_starts(self, reader: Reader, path: tuple, task: str, raw: Any) -> None:
+        """Record the subtasks a recipe starts before anything else (no ``after``)."""
+        for index, spec in enumerate(raw if isinstance(raw, list) else []):
+            first = spec.get("after") == [] if "after" in spec else index == 0
+            if first and isinstance(spec.get("task"), str) \
+                    and not self.starts.has_edge(task, spec["task"]):
+                self.starts.add_edge(task, spec["task"], at=(reader, path + ("steps", index)))
+
+    def check_starts(self) -> None:
+        """Refuse tasks that start themselves before anything happens, at the step that does.
+
+        A recipe without ``when:`` whose first step is its own task (or a
+        task whose first step leads back to it) starts that task again at the
+        same instant, with nothing done in between that could end it: a run
+        would only stop when Python's stack does.
+        """
+        for component in nx.strongly_connected_components(self.starts):
+            task = min(component)
+            if len(component) == 1 and not self.starts.has_edge(task, task):
+                continue
+            cycle = nx.find_cycle(self.starts.subgraph(component), task)
+            loop = " -> ".join([a for a, _ in cycle] + [cycle[0][0]])
+            reader, at = self.starts.edges[cycle[0]]["at"]
+            reader.problem(at, f"task {task!r} starts itself before anything else happens "
+                           f"({loop}: each recipe on the way, none with 'when:', starts the "
+                           "next task first): a run would start it again without end")
 
     def _steps(self, reader: Reader, path: tuple, raw: Any,
                env: set[str]) -> tuple[Step, ...]:

@@ -25,6 +25,7 @@ from shary.model import (
     FINAL,
     HISTORY,
     PARALLEL,
+    PARENT,
     Action,
     Cancel,
     Coverage,
@@ -47,7 +48,7 @@ DEFAULT_ROLES = {"robot": "robot", "partner": "human"}
 
 EVENTLESS_KEY = "always"
 _AFTER = re.compile(r"^after\s+(\S+)$")
-_GUARD = re.compile(r"^(not )?[a-z][a-z0-9_-]*$")
+_GUARD = re.compile(r"^(not )?([a-z][a-z0-9_-]*|in [A-Za-z0-9_][A-Za-z0-9_.:-]*)$")
 _ACT_WORD = re.compile(r"^[A-Z][A-Z0-9]*(-[A-Z0-9]+)*$")
 _DESCRIPTOR = re.compile(r"^(\*|[A-Za-z0-9_][A-Za-z0-9_:-]*(\.[A-Za-z0-9_:-]+)*(\.\*)?)$")
 
@@ -112,6 +113,8 @@ class _Builder:
         self.base_acts = acts
         self.chain = chain
         self.invoke_ids: dict[str, tuple] = {}
+        self.send_targets: list[tuple[str, tuple]] = []
+        """The invoke ids that sends name in ``to:``, with where: checked once all are known."""
         self.check_reachable = check_reachable
         self.data: dict[str, Any] = located.data
         self.reader = Reader(located, schema.check(located, "scheme"))
@@ -140,7 +143,7 @@ class _Builder:
         roles = data.get("roles")
         self.roles = dict(roles) if isinstance(roles, dict) and roles else dict(DEFAULT_ROLES)
         root = State("", COMPOUND, mark=self.located.at(()))
-        root.initial, root.initial_actions = self._initial(data.get("initial"))
+        root.initial, root.initial_actions = self._initial(data.get("initial"), ("initial",))
         states = data.get("states")
         if isinstance(states, dict):
             self._children(root, states, ("states",))
@@ -154,6 +157,11 @@ class _Builder:
             taken = Coverage()
             for transition in state.transitions:
                 self._check_transition(transition, taken)
+        for to, path in self.send_targets:
+            if to not in self.invoke_ids:
+                self.problem(path, f"send to {to!r}: no invoke of this scheme has that id"
+                             f"{did_you_mean(to, self.invoke_ids)}; 'to' is '{PARENT}' (the "
+                             "scheme that invoked this one) or an invoke id of this scheme")
         if self.check_reachable:
             self._check_reachable(scheme)
         return scheme
@@ -175,16 +183,18 @@ class _Builder:
             self.states[name] = state
             self.paths[name] = spec_path
             state.doc = spec.get("doc", "") if isinstance(spec.get("doc"), str) else ""
-            state.initial, state.initial_actions = self._initial(spec.get("initial"))
-            state.default, default_actions = self._initial(spec.get("default"))
+            state.initial, state.initial_actions = self._initial(spec.get("initial"),
+                                                                 spec_path + ("initial",))
+            state.default, default_actions = self._initial(spec.get("default"),
+                                                           spec_path + ("default",))
             state.initial_actions = state.initial_actions or default_actions
             if spec.get("outcome") in ("done", "failed"):
                 state.outcome = spec["outcome"]
             if spec.get("history") in ("shallow", "deep"):
                 state.history = spec["history"]
             self._act(state, spec, spec_path)
-            state.on_entry = self._actions(spec.get("on_entry"))
-            state.on_exit = self._actions(spec.get("on_exit"))
+            state.on_entry = self._actions(spec.get("on_entry"), spec_path + ("on_entry",))
+            state.on_exit = self._actions(spec.get("on_exit"), spec_path + ("on_exit",))
             if isinstance(spec.get("on"), dict):
                 self._transitions(state, spec["on"], spec_path + ("on",))
             if "invoke" in spec:
@@ -222,10 +232,11 @@ class _Builder:
         state.by = by if isinstance(by, str) else next(iter(self.roles))
         state.act_type = act_type(self.roles[state.by])
 
-    def _initial(self, value: Any) -> tuple[tuple[str, ...], tuple[Action, ...]]:
+    def _initial(self, value: Any, path: tuple) -> tuple[tuple[str, ...], tuple[Action, ...]]:
         """Targets and actions of an ``initial`` or ``default`` (a name, a list, a transition)."""
         if isinstance(value, dict):
-            return self._targets(value.get("target")), self._actions(value.get("do"))
+            return self._targets(value.get("target")), self._actions(value.get("do"),
+                                                                     path + ("do",))
         return self._targets(value), ()
 
     def _invokes(self, state: State, value: Any, path: tuple) -> None:
@@ -238,6 +249,10 @@ class _Builder:
             ident = item.get("id")
             if not isinstance(ident, str):
                 ident = state.name if len(items) == 1 else f"{state.name}.{index + 1}"
+            if item.get("id") == PARENT:
+                self.problem(item_path + ("id",), f"invoke id {PARENT!r} is reserved: a "
+                             f"send's 'to: {PARENT}' names the scheme that invoked this one")
+                continue
             if ident in self.invoke_ids:
                 first = self.located.at(self.invoke_ids[ident])
                 self.problem(item_path, f"duplicate invoke id {ident!r} (first at line "
@@ -292,7 +307,7 @@ class _Builder:
                     guard = item.get("guard")
                     t.guard = guard if isinstance(guard, str) and _GUARD.match(guard) else None
                     t.internal = item.get("type") == "internal"
-                    t.actions = self._actions(item.get("do"))
+                    t.actions = self._actions(item.get("do"), item_path + ("do",))
                 else:
                     continue
                 state.transitions.append(t)
@@ -317,11 +332,11 @@ class _Builder:
                     ok = False
         return ok
 
-    def _actions(self, value: Any) -> tuple[Action, ...]:
+    def _actions(self, value: Any, path: tuple) -> tuple[Action, ...]:
         if not isinstance(value, list):
             return ()
         out: list[Action] = []
-        for item in value:
+        for index, item in enumerate(value):
             if not isinstance(item, dict):
                 continue
             if isinstance(item.get("raise"), str):
@@ -333,7 +348,10 @@ class _Builder:
                 except ValueError:
                     continue  # the schema reported it
                 ident = item.get("id") if isinstance(item.get("id"), str) else None
-                out.append(Send(item["send"], wait, ident))
+                to = item.get("to") if isinstance(item.get("to"), str) else None
+                if to is not None and to != PARENT:
+                    self.send_targets.append((to, path + (index, "to")))
+                out.append(Send(item["send"], wait, ident, to))
             elif isinstance(item.get("cancel"), str):
                 out.append(Cancel(item["cancel"]))
             elif isinstance(item.get("log"), str):
@@ -420,7 +438,10 @@ class _Builder:
                 self.problems.append(Problem(self.located.file, *t.target_mark,
                                              f"unknown target state {name!r}"
                                              f"{did_you_mean(name, self.states)}"))
-        if t.condition is not None and self.conditions is not None \
+        if t.in_state is not None and t.in_state not in self.states:
+            self._at(at, f"guard 'in {t.in_state}' names an unknown state"
+                     f"{did_you_mean(t.in_state, self.states)}")
+        elif t.condition is not None and t.in_state is None and self.conditions is not None \
                 and t.condition not in self.conditions:
             self._at(at, f"guard names an unknown condition {t.condition!r}"
                      f"{did_you_mean(t.condition, self.conditions)}; known conditions: "
@@ -457,8 +478,13 @@ class _Builder:
                          "transition or initial state leads to it", key=True)
 
 
-def unreachable(scheme: Scheme) -> list[State]:
-    """States (history pseudo-states aside) that no run of the scheme can ever enter."""
+def unreachable(scheme: Scheme, histories: bool = False) -> list[State]:
+    """States that no run of the scheme can ever enter (history pseudo-states only if asked).
+
+    A history state no transition targets is harmless in a scheme, but a tool
+    that removes the unreachable states must remove it too: its default may
+    name one of them.
+    """
     graph = nx.DiGraph()
     graph.add_node(scheme.root)
     states = scheme.states
@@ -474,7 +500,8 @@ def unreachable(scheme: Scheme) -> list[State]:
             if name in states:
                 graph.add_edge(state, states[name])
     reached = nx.descendants(graph, scheme.root)
-    return [s for s in scheme.all_states() if s not in reached and s.kind != HISTORY]
+    return [s for s in scheme.all_states() if s not in reached
+            and (histories or s.kind != HISTORY)]
 
 
 def _at(data: Any, path: tuple) -> Any:

@@ -32,9 +32,10 @@ import re
 import xml.parsers.expat
 from dataclasses import dataclass, field
 from typing import Any
+from urllib.parse import unquote, urlsplit
 
 from shary.io.schemes import parse_scheme, unreachable
-from shary.model import Coverage
+from shary.model import PARENT, Coverage
 from userfiles.errors import FileError, Problem
 from userfiles.reader import confine, spelled
 from userfiles.yamlsafe import Located, dump, read_text
@@ -48,6 +49,7 @@ MAX_INVOKE_DEPTH = 8
 """Most charts a chain of ``<invoke src>`` may go through."""
 
 _NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.:-]*$")
+_IN = re.compile(r"""^\s*In\(\s*(['"])([A-Za-z0-9_][A-Za-z0-9_.:-]*)\1\s*\)\s*$""")
 _TIME = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*(ms|s)\s*$")
 _STATES = {"state", "parallel", "final", "history"}
 _ACTIONS = {"raise", "send", "cancel", "log"}
@@ -57,19 +59,21 @@ _SCXML_TYPES = ("", "scxml", "http://www.w3.org/TR/scxml/", "http://www.w3.org/T
 
 
 @dataclass
-class _Element:
+class Element:
+    """An XML element as read: local tag name, attributes and where it starts."""
+
     tag: str
     attrs: dict[str, str]
     line: int
     col: int
-    children: list[_Element] = field(default_factory=list)
+    children: list[Element] = field(default_factory=list)
 
 
 def import_scxml(path: str | os.PathLike[str]) -> str:
     """The scheme YAML equivalent to an SCXML file; :class:`FileError` for what cannot be."""
     name = os.fspath(path)
     budget = [MAX_ELEMENTS]
-    root = _parse(read_text(name), name, budget)
+    root = parse_xml(read_text(name), name, budget)
     out, pruned = _Translator(name, (os.path.realpath(name),), budget).scheme(root)
     text = dump(out)
     if pruned:
@@ -77,11 +81,14 @@ def import_scxml(path: str | os.PathLike[str]) -> str:
     return text
 
 
-def _parse(text: str, file: str, budget: list[int]) -> _Element:
-    """The element tree of an SCXML text; ``budget`` counts down the elements left."""
+def parse_xml(text: str, file: str, budget: list[int], root: str = "scxml") -> Element:
+    """The element tree of an XML text whose top is ``<root>`` (SCXML's by default).
+
+    ``budget`` counts down the elements left.
+    """
     parser = xml.parsers.expat.ParserCreate(namespace_separator=" ")
-    stack: list[_Element] = []
-    top: list[_Element] = []
+    stack: list[Element] = []
+    top: list[Element] = []
 
     def refuse(what: str, line: int | None = None, col: int | None = None) -> None:
         raise FileError([Problem(file, line or parser.CurrentLineNumber,
@@ -95,7 +102,7 @@ def _parse(text: str, file: str, budget: list[int]) -> _Element:
             refuse(f"more than {MAX_ELEMENTS} XML elements: the limit of a chart (with the "
                    "charts it invokes)", 1, 1)
         local = tag.split(" ")[-1]
-        element = _Element(local, {k.split(" ")[-1]: v for k, v in attrs.items()},
+        element = Element(local, {k.split(" ")[-1]: v for k, v in attrs.items()},
                            parser.CurrentLineNumber, parser.CurrentColumnNumber + 1)
         (stack[-1].children if stack else top).append(element)
         stack.append(element)
@@ -113,8 +120,9 @@ def _parse(text: str, file: str, budget: list[int]) -> _Element:
         raise FileError([Problem(file, err.lineno, err.offset + 1,
                                  f"XML syntax: {xml.parsers.expat.errors.messages[err.code]}")]
                         ) from None
-    if not top or top[0].tag != "scxml":
-        raise FileError([Problem(file, 1, 1, "not an SCXML document (no <scxml> root)")])
+    if not top or top[0].tag != root:
+        what = "an SCXML document" if root == "scxml" else f"a <{root}> document"
+        raise FileError([Problem(file, 1, 1, f"not {what} (no <{root}> root)")])
     return top[0]
 
 
@@ -126,10 +134,10 @@ class _Translator:
         self.problems: list[Problem] = []
         self.generated = 0
 
-    def refuse(self, element: _Element, message: str) -> None:
+    def refuse(self, element: Element, message: str) -> None:
         self.problems.append(Problem(self.file, element.line, element.col, message))
 
-    def scheme(self, root: _Element) -> tuple[dict[str, Any], list[str]]:
+    def scheme(self, root: Element) -> tuple[dict[str, Any], list[str]]:
         """The scheme of an ``<scxml>`` element, and the unreachable states left out."""
         for attr in ("datamodel", "binding"):
             if root.attrs.get(attr, "") not in ("", "ecmascript", "null", "early"):
@@ -148,7 +156,7 @@ class _Translator:
             raise FileError(self.problems)
         return out, _prune_unreachable(out, self.file)
 
-    def children(self, element: _Element) -> dict[str, Any]:
+    def children(self, element: Element) -> dict[str, Any]:
         states: dict[str, Any] = {}
         for child in element.children:
             if child.tag in _STATES:
@@ -166,7 +174,7 @@ class _Translator:
                 self.refuse(child, f"<{child.tag}> is not supported")
         return states
 
-    def state(self, element: _Element) -> dict[str, Any]:
+    def state(self, element: Element) -> dict[str, Any]:
         spec: dict[str, Any] = {}
         if element.tag == "final":
             spec["final"] = True
@@ -208,13 +216,13 @@ class _Translator:
             spec["states"] = children
         return spec or None  # type: ignore[return-value]
 
-    def initial(self, transition: _Element) -> Any:
+    def initial(self, transition: Element) -> Any:
         """The targets of an ``<initial>`` or history default transition, with its actions."""
         targets = _one_or_list(transition.attrs.get("target", "").split())
         actions = self.actions(transition)
         return {"target": targets, "do": actions} if actions else targets
 
-    def invoke(self, element: _Element) -> dict[str, Any]:
+    def invoke(self, element: Element) -> dict[str, Any]:
         """An ``<invoke>`` of another SCXML chart, its child written inline."""
         out: dict[str, Any] = {}
         for attr, value in element.attrs.items():
@@ -252,8 +260,20 @@ class _Translator:
             self.refuse(element, "<invoke> needs src= or a <content> chart")
         return out
 
-    def src(self, element: _Element, src: str) -> dict[str, Any] | None:
-        """The chart an ``<invoke src>`` names: a file below this chart's folder."""
+    def src(self, element: Element, src: str) -> dict[str, Any] | None:
+        """The chart an ``<invoke src>`` names: a file below this chart's folder.
+
+        ``src`` is a URI: a relative path or a ``file:`` URI without host
+        (``file:child.scxml``) resolves against the including chart's folder,
+        within the same confinement; other schemes (``http:`` …) are refused.
+        """
+        parts = urlsplit(src)
+        if parts.scheme == "file" and not (parts.netloc or parts.query or parts.fragment):
+            src = unquote(parts.path)
+        elif len(parts.scheme) > 1:  # (one letter is a drive, which confine refuses)
+            self.refuse(element, f"<invoke src={src!r}>: only a relative path or a file: URI "
+                        "naming a chart below this chart's folder can be invoked")
+            return None
         full, refusal = confine(self.file, src)
         if refusal is not None:
             self.refuse(element, refusal)
@@ -268,13 +288,13 @@ class _Translator:
             return None
         shown = spelled(path, like=self.file)
         try:
-            root = _parse(read_text(shown), shown, self.budget)
+            root = parse_xml(read_text(shown), shown, self.budget)
         except FileError as err:
             self.problems.extend(err.problems)
             return None
         return self.child(root, shown, self.chain + (path,))
 
-    def child(self, root: _Element, file: str, chain: tuple[str, ...]) -> dict[str, Any] | None:
+    def child(self, root: Element, file: str, chain: tuple[str, ...]) -> dict[str, Any] | None:
         if root.tag != "scxml":
             self.refuse(root, f"<{root.tag}> is not an SCXML chart")
             return None
@@ -286,26 +306,32 @@ class _Translator:
             return None
         return scheme
 
-    def transitions(self, element: _Element) -> dict[str, Any]:
+    def transitions(self, element: Element) -> dict[str, Any]:
         taken = Coverage()
         on: dict[str, Any] = {}
         for t in (c for c in element.children if c.tag == "transition"):
+            guard = None
             if "cond" in t.attrs:
-                self.refuse(t, "cond= needs a data model; use a scheme guard naming a "
-                            "registered condition instead")
-                continue
+                guard = _in_state(t.attrs["cond"])
+                if guard is None:
+                    self.refuse(t, "cond= needs a data model (only In('STATE') does not); "
+                                "use a scheme guard naming a registered condition instead")
+                    continue
             for attr in t.attrs:
-                if attr not in ("event", "target", "type"):
+                if attr not in ("event", "target", "type", "cond"):
                     self.refuse(t, f"transition attribute {attr!r} is not supported")
             events = tuple(t.attrs["event"].split()) if "event" in t.attrs else None
             if taken.covering(events) is not None:
                 continue  # an earlier transition takes all its events: it is never taken
-            taken.add(events, t)
+            if guard is None:
+                taken.add(events, t)
             targets = t.attrs.get("target", "").split()
             actions = self.actions(t)
             body: dict[str, Any] = {}
-            if len(targets) != 1 or actions or t.attrs.get("type") == "internal":
+            if len(targets) != 1 or actions or t.attrs.get("type") == "internal" or guard:
                 body["target"] = _one_or_list(targets) if targets else None
+                if guard:
+                    body["guard"] = guard
                 if t.attrs.get("type") == "internal" and targets:
                     body["type"] = "internal"
                 if actions:
@@ -313,10 +339,14 @@ class _Translator:
                 value: Any = body
             else:
                 value = _one_or_list(targets)
-            on[" ".join(events) if events is not None else "always"] = value
+            key = " ".join(events) if events is not None else "always"
+            if key in on:  # a guarded transition before it: the scheme lists both
+                on[key] = (on[key] if isinstance(on[key], list) else [on[key]]) + [value]
+            else:
+                on[key] = value
         return on
 
-    def actions(self, element: _Element) -> list[dict[str, Any]]:
+    def actions(self, element: Element) -> list[dict[str, Any]]:
         out: list[dict[str, Any]] = []
         for a in element.children:
             if a.tag in _NEEDS_DATAMODEL:
@@ -337,12 +367,25 @@ class _Translator:
                 out.append({"log": a.attrs.get("label", "")})
         return out
 
-    def send(self, a: _Element) -> dict[str, Any]:
+    def send(self, a: Element) -> dict[str, Any]:
         for attr in a.attrs:
             if attr not in ("event", "delay", "id", "target", "type"):
                 self.refuse(a, f"<send {attr}=…> is not supported (it needs a data model)")
-        if a.attrs.get("target", "#_internal") not in ("#_internal",):
-            self.refuse(a, "<send> to another target than the chart itself is not supported")
+        target = a.attrs.get("target", "")
+        to = None
+        if target == "#_parent":
+            to = PARENT
+        elif target.startswith("#_") and target != "#_internal":
+            to = target[2:]
+            if not _NAME.match(to) or to == PARENT:
+                self.refuse(a, f"<send target={target!r}>: {to!r} cannot be an invoke id")
+        elif target not in ("", "#_internal"):
+            self.refuse(a, f"<send target={target!r}>: a chart sends to itself, to "
+                        "'#_parent' or to a child by '#_INVOKEID', nowhere else")
+        if a.attrs.get("type", "") not in ("", "scxml", "http://www.w3.org/TR/scxml/",
+                                           "http://www.w3.org/TR/scxml/#SCXMLEventProcessor"):
+            self.refuse(a, f"<send type={a.attrs['type']!r}>: only SCXML's own event "
+                        "processor is supported")
         if a.children:
             self.refuse(a, "<send> with <param> or <content> needs a data model")
         if "event" not in a.attrs:
@@ -360,23 +403,47 @@ class _Translator:
                     + match.group(2)
         if "id" in a.attrs:
             out["id"] = a.attrs["id"]
+        if to is not None:
+            out["to"] = to
         return out
 
 
 def _prune_unreachable(document: dict[str, Any], file: str) -> list[str]:
     """Remove the states no run can enter (schemes refuse them); return their names."""
     scheme = parse_scheme(Located(file, document), check_reachable=False)
-    dead = {s.name for s in unreachable(scheme)}
+    never = unreachable(scheme, histories=True)
+    dead = {s.name for s in never if s.history is None}
+    # a history no transition targets stays, unless its default is among the dead
+    dead.update(s.name for s in never if s.history is not None and dead & set(s.default))
 
     def prune(states: dict[str, Any]) -> None:
         for name in [n for n in states if n in dead]:
             del states[name]
         for spec in states.values():
+            if isinstance(spec, dict) and isinstance(spec.get("on"), dict):
+                _drop_never_true(spec["on"], {f"in {n}" for n in dead})
             if isinstance(spec, dict) and isinstance(spec.get("states"), dict):
                 prune(spec["states"])
 
     prune(document["states"])
     return sorted(dead, key=lambda n: scheme.states[n].order)
+
+
+def _drop_never_true(on: dict[str, Any], never: set[str]) -> None:
+    """Remove the transitions guarded ``in S`` for a state S no run enters: never taken."""
+    for key in list(on):
+        items = on[key] if isinstance(on[key], list) else [on[key]]
+        kept = [t for t in items if not (isinstance(t, dict) and t.get("guard") in never)]
+        if not kept:
+            del on[key]
+        elif len(kept) != len(items):
+            on[key] = kept[0] if len(kept) == 1 else kept
+
+
+def _in_state(cond: str) -> str | None:
+    """The guard of a ``cond`` the null data model has: ``In('S')`` is ``in S``; else None."""
+    match = _IN.match(cond)
+    return None if match is None else f"in {match.group(2)}"
 
 
 def _one_or_list(items: list[str]) -> Any:

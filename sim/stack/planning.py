@@ -13,18 +13,20 @@ from __future__ import annotations
 
 import re
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import planner
 from planner.conditional import explore
+from planner.domain import Domain, Problem
 from planner.policy import select
 from planner.sharedplan import to_dict
 from shary.plans.tasks import SharedPlan
 from userfiles import yamlsafe
 from userfiles.errors import FileError
 
-__all__ = ["Replanner", "first_plan", "problem_path"]
+__all__ = ["Replanner", "StackFiles", "first_plan", "problem_path"]
 
 
 def problem_path(name: str) -> Path:
@@ -44,25 +46,40 @@ def _renamed(value: Any, names: dict[str, str]) -> Any:
     return value
 
 
-def _plan(path: Path, names: dict[str, str]) -> SharedPlan:
-    domain = planner.load_domain("stack")
-    problem = planner.load_problem(path, domain)
+@dataclass(frozen=True)
+class StackFiles:
+    """The planner's files a shared plan needs, read once before the run starts (and
+    not again at each replan): the ``stack`` domain, the problem, the problem's data."""
+
+    domain: Domain
+    problem: Problem
+    data: dict[str, Any]
+
+    @classmethod
+    def read(cls, problem: str) -> StackFiles:
+        path = problem_path(problem)
+        domain = planner.load_domain("stack")
+        return cls(domain, planner.load_problem(path, domain), yamlsafe.load_file(path).data)
+
+
+def _plan(problem: Problem, names: dict[str, str]) -> SharedPlan:
     return SharedPlan.from_dict(_renamed(to_dict(select(problem, explore(problem))), names))
 
 
-def first_plan(problem: str, names: dict[str, str]) -> SharedPlan:
+def first_plan(files: StackFiles, names: dict[str, str]) -> SharedPlan:
     """The problem's plan, its agents named as in the run (``{"robot": "pr2", …}``)."""
-    return _plan(problem_path(problem), names)
+    return _plan(files.problem, names)
 
 
 class Replanner:
     """Plans again from the robot's beliefs (see the module's documentation)."""
 
-    def __init__(self, facts: Any, problem: str, names: dict[str, str], record: Any):
+    def __init__(self, facts: Any, files: StackFiles, names: dict[str, str], record: Any):
         self.facts = facts
         self.names = names
         self.back = {v: k for k, v in names.items()}
-        self.data = yamlsafe.load_file(problem_path(problem)).data
+        self.domain = files.domain
+        self.data = files.data
         self.record = record
 
     def __call__(self, agendas: dict[str, list[str]]) -> SharedPlan | None:
@@ -107,7 +124,7 @@ class Replanner:
             path = Path(folder) / "replan.yaml"
             path.write_text(yamlsafe.dump(data), encoding="utf-8")
             try:
-                plan = _plan(path, self.names)
+                plan = _plan(planner.load_problem(path, self.domain), self.names)
             except (FileError, ValueError) as err:
                 self.record("plan-replan", error=str(err).splitlines()[0], agendas=agendas)
                 return None

@@ -15,7 +15,7 @@ from shary.plans.execution import PlanFollower
 
 from . import table
 from .partner import StackPartner
-from .planning import Replanner, first_plan
+from .planning import Replanner, StackFiles, first_plan
 from .world import StackExecutors, StackPerception
 
 __all__ = ["StackSession"]
@@ -35,6 +35,7 @@ class StackSession:
         self.names = {"robot": robot, "human": self.partner_name}
         self.follower: PlanFollower | None = None
         self.partner: StackPartner | None = None
+        self.files = StackFiles.read(str(spec["problem"]))
 
     @staticmethod
     def objects() -> dict[str, dict[str, Any]]:
@@ -46,10 +47,9 @@ class StackSession:
 
     def start(self, sup: Any, person: Any, decision_wait: float = 6.0) -> None:
         """Plan, and follow the plan with ``person`` (recognition must be running)."""
-        problem = str(self.spec["problem"])
         self.follower = PlanFollower(
-            sup, first_plan(problem, self.names), humans=[self.partner_name],
-            replan=Replanner(sup.facts, problem, self.names,
+            sup, first_plan(self.files, self.names), humans=[self.partner_name],
+            replan=Replanner(sup.facts, self.files, self.names,
                              lambda kind, **row: sup.record(kind, agent=sup.robot, **row)),
             decision_wait=decision_wait, name="StackBuildingTask")
         self.partner = StackPartner(person, self.follower, self.spec.get("profile") or {})

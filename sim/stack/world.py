@@ -17,6 +17,7 @@ from typing import Any
 from sim.executors import ActionFailed, RobotExecutors
 from sim.perception import Perception
 from sim.simulation import standing_height
+from sim.world import pb
 
 __all__ = ["StackExecutors", "StackPerception", "top_of"]
 
@@ -45,9 +46,51 @@ class StackExecutors(RobotExecutors):
 
 
 class StackPerception(Perception):
-    """The robot's perception, which also sees an object resting on another object."""
+    """The robot's perception, which also sees an object resting on another object.
+
+    Which object rests on which depends on every object's bounding box, so it is
+    worked out once per look at a scene, not once per object and tick: the boxes are
+    read when first needed and each object's facts kept, until something moves (an
+    object's pose or who holds what changes: :meth:`_look`).  While the robot moves
+    its arm or talks, nothing on the table does, and perception costs a few pose reads.
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any):
+        super().__init__(*args, **kwargs)
+        self._scene: Any = None
+        self._boxes: dict[str, tuple[Any, Any]] = {}
+        self._facts_seen: dict[tuple[str, tuple[float, float, float]], tuple[Any, ...]] = {}
+
+    def update(self) -> None:
+        self._look()
+        super().update()
+
+    def _look(self) -> None:
+        """Forget the boxes and facts worked out if anything moved since they were."""
+        world = self.world
+        scene = (tuple(world.call(pb.getBasePositionAndOrientation, world.body(obj))
+                       for obj in world.movables), tuple(self.sim.holder))
+        if scene != self._scene:
+            self._scene = scene
+            self._boxes.clear()
+            self._facts_seen.clear()
+
+    def _box(self, obj: str) -> tuple[Any, Any]:
+        box = self._boxes.get(obj)
+        if box is None:
+            box = self._boxes[obj] = self.world.aabb(obj)
+        return box
 
     def _object_facts(self, obj: str, where: tuple[float, float, float]) -> Iterable[Any]:
+        if self._scene is None:  # the first look (Perception.start), before any update
+            self._look()
+        key = (obj, where)
+        facts = self._facts_seen.get(key)
+        if facts is None:
+            facts = self._facts_seen[key] = tuple(self._stacked_facts(obj, where))
+        return facts
+
+    def _stacked_facts(self, obj: str, where: tuple[float, float, float]) -> Iterable[Any]:
         on = list(self._on_objects(obj, where))
         for fact in super()._object_facts(obj, where):
             if not (on and fact[1] == "isOn"):  # on a cube, not on the table under it
@@ -61,7 +104,7 @@ class StackPerception(Perception):
         for other in self.world.movables:
             if other == obj or other in self.sim.holder:
                 continue
-            (x0, y0, _), (x1, y1, z1) = self.world.aabb(other)
+            (x0, y0, _), (x1, y1, z1) = self._box(other)
             if (x0 - 0.01 <= where[0] <= x1 + 0.01 and y0 - 0.01 <= where[1] <= y1 + 0.01
                     and abs(bottom - z1) < RESTING):
                 yield (obj, "isOn", other)
@@ -72,7 +115,7 @@ class StackPerception(Perception):
         """A long object (the stick) lies across ``other`` when its ends reach over it."""
         if abs(bottom - top) >= RESTING:
             return False
-        (a0, b0, _), (a1, b1, _) = self.world.aabb(obj)
-        (x0, y0, _), (x1, y1, _) = self.world.aabb(other)
+        (a0, b0, _), (a1, b1, _) = self._box(obj)
+        (x0, y0, _), (x1, y1, _) = self._box(other)
         return a0 <= x1 and x0 <= a1 and b0 <= y1 and y0 <= b1 and \
             math.hypot(a1 - a0, b1 - b0) > 2 * math.hypot(x1 - x0, y1 - y0)

@@ -6,7 +6,8 @@ cannot use, inserted behind the writer's back as another tool, a crash or a
 hand edit could.  ``CORPUS`` says what each file holds and what a reader must
 say about it; ``tests/test_hostile_log.py`` reads it.  Every file here made
 ``shary render tree`` (and, for the deep one, ``shary log``) end in a Python
-traceback before the reader checked rows.
+traceback before the reader checked rows, or draw a tree from rows the writer
+never writes (the ones :data:`TREE_ONLY` names).
 """
 
 from __future__ import annotations
@@ -46,10 +47,27 @@ CORPUS: dict[str, tuple[str, str | None, str, str]] = {
     "task-state-with-object-state": (
         "task-state", "n2", '{"name":"GIVE","state":{"done":true}}',
         r"data\.state is an object, not text"),
+    # rows of a good shape that only the task tree sees are wrong (shary log lists them)
+    "node-of-an-unknown-kind": (
+        "node", "n9", '{"name":"fetch","node_kind":"banana","parent":"n1","state":"todo"}',
+        r"data\.node_kind is 'banana', not one of task, act, atomic"),
+    "node-its-own-parent": (
+        "node", "n9", '{"name":"fetch","node_kind":"task","parent":"n9","state":"todo"}',
+        r"node n9 is its own parent"),
+    "task-state-of-no-node": (
+        "task-state", "n77", '{"name":"GIVE","state":"done"}',
+        r"node n77 changes state, but it is not in the tree"),
+    "node-removed-of-no-node": (
+        "node-removed", "n77", '{"nodes":["n77"]}',
+        r"node n77 is removed, but it is not in the tree"),
     "deeply-nested-data": (
         "fact-added", None, '{"o":' + "[" * DEEP + "]" * DEEP + "}",
         r"data nests lists and objects deeper than 64 levels"),
 }
+
+TREE_ONLY = {"node-of-an-unknown-kind", "node-its-own-parent", "task-state-of-no-node",
+             "node-removed-of-no-node"}
+"""Rows of a good shape that ``shary log`` lists; only the tree's replay refuses them."""
 
 
 def good_log(path: Path) -> None:
