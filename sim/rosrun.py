@@ -13,6 +13,7 @@ in one process is judged (:func:`sim.run.happened`, :func:`sim.scenario.judge`).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import signal
@@ -32,6 +33,10 @@ SETTLE = 1.0
 """Wall seconds with nothing left to do before the run is over (an answer on its way)."""
 
 
+TEAM_SCENARIO = ("{}: a seam-welding scenario runs as a team over Zenoh ('shary team up', "
+                 "docs/distributed.md), not behind ROS 2")
+
+
 def _ros_ready() -> str | None:
     """Why ROS 2 cannot be used here, after restarting the program with the wheels'
     libraries found if it must."""
@@ -48,8 +53,11 @@ def cmd_world_ros(args: argparse.Namespace, path: Path) -> int:
     from userfiles.errors import FileError
 
     from .narration import ConsoleReport
+    from .scenario import is_team_scenario
     from .world import LivingRoom
 
+    if is_team_scenario(path):
+        return error(TEAM_SCENARIO.format(path.stem))
     problem = _ros_ready()
     if problem is not None:
         return error(problem)
@@ -86,6 +94,10 @@ def cmd_world_ros(args: argparse.Namespace, path: Path) -> int:
 def cmd_run_ros(args: argparse.Namespace, path: Path, out: Path) -> int:
     """``shary run SCENARIO --ros``: the supervisor of a scenario whose world is on ROS 2
     (with ``--world``, both started here as processes of their own)."""
+    from .scenario import is_team_scenario
+
+    if is_team_scenario(path):
+        return error(TEAM_SCENARIO.format(path.stem), json_mode=args.json)
     if args.world:
         return _with_world(args, path, out)
     problem = _ros_ready()
@@ -146,11 +158,14 @@ def _with_world(args: argparse.Namespace, path: Path, out: Path) -> int:
 def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict[str, Any] | str:
     """Run the scenario's supervisor against the robot on ROS 2 (see the module's
     docstring): the summary written to ``out``, or why it could not start."""
+    from std_msgs.msg import String
+
     from shary.agenda import OVER, ChronicleRecognizer
     from shary.dialogue.sessions import Sessions
     from shary.log import ContextLog, read_events
     from shary.loop import EventLoop, WallClock
     from shary.planning import HatpPlanner
+    from shary.recognition.models import load_action_models
     from shary.ros.binding import load_binding
     from shary.ros.bridge import Fanout, RosSupervision
     from shary.ros.node import RosNode
@@ -160,11 +175,11 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
     from .rosworld import JIDO_BINDING
     from .run import happened, load
     from .scenario import judge
+    from .stack.session import StackSession
 
     scenario, library, domain = load(path)
-    if scenario.shared_plan:
-        return f"{scenario.name}: a shared-plan scenario does not run behind ROS 2 yet"
-    binding = load_binding(JIDO_BINDING)
+    binding = dataclasses.replace(load_binding(JIDO_BINDING), robot=scenario.robot)
+    stack = StackSession(scenario.shared_plan, scenario.robot) if scenario.shared_plan else None
     output_folder(out)
     log_path = out / "log.sqlite"
     if log_path.exists():
@@ -181,8 +196,14 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
     node = RosNode("shary")
     try:
         ros = RosSupervision(sup, binding, node, fanout=fanout)
+        plan_pub = node.publisher(String, "~/plan", depth=100) if stack else None
+        listeners = [p for p in (ros.server.acts_pub, plan_pub) if p is not None]
+
+        def ready() -> bool:  # the robot's servers found, the world's people listening
+            return ros.executors.ready() and all(p.get_subscription_count() for p in listeners)
+
         deadline = time.monotonic() + wait
-        while not (ros.perception.messages and node.call(ros.executors.ready)):
+        while not (ros.perception.messages and node.call(ready)):
             if time.monotonic() > deadline:
                 return (f"no simulated robot answered on ROS 2 within {wait:g} s (its facts on "
                         f"{binding.facts[0].topic}, its action servers): start it with "
@@ -195,13 +216,25 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
         if library.chronicles:
             ChronicleRecognizer(sup)
         Sessions(sup).start()
+        if scenario.action_models:  # what is there at the start was not done by anyone
+            sup.recognize(load_action_models(scenario.action_models, facts,
+                                             atomic=library.atomic))
+        if stack is not None and plan_pub is not None:
+            follower = stack.follow(sup, scenario.shared_plan["decision-wait"])
+            follower.watchers.append(lambda event, task: node.post(
+                plan_pub.publish, String(data=json.dumps(
+                    {"event": event, "task": task, "current": follower.current,
+                     "finished": follower.finished,
+                     "labels": {t: p.label() for t, p in follower.plan.primitive.items()}}))))
+            follower.start()
         quiet_since = None
         end = start + scenario.timeout
         while loop.now() < end:
             loop.run_for(0.1)
             quiet = (not sup.runs and sup.agenda.active is None
                      and all(g.state in OVER for g in sup.agenda.goals)
-                     and loop.now() - start > max((g.at for g in scenario.goals), default=0))
+                     and loop.now() - start > max((g.at for g in scenario.goals), default=0)
+                     and not (stack is not None and stack.busy))
             quiet_since = (quiet_since or loop.now()) if quiet else None
             if quiet_since is not None and loop.now() - quiet_since >= SETTLE:
                 break

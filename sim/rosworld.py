@@ -16,7 +16,9 @@ SCENARIO --ros``, :mod:`sim.rosrun`) reaches it only through ROS 2:
   knows beforehand) is published as lines ``SUBJECT PREDICATE OBJECT`` on the
   binding's fact topic, whole, on every change and at least every second;
 - the people hear the supervisor's acts on ``/shary/acts`` (who is asked what,
-  in which task) and answer on ``/shary/person_act``; what they say of their
+  in which task) and answer on ``/shary/person_act``; in a shared-plan scenario
+  (``stack-*``) the partner follows the supervisor's plan as ``/shary/plan``
+  tells it (each task due, started, done); what they say of their
   own accord (a request) goes on the binding's speech-in topic
   (``/jido/heard/NAME``), to the supervisor's requests grammar.
 
@@ -43,6 +45,7 @@ from .perception import Noise, Perception
 from .run import a_priori, arrange_objects
 from .scenario import load_scenario
 from .simulation import Simulation
+from .stack.session import StackSession
 from .world import LivingRoom
 
 JIDO_BINDING = Path(__file__).resolve().parent.parent / "shary" / "ros" / "bindings" / \
@@ -134,9 +137,8 @@ class RosWorld:
         from shary.ros.binding import import_interface
 
         self.scenario = scenario = load_scenario(path)
-        if scenario.shared_plan:
-            raise ValueError(f"{scenario.name}: a shared-plan scenario does not run behind "
-                             f"ROS 2 yet")
+        self.stack = StackSession(scenario.shared_plan, scenario.robot) \
+            if scenario.shared_plan else None
         self.world, self.node, self.binding = world, node, binding
         self.report = report or (lambda t, who, kind, text: None)
         self.loop = EventLoop(seed=seed)
@@ -144,7 +146,8 @@ class RosWorld:
         robot = scenario.robot
         world.add_robot(robot, scenario.model, scenario.robot_at)
         self.sim = Simulation(world, self.loop, robot)
-        self.executors = RobotExecutors(self.sim, self.say, self.facts.set,
+        self.executors = (self.stack.executors_class if self.stack else RobotExecutors)(
+            self.sim, self.say, self.facts.set,
                                         lambda who, kind, text: self.report(
                                             self.loop.now(), who, kind, text))
         self.supervisor = _Supervisor(self)
@@ -158,9 +161,10 @@ class RosWorld:
         self.executors.people = self.people
         for action, reason, times in scenario.faults:
             self.executors.faults.setdefault(action, []).extend([reason] * times)
-        arrange_objects(world, self.sim, scenario, None)
-        a_priori(self.facts, world, scenario, None)
-        self.perception = Perception(self.sim, self.facts, hold=scenario.hold,
+        arrange_objects(world, self.sim, scenario, self.stack)
+        a_priori(self.facts, world, scenario, self.stack)
+        self.perception = (self.stack.perception_class if self.stack else Perception)(
+            self.sim, self.facts, hold=scenario.hold,
                                      noise=Noise(dict(scenario.flicker), list(scenario.lost)),
                                      rng=self.loop.random)
         self.sim.observers.append(self.perception.update)
@@ -181,6 +185,11 @@ class RosWorld:
         self.speech_pubs = {s.speaker: node.publisher(String, s.topic) for s in binding.speech}
         self.act_pub = node.publisher(String, f"{SUPERVISOR}/person_act", depth=100)
         node.subscription(String, f"{SUPERVISOR}/acts", lambda m: node.put(self.on_act, m.data))
+        self.follower = _Follower()
+        if self.stack is not None:  # the partner follows the supervisor's shared plan
+            self.stack.join(self.people[self.stack.partner_name], self.follower)
+            node.subscription(String, f"{SUPERVISOR}/plan",
+                              lambda m: node.put(self.follower.hear, m.data))
 
     # -- goals (the callbacks run on the executor's thread; the work on the world's) -----
 
@@ -305,6 +314,41 @@ class RosWorld:
                 self.loop.advance(wall - self.loop.now())
             self.publish_facts(wall)
             time.sleep(STEP)
+
+
+class _Task:
+    """A task of the shared plan as the partner reads it: its label."""
+
+    def __init__(self, label: str):
+        self._label = label
+
+    def label(self) -> str:
+        return self._label
+
+
+class _Plan:
+    def __init__(self) -> None:
+        self.primitive: dict[int, _Task] = {}
+
+
+class _Follower:
+    """The supervisor's plan follower as the partner (:class:`sim.stack.partner.
+    StackPartner`) sees it, from ``/shary/plan``: the plan's tasks, the ones due now,
+    whether it is over, and each event told to the watchers."""
+
+    def __init__(self) -> None:
+        self.plan = _Plan()
+        self.current: list[int] = []
+        self.finished: str | None = None
+        self.watchers: list[Any] = []
+
+    def hear(self, text: str) -> None:
+        data = json.loads(text)
+        self.plan.primitive = {int(k): _Task(str(v)) for k, v in data["labels"].items()}
+        self.current = [int(t) for t in data["current"]]
+        self.finished = data.get("finished")
+        for watcher in self.watchers:
+            watcher(str(data["event"]), int(data["task"]))
 
 
 class _Done:
