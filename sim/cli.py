@@ -299,11 +299,14 @@ def add_world(sub: argparse._SubParsersAction) -> None:
     from shary.commands.distributed import DEFAULT_ENDPOINT, add_common, endpoint
 
     p = sub.add_parser("world", help="run a seam-welding scenario's world (the PyBullet site) "
-                       "as an agent of a distributed team (Zenoh)",
+                       "as an agent of a distributed team (Zenoh), or with --ros a living-room "
+                       "scenario's world as the simulated Jido on ROS 2",
                        description="Run the scenario's world in this process: it joins the "
                        "team whose managers listen at --connect (shary team up SCENARIO), "
                        "performs the robots' atomic tasks and the people's work on site, and "
-                       "shares what it perceives.")
+                       "shares what it perceives.  With --ros, the living room serves the "
+                       "jido-sim binding's interfaces on ROS 2 for 'shary run SCENARIO --ros' "
+                       "(docs/ros2.md).")
     p.add_argument("scenario", metavar="SCENARIO",
                    help="a seam-welding scenario (built-in name or file); with --ros, a "
                    "living-room scenario")

@@ -24,7 +24,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from shary.terminal import error
+from shary.terminal import emit_json, error
 from shary.terminal import out as _out
 
 WAIT_FOR_ROBOT = 30.0
@@ -107,7 +107,7 @@ def cmd_run_ros(args: argparse.Namespace, path: Path, out: Path) -> int:
     if isinstance(result, str):
         return error(result, json_mode=args.json, status=1)
     if args.json:
-        _out.print(json.dumps(result, indent=2), markup=False)
+        emit_json({**result, "out": str(out)})
     else:
         verdict = "[bold green]PASSED[/bold green]" if result["passed"] else \
             "[bold red]FAILED[/bold red]"
