@@ -41,7 +41,8 @@ def test_facts_in_stale_facts_out_speech_in_and_out(write, ros_domain, spawn):
         RosPerception(node, binding, facts, loop, act=lambda *a: acts.append(a),
                       hear=lambda *a: heard.append(a),
                       record=lambda kind, **data: rows.append((kind, data)))
-        executors = RosExecutors(node, binding, loop)
+        executors = RosExecutors(node, binding, loop,
+                                 record=lambda kind, **data: rows.append((kind, data)))
         robot.send(r"pub /robot/facts alice looksAt jido\nalice isAt sofa-area")
         run_until(loop, lambda: facts.holds("alice", "looksAt", "jido"))
         loop.run_for(0.3)  # three more identical messages: no change reaches the database
@@ -63,6 +64,8 @@ def test_facts_in_stale_facts_out_speech_in_and_out(write, ros_domain, spawn):
                         Reporter(outcomes.append, loop.call_soon))
         run_until(loop, lambda: "heard /robot/say Here is your bottle." in robot.lines)
         assert [o.status for o in outcomes] == ["done"]
+        # the log says what the robot said, as a simulated run's does (a scenario's `said`)
+        assert ("speech", {"agent": "jido", "text": "Here is your bottle."}) in rows
 
 
 def test_templates_make_one_fact_per_element_of_a_sequence():

@@ -132,6 +132,8 @@ class RosExecutors:
             reporter.failed(request, f"invalid goal: {err}")
             return
         goal = _Goal(request, reporter, task, message, self.loop.now())
+        if request.atomic == "speak":  # what the robot says, as in a simulated run's log
+            self.record("speech", agent=request.agent, text=str(request.args.get("text", "")))
         if task.kind == "topic":
             self.node.post(self._entities[request.atomic].publish, message)
             self._end(goal, "done", "succeeded", f"published on {task.name}")
