@@ -13,7 +13,6 @@ in one process is judged (:func:`sim.run.happened`, :func:`sim.scenario.judge`).
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import os
 import signal
@@ -158,7 +157,7 @@ def _with_world(args: argparse.Namespace, path: Path, out: Path) -> int:
 def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict[str, Any] | str:
     """Run the scenario's supervisor against the robot on ROS 2 (see the module's
     docstring): the summary written to ``out``, or why it could not start."""
-    from std_msgs.msg import String
+    from std_msgs.msg import Bool, String
 
     from shary.agenda import OVER, ChronicleRecognizer
     from shary.dialogue.sessions import Sessions
@@ -172,13 +171,13 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
     from shary.supervisor import Supervisor
     from userfiles.outputs import output_folder, write_output
 
-    from .rosworld import JIDO_BINDING
+    from .rosworld import JIDO_BINDING, QUIET, scenario_binding
     from .run import happened, load
     from .scenario import judge
     from .stack.session import StackSession
 
     scenario, library, domain = load(path)
-    binding = dataclasses.replace(load_binding(JIDO_BINDING), robot=scenario.robot)
+    binding = scenario_binding(load_binding(JIDO_BINDING), scenario)
     stack = StackSession(scenario.shared_plan, scenario.robot) if scenario.shared_plan else None
     output_folder(out)
     log_path = out / "log.sqlite"
@@ -197,6 +196,8 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
     try:
         ros = RosSupervision(sup, binding, node, fanout=fanout)
         plan_pub = node.publisher(String, "~/plan", depth=100) if stack else None
+        world_quiet = [False]
+        node.subscription(Bool, QUIET, lambda m: node.put(world_quiet.__setitem__, 0, m.data))
         listeners = [p for p in (ros.server.acts_pub, plan_pub) if p is not None]
 
         def ready() -> bool:  # the robot's servers found, the world's people listening
@@ -234,7 +235,7 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
             quiet = (not sup.runs and sup.agenda.active is None
                      and all(g.state in OVER for g in sup.agenda.goals)
                      and loop.now() - start > max((g.at for g in scenario.goals), default=0)
-                     and not (stack is not None and stack.busy))
+                     and not (stack is not None and stack.busy) and world_quiet[0])
             quiet_since = (quiet_since or loop.now()) if quiet else None
             if quiet_since is not None and loop.now() - quiet_since >= SETTLE:
                 break

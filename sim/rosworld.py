@@ -20,7 +20,13 @@ SCENARIO --ros``, :mod:`sim.rosrun`) reaches it only through ROS 2:
   (``stack-*``) the partner follows the supervisor's plan as ``/shary/plan``
   tells it (each task due, started, done); what they say of their
   own accord (a request) goes on the binding's speech-in topic
-  (``/jido/heard/NAME``), to the supervisor's requests grammar.
+  (``/jido/heard/NAME``), to the supervisor's requests grammar;
+- whether anything is left to happen in the world goes on ``/jido_sim/quiet``, so
+  that the supervisor knows when the run is over (a person may still be on their
+  way to do something).
+
+Objects and people a scenario adds get codes after the binding's, the same in both
+processes (:func:`scenario_binding`).
 
 Only this module and :mod:`sim.rosrun` of ``sim`` touch ROS, and only through
 :mod:`shary.ros` (which alone imports rclpy).  The world's clock is the
@@ -29,6 +35,7 @@ simulation's, kept in step with the wall clock.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import time
 from pathlib import Path
@@ -55,6 +62,10 @@ STEP = 0.02
 REPUBLISH = 1.0
 """Seconds after which the robot's facts are published again though unchanged (the
 binding's fact topic goes stale after 2 s of silence)."""
+FAILURE_CODE = "nested_field.int32_value"
+"""The field of the jido-sim binding's results that carries a failure's code."""
+QUIET = "/jido_sim/quiet"
+"""Where the world says whether anything is left to happen in it (``std_msgs/Bool``)."""
 SUPERVISOR = "/shary"
 """The supervisor's node, whose ``acts`` and ``person_act`` topics the people use."""
 
@@ -67,29 +78,35 @@ class _Request:
 
 
 class _Goal:
-    """How one goal ends, told to the action server's coroutine on the executor's thread."""
+    """A goal the world performs, and how it ends: told to the action server through
+    ``end`` (:meth:`shary.ros.node.RosNode.serve_goals`) as the binding's result."""
 
-    def __init__(self, node: Any, future: Any):
-        self.node, self.future = node, future
+    def __init__(self, result: Any, task: Any, end: Any):
+        self.result, self.task, self._end = result, task, end
         self.request: _Request | None = None
+        self.over = False
 
     def done(self, request: Any) -> None:
-        self._end("succeeded", "")
+        self._finish(True, False)
 
     def failed(self, request: Any, reason: str) -> None:
-        self._end("failed", reason)
+        self._finish(False, False)
 
     def cancelled(self, request: Any, reason: str) -> None:
-        self._end("canceled", reason)
+        self._finish(False, True)
 
-    def _end(self, outcome: str, reason: str) -> None:
-        if not self.future.done():
-            self.node.post(_settle, self.future, (outcome, reason))
+    def _finish(self, succeeded: bool, canceled: bool) -> None:
+        from shary.ros.messages import build
 
-
-def _settle(future: Any, value: Any) -> None:
-    if not future.done():
-        future.set_result(value)
+        if self.over or self.result is None:  # ended, or speech: nobody waits for a result
+            self.over = True
+            return
+        self.over = True
+        # the binding's succeeded-if fields say whether it worked, FAILURE_CODE why not
+        fields = {f: v if succeeded else not v for f, v in self.task.succeeded_if.items()}
+        if not succeeded:
+            fields[FAILURE_CODE] = 1
+        self._end(build(self.result, fields, {}, codes={}), canceled)
 
 
 class _Run:
@@ -132,11 +149,12 @@ class RosWorld:
 
     def __init__(self, path: str | Path, world: LivingRoom, node: Any, binding: Any,
                  *, seed: int = 0, report: Any = None):
-        from std_msgs.msg import String
+        from std_msgs.msg import Bool, String
 
         from shary.ros.binding import import_interface
 
         self.scenario = scenario = load_scenario(path)
+        binding = scenario_binding(binding, scenario)
         self.stack = StackSession(scenario.shared_plan, scenario.robot) \
             if scenario.shared_plan else None
         self.world, self.node, self.binding = world, node, binding
@@ -148,8 +166,7 @@ class RosWorld:
         self.sim = Simulation(world, self.loop, robot)
         self.executors = (self.stack.executors_class if self.stack else RobotExecutors)(
             self.sim, self.say, self.facts.set,
-                                        lambda who, kind, text: self.report(
-                                            self.loop.now(), who, kind, text))
+            lambda who, kind, text: self.report(self.loop.now(), who, kind, text))
         self.supervisor = _Supervisor(self)
         self.people: dict[str, Person] = {}
         for spec in scenario.people:
@@ -165,10 +182,10 @@ class RosWorld:
         a_priori(self.facts, world, scenario, self.stack)
         self.perception = (self.stack.perception_class if self.stack else Perception)(
             self.sim, self.facts, hold=scenario.hold,
-                                     noise=Noise(dict(scenario.flicker), list(scenario.lost)),
-                                     rng=self.loop.random)
+            noise=Noise(dict(scenario.flicker), list(scenario.lost)), rng=self.loop.random)
         self.sim.observers.append(self.perception.update)
         self.runs: dict[str, _Run] = {}
+        self.goals: dict[bytes, _Goal] = {}
         self._goals = 0
         self._published: str | None = None
         self._published_at = -REPUBLISH
@@ -176,12 +193,15 @@ class RosWorld:
         self.codes = {code: name for name, code in binding.codes.items()}
         for atomic, task in binding.tasks.items():
             if task.kind == "action":
-                node.action_server(import_interface(task.type), task.name,
-                                   **self._callbacks(atomic, task))
+                node.serve_goals(import_interface(task.type), task.name,
+                                 lambda key, goal, end, a=atomic, t=task:
+                                     self.start(a, t, key, goal, end), self.cancel)
             elif atomic == "speak":
                 node.subscription(import_interface(task.type), task.name,
                                   lambda m: node.put(self.speak, str(m.data)))
         self.fact_pub = node.publisher(String, binding.facts[0].topic)
+        self.quiet_pub = node.publisher(Bool, QUIET)
+        self._quiet: bool | None = None
         self.speech_pubs = {s.speaker: node.publisher(String, s.topic) for s in binding.speech}
         self.act_pub = node.publisher(String, f"{SUPERVISOR}/person_act", depth=100)
         node.subscription(String, f"{SUPERVISOR}/acts", lambda m: node.put(self.on_act, m.data))
@@ -193,45 +213,9 @@ class RosWorld:
 
     # -- goals (the callbacks run on the executor's thread; the work on the world's) -----
 
-    def _callbacks(self, atomic: str, task: Any) -> dict[str, Any]:
-        from rclpy.action import CancelResponse
-        from rclpy.task import Future
-
-        cls = self._interface(task)
-        live: dict[bytes, _Goal] = {}
-        """A goal's id -> how it ends, while it runs."""
-
-        async def execute(handle: Any) -> Any:
-            key = bytes(handle.goal_id.uuid)
-            goal = live[key] = _Goal(self.node, Future())
-            self.node.put(self.start, atomic, task, handle.request, goal)
-            outcome, reason = await goal.future
-            del live[key]
-            result = cls.Result()
-            result.nested_field.bool_value = outcome == "succeeded"
-            result.nested_field.int32_value = 0 if outcome == "succeeded" else 1
-            if outcome == "canceled" and handle.is_cancel_requested:
-                handle.canceled()
-            else:
-                handle.succeed()
-            return result
-
-        def cancel(handle: Any) -> Any:
-            goal = live.get(bytes(handle.goal_id.uuid))
-            if goal is not None:
-                self.node.put(self.cancel, goal)
-            return CancelResponse.ACCEPT
-
-        return {"execute_callback": execute, "cancel_callback": cancel}
-
-    @staticmethod
-    def _interface(task: Any) -> Any:
-        from shary.ros.binding import import_interface
-
-        return import_interface(task.type)
-
-    def start(self, atomic: str, task: Any, message: Any, goal: _Goal) -> None:
+    def start(self, atomic: str, task: Any, key: bytes, message: Any, end: Any) -> None:
         """Perform ``atomic`` for a goal (on the world's thread)."""
+        from shary.ros.binding import import_interface
         from shary.ros.messages import read_field
 
         args: dict[str, Any] = {}
@@ -246,18 +230,20 @@ class RosWorld:
             if value is not None:
                 args[name] = value
         self._goals += 1
+        goal = self.goals[key] = _Goal(import_interface(task.type).Result, task, end)
         goal.request = _Request(f"g{self._goals}", atomic, args, self.scenario.robot)
         self.executors.start(goal.request, goal)
 
-    def cancel(self, goal: _Goal) -> None:
-        if goal.request is not None:
+    def cancel(self, key: bytes) -> None:
+        goal = self.goals.get(key)
+        if goal is not None and goal.request is not None and not goal.over:
             self.executors.cancel(goal.request)
 
     def speak(self, text: str) -> None:
         """The supervisor said ``text`` (on the speech topic): the robot says it."""
         self._goals += 1
         request = _Request(f"g{self._goals}", "speak", {"text": text}, self.scenario.robot)
-        self.executors.start(request, _Goal(self.node, _Done()))
+        self.executors.start(request, _Goal(None, None, None))
 
     # -- the people ------------------------------------------------------------------------
 
@@ -292,12 +278,25 @@ class RosWorld:
 
     # -- perception out, and the clock -------------------------------------------------
 
-    def publish_facts(self, wall: float) -> None:
-        from std_msgs.msg import String
+    @property
+    def quiet(self) -> bool:
+        """Whether nothing is left to happen in the world (no motion, no timer, no person
+        with something to do): with the supervisor's own, the end of a run."""
+        return (not self.sim.busy and self.loop.clock.next_due() is None
+                and not any(p.pending for p in self.people.values()))
 
+    def publish(self, wall: float) -> None:
+        """The robot's facts and whether the world is quiet: on change, and every
+        :data:`REPUBLISH` seconds."""
+        from std_msgs.msg import Bool, String
+
+        again = wall - self._published_at >= REPUBLISH
+        if self.quiet != self._quiet or again:
+            self._quiet = self.quiet
+            self.node.post(self.quiet_pub.publish, Bool(data=self._quiet))
         lines = "\n".join(sorted(f"{s} {p} {_literal(o)}"
                                  for s, p, o in self.facts.triples("robot")))
-        if lines != self._published or wall - self._published_at >= REPUBLISH:
+        if lines != self._published or again:
             self._published, self._published_at = lines, wall
             self.node.post(self.fact_pub.publish, String(data=lines))
 
@@ -312,7 +311,7 @@ class RosWorld:
             wall = time.monotonic() - origin
             if wall > self.loop.now():
                 self.loop.advance(wall - self.loop.now())
-            self.publish_facts(wall)
+            self.publish(wall)
             time.sleep(STEP)
 
 
@@ -351,11 +350,17 @@ class _Follower:
             watcher(str(data["event"]), int(data["task"]))
 
 
-class _Done:
-    """The future of a goal nobody waits for (the robot's speech, a topic)."""
-
-    def done(self) -> bool:
-        return True
+def scenario_binding(binding: Any, scenario: Any) -> Any:
+    """The Jido binding for one scenario, the same in both processes: the scenario's
+    robot, and a code for each object and person the scenario adds (after the binding's
+    codes, in name order)."""
+    codes = dict(binding.codes)
+    added = set(scenario.objects) | {p.name for p in scenario.people}
+    if scenario.shared_plan:
+        added |= set(StackSession.objects())
+    first = max(codes.values(), default=0) + 1
+    codes.update({name: first + i for i, name in enumerate(sorted(added - set(codes)))})
+    return dataclasses.replace(binding, robot=scenario.robot, codes=codes)
 
 
 def _literal(value: Any) -> str:
