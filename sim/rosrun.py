@@ -79,8 +79,10 @@ def cmd_world_ros(args: argparse.Namespace, path: Path) -> int:
             except ValueError as err:
                 return error(str(err))
             _out.print(f"the simulated {served.scenario.robot} of {served.scenario.name} is on "
-                       f"ROS 2 ({binding.name}); Ctrl-C stops it")
-            served.serve(args.seconds, stopping)
+                       f"ROS 2 ({binding.name}), waiting for a supervisor ('shary run "
+                       f"{served.scenario.name} --ros'); Ctrl-C stops it")
+            served.serve(args.seconds, stopping, lambda: _out.print(
+                "a supervisor is there: the scenario starts"))
     except KeyboardInterrupt:
         pass
     finally:
@@ -216,7 +218,8 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
                                                                    priority=g.priority))
         if library.chronicles:
             ChronicleRecognizer(sup)
-        Sessions(sup).start()
+        sessions = Sessions(sup)
+        sessions.start()
         if scenario.action_models:  # what is there at the start was not done by anyone
             sup.recognize(load_action_models(scenario.action_models, facts,
                                              atomic=library.atomic))
@@ -235,7 +238,8 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
             quiet = (not sup.runs and sup.agenda.active is None
                      and all(g.state in OVER for g in sup.agenda.goals)
                      and loop.now() - start > max((g.at for g in scenario.goals), default=0)
-                     and not (stack is not None and stack.busy) and world_quiet[0])
+                     and not (stack is not None and stack.busy) and world_quiet[0]
+                     and not sessions.timing)
             quiet_since = (quiet_since or loop.now()) if quiet else None
             if quiet_since is not None and loop.now() - quiet_since >= SETTLE:
                 break

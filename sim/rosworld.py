@@ -30,7 +30,8 @@ processes (:func:`scenario_binding`).
 
 Only this module and :mod:`sim.rosrun` of ``sim`` touch ROS, and only through
 :mod:`shary.ros` (which alone imports rclpy).  The world's clock is the
-simulation's, kept in step with the wall clock.
+simulation's, kept in step with the wall clock from when a supervisor is there;
+a world serves one run (start another for the next).
 """
 
 from __future__ import annotations
@@ -59,6 +60,8 @@ JIDO_BINDING = Path(__file__).resolve().parent.parent / "shary" / "ros" / "bindi
     "jido-sim.yaml"
 STEP = 0.02
 """Wall seconds between two steps of the world (it advances by the time that passed)."""
+WAITING = 0.1
+"""Wall seconds between two looks for a supervisor, before the scenario starts."""
 REPUBLISH = 1.0
 """Seconds after which the robot's facts are published again though unchanged (the
 binding's fact topic goes stale after 2 s of silence)."""
@@ -300,18 +303,38 @@ class RosWorld:
             self._published, self._published_at = lines, wall
             self.node.post(self.fact_pub.publish, String(data=lines))
 
-    def serve(self, seconds: float | None = None, stopping: list[int] | None = None) -> None:
-        """Run the world in step with the wall clock (until ``seconds`` or ``stopping``)."""
+    def supervised(self) -> bool:
+        """Whether a supervisor listens to the people (its ``person_act`` subscription)."""
+        return bool(self.node.call(self.act_pub.get_subscription_count))
+
+    def serve(self, seconds: float | None = None, stopping: list[int] | None = None,
+              starting: Any = None) -> None:
+        """Run the world in step with the wall clock, from when a supervisor is there
+        (``starting()`` is told) until ``seconds`` or ``stopping``.  Until then the
+        world's clock waits, publishing what the robot knows: in one process the
+        people and the supervisor start together, and a person's first request must
+        not go out before anyone listens."""
+        stopping = stopping if stopping is not None else []
+        for person in self.people.values():  # who looks where at the start, as perceived
+            person.refresh()
+        self.perception.start()
+        while not stopping and not self.supervised():
+            self.node.drain()
+            self.publish(time.monotonic())
+            time.sleep(WAITING)
+        if stopping:
+            return
+        if starting is not None:
+            starting()
         for person in self.people.values():
             person.begin()
-        self.perception.start()
         origin = time.monotonic()
         while not stopping and (seconds is None or self.loop.now() < seconds):
             self.node.drain()
             wall = time.monotonic() - origin
             if wall > self.loop.now():
                 self.loop.advance(wall - self.loop.now())
-            self.publish(wall)
+            self.publish(time.monotonic())
             time.sleep(STEP)
 
 
