@@ -16,6 +16,7 @@ from __future__ import annotations
 import tempfile
 from pathlib import Path
 
+import _first  # noqa: F401  (this folder after the packages: see _first.py)
 import yaml
 
 from planner import Problem, load_domain, load_problem
@@ -81,3 +82,8 @@ def clean_up(bottles: int, agents: int, *, rules: bool = True) -> Problem:
         path = Path(folder) / f"clean-up-{bottles}-{agents}.yaml"
         path.write_text(clean_up_text(bottles, agents, rules=rules), "utf-8")
         return load_problem(path, load_domain("living-room"))
+
+
+if __name__ == "__main__":
+    print("benchmarks/livingroom.py: problems and helpers that "
+          "benchmarks/planner.py time; run that instead")

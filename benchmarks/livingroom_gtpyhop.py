@@ -24,6 +24,8 @@ import contextlib
 import io
 from typing import Any
 
+import _first  # noqa: F401  (this folder after the packages: see _first.py)
+
 from planner import Problem
 
 with contextlib.redirect_stdout(io.StringIO()):  # GTPyhop prints as it loads
@@ -188,3 +190,8 @@ def find_plan(domain: Any, state: Any, todo: list[tuple]) -> Any:
     with contextlib.redirect_stdout(io.StringIO()):
         gtpyhop.set_recursive_planning("iterative_dfs_backtracking")
         return gtpyhop.find_plan(state, todo)
+
+
+if __name__ == "__main__":
+    print("benchmarks/livingroom_gtpyhop.py: problems and helpers that "
+          "benchmarks/planner.py and benchmarks/planner_vs_gtpyhop.py time; run that instead")

@@ -32,9 +32,16 @@ from sim.run import run_scenario
 from sim.scenario import builtin_scenarios, find_scenario
 from sim.world import LivingRoom
 
+PEER_SECONDS = 5.0
+"""At most this many simulated seconds of the peer are stepped: its real-time factor is a
+rate, the same over 5 s as over a scenario's 150 (stepping them all took about as long
+as the scenarios themselves, and the default run must end within two minutes)."""
+
 
 def physics_rtf(seconds: float) -> float:
-    """Simulated over wall seconds when stepping physics at 240 Hz for ``seconds``."""
+    """Simulated over wall seconds when stepping physics at 240 Hz for ``seconds`` (at most
+    :data:`PEER_SECONDS`)."""
+    seconds = min(seconds, PEER_SECONDS)
     with LivingRoom() as world:
         world.add_robot("pr2", "pr2like", "sofa-area")  # a second robot stands in for a person
         start = time.perf_counter()

@@ -30,7 +30,12 @@ method's variables are bound from its precondition, its first action's
 precondition and the static facts every later action needs.
 
 A search is bounded by a time budget, a **node budget** (:data:`MAX_NODES`
-nodes by default) and a depth (:data:`MAX_DEPTH`): a recursion that never ends
+nodes by default) and a depth that grows with the problem: a pass cuts the
+branches deeper than :data:`MAX_DEPTH` decompositions (a wrong choice high in
+a recursive domain -- Logistics' learned methods -- is then left soon enough),
+and when a pass ends without a plan because it cut some, the next allows
+:data:`DEEPER` times more, up to :data:`DEEPEST` (Towers of Hanoi with 16 rings
+needs 65,535 moves, nested about twice as deep).  A recursion that never ends
 cannot allocate without bound; it ends with ``no plan`` and the explanation
 ``search budget exhausted``, then the deepest points reached.
 
@@ -57,8 +62,12 @@ MAX_NODES = 2_000_000
 """Default node budget: search nodes expanded, over every pass, before giving up (the
 set of nodes seen then holds about 100 MB)."""
 MAX_DEPTH = 10_000
-"""Deepest decomposition tree searched: a branch deeper than this is cut (each level
-keeps a state and a choice point: about 9 KB)."""
+"""Deepest decomposition tree the first pass searches: a branch deeper than this is cut
+(each level keeps a state and a choice point: about 6-13 KB)."""
+DEEPER = 10
+"""How much deeper each new pass may go, when the one before cut branches."""
+DEEPEST = 1_000_000
+"""The deepest any pass goes (several GB: in practice the time budget ends first)."""
 SHOWN = 12
 """The most tasks an explanation shows on the path to a failure."""
 WINDOW = 64
@@ -140,7 +149,8 @@ class DepthFirst:
         self.repeats = 0
         self.repeated = False
         self.cut = False
-        """A branch was cut at :data:`MAX_DEPTH`."""
+        """A branch was cut at ``max_depth`` in the last pass."""
+        self.max_depth = MAX_DEPTH
         self.decomposed: set[int] = set()
         """The (task, arguments, state) hashes of every decomposition made so far."""
         self.missed = ""
@@ -189,7 +199,13 @@ class DepthFirst:
                 except _Stop as stop:
                     stopped = str(stop)
                     break
-                if trail is not None or not self.repeated or self.repeats >= MAX_REPEATS:
+                if trail is not None:
+                    break
+                if self.cut and self.max_depth < DEEPEST:  # cut, not refuted: go deeper
+                    self.max_depth = min(self.max_depth * DEEPER, DEEPEST)
+                    self.cut = False
+                    continue
+                if not self.repeated or self.repeats >= MAX_REPEATS:
                     break
                 self.repeats += 1
         finally:
@@ -209,7 +225,8 @@ class DepthFirst:
         if plan is None and (stopped or self.cut):
             why = {"nodes": f"the node budget ({max_nodes}) ran out",
                    "time": f"the time budget ({budget_ms:g} ms) ran out",
-                   "": f"branches deeper than {MAX_DEPTH} decompositions were cut"}[stopped]
+                   "": f"branches deeper than {self.max_depth} decompositions were cut"
+                   }[stopped]
             failures.insert(0, Failure(0, (BUDGET_EXHAUSTED,), (
                 f"{why} after {self.expansions} search nodes, without a plan; the deepest "
                 "points reached follow")))
@@ -344,10 +361,10 @@ class DepthFirst:
                        f"than {self.repeats} time(s)")
             return
         depth = parent[5] + 1
-        if depth > MAX_DEPTH:
+        if depth > self.max_depth:
             self.cut = True
             self._fail(parent, _label(method.name, args),
-                       f"deeper than {MAX_DEPTH} decompositions: cut")
+                       f"deeper than {self.max_depth} decompositions: cut")
             return
         env = {p: a for (p, _), a in zip(method.params, args, strict=True)}
         root = parent[2]

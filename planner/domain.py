@@ -279,6 +279,10 @@ class Problem:
     policy: dict[str, Any] = field(default_factory=dict)
     """Conditional problems: ``mode`` (expected or worst), ``idle_cost``, ``wait_cost``,
     ``max_steps``."""
+    spelling: dict[str, str] = field(default_factory=dict)
+    """HDDL problems: names the files spell otherwise than in lower case, with that
+    spelling (:func:`planner.ipc.write_ipc` writes them so: the IPC verifier compares
+    names case-sensitively)."""
     assigned: tuple[Assignment, ...] = ()
     """Steps given to an agent (:class:`Assignment`): a plan honours every one (the
     total-order search; plan negotiation, docs/communication.md)."""

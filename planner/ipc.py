@@ -22,6 +22,7 @@ plans can be compared (the feature tests' ``plans/``).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -31,8 +32,10 @@ from userfiles.errors import FileError
 from userfiles.errors import Problem as FileProblem
 
 
-def write_ipc(plan: Plan) -> str:
-    """``plan`` in the IPC format (ending with a newline)."""
+def write_ipc(plan: Plan, spelling: Mapping[str, str] | None = None) -> str:
+    """``plan`` in the IPC format (ending with a newline), its names spelt as
+    ``spelling`` says (:attr:`planner.domain.Problem.spelling`: the files' own spelling,
+    which the track's verifier expects; a name it does not give is written as it is)."""
     count = len(plan.actions)
     ids: dict[int, int] = {}
     order: list[int] = []
@@ -49,13 +52,16 @@ def write_ipc(plan: Plan) -> str:
         ids[node.id] = count + len(order)
         order.append(node.id)
         stack.extend(reversed(node.children))
+    spell = (lambda word: word) if not spelling else (lambda word: spelling.get(word, word))
     lines = ["==>"]
-    lines += [_words(str(i), a.name, *map(str, a.args)) for i, a in enumerate(plan.actions)]
+    lines += [_words(str(i), spell(a.name), *(spell(str(x)) for x in a.args))
+              for i, a in enumerate(plan.actions)]
     lines.append(_words("root", *(str(ids[r]) for r in roots)))
     for node_id in order:
         node = plan.tree[node_id]
-        lines.append(_words(str(ids[node_id]), node.task, *map(str, node.args), "->",
-                            str(node.decomposition), *(str(ids[c]) for c in node.children)))
+        lines.append(_words(str(ids[node_id]), spell(node.task),
+                            *(spell(str(x)) for x in node.args), "->",
+                            spell(str(node.decomposition)), *(str(ids[c]) for c in node.children)))
     lines.append("<==")
     return "\n".join(lines) + "\n"
 

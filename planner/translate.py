@@ -51,6 +51,8 @@ from userfiles.errors import Problem as FileProblem
 
 BUDGET_MS = 60_000
 """Default time budget of an HDDL problem (the files give none)."""
+MAX_ENTRY = 32
+"""The most entry conditions kept for one task (they are checked at every binding)."""
 NETWORK = ":htn"
 """The task standing for an initial task network with ``:parameters``: its one method
 binds them (no HDDL name starts with ':', so it cannot clash with the domain's)."""
@@ -117,6 +119,8 @@ class _Translator:
                         for adding in (True, False)
                         for pred, _ in _effect_atoms(action.effect, adding)}
         """The predicates some action's effect may change (the others are static)."""
+        self._touched: dict[str, frozenset[tuple[str, tuple[str, ...]]]] | None = None
+        self._entry: dict[str, list[hddl.Formula]] = {}
 
     def problem(self) -> Problem:
         hdomain, hproblem = self.hdomain, self.hproblem
@@ -156,7 +160,8 @@ class _Translator:
                         dict(hdomain.predicates),
                         {p: tuple(sorted(s)) for p, s in patterns.items()}, self.additions())
         return Problem(hproblem.name, domain, dict(self.objects), initial, tasks, goals,
-                       budget_ms=BUDGET_MS, file=hproblem.file)
+                       budget_ms=BUDGET_MS, file=hproblem.file,
+                       spelling={**hdomain.spelling, **hproblem.spelling})
 
     # -- actions and methods ---------------------------------------------------------
 
@@ -228,19 +233,139 @@ class _Translator:
         text = f"task {call}, {whole or '()'}"
         reads = {f.children[0] for f in whole.walk() if f.kind == "pred"} if whole else set()
         pre = Expr(text, matches, frozenset(dict(method.params)), frozenset(reads), "bool")
-        tests = [self.test(f) for f in _conjuncts(whole)]
+        conditions = list(_conjuncts(whole))
         for position, sub in enumerate(method.subtasks):
             action = domain.actions.get(sub.name)
             if action is None:
                 continue
             rename = {p: t for (p, _), t in zip(action.params, sub.args, strict=True)}
-            tests += [self.test(_rename(f, rename)) for f in _conjuncts(action.precondition)
-                      if position == 0 or self.static(f)]
+            conditions += [_rename(f, rename) for f in _conjuncts(action.precondition)
+                           if position == 0 or self.static(f)]
+        conditions += self.hoisted(method)
+        unique: dict[str, hddl.Formula] = {}
+        for formula in conditions:  # each once, at its first place
+            unique.setdefault(str(formula), formula)
+        tests = [self.test(f) for f in unique.values()]
         bind, patterns = compile_binder(dict(method.params), head, tests, self.typed)
         subtasks = tuple(Subtask(s.name, tuple(_term(t) for t in s.args),
                                  f"({' '.join((s.name, *s.args))})", args_of(s.args))
                          for s in method.subtasks)
         return Decomposition(method.name, method.params, pre, subtasks, bind=bind), patterns
+
+    # -- entry conditions ---------------------------------------------------------------
+
+    def touched(self, task: str) -> frozenset[tuple[str, tuple[str, ...]]]:
+        """The facts ``task`` may add or delete, through every method below it: each a
+        predicate and the types of its arguments, as the actions declare them (a
+        quantifier's variable counts as ``object``).  Transport's ``get_to ?v`` moves
+        vehicles: it may change ``(at vehicle location)``, never a package's ``at``."""
+        if self._touched is None:
+            found: dict[str, set[tuple[str, tuple[str, ...]]]] = {}
+            for name, action in self.hdomain.actions.items():
+                kinds = dict(action.params)
+                found[name] = {(pred, tuple(self.kind(t, kinds) for t in terms))
+                               for adding in (True, False)
+                               for pred, terms in _effect_atoms(action.effect, adding)}
+            changed = True
+            while changed:
+                changed = False
+                for method in self.hdomain.methods:
+                    target = found.setdefault(method.task.name, set())
+                    for sub in method.subtasks:
+                        extra = found.get(sub.name, set()) - target
+                        if extra:
+                            target |= extra
+                            changed = True
+            self._touched = {name: frozenset(preds) for name, preds in found.items()}
+        return self._touched.get(task, frozenset())
+
+    def entry(self, task: str) -> list[hddl.Formula]:
+        """Literals over ``task``'s parameters that hold wherever ``task`` starts: an
+        action's precondition literals; for a compound task, those every one of its
+        methods requires (:meth:`method_entry`), over the task's own parameters.  A
+        recursion met while computing them counts as requiring nothing (fewer
+        conditions: still sound)."""
+        known = self._entry.get(task)
+        if known is not None:
+            return known
+        self._entry[task] = []
+        action = self.hdomain.actions.get(task)
+        if action is not None:
+            found = [f for f in _conjuncts(action.precondition) if _plain(f)]
+        else:
+            params = [p for p, _ in self.hdomain.tasks.get(task, ())]
+            common: dict[str, hddl.Formula] | None = None
+            for method in self.hdomain.methods:
+                if method.task.name != task:
+                    continue
+                rename = _head_renaming(method.task.args, params)
+                mine: dict[str, hddl.Formula] = {}
+                if rename is not None:
+                    for formula in self.method_entry(method):
+                        if _free(formula) <= set(rename):
+                            renamed = _rename(formula, rename)
+                            mine[str(renamed)] = renamed
+                common = mine if common is None else {k: v for k, v in common.items()
+                                                      if k in mine}
+                if not common:
+                    break
+            found = list((common or {}).values())
+        found = found[:MAX_ENTRY]
+        self._entry[task] = found
+        return found
+
+    def kind(self, term: str, kinds: dict[str, str]) -> str:
+        """The type of a term: a variable's declared type, a constant's own."""
+        if is_variable(term):
+            return kinds.get(term, "object")
+        return self.objects.get(term, "object")
+
+    def may_change(self, formula: hddl.Formula, kinds: dict[str, str],
+                   touched: set[tuple[str, tuple[str, ...]]]) -> bool:
+        """Whether a fact ``formula`` reads may be one of ``touched`` (a predicate and
+        argument types that may overlap: one type is the other or below it)."""
+        for part in formula.walk():
+            if part.kind != "pred":
+                continue
+            pred, terms = part.children
+            mine = [self.kind(t, kinds) for t in terms]
+            for other, types in touched:
+                if other == pred and all(self.overlap(a, b)
+                                         for a, b in zip(mine, types, strict=True)):
+                    return True
+        return False
+
+    def overlap(self, a: str, b: str) -> bool:
+        """Whether an object may be of both types ``a`` and ``b``."""
+        return (a == b or a in hddl.supertypes(self.hdomain, b)
+                or b in hddl.supertypes(self.hdomain, a))
+
+    def method_entry(self, method: hddl.HMethod) -> list[hddl.Formula]:
+        """The literals over a method's variables that must hold where it is entered: its
+        precondition's, and each subtask's entry conditions that none of the subtasks
+        before it may change (:meth:`hoisted`)."""
+        whole = [f for f in _conjuncts(method.precondition) if _plain(f)]
+        return whole + self.hoisted(method)
+
+    def hoisted(self, method: hddl.HMethod) -> list[hddl.Formula]:
+        """The subtasks' entry conditions (:meth:`entry`), seen from ``method``, that
+        hold at its entry already: those whose predicates no earlier subtask may change.
+        A binder that checks them refuses, at once, a binding that would fail only at
+        the subtask (Freecell's ``M241`` binds a card that ``SENDTOFREE-B``, three
+        bookkeeping tasks later, needs clear and at the bottom of a column)."""
+        out: list[hddl.Formula] = []
+        kinds = dict(method.params)
+        changed: set[tuple[str, tuple[str, ...]]] = set()
+        for sub in method.subtasks:
+            params = (self.hdomain.actions[sub.name].params if sub.name in self.hdomain.actions
+                      else self.hdomain.tasks.get(sub.name, ()))
+            rename = {p: t for (p, _), t in zip(params, sub.args, strict=True)}
+            for formula in self.entry(sub.name):
+                renamed = _rename(formula, rename)
+                if not self.may_change(renamed, kinds, changed):
+                    out.append(renamed)
+            changed |= self.touched(sub.name)
+        return out
 
     def static(self, formula: hddl.Formula) -> bool:
         """Whether no action can change what ``formula`` says (it reads only facts that no
@@ -418,6 +543,26 @@ def _lift(entry: Any, args: tuple[str, ...], head: dict[str, int]) -> Any:
         return entry
     term = args[entry]
     return head.get(term) if is_variable(term) else term
+
+
+def _plain(formula: hddl.Formula) -> bool:
+    """A fact, a negated fact or an (in)equality: a conjunct that can be renamed into
+    another scope safely (a quantifier's own variables could be captured there)."""
+    if formula.kind == "not":
+        formula = formula.children[0]
+    return formula.kind in ("pred", "=")
+
+
+def _head_renaming(terms: tuple[str, ...], params: list[str]) -> dict[str, str] | None:
+    """How a method's task terms become the task's own parameters (``?x`` of the method
+    is the task's ``?a``), or None when a term is a constant or a variable repeated (the
+    method then says more than the task: its conditions are not the task's)."""
+    rename: dict[str, str] = {}
+    for term, param in zip(terms, params, strict=True):
+        if not is_variable(term) or term in rename:
+            return None
+        rename[term] = param
+    return rename
 
 
 def _free(formula: hddl.Formula) -> set[str]:

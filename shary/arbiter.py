@@ -31,6 +31,7 @@ serve, wait, supersede, restore, release; ``target``, ``priority``,
 
 from __future__ import annotations
 
+import heapq
 import itertools
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -78,11 +79,23 @@ class BodyArbiter:
         self.record = record
         self._seq = itertools.count(1)
         self._aims: dict[str, _Aim] = {}  # owner (or request id) -> its latest aim
+        # Kept beside the aims so that serving costs the same however many are held (a
+        # supervisor with thousands of tasks, benchmarks/kernel.py): the aims by key in a
+        # heap (stale entries skipped), the aims that may have ended since the last serve,
+        # the waiting aims whose wait is not logged yet, and each request's aim's key.
+        self._heap: list[tuple[int, int, int, str, _Aim]] = []
+        self._pushes = itertools.count()
+        self._suspects: dict[str, None] = {}
+        self._unlogged: dict[str, _Aim] = {}
+        self._keys: dict[str, str] = {}
         self._moving: _Aim | None = None  # the aim the head moves for
         self._reached: _Aim | None = None  # the aim the head last reached
         self._told: set[str] = set()  # requests already answered (superseded)
         self._head: Any = None
-        self._arm_queue: list[tuple[Request, Reporter, Any]] = []
+        self._arm_queue: dict[str, tuple[Request, Reporter, Any]] = {}
+        """Motions waiting for the arm, by request id, oldest first: a dict, so that a
+        cancel or the next start costs the same however many wait (a supervisor with
+        thousands of tasks, benchmarks/kernel.py)."""
         self._arm_busy: Request | None = None
         self._arm_requesters: dict[str, Reporter] = {}
         self._ports: dict[int, _Port] = {}
@@ -124,8 +137,27 @@ class BodyArbiter:
         old = self._aims.pop(key, None)
         if old is not None and old.waiting:
             self._drop(old, "superseded by a newer request of the same task")
-        self._aims[key] = _Aim(request, reporter, owner, next(self._seq))
+        self._hold(key, _Aim(request, reporter, owner, next(self._seq)))
         self._serve()
+
+    def _hold(self, key: str, aim: _Aim) -> None:
+        self._aims[key] = aim
+        heapq.heappush(self._heap, (-aim.request.priority, -aim.seq, -next(self._pushes),
+                                    key, aim))
+        self._keys[aim.request.id] = key
+        if aim.waiting:
+            self._unlogged[key] = aim
+        if not self._alive(aim):
+            self._suspects[key] = None
+
+    def _find(self, request: Request) -> tuple[str | None, _Aim | None]:
+        """The key and aim of ``request``, if it is still held."""
+        key = self._keys.get(request.id)
+        aim = self._aims.get(key) if key is not None else None
+        if aim is None or aim.request is not request:
+            self._keys.pop(request.id, None)
+            return None, None
+        return key, aim
 
     def _log(self, action: str, aim: _Aim, **extra: Any) -> None:
         self.record("body", task=aim.request.node, agent=aim.request.agent, part="head",
@@ -133,20 +165,30 @@ class BodyArbiter:
                     priority=aim.request.priority, owner=aim.owner, **extra)
 
     def _best(self) -> _Aim | None:
-        for key in [k for k, a in self._aims.items() if not self._alive(a)]:
-            aim = self._aims.pop(key)
+        suspects, self._suspects = self._suspects, {}
+        for key in suspects:
+            aim = self._aims.get(key)
+            if aim is None or self._alive(aim):
+                continue
+            del self._aims[key]
             if aim.owner is not None:
                 self._log("release", aim)
             if aim.waiting:
                 self._drop(aim, "its task ended before the head was free")
-        return max(self._aims.values(), key=lambda a: a.key, default=None)
+        heap = self._heap
+        while heap and self._aims.get(heap[0][3]) is not heap[0][4]:
+            heapq.heappop(heap)
+        return heap[0][4] if heap else None
 
     def _serve(self) -> None:
         best = self._best()
         if best is None:
             return
-        for aim in self._aims.values():
-            if aim is not best and aim.waiting and aim.key < best.key and not aim.logged:
+        for key, aim in list(self._unlogged.items()):
+            if self._aims.get(key) is not aim or not aim.waiting or aim.logged:
+                del self._unlogged[key]
+            elif aim is not best and aim.key < best.key:
+                del self._unlogged[key]
                 aim.logged = True
                 self._log("wait", aim, behind=best.owner)
         if best is self._moving:
@@ -158,6 +200,7 @@ class BodyArbiter:
             self._told.add(moving.request.id)  # what the executor reports is not news
             if moving.waiting and moving.reporter is not None:
                 moving.waiting = False
+                self._suspects[self._keys.get(moving.request.id, "")] = None
                 moving.reporter.cancelled(moving.request, "superseded: the head was needed "
                                           f"for {best.request.args.get('target')}")
             self._head.cancel(moving.request)
@@ -169,7 +212,7 @@ class BodyArbiter:
             restore = Request(f"{request.id}+", request.atomic, request.args, request.agent,
                               request.node, request.priority)
             best = _Aim(restore, None, best.owner, best.seq, False)
-            self._aims[best.owner if best.owner is not None else restore.id] = best
+            self._hold(best.owner if best.owner is not None else restore.id, best)
             self._log("restore", best)
         else:
             self._log("serve", best)
@@ -183,15 +226,15 @@ class BodyArbiter:
         if request.id in self._told:
             self._told.discard(request.id)
             return
-        key, aim = next(((k, a) for k, a in self._aims.items() if a.request is request),
-                        (None, None))
-        if aim is None:
+        key, aim = self._find(request)
+        if aim is None or key is None:
             return
         if outcome.status == "done":
             self._reached = aim
         if aim.waiting and aim.reporter is not None:
             _report(aim.reporter, outcome)
         aim.waiting = False
+        self._suspects[key] = None
         if outcome.status != "done" or aim.owner is None:
             del self._aims[key]  # it could not look there, or nothing holds it: no way back
         self.loop.call_soon(self._serve)
@@ -208,15 +251,15 @@ class BodyArbiter:
             self._told.discard(aim.request.id)
 
     def cancel_look(self, request: Request) -> None:
-        for key, aim in list(self._aims.items()):
-            if aim.request.id == request.id:
-                del self._aims[key]
-                self._drop(aim, "cancelled")
-                self.loop.call_soon(self._serve)
-                return
+        key, aim = self._find(request)
+        if aim is not None and key is not None:
+            del self._aims[key]
+            self._drop(aim, "cancelled")
+            self.loop.call_soon(self._serve)
 
     def _node_changed(self, node: str, state: str) -> None:
         if state in FINISHED and node in self._aims:
+            self._suspects[node] = None
             self.loop.call_soon(self._serve)
 
     # -- the arms ---------------------------------------------------------------------
@@ -228,7 +271,7 @@ class BodyArbiter:
         else:
             self.record("body", task=request.node, agent=request.agent, part="arm",
                         action="wait", atomic=request.atomic, behind=self._arm_busy.id)
-            self._arm_queue.append((request, reporter, inner))
+            self._arm_queue[request.id] = (request, reporter, inner)
 
     def _arm_start(self, request: Request, inner: Any) -> None:
         self._arm_busy = request
@@ -241,18 +284,17 @@ class BodyArbiter:
         if reporter is not None:
             _report(reporter, outcome)
         if self._arm_busy is None and self._arm_queue:
-            request, _, inner = self._arm_queue.pop(0)
+            request, _, inner = self._arm_queue.pop(next(iter(self._arm_queue)))
             self.record("body", task=request.node, agent=request.agent, part="arm",
                         action="serve", atomic=request.atomic)
             self._arm_start(request, inner)
 
     def cancel_move(self, request: Request, inner: Any) -> None:
-        for i, (queued, reporter, _) in enumerate(self._arm_queue):
-            if queued.id == request.id:
-                del self._arm_queue[i]
-                self._arm_requesters.pop(request.id, None)
-                reporter.cancelled(request, "cancelled before the arm was free")
-                return
+        queued = self._arm_queue.pop(request.id, None)
+        if queued is not None:
+            self._arm_requesters.pop(request.id, None)
+            queued[1].cancelled(request, "cancelled before the arm was free")
+            return
         inner.cancel(request)
 
 

@@ -19,6 +19,39 @@ def test_a_benchmark_beside_benchmarks_planner_py_imports_the_planner_package():
     assert "--only" in done.stdout
 
 
+def test_the_ipc_track_benchmark_counts_plans_the_verifier_accepts(tmp_path):
+    """``benchmarks/ipc_track.py`` finds each domain's problems (``domain.hddl`` beside them
+    or ``NAME-domain.hddl``), plans them with ``shary plan --ipc`` and counts a plan only if
+    the verifier accepts it.  The verifier here is a stand-in that accepts a plan naming
+    ``Load BigCrate`` as the files spell it (pandaPIparser compares names so)."""
+    from test_planner_hddl_ipc import MIXED, MIXED_PROBLEM
+
+    track = tmp_path / "total-order"
+    for folder, domain_name in (("Shared", "domain.hddl"), ("Own", "p1-domain.hddl")):
+        (track / folder).mkdir(parents=True)
+        (track / folder / domain_name).write_text(MIXED)
+        (track / folder / "p1.hddl").write_text(MIXED_PROBLEM)
+    (track / "Own" / "p2-domain.hddl").write_text(MIXED)
+    unsolvable = MIXED_PROBLEM.replace("(At BigCrate)", "(Done BigCrate)")
+    (track / "Own" / "p2.hddl").write_text(unsolvable)
+    verifier = tmp_path / "verify.py"
+    verifier.write_text(
+        "import sys\n"
+        "ok = '0 Load BigCrate' in open(sys.argv[-1]).read()\n"
+        "print('Plan verification result: \\x1b[1;32mtrue' if ok else 'false')\n")
+    verifier.chmod(0o755)
+    wrapper = tmp_path / "verify"
+    wrapper.write_text(f"#!/bin/sh\nexec {sys.executable} {verifier} \"$@\"\n")
+    wrapper.chmod(0o755)
+    done = subprocess.run([sys.executable, "benchmarks/ipc_track.py", str(track), "--verifier",
+                           str(wrapper), "--cutoff", "60", "--json"], cwd=ROOT,
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert "Own: 1/1" not in done.stdout and "Own: 1/2" in done.stdout
+    assert "Shared: 1/1" in done.stdout
+    assert '"p2.hddl": "unsolved"' in done.stdout
+
+
 def test_the_scenarios_benchmark_stops_at_a_scenario_that_fails(tmp_path):
     """A scenario that does not do its job has no time worth reporting: the benchmark
     stops, exit status 1, and says which scenario failed and how."""

@@ -144,7 +144,7 @@ def test_cancel_stops_the_task_and_puts_back_what_it_took(world):
     world.facts.add("jido", "isHolding", "bottle")
     world.sup.receive_act("alice", "CANCEL", {"task": "give-object"})
     world.run(10)
-    assert said(world)[-1] == "All right, I stop. I put the bottle back."
+    assert said(world)[-1] == "All right, I will stop and put the bottle back."
     assert "put-back" in world.executor.names()
     assert world.sup.agenda.goals[0].run.outcome == "failed"
     assert not world.sup.runs

@@ -362,3 +362,58 @@ def test_subscription_to_one_kind_of_change(db):
     assert removed == [FactEvent("removed", "human-1", "looksAt", "jido", "robot")]
     with pytest.raises(ValueError, match="'added' or 'removed'"):
         db.subscribe(removed.append, kind="changed")
+
+
+def test_a_derived_structure_is_kept_current_by_changes(db, write):
+    """A derived structure (an index) sees every change of its predicates as it is made,
+    also inside a subscriber's callback; other predicates never reach it; loading
+    Turtle drops it, and the next call builds it again from the facts."""
+    built: list[int] = []
+
+    def build(triples):
+        built.append(len(triples))
+        return set(triples)
+
+    def changed(found, added, s, p, o):
+        (found.add if added else found.discard)((s, p, o))
+
+    def cups():
+        return db.derived("cups", "robot", build, ["isOn"], changed)
+
+    db.add("cup", "type", "Cup")  # the robot's perspective is its own from now on
+    start = cups()
+    assert ("bottle-yellow", "isOn", "coffee-table") in start
+    seen_in_callback = []
+    db.subscribe(lambda event: seen_in_callback.append(
+        ("cup", "isOn", "sofa") in cups()), subject="cup", predicate="isOn")
+    db.set("bottle-yellow", "isOn", "sofa")
+    db.add("cup", "isOn", "sofa")
+    db.add("cup", "color", "red")
+    assert cups() is start and len(built) == 1
+    assert ("bottle-yellow", "isOn", "sofa") in start
+    assert ("bottle-yellow", "isOn", "coffee-table") not in start
+    assert not any(p == "color" for _, p, _ in start)
+    assert seen_in_callback == [True]
+    assert start == {t for t in db.triples("robot") if t[1] == "isOn"}
+    db.load_turtle(write("more.ttl", "@prefix w: <http://shary.dev/world#> .\n"
+                                     "w:mug w:isOn w:sofa .\n"), perspective="robot")
+    again = cups()
+    assert again is not start and ("mug", "isOn", "sofa") in again and len(built) == 2
+
+
+def test_a_perspective_written_first_gets_its_own_derived_structure(db):
+    """Before anything is written to it a perspective reads (and derives from) the
+    a-priori facts; its first change makes its own copy, and its own structure."""
+    def build(triples):
+        return set(triples)
+
+    def changed(found, added, s, p, o):
+        (found.add if added else found.discard)((s, p, o))
+
+    shared = db.derived("on", "alice", build, ["isOn"], changed)
+    assert db.derived("on", "bob", build, ["isOn"], changed) is shared
+    db.remove("bottle-yellow", "isOn", "coffee-table", perspective="alice")
+    own = db.derived("on", "alice", build, ["isOn"], changed)
+    assert own is not shared
+    assert ("bottle-yellow", "isOn", "coffee-table") in shared
+    assert ("bottle-yellow", "isOn", "coffee-table") not in own

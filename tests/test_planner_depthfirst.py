@@ -120,6 +120,7 @@ def test_a_recursion_through_ever_new_states_ends_at_the_node_budget(write):
 
 def test_a_branch_deeper_than_the_limit_is_cut_and_said_so(write, monkeypatch):
     monkeypatch.setattr(depthfirst, "MAX_DEPTH", 40)
+    monkeypatch.setattr(depthfirst, "DEEPEST", 40)  # no deeper pass after the cut
     result = first_plan(_counter(write, 6), 60_000)
     assert result.plan is None
     text = result.explain()

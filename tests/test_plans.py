@@ -332,7 +332,7 @@ def test_a_task_the_human_never_does_is_looked_for_asked_for_then_taken_over():
     rungs = [d["rung"] for _, d in table.log.of("plan-recover")
              if d["name"] == "Pick(human, stick)"]
     assert rungs == ["look", "ask", "take-over"]
-    assert any("pick the stick" in text for text in table.executor.said), table.executor.said
+    assert any("pick up the stick" in text for text in table.executor.said), table.executor.said
     assert table.states("robot")["Pick(human, stick)"] == "EXECUTED"
     assert "stick" in [d["params"]["Pickable"] for _, d in table.log.of("robot-action")
                        if d["state"] == "started" and d["action"] == "pick"]
@@ -349,7 +349,7 @@ def test_a_task_nobody_else_can_do_climbs_the_ladder_and_the_plan_ends_with_a_re
     rungs = [d["rung"] for _, d in table.log.of("plan-recover")
              if d["name"] == "Pick(human, stick)"]
     assert rungs[:2] == ["look", "ask"] and "replan" in rungs
-    assert any("pick the stick" in text for text in table.executor.said), table.executor.said
+    assert any("pick up the stick" in text for text in table.executor.said), table.executor.said
     assert any("so I stop here" in text for text in table.executor.said), \
         table.executor.said
     (end,) = [d for _, d in table.log.of("shared-plan") if d["state"] == "failed"]

@@ -307,5 +307,5 @@ def test_a_models_file_brings_its_own_classes_in_turtle(tmp_path):
     facts = FactDatabase()
     models = load_action_models([tmp_path / "mugs.yaml"], facts)
     assert models.human["pick-mug"].action_class == "HumanPickMug"
-    assert models.ontology.label("HumanPickMug") == "{Agent} @Pick {Pickable}"
+    assert models.ontology.label("HumanPickMug") == "{Agent} @Pick_up {Pickable}"
     assert facts.holds("Mug", "rdfs:subClassOf", "Pickable")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from rdflib import Literal
 
 from shary.dialogue.reg import Description, PerspectiveIndex, Referrer
 from shary.facts import FactDatabase
@@ -143,3 +144,28 @@ def test_descriptions_among_candidates_tell_them_apart(things, data):
     for target in candidates:
         described = reg.describe(target, context=candidates)
         assert meaning(described, triples) & set(candidates) == {target}
+
+
+def test_a_perspectives_index_follows_the_facts_without_being_built_again():
+    """The index a referrer reads is the database's, kept current change by change (a
+    sentence must not cost the whole world), and it always equals an index built
+    afresh from the facts."""
+    facts = FactDatabase()
+    for s, p, o in TABLETOP:
+        facts.add(s, p, o)
+    index = Referrer.for_perspective(facts, "robot").index
+    assert Referrer.for_perspective(facts, "robot").text("g1") == "the green cube on the table"
+    facts.set("g2", "isOn", "table")
+    facts.remove("r1", "type", "Cube")
+    facts.add("b1", "type", "Ball")
+    facts.add("b1", "isNear", "g1")
+    facts.remove("g1", "isOn", "table")
+    facts.add("Shelf", "rdfs:label", Literal("bookshelf"))
+    reg = Referrer.for_perspective(facts, "robot")
+    assert reg.index is index
+    fresh = PerspectiveIndex.from_triples(facts.triples("robot"))
+    for part in ("entities", "values", "having", "related", "relations", "labels"):
+        assert getattr(index, part) == getattr(fresh, part), part
+    assert reg.text("g2") == "the cube on the table"  # g1 is green too, and nowhere now
+    assert reg.text("b1") == "the ball"
+    assert reg.text("shelf") == "the bookshelf"

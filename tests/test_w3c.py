@@ -14,7 +14,7 @@ import os
 from pathlib import Path
 
 import pytest
-from conftest import SUITES
+from suites import SUITES
 
 from shary.conformance import REFUSED
 from shary.w3c import irp_tests, run_irp, translate

@@ -51,7 +51,7 @@ class _DomainReader(_Networks):
                     methods.append(method)
         return HDDLDomain(domain_name, tuple(requirements), dict(self.types), dict(self.objects),
                           dict(self.predicates), dict(self.tasks), methods, actions, self.file,
-                          define.line, define.col, where)
+                          define.line, define.col, where, dict(self.spelling))
 
     def read_types(self, nodes: list[SList], where: dict) -> None:
         explicit: dict[str, tuple[str, Symbol, Node | None]] = {}
@@ -103,6 +103,7 @@ class _DomainReader(_Networks):
                 self.error(symbol, f"duplicate constant '{symbol.text}' (first at {line}:{col})")
                 continue
             self.objects[symbol.value] = kind
+            self.spell(symbol)
             where[("constant", symbol.value)] = (symbol.line, symbol.col)
 
     def read_predicates(self, node: SList, where: dict) -> None:

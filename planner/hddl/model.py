@@ -127,6 +127,9 @@ class HDDLDomain:
     line: int = 1
     col: int = 1
     where: dict[tuple[str, str], tuple[int, int]] = field(default_factory=dict)
+    spelling: dict[str, str] = field(default_factory=dict)
+    """Names (lower case) that the file spells otherwise, with that spelling: the IPC
+    verifier compares names case-sensitively, so a plan must write them so."""
 
 
 @dataclass
@@ -150,6 +153,9 @@ class HDDLProblem:
     htn_constraints: Formula | None = None
     """The initial task network's ``:constraints`` that are conditions (``=``, ``not =``),
     as an ``and``; its ``sortof`` constraints narrow the types of ``htn_params``."""
+    spelling: dict[str, str] = field(default_factory=dict)
+    """The problem's object names spelt otherwise than in lower case (see
+    :attr:`HDDLDomain.spelling`)."""
 
 
 def supertypes(domain: HDDLDomain, type_name: str) -> list[str]:

@@ -86,7 +86,7 @@ class _ProblemReader(_Networks):
                 goal = self.condition(node.items[1], {})
         return HDDLProblem(problem_name, domain_name, own, tuple(init), params, subtasks, ordered,
                            goal, self.file, define.line, define.col, tuple(requirements),
-                           ordering, htn_line, htn_col, where, constraints)
+                           ordering, htn_line, htn_col, where, constraints, dict(self.spelling))
 
     def read_objects(self, node: SList, own: dict[str, str], where: dict) -> None:
         body = node._replace(items=node.items[1:])
@@ -106,6 +106,7 @@ class _ProblemReader(_Networks):
                 continue
             own[name] = kind
             self.objects[name] = kind
+            self.spell(symbol)
             where[("object", name)] = (symbol.line, symbol.col)
 
     def read_init(self, node: SList) -> list[Fact]:

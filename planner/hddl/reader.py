@@ -128,6 +128,8 @@ class _Reader:
         self.objects: dict[str, str] = {}
         """Every name a term may be: constants (and, in a problem, objects)."""
         self.object_word = "constant"
+        self.spelling: dict[str, str] = {}
+        """Names declared otherwise than in lower case, as first written."""
         self.hints = 0
         """How many hints were looked for (see :data:`MAX_HINTS`)."""
 
@@ -183,7 +185,13 @@ class _Reader:
                 self.error(node, f"'{node.text}' is not a valid name for {what} (a name starts "
                                  "with a letter and has letters, digits, '-' and '_')")
             return None
+        self.spell(node)
         return node.value
+
+    def spell(self, symbol: Symbol) -> None:
+        """Keep how the file writes a declared name, when not in lower case."""
+        if symbol.text != symbol.value:
+            self.spelling.setdefault(symbol.value, symbol.text)
 
     def variable(self, node: Symbol) -> str | None:
         if not node.value.startswith("?") or not _NAME.match(node.value[1:]):

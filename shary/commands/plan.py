@@ -91,7 +91,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
         if best is None:
             _err.print("[bold red]no plan[/bold red]: " + escape(result.explain()))
         else:
-            sys.stdout.write(write_ipc(best))
+            sys.stdout.write(write_ipc(best, problem.spelling))
     elif args.json:
         emit_json(_plan_json(problem, result, errors))
     else:

@@ -36,6 +36,7 @@ from shary.console.view import View
 from shary.log import LogEvent, stream_events
 from shary.plans.states import STATES as TASK_STATES
 from shary.recognition.recognizer import STATES as RECOGNITION_STATES
+from shary.tasktree import replay_log
 from shary.terminal import add_json_flag, emit_json
 from shary.terminal import out as _out
 from userfiles.outputs import open_output, output_file
@@ -111,6 +112,7 @@ def export_mcap(log: str | Path, out: str | Path) -> dict[str, int]:
     from mcap.writer import CompressionType, Writer
 
     output_file(out, inputs=[log])
+    replay_log(log)  # a tree the log cannot have grown is refused at its row, before writing
     folder = Path(log).resolve().parent
     counts = dict.fromkeys(SCHEMAS, 0)
     with stream_events(log) as events, open_output(out, binary=True) as stream:

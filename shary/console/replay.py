@@ -21,6 +21,7 @@ from shary.console.ports import Feed, StatusFeed
 from shary.console.view import Change, View
 from shary.log import LogEvent, stream_events
 from shary.model import Scheme
+from shary.tasktree import replay_log
 from userfiles.errors import FileError
 
 
@@ -49,6 +50,7 @@ class Replay:
         self.folder = self.log.resolve().parent
         with stream_events(self.log) as events:
             self.events: list[LogEvent] = list(events)
+        replay_log(self.log)  # a tree the log cannot have grown is refused at its row
         self.end = self.events[-1].time if self.events else 0.0
         self._schemes = schemes
 

@@ -272,8 +272,13 @@ def stop_task(run: TaskRun, recipe: Recipe) -> list[Step]:
     """STOP-TASK: put back the task's object if the robot holds it, and say so."""
     wanted = _task_object(run)
     holding = wanted is not None and run.sup.facts.holds(run.robot, "isHolding", wanted)
-    steps = [say("stop", "All right, I stop." + (f" I put the {wanted} back." if holding
-                                                   else ""))]
+    if holding:
+        thing = Referrer.for_perspective(run.sup.facts, "robot").describe(
+            wanted, by_name=True).text()
+        words = f"All right, I will stop and put {thing} back."
+    else:
+        words = "All right, I will stop."
+    steps = [say("stop", words)]
     if holding and "put-back" in run.sup.library.atomic:
         steps.append(Step("put-back", "put-back", None, {"object": Term("const", wanted)},
                           None, ("stop",)))

@@ -126,12 +126,19 @@ class Speech:
         listener = Referrer.for_perspective(self.facts, seen_by)
         scene = listener if seen_by == "robot" else Referrer.for_perspective(self.facts, "robot")
 
+        people = {speaker: "me", **({addressee: "you"} if addressee else {})}
+        # The things the sentence relates an object to: the action's other things, and
+        # its agent once it is done ("I picked up the red cube": the one in my hand).
+        implied = values[1:] + (values[:1] if act == "inform-done" else [])
+
         def refer(thing: str) -> str:
             # What the listener's perspective says nothing of (the robot has no estimate
             # of what they know of it) is described from the scene the robot perceives,
-            # which they share, rather than by its identifier.
+            # which they share, rather than by its identifier.  The sentence's other
+            # things are named anyway: relations to them go unsaid (see Referrer.describe).
             known = listener.knows(thing) or not scene.knows(thing)
-            return (listener if known else scene).describe(thing, by_name=True).text()
+            return (listener if known else scene).describe(
+                thing, by_name=True, implied=implied).text(people=people)
 
         bindings = {"Agent": values[0], **dict(zip(roles, values[1:], strict=True))}
         return verbalize(ontology.label(cls), bindings, act, speaker=speaker,

@@ -42,7 +42,7 @@ import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
-__all__ = ["ACTS", "Label", "Verbalizer", "conjugate", "humanize", "verbalize"]
+__all__ = ["ACTS", "Label", "Verbalizer", "conjugate", "humanize", "plural", "verbalize"]
 
 ACTS = ("inform-done", "inform-ongoing", "inform-planned", "inform-failed", "inform-dropped",
         "request", "question", "ask-done", "ask-going", "propose")
@@ -128,6 +128,18 @@ def conjugate(verb: str, form: str, person: int = 3) -> str:
         # its first is the usual one.
         word = found[0] if found else head
     return f"{word} {particle}" if particle else word
+
+
+@functools.lru_cache(maxsize=1024)
+def plural(noun: str) -> str:
+    """A noun phrase's plural, inflecting its last word: "coffee table" -> "coffee tables",
+    "box" -> "boxes" (lemminflect, imported when first needed as in :func:`conjugate`)."""
+    from lemminflect import getInflection
+
+    head, _, last = noun.rpartition(" ")
+    found = getInflection(last, "NNS")
+    word = found[0] if found else last + "s"
+    return f"{head} {word}" if head else word
 
 
 def humanize(name: str) -> str:

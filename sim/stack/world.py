@@ -6,6 +6,13 @@ StackBuildingTask puts cubes on placements, a stick across two cubes and cubes
 on the stick.  :class:`StackExecutors` places on any object (the gripper goes
 to the top of the support, centred on it) and :class:`StackPerception` adds
 ``isOn(object, support)`` for an object resting on another one.
+
+Two red cubes, two blue cubes and two placements look alike; what tells them
+apart for a person is where they are for them: perception also says which
+agent an object on the table is near (``isNear(object, agent)``: "the red
+cube near you") and on which side of each person it lies
+(``leftOf``/``rightOf(object, person)``, from where they stand: "the placement
+on your left"), the relations :mod:`shary.dialogue.reg` describes things with.
 """
 
 from __future__ import annotations
@@ -23,6 +30,15 @@ __all__ = ["StackExecutors", "StackPerception", "top_of"]
 
 RESTING = 0.02
 """How close (m) an object's bottom must be to a support's top to rest on it."""
+NEAR_AGENT = 1.0
+"""How far (m) an object may be from the agent it is near."""
+CLEARLY = 0.1
+"""How much nearer (m) to one agent than to any other an object must be to be near it."""
+SIDE = 0.05
+"""How far (m) from a person's line of sight to the table's centre an object must be
+to be on their left or right."""
+TABLE = "coffee-table"
+"""The stack table (sim/stack/table.py)."""
 
 
 def top_of(world: Any, support: str) -> tuple[float, float, float]:
@@ -96,6 +112,30 @@ class StackPerception(Perception):
             if not (on and fact[1] == "isOn"):  # on a cube, not on the table under it
                 yield fact
         yield from on
+        if obj not in self.sim.holder:
+            yield from self._around(obj, where)
+
+    def _around(self, obj: str, where: tuple[float, float, float]) -> Iterable[Any]:
+        """Which agent ``obj`` is near, and on which side of each person it is."""
+        rx, ry, _ = self.world.base_pose(self.sim.robot)
+        agents = {self.sim.robot: (rx, ry)}
+        cx, cy, _ = top_of(self.world, TABLE)
+        for name, avatar in self.sim.people.items():
+            agents[name] = (avatar.x, avatar.y)
+            # Left and right as the person sees the table: across their line of sight
+            # to its centre (not their body's heading: they stand off-centre).
+            ahead = math.hypot(cx - avatar.x, cy - avatar.y)
+            if ahead < 1e-6:
+                continue
+            left = (-(cy - avatar.y) / ahead, (cx - avatar.x) / ahead)
+            side = (where[0] - avatar.x) * left[0] + (where[1] - avatar.y) * left[1]
+            if abs(side) >= SIDE:
+                yield (obj, "leftOf" if side > 0 else "rightOf", name)
+        distances = sorted((math.hypot(where[0] - x, where[1] - y), name)
+                           for name, (x, y) in agents.items())
+        if distances[0][0] <= NEAR_AGENT and (len(distances) == 1
+                                              or distances[1][0] - distances[0][0] >= CLEARLY):
+            yield (obj, "isNear", distances[0][1])
 
     def _on_objects(self, obj: str, where: tuple[float, float, float]) -> Iterable[Any]:
         if obj in self.sim.holder:
