@@ -216,8 +216,7 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
         for goal in scenario.goals:
             loop.call_later(goal.at, lambda g=goal: sup.agenda.add(g.task, g.args,
                                                                    priority=g.priority))
-        if library.chronicles:
-            ChronicleRecognizer(sup)
+        chronicles = ChronicleRecognizer(sup) if library.chronicles else None
         sessions = Sessions(sup)
         sessions.start()
         if scenario.action_models:  # what is there at the start was not done by anyone
@@ -239,7 +238,8 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
                      and all(g.state in OVER for g in sup.agenda.goals)
                      and loop.now() - start > max((g.at for g in scenario.goals), default=0)
                      and not (stack is not None and stack.busy) and world_quiet[0]
-                     and not sessions.timing)
+                     and not sessions.timing
+                     and not (chronicles is not None and chronicles.timing))
             quiet_since = (quiet_since or loop.now()) if quiet else None
             if quiet_since is not None and loop.now() - quiet_since >= SETTLE:
                 break
