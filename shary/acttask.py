@@ -44,7 +44,7 @@ class ActTask:
     """One act of one task, carried out by a recipe (see the module's docstring)."""
 
     __slots__ = ("run", "sup", "state", "act", "agent", "node", "recipe", "steps",
-                 "subscriptions", "started", "replans", "completes", "suspended", "over")
+                 "subscriptions", "until", "started", "replans", "completes", "suspended", "over")
 
     def __init__(self, run: TaskRun, state: State, agent: str):
         self.run = run
@@ -59,6 +59,8 @@ class ActTask:
         self.recipe: Recipe | None = None
         self.steps: dict[str, StepRun] = {}
         self.subscriptions: list[Any] = []
+        self.until: dict[str, list[Any]] = {}
+        """Step name -> the monitors that stop when it starts (``until:``)."""
         self.started = False
         self.replans = 0
         self.completes = False
@@ -159,6 +161,9 @@ class ActTask:
         run.state = ONGOING
         run.attempts += 1
         sup.tree.set_state(run.node, ONGOING)
+        for subscription in self.until.pop(run.step.name, ()):
+            sup.facts.unsubscribe(subscription)
+            self.subscriptions.remove(subscription)
         env = self.run.env
         args = {k: t.resolve(env) for k, t in run.step.args.items()}
         agent = run.step.by.resolve(env) if run.step.by is not None else self.run.robot
@@ -279,9 +284,12 @@ class ActTask:
                 else:
                     self.run.deliver_soon(monitor.emit, {"fact": fact})
 
-        self.subscriptions.append(self.sup.facts.subscribe(
+        subscription = self.sup.facts.subscribe(
             react, subject=s, predicate=p, object=o, perspective=perspective,
-            kind=monitor.change))
+            kind=monitor.change)
+        self.subscriptions.append(subscription)
+        if monitor.until is not None:
+            self.until.setdefault(monitor.until, []).append(subscription)
 
     def _detach(self) -> None:
         for subscription in self.subscriptions:

@@ -153,6 +153,9 @@ class Monitor:
     pattern: Pattern
     emit: str
     perspective: Term | None = None
+    until: str | None = None
+    """A step of the recipe: the monitor is dropped when that step starts (a look-away
+    matters to an inform until its sentence begins, not while it is said)."""
 
 
 @dataclass(frozen=True)

@@ -341,3 +341,62 @@ def cmd_world(args: argparse.Namespace) -> int:
     from sim.weld.agent import cmd_world as run_world
 
     return run_world(args, path)
+
+
+def add_fuzz(sub: argparse._SubParsersAction) -> None:
+    from sim.fuzz.behaviours import FAMILIES
+
+    p = sub.add_parser("fuzz", help="a behaviour campaign: run a family's scenarios with "
+                       "people who behave at random, and check that the supervisor never "
+                       "stalls, lies or speaks to no one")
+    p.add_argument("family", choices=FAMILIES, help="the scenarios varied: stack (the shared "
+                   "plan), living-room (give and clean up), weld (the HRI/OS team)")
+    p.add_argument("--runs", type=int, default=20, metavar="N", help="how many runs (default 20)")
+    p.add_argument("--seed", type=int, default=1, metavar="S",
+                   help="the first run's seed; run i has seed S+i (default 1)")
+    p.add_argument("--replay", type=int, metavar="SEED",
+                   help="run that one seed again, telling its story and the scenario drawn")
+    p.add_argument("--out", type=Path, metavar="DIR",
+                   help="with --replay: write the run's files there (log.sqlite, ...)")
+    p.add_argument("--jobs", type=int, default=1, metavar="J",
+                   help="worker processes (default 1); the report is the same for any J")
+    add_json_flag(p, "the campaign: verdicts, invariants, violations, each run")
+    p.set_defaults(func=cmd_fuzz)
+
+
+def cmd_fuzz(args: argparse.Namespace) -> int:
+    from sim.fuzz.campaign import Campaign, campaign, run_one
+    from sim.fuzz.report import print_campaign, progress_line
+
+    if not 1 <= args.runs <= 100_000:
+        return error(f"--runs {args.runs}: from 1 to 100000", json_mode=args.json)
+    if not 1 <= args.jobs <= 64:
+        return error(f"--jobs {args.jobs}: from 1 to 64", json_mode=args.json)
+    if args.out is not None and args.replay is None:
+        return error("--out goes with --replay SEED (a campaign writes no files)",
+                     json_mode=args.json)
+    if args.replay is not None:
+        from sim.fuzz.behaviours import draw
+        from sim.narration import ConsoleReport
+
+        variation = draw(args.family, args.replay)
+        if not args.json:
+            _out.print(f"[bold]seed {args.replay}[/bold]: {escape(variation.base)} with "
+                       f"{escape(variation.story)}")
+            _out.print(escape(variation.text()), end="")
+            if variation.team is not None:
+                _out.print(escape(variation.team_text() or ""), end="")
+        import time
+
+        wall = time.perf_counter()
+        outcome = run_one(args.family, args.replay, variation=variation, out=args.out,
+                          report=None if args.json else ConsoleReport(_out))
+        result = Campaign(args.family, args.replay, [outcome], time.perf_counter() - wall)
+    else:
+        result = campaign(args.family, args.runs, args.seed, jobs=args.jobs,
+                          progress=None if args.json else progress_line(_out))
+    if args.json:
+        emit_json(result.as_dict())
+    else:
+        print_campaign(_out, result)
+    return 1 if result.violations else 0

@@ -45,6 +45,11 @@ from .world import FURNITURE, MANIPULATION_PLACES
 
 NEAR_PEOPLE_SPEED = 0.5
 """Joint speed (rad/s) when the arm moves towards a person: slower, as near people it must."""
+TAKE_WITHIN = 20.0
+"""How long the arm holds an object out to a person before the give fails ("alice did
+not take the yellow bottle within 20 s"): people here take within seconds when they
+attend; one who looked away already makes the give wait (WAIT-ATTENTION) and cancels
+it.  Without a bound, a person who never takes would hold the robot for ever."""
 REACH_TOLERANCE = 0.015
 """An IK answer further than this from the target means the target is out of reach."""
 ROBOT_REACH = 0.95
@@ -443,14 +448,24 @@ class RobotExecutors:
         def release() -> None:
             set_gripper(self.world, self.robot, 0.04)
 
+        def not_taken() -> None:
+            if not taken and not running.failure:
+                person.withdraw()
+                running.failure.append(f"{to} did not take the {object} within "
+                                       f"{TAKE_WITHIN:g} s")
+
         running.on_cancel.append(person.withdraw)
         return Sequence([self._arm_to(running, lambda: self._handover_point(to),
                                       f"the hand-over point towards {to}", NEAR_PEOPLE_SPEED),
                          Instant(offer, "hold out"),
-                         Wait(until=lambda: bool(taken) or bool(running.failure),
+                         Wait(TAKE_WITHIN, until=lambda: bool(taken) or bool(running.failure),
                               label="wait for the take"),
-                         Instant(release, "release"), self._home()], f"give {object}",
-                        running.failed)
+                         Instant(not_taken, "taken?"),
+                         Instant(release, "release"),
+                         # given once taken: the arm's way back is not part of the give
+                         # (a person who looks away now does not undo it)
+                         Instant(lambda: self._finished(running), "given"),
+                         self._home()], f"give {object}", running.failed)
 
     def take_from(self, person: str, obj: str, done: Callable[[], Any]) -> bool:
         """A person holds ``obj`` out: reach their hand and grasp (the receiving side).

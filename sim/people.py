@@ -293,7 +293,10 @@ class Person:
     def _pick(self, obj: str) -> Activity:
         def grab() -> None:
             x, y, _ = self.sim.world.position(obj)
-            if math.hypot(x - self.avatar.x, y - self.avatar.y) <= ARM_LENGTH:
+            holder = self.sim.holder.get(obj)
+            if holder not in (None, self.name):  # nobody pulls it out of another's hand
+                self.say(self.name, f"(the {obj} is in {holder}'s hand)")
+            elif math.hypot(x - self.avatar.x, y - self.avatar.y) <= ARM_LENGTH:
                 self.sim.attach(obj, self.name)
             else:
                 self.say(self.name, f"(cannot reach the {obj})")

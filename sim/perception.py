@@ -199,6 +199,16 @@ class Perception:
                         and math.hypot(where[0] - avatar.x, where[1] - avatar.y) <= ARM_LENGTH):
                     yield (obj, "isReachableBy", name)
 
+    def truth(self) -> Iterable[tuple[str, str, str]]:
+        """What the world makes true of its objects now, seen or not: who holds what,
+        what rests on or in what (from true poses, without noise or the camera's view)."""
+        for obj, holder in self.sim.holder.items():
+            yield (holder, "isHolding", obj)
+        for obj in self.world.movables:
+            for s, p, o in self._object_facts(obj, self.world.position(obj)):
+                if p in ("isOn", "isIn"):
+                    yield (s, p, str(o))
+
     def _reached(self, hand: tuple[float, float, float],
                  positions: dict[str, tuple[float, float, float]], person: str) -> str | None:
         """What a reaching hand goes for: an object it is on (10 cm), else the furniture

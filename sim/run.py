@@ -85,6 +85,14 @@ class RunResult:
     noise_misses: int = 0
     """Facts the injected perception noise made the detector miss."""
     outputs: dict[str, str] = field(default_factory=dict)
+    events: list[tuple[float, str, str | None, str | None, dict[str, Any]]] = field(
+        default_factory=list, repr=False)
+    """The context log's rows ``(time, kind, task, agent, data)``, kept when the run wrote
+    no output folder (otherwise they are in its ``log.sqlite``)."""
+    truth: frozenset[tuple[str, str, str]] = field(default_factory=frozenset, repr=False)
+    """What the world makes true at the end, whatever the robot perceived: where each
+    object is (``isOn``, ``isIn``), who holds what; a site's panels ``mounted`` and seams
+    ``welded``.  What a campaign checks a verdict against (:mod:`sim.fuzz`)."""
 
     @property
     def real_time_factor(self) -> float:
@@ -92,6 +100,7 @@ class RunResult:
 
     def summary(self) -> dict[str, Any]:
         out = asdict(self)
+        del out["events"], out["truth"]
         out["outcome"] = "passed" if self.passed else "failed"
         out["real_time_factor"] = round(self.real_time_factor, 1)
         out["simulated_seconds"] = round(self.simulated_seconds, 2)
@@ -107,20 +116,27 @@ def load(path: str | Path) -> tuple[Scenario, Any, Any]:
     return scenario, scenario.library, planner.load_domain("living-room")
 
 
-def run_scenario(path: str | Path, *, seed: int = 0, out: str | Path | None = None,
-                 snapshots: bool = False, gui: bool = False,
+def run_scenario(path: str | Path | Scenario | Any, *, seed: int = 0,
+                 out: str | Path | None = None, snapshots: bool = False, gui: bool = False,
                  report: Report | None = None, console: Any = None) -> RunResult:
     """Run one scenario (see the module's docstring); ``report`` is told the story as it
     happens (see :mod:`sim.narration`; :class:`sim.narration.ConsoleReport` prints it).
     ``console`` (a :class:`shary.console.live.Attachment`) is given the supervisor, sees
     every logged event, and is called between two steps of the clock (pause, speed).
     A team scenario (``site: seam-welding``) runs on its site (:mod:`sim.weld.run`),
-    without a console for now."""
-    if is_team_scenario(path):
+    without a console for now.  ``path`` may also be a scenario already loaded (a
+    :class:`~sim.scenario.Scenario` or a :class:`~sim.weld.scenario.WeldScenario`)."""
+    from .weld.scenario import WeldScenario
+
+    if isinstance(path, WeldScenario) or (not isinstance(path, Scenario)
+                                          and is_team_scenario(path)):
         from .weld.run import run_weld
 
         return run_weld(path, seed=seed, out=out, snapshots=snapshots, gui=gui, report=report)
-    scenario, library, domain = load(path)
+    if isinstance(path, Scenario):
+        scenario, library, domain = path, path.library, planner.load_domain("living-room")
+    else:
+        scenario, library, domain = load(path)
     out_dir = Path(out) if out is not None else None
     if out_dir is not None:
         output_folder(out_dir)
@@ -143,7 +159,9 @@ def run_scenario(path: str | Path, *, seed: int = 0, out: str | Path | None = No
         if end >= scenario.timeout - 1e-9:
             differences.append(f"the run was still going at the timeout ({scenario.timeout:g}s)")
         result = RunResult(scenario.name, not differences, differences, end, wall, setup, seed,
-                           run.sim.physics_steps, run.perception.misses)
+                           run.sim.physics_steps, run.perception.misses,
+                           events=log.events if out_dir is None else [],
+                           truth=run.truth)
         if out_dir is not None:
             log.flush()
             result.outputs = run.write(out_dir, log_path)
@@ -305,6 +323,8 @@ class _Run:
         self.report = report
         self.snapshot_dir = snapshot_dir
         self.snapshots: list[str] = []
+        self.truth: frozenset[tuple[str, str, str]] = frozenset()
+        """What the world makes true at the end (:attr:`RunResult.truth`)."""
         self.loop = EventLoop(seed=seed)
         self.facts = FactDatabase()
         robot = scenario.robot
@@ -422,17 +442,22 @@ class _Run:
                 break
         self.snapshot("end")
         self.sup.record("run-end", scenario=self.scenario.name)
+        self.truth = frozenset(self.perception.truth())
         return self.loop.now()
 
     def _add_goal(self, goal: Any) -> None:
         self.sup.agenda.add(goal.task, goal.args, priority=goal.priority)
 
     def _quiet(self) -> bool:
-        return (not self.sup.runs and self.sup.agenda.active is None
-                and not any(g.state not in OVER for g in self.sup.agenda.goals)
-                and not self.sim.busy and self.loop.clock.next_due() is None
-                and not any(p.pending for p in self.people.values())
-                and not (self.stack is not None and self.stack.busy))
+        if (self.sup.runs or self.sup.agenda.active is not None
+                or any(g.state not in OVER for g in self.sup.agenda.goals)
+                or self.sim.busy or any(p.pending for p in self.people.values())):
+            return False
+        if self.stack is not None:
+            if self.stack.busy:
+                return False
+            self.stack.settle()
+        return self.loop.clock.next_due() is None
 
     # -- after the run --------------------------------------------------------------
 

@@ -173,20 +173,24 @@ def load_profile(name: str | Path, things: set[str] = frozenset(),
     return read(path, _schema("profile"), meaning)
 
 
-def load_scenario(path: str | Path, *, acts: ActRegistry | None = None) -> Scenario:
+def load_scenario(path: str | Path, *, acts: ActRegistry | None = None,
+                  text: str | None = None) -> Scenario:
     """Load and check a scenario with the recipe library it names (built-in recipes plus
     its ``recipes:`` files, which must stay below its folder); raise :class:`FileError`
     listing every problem, the recipe files' own included, each once.
 
     ``acts`` are the acts known besides the library's (e.g. an acts file given to
-    ``shary validate`` with the scenario).
+    ``shary validate`` with the scenario).  ``text`` is a living-room scenario read in
+    place of the file's own text, as if it were that file (``shary fuzz`` varies a
+    built-in scenario in memory this way).
     """
     path = Path(path)
-    if is_team_scenario(path):
+    if text is None and is_team_scenario(path):
         from .weld.scenario import load_weld_scenario
 
         return load_weld_scenario(path)  # type: ignore[return-value]
-    return read(path, _schema("scenario"), lambda reader: _Reading(reader, acts).scenario())
+    return read(path, _schema("scenario"), lambda reader: _Reading(reader, acts).scenario(),
+                text=text)
 
 
 def is_team_scenario(path: str | Path) -> bool:

@@ -95,7 +95,9 @@ def test_unreachable_bottle_replans_with_the_human_as_in_fig_10():
     assert kinds.count("ask-help") == 1  # Alice's part of the plan: one joint task
     ask = next(n for n in tree.graph if tree.node(n)["name"] == "ask-help")
     acts = {tree.node(c)["name"] for c in tree.children(ask)}
-    assert acts == {"ASK-HELP x ask-help", "REALIZE-TASK x ask-help", "END-TASK x ask-help"}, acts
+    # attention first (she attends already: the wait ends at once), then the question
+    assert acts == {"WAIT-ATTENTION x ask-help", "ASK-HELP x ask-help",
+                    "REALIZE-TASK x ask-help", "END-TASK x ask-help"}, acts
     plan = world.sup.planners["living-room"].last.plan
     assert [(a.name, a.agent) for a in plan.actions] == [
         ("Move", "alice"), ("Pick", "alice"), ("Move", "alice"), ("Give", "alice"),

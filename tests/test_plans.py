@@ -210,6 +210,29 @@ def test_the_plan_of_the_planner_reads_as_abstract_and_primitive_tasks():
         == "RobotStack"
 
 
+def test_a_replan_s_agendas_keep_the_tasks_the_branch_found_already_done():
+    """The first branch has the human place a blue cube on the stick, so the planner
+    found their ``HumanTopBlue`` (and the robot's ``CheckDone``) done with nothing
+    to do: no primitive task.  A replan from just before the human's blue cube must
+    still ask for them: if the human now leaves the first blue cube to the robot,
+    theirs goes on top (``shary fuzz stack --replay 58``)."""
+    from shary.plans.replan import remaining_agendas
+
+    plan = stack_plan()
+    branch, task = [], None
+    while True:
+        following = plan.next(task)
+        if not following:
+            break
+        task = following[0].id
+        branch.append(task)
+    blue = next(t for t in branch if plan.primitive[t].label() == "Pick(human, blue_cube_2)")
+    agendas = remaining_agendas(plan, [blue], set(branch[:branch.index(blue)]), {})
+    assert agendas["human"] == ["HumanFirstBlue(human, blue_cube_2, stick)",
+                                "HumanTopBlue(human, blue_cube_2, green_cube)"]
+    assert agendas["robot"][-1] == "CheckDone(robot, green_cube)"
+
+
 def test_nominal_the_human_does_their_part_and_the_stack_is_built():
     table = Table(choices=["0", "0"])
     table.run()

@@ -126,6 +126,21 @@ recipes:
     assert (line, col) == (14, 27)
 
 
+def test_a_monitor_until_a_step_the_recipe_lacks(shary, write):
+    path = write("until.yaml", BASE + """\
+recipes:
+  - task: greet
+    act: ASK-TASK
+    steps:
+      - {do: wave, with: {to: $person}}
+    monitors:
+      - {removed: [$person, looksAt, $robot], emit: attention-lost, until: speak}
+""")
+    ((line, col, msg),) = _problems(shary, path)
+    assert msg == "no step named 'speak' in this recipe"
+    assert line == 16
+
+
 def test_malformed_turtle(shary, write):
     path = write("world.ttl", "@prefix w: <http://shary.dev/world#> .\nw:a w:b w:c .\n"
                  "w:d w:e .\n")

@@ -123,7 +123,7 @@ def test_every_act_bar_starts_at_a_logged_act(clean_up: Path):
     alice = groups(root, "lane")[1]
     (helping,) = act_bars(alice)  # the act Alice performs in the joint task ask-help
     assert (helping.get("data-act"), helping.get("data-start"), helping.get("data-end")) == (
-        "REALIZE-TASK", "7.0", "15.0")  # after "I could not pick …" and the question
+        "REALIZE-TASK", "8.0", "16.0")  # after her glance, "I could not pick …", the question
 
 
 def test_human_acts_are_diamonds_in_their_lane(distracted: Path):

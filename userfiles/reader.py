@@ -146,26 +146,33 @@ def spelled(path: str | os.PathLike[str], *, like: str | os.PathLike[str] = "") 
         return str(full)
 
 
-def checked(path: str | os.PathLike[str], schema: Draft202012Validator) -> Reader:
+def checked(path: str | os.PathLike[str], schema: Draft202012Validator,
+            text: str | None = None) -> Reader:
     """Steps 1 and 2 of the pipeline, for a format that reads several files together
     (a recipe library): the file loaded safely with the schema's size limits, and its
-    shape problems recorded on the reader rather than raised."""
-    located = yamlsafe.load_file(path, sizes=size_limits(schema))
+    shape problems recorded on the reader rather than raised.  ``text``, when given, is
+    read as if it were the file at ``path`` (the names it gives resolve from that
+    file's folder): a document made in memory, e.g. a campaign's variation of a file."""
+    sizes = size_limits(schema)
+    located = (yamlsafe.load_file(path, sizes=sizes) if text is None
+               else yamlsafe.load_text(text, os.fspath(path), sizes=sizes))
     return Reader(located, check(located, schema))
 
 
-def open_checked(path: str | os.PathLike[str], schema: Draft202012Validator) -> Reader:
+def open_checked(path: str | os.PathLike[str], schema: Draft202012Validator,
+                 text: str | None = None) -> Reader:
     """Steps 1 and 2 of the pipeline: a :class:`Reader` over a file whose shape is right."""
-    reader = checked(path, schema)
+    reader = checked(path, schema, text)
     reader.done()
     return reader
 
 
 def read(path: str | os.PathLike[str], schema: Draft202012Validator,
-         meaning: Callable[[Reader], T]) -> T:
+         meaning: Callable[[Reader], T], *, text: str | None = None) -> T:
     """The whole pipeline: load safely, check the schema, then ``meaning`` (which records
-    problems on the reader); raise one :class:`FileError` with every problem."""
-    reader = open_checked(path, schema)
+    problems on the reader); raise one :class:`FileError` with every problem.  With
+    ``text``, that text is read in place of the file's (see :func:`checked`)."""
+    reader = open_checked(path, schema, text)
     result = meaning(reader)
     reader.done()
     return result

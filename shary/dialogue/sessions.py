@@ -22,9 +22,12 @@ opens and closes them from the robot's perception:
 The agenda runs a goal that involves a person (one of its arguments, or who
 asked for it) only inside a session with that person (:meth:`Sessions.admits`,
 one of the agenda's gates); a goal of the robot alone (exploring a place) is
-not an interaction and is not held.  A session is ``busy`` while a task with
-its person runs and ``idle`` otherwise (its first act starting; the agenda's
-listeners told when the goal is over).
+not an interaction and is not held.  A goal held for someone who does not
+come to interact within :attr:`Sessions.wait_for` seconds is cancelled, the
+reason in its ``goal-over`` row ("alice did not come to interact within
+60 s"): the robot does not wait for ever for a person who is not there.  A
+session is ``busy`` while a task with its person runs and ``idle`` otherwise
+(its first act starting; the agenda's listeners told when the goal is over).
 """
 
 from __future__ import annotations
@@ -69,10 +72,14 @@ class Sessions:
     """Opens and closes interaction sessions (see the module's docstring)."""
 
     def __init__(self, sup: Supervisor, *, within: float = 10.0, leave_after: float = 2.0,
-                 perspective: str = "robot"):
+                 wait_for: float = 60.0, perspective: str = "robot"):
         self.sup = sup
         self.within = within
         self.leave_after = leave_after
+        self.wait_for = wait_for
+        """How long a goal waits for its people to come to interact before it is dropped."""
+        self._held: dict[int, Any] = {}
+        """Goal id -> the timer that drops it if its people never come (while held)."""
         self.perspective = perspective
         self.open: dict[str, TaskRun] = {}
         """Person -> their session's task run, while it is open (farewell included)."""
@@ -93,9 +100,10 @@ class Sessions:
             self.sup.facts.unsubscribe(subscription)
         if self.recognizer is not None:
             self.recognizer.close()
-        for timer in self._leaving.values():
+        for timer in [*self._leaving.values(), *self._held.values()]:
             timer.cancel()
         self._leaving.clear()
+        self._held.clear()
 
     # -- who is a person ----------------------------------------------------------------
 
@@ -197,8 +205,22 @@ class Sessions:
             and run.instance.is_active("open")
 
     def admits(self, goal: Goal) -> bool:
-        """The agenda's gate: every person of the goal is in an open session."""
-        return all(self.is_open(p) for p in self.involved(goal))
+        """The agenda's gate: every person of the goal is in an open session (a goal
+        held starts the wait after which it is dropped, :attr:`wait_for`)."""
+        if all(self.is_open(p) for p in self.involved(goal)):
+            return True
+        if goal.id not in self._held:
+            self._held[goal.id] = self.sup.loop.call_later(self.wait_for, self._not_come, goal)
+        return False
+
+    def _not_come(self, goal: Goal) -> None:
+        from shary.agenda import PENDING
+
+        self._held.pop(goal.id, None)
+        absent = sorted(p for p in self.involved(goal) if not self.is_open(p))
+        if goal.state == PENDING and absent:
+            self.sup.agenda.cancel(goal, f"{' and '.join(absent)} did not come to interact "
+                                         f"within {self.wait_for:g} s")
 
     def _act(self, run: TaskRun, state: Any, agent: str) -> None:
         if run.type.name == SESSION_TASK:

@@ -228,6 +228,10 @@ class _Builder:
         monitors = tuple(self._monitor(reader, path + ("monitors", i), m, env)
                          for i, m in enumerate(spec.get("monitors") or [])
                          if isinstance(m, dict))
+        for i, monitor in enumerate(monitors):
+            if monitor.until is not None and monitor.until not in {s.name for s in steps}:
+                reader.problem(path + ("monitors", i, "until"),
+                               f"no step named {monitor.until!r} in this recipe")
         plan = None
         if isinstance(spec.get("plan"), dict):
             raw = spec["plan"]
@@ -415,7 +419,8 @@ class _Builder:
         if perspective is not None:
             self._check_term(reader, path + ("perspective",), perspective, env)
         name = spec.get("name") or f"{change}-{pattern.predicate}"
-        return Monitor(name, change, pattern, str(spec.get("emit", "")), perspective)
+        until = str(spec["until"]) if "until" in spec else None
+        return Monitor(name, change, pattern, str(spec.get("emit", "")), perspective, until)
 
     def _pattern(self, reader: Reader, path: tuple, raw: Any, env: set[str],
                  variables: set[str] | None = None) -> Pattern:

@@ -108,8 +108,12 @@ class HumanBeliefs:
 
         def said(run: Any) -> None:
             self._speaking.discard(human)
-            if run.outcome != "done":
-                return  # not heard: it stays NOT_SEEN, to be said when they look back
+            if run.outcome != "done":  # not heard: it stays NOT_SEEN, said when they look back
+                if follower.finished is not None:  # ... if they ever do: say why it stays
+                    self.sup.record("belief", task=follower.states.fact_name(task),
+                                    agent=human, state="NOT_SEEN", why="untold",
+                                    reason=f"{human} did not attend after the plan ended")
+                return
             if task in pending:
                 pending.remove(task)
             follower.states.send(task, "seen", [human], reason="informed")

@@ -40,9 +40,14 @@ def remaining_agendas(plan: SharedPlan, current: list[int], executed: set[int],
         start = following[0].id if following else None
     out: dict[str, list[str]] = {}
     emitted: set[int] = set()
+    empty = _empty_by_task(plan)
     for task in branch:
         spec = plan.primitive[task]
-        if task in executed or spec.kind != ACTION:
+        if task in executed:
+            continue
+        for hollow in empty.get(task, ()):
+            _emit_abstract(plan, hollow, [hollow, *plan.ancestors(hollow)], begun, emitted, out)
+        if spec.kind != ACTION:
             continue
         agent = agents.get(task, spec.agent)
         fresh = [a for a in plan.ancestors(task) if a not in begun]
@@ -59,3 +64,40 @@ def remaining_agendas(plan: SharedPlan, current: list[int], executed: set[int],
         if call is not None and isinstance(agent, str):
             out.setdefault(agent, []).append(call)
     return out
+
+
+def _empty_by_task(plan: SharedPlan) -> dict[int, list[int]]:
+    """Primitive task -> the abstract tasks decomposed into nothing on the way to it.
+
+    A task the planner found already done (``HumanTopBlue`` when the blue cube is
+    placed, ``CheckDone`` when the green cube is covered) has no primitive task, so
+    no branch passes through it; but after a failure it may be needed again (the
+    human left the first blue cube to the robot: theirs now goes on top).  The
+    planner opens such tasks while looking for an agent's next step, and ids are
+    given in that order (the step's abstract tasks, then the step), so each belongs
+    to the first primitive task after it.
+    """
+    parents = {t.decomposition for t in plan.primitive.values()}
+    parents |= {a.decomposition for a in plan.abstract.values()}
+    steps = sorted(plan.primitive)
+    out: dict[int, list[int]] = {}
+    for node in sorted(plan.abstract):
+        if node in parents:
+            continue
+        owner = next((t for t in steps if t > node), None)
+        if owner is not None:
+            out.setdefault(owner, []).append(node)
+    return out
+
+
+def _emit_abstract(plan: SharedPlan, node: int, chain: list[int], begun: set[int],
+                   emitted: set[int], out: dict[str, list[str]]) -> None:
+    """Add the highest task above ``node`` (itself included) nothing has been done of."""
+    fresh = [a for a in chain if a not in begun]
+    if not fresh or fresh[-1] in emitted:
+        return
+    top = plan.abstract[fresh[-1]]
+    emitted.add(fresh[-1])
+    call = _call(top.name, top.params)
+    if call is not None and isinstance(top.agent, str):
+        out.setdefault(top.agent, []).append(call)

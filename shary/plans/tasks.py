@@ -149,9 +149,11 @@ class SharedPlan:
             current = following[0] if len(following) == 1 else None
 
     def ancestors(self, task: int) -> list[int]:
-        """The abstract tasks ``task`` was decomposed from, nearest first."""
+        """The abstract tasks ``task`` (primitive or abstract) was decomposed from,
+        nearest first."""
         out = []
-        parent = self.primitive[task].decomposition
+        node = self.primitive[task] if task in self.primitive else self.abstract[task]
+        parent = node.decomposition
         while parent is not None and parent in self.abstract:
             out.append(parent)
             parent = self.abstract[parent].decomposition

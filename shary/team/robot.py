@@ -279,6 +279,9 @@ class RobotAgent(Agent):
         self.mode, self.controller = SYSTEM, None
         self.team.record("control", task=self.current, agent=self.name, mode=SYSTEM, by=human)
         self.sup.agenda.release(f"control:{human}")
+        # a task that became ready while the robot was driven waited for it (it was not
+        # available then): offer it now, or nothing else would ever make it go
+        self.team.loop.call_soon(self.team.tasks.dispatch)
         return True
 
 

@@ -42,9 +42,10 @@ TEAM_LIBRARY = Path(__file__).resolve().parent / "team-recipes.yaml"
 """The atomic tasks the team gives every robot (``ask``)."""
 
 
-def load_team(path: str | os.PathLike[str]) -> TeamSpec:
-    """Read and check a team file (FileError with every problem)."""
-    return read(path, validator("team"), lambda reader: _Meaning(reader).team())
+def load_team(path: str | os.PathLike[str], *, text: str | None = None) -> TeamSpec:
+    """Read and check a team file (FileError with every problem); ``text``, when given,
+    is read in place of the file's own, as if it were that file."""
+    return read(path, validator("team"), lambda reader: _Meaning(reader).team(), text=text)
 
 
 def robot_library(spec: TeamSpec) -> RecipeLibrary:

@@ -45,13 +45,27 @@ class StackPartner:
         self.leave = (profile.get("leave") or {}).get("after")
         self.queue: list[list[str]] = []
         self.handled: set[int] = set()
+        self.timers: list[Any] = []
+        """What they mean to do later (act, look back, leave): cancelled by :meth:`stop`."""
         follower.watchers.append(self.plan_event)
         if self.look_away and "at" in self.look_away:
-            self.sim.loop.call_later(float(self.look_away["at"]), self._look_away)
+            self._later(float(self.look_away["at"]), self._look_away)
 
     @property
     def name(self) -> str:
         return self.person.name
+
+    def _later(self, seconds: float, callback: Any, *args: Any) -> None:
+        self.timers = [t for t in self.timers if not t.cancelled and t.due > self.sim.loop.now()]
+        self.timers.append(self.sim.loop.call_later(seconds, callback, *args))
+
+    def stop(self) -> None:
+        """The shared task is over and the robot has nothing left to say: what they would
+        still do on their own (look back in ten minutes) changes nothing the run decides,
+        so it is dropped and the run can end."""
+        for timer in self.timers:
+            timer.cancel()
+        self.timers = []
 
     def plan_event(self, event: str, task: int) -> None:
         """The follower's news: a task ``due`` or ``started`` by the robot, ``done``."""
@@ -60,16 +74,16 @@ class StackPartner:
                 label.startswith(str(self.look_away["during"])):
             self._look_away()
         elif event == "done" and self.leave and label.startswith(str(self.leave)):
-            self.sim.loop.call_later(self.delay, self._leave)
+            self._later(self.delay, self._leave)
         elif event == "due":
-            self.sim.loop.call_later(self.delay, self._consider)
+            self._later(self.delay, self._consider)
 
     def _look_away(self) -> None:
         if self.look_away is None:
             return
         self.person.look("away")
         seconds = float(self.look_away.get("for", 5.0))
-        self.sim.loop.call_later(seconds, self.person.look, "robot")
+        self._later(seconds, self.person.look, "robot")
         self.look_away = None
 
     def _consider(self) -> None:

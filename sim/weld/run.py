@@ -49,15 +49,16 @@ VIEWED = ("question", "answer", "respawn", "associate", "release", "control", "s
 """The events after which ``--snapshots`` takes a view of the whole site."""
 
 
-def run_weld(path: str | Path, *, seed: int = 0, out: str | Path | None = None,
+def run_weld(path: str | Path | WeldScenario, *, seed: int = 0, out: str | Path | None = None,
              snapshots: bool = False, gui: bool = False,
              report: Report | None = None, console: Any = None) -> RunResult:
     """Run one seam-welding scenario (see the module's docstring).  Pictures from K-10's
     camera are written whenever there is an output folder (they go with its questions);
     ``snapshots`` adds a view of the whole site at the end.  ``console`` (a
     :class:`shary.console.live.Attachment`) is given the team, sees every logged event and
-    is called between two steps of the clock, as in :func:`sim.run.run_scenario`."""
-    scenario = load_weld_scenario(path)
+    is called between two steps of the clock, as in :func:`sim.run.run_scenario`.
+    ``path`` may be a scenario already loaded."""
+    scenario = path if isinstance(path, WeldScenario) else load_weld_scenario(path)
     out_dir = Path(out) if out is not None else None
     log_path = None
     if out_dir is not None:
@@ -90,7 +91,9 @@ def run_weld(path: str | Path, *, seed: int = 0, out: str | Path | None = None,
                 differences.append(f"the run was still going at the timeout "
                                    f"({scenario.timeout:g}s)")
             result = RunResult(scenario.name, not differences, differences, end, wall, setup,
-                               seed, run.sim.physics_steps + site_steps(site))
+                               seed, run.sim.physics_steps + site_steps(site),
+                               events=rows if log_path is None else [],
+                               truth=site_truth(site))
             if out_dir is not None:
                 if snapshots:
                     run.overview("end")
@@ -138,6 +141,16 @@ def schedule_script(team: Team, scenario: WeldScenario) -> None:
 
     for step in scenario.script:
         team.loop.call_later(step.at, scripted, step)
+
+
+def site_truth(site: WeldSite) -> frozenset[tuple[str, str, str]]:
+    """What the site makes true now: the panels ``mounted`` on the frame, the seams
+    ``welded`` and the ``quality`` of each bead (:attr:`sim.run.RunResult.truth`)."""
+    return frozenset({*((panel, "mounted", "true") for panel in site.panels
+                        if site.mounted(panel)),
+                      *((seam, "welded", "true") for seam in site.beads),
+                      *((seam, "quality", f"{bead.quality:g}")
+                        for seam, bead in site.beads.items())})
 
 
 def site_steps(site: WeldSite) -> int:

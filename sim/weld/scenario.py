@@ -87,20 +87,23 @@ def is_weld_scenario(data: Any) -> bool:
     return isinstance(data, dict) and data.get("site") == SITE
 
 
-def load_weld_scenario(path: str | Path) -> WeldScenario:
+def load_weld_scenario(path: str | Path, *, text: str | None = None,
+                       team_text: str | None = None) -> WeldScenario:
     """Load and check a weld scenario and its team file; raise :class:`FileError` listing
-    every problem of both."""
-    return read(path, _schema(), _meaning)
+    every problem of both.  ``text`` and ``team_text`` are read in place of the
+    scenario's and its team file's own texts, as if they were those files (``shary
+    fuzz`` varies a built-in scenario and its team in memory this way)."""
+    return read(path, _schema(), lambda reader: _meaning(reader, team_text), text=text)
 
 
-def _meaning(reader: Reader) -> WeldScenario:
+def _meaning(reader: Reader, team_text: str | None = None) -> WeldScenario:
     data = reader.data
     problem = reader.problem
     team: TeamSpec | None = None
     full = reader.confined_path(("team",), data["team"])
     if full is not None:
         try:
-            team = load_team(spelled(full, like=reader.file))
+            team = load_team(spelled(full, like=reader.file), text=team_text)
         except FileError as err:
             reader.problems.extend(err.problems)
             problem(("team",), f"the team file {data['team']} has errors")

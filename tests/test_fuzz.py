@@ -1,0 +1,299 @@
+"""Behaviour campaigns (``shary fuzz``): the invariants on short campaigns of each family,
+Hypothesis-drawn partners for the stack, and the violations campaigns found, each
+kept as a scenario of its own (docs/fuzz.md)."""
+
+from __future__ import annotations
+
+import textwrap
+
+import pytest
+import yaml
+from hypothesis import HealthCheck, Phase, given, settings
+from hypothesis import strategies as st
+
+from sim.fuzz.behaviours import ROBOT_TASKS, draw, stack_partner
+from sim.fuzz.campaign import campaign, command, judge
+from sim.run import run_scenario
+from sim.scenario import builtin_scenarios, load_scenario
+
+
+def run_text(base: str, text: str, family: str = "living-room", seed: int = 0
+             ) -> tuple[str | None, str, dict[str, str]]:
+    """Run a scenario written here, read as if it were the built-in ``base``; judge it."""
+    scenario = load_scenario(builtin_scenarios()[base], text=textwrap.dedent(text))
+    return judge(family, scenario, run_scenario(scenario, seed=seed))
+
+
+CAMPAIGNS = [("living-room", 30, 1), ("weld", 24, 1), ("stack", 24, 5)]
+"""(family, runs, first seed): a short campaign each, a few seconds a run at most."""
+
+
+@pytest.mark.parametrize(("family", "runs", "seed"), CAMPAIGNS,
+                         ids=[c[0] for c in CAMPAIGNS])
+def test_a_short_campaign_violates_no_invariant(family, runs, seed):
+    result = campaign(family, runs, seed)
+    assert len(result.outcomes) == runs
+    assert not result.violations, "\n".join(
+        f"{command(family, o.seed)}: {name}: {what}" for o, name, what in result.violations)
+
+
+def test_a_seed_draws_one_behaviour_a_user_could_write():
+    """The same seed draws the same document, and the readers accept it as a file."""
+    for family in ("stack", "living-room", "weld"):
+        first, again = draw(family, 7), draw(family, 7)
+        assert first.text() == again.text() and first.team_text() == again.team_text()
+        assert first.load().name == f"{first.base}-fuzz-7"
+    assert draw("living-room", 7).text() != draw("living-room", 8).text()
+
+
+PARTNER = st.sampled_from(["alice", "bob", "zoe"])
+
+
+@st.composite
+def profiles(draw_from: st.DrawFn) -> dict:
+    """A stack partner's profile from the documented keys (docs/jahrvis.md)."""
+    profile = {"choices": draw_from(st.lists(st.sampled_from(
+                   ["placement_1", "placement_2", "Pick", "Place", "wait"]), max_size=4)),
+               "delay": draw_from(st.sampled_from([0, 0.5, 1, 2.5, 4]))}
+    if draw_from(st.booleans()):
+        profile["look-away"] = {"during": draw_from(st.sampled_from(ROBOT_TASKS)),
+                                "for": draw_from(st.sampled_from([0.5, 3, 6, 15, 40]))}
+    return profile
+
+
+@settings(max_examples=6, deadline=None, derandomize=True, database=None,
+          phases=(Phase.explicit, Phase.generate),
+          suppress_health_check=[HealthCheck.too_slow])
+@given(partner=PARTNER, profile=profiles(), wait=st.sampled_from([2, 4, 6]))
+def test_a_stack_partner_drawn_by_hypothesis_never_stalls_the_plan(partner, profile, wait):
+    data = stack_partner(partner, profile, wait)
+    data["scenario"] = "stack-hypothesis"
+    text = yaml.safe_dump(data, sort_keys=False)
+    state, reason, violations = run_text("stack-nominal", text, family="stack")
+    assert violations == {}, f"{violations}\nthe scenario:\n{text}"
+    assert state in ("achieved", "failed")
+
+
+GIVE = """\
+    scenario: give-{name}
+    robot: {{name: jido, at: base}}
+    people:
+      alice:
+        at: sofa-seat
+        profile: {profile}
+    goals:
+      - {{task: give-object, with: {{object: yellow-bottle, partner: alice}}}}
+    timeout: 200s
+    expect: {{}}
+"""
+
+
+def test_a_hand_over_nobody_takes_ends_failed_with_its_reason():
+    """Found by ``shary fuzz living-room --replay 47``: she agrees but never takes what
+    is held out; the give waited for ever and the run reached its timeout."""
+    state, reason, violations = run_text("give-bottle", GIVE.format(
+        name="never-taken",
+        profile="{answers: {ASK-TASK: {reply: H-AGREE, after: 1s}}, takes: null}"))
+    assert violations == {}
+    assert state == "failed" and reason
+
+
+def test_a_robot_handed_back_takes_the_task_that_waited_for_it():
+    """Found by ``shary fuzz weld --replay 15``: IVA drives K-10 while the weld is
+    made; the inspection becomes ready then, nobody else can do it, and after the hand
+    back nothing offered it again: the run reached its timeout with the goal open."""
+    from sim.weld.scenario import load_weld_scenario
+
+    scenario = load_weld_scenario(builtin_scenarios()["weld-human-supports-robot"], text="""\
+scenario: weld-held
+site: seam-welding
+team: weld/human-supports-robot.team.yaml
+mounted: [P1, P2, P3]
+script:
+  - {at: 2s, by: IVA, take-control: K-10}
+  - {at: 30s, by: IVA, hand-back: K-10}
+timeout: 4min
+expect: {}
+""")
+    state, reason, violations = judge("weld", scenario, run_scenario(scenario))
+    assert violations == {} and state == "achieved"
+
+
+CLEAN_UP = """\
+    scenario: clean-up-{name}
+    robot: {{name: jido, at: base}}
+    people:
+      alice:
+        at: sofa-seat
+        profile: {profile}
+    objects:
+      yellow-bottle: {{on: coffee-table, at: [{at}]}}
+    goals:
+      - {{task: clean-up, with: {{object: yellow-bottle}}}}
+    timeout: 200s
+    expect: {{}}
+"""
+
+
+def test_the_robot_asks_for_help_only_once_the_helper_looks():
+    """Found by ``shary fuzz living-room --replay 20``: Alice is on the phone when the
+    pick fails; the robot said "I could not pick the yellow bottle." to no one
+    listening.  Now it waits for her glance (as every question does), then asks."""
+    state, _, violations = run_text("clean-up-unreachable", CLEAN_UP.format(
+        name="helper-away", at="-0.35, 0.2",
+        profile="{answers: {ASK-HELP: {reply: H-AGREE, after: 1s}}, distractions: "
+                "[{when: {at: 1s}, look: phone, for: 12s}]}"))
+    assert violations == {}
+    assert state == "achieved"
+
+
+
+def test_a_goal_with_someone_who_never_comes_to_interact_is_dropped_saying_why():
+    """Found by ``shary fuzz living-room --replay 76``: Alice never looks at the robot,
+    so no session opens and the give waited for one until the run's timeout.  Now
+    the goal is cancelled after a while, the reason in its ``goal-over`` row."""
+    state, reason, violations = run_text("give-bottle", GIVE.format(
+        name="never-attends", profile="{attention: store-table}"))
+    assert violations == {}
+    assert state == "failed" and "alice" in reason
+
+
+def test_the_robot_stops_asking_when_the_helper_walks_away():
+    """Found by ``shary fuzz living-room --replay 100``: Alice walks to the door while
+    the robot says "I could not pick the yellow bottle."; it went on with "Can you give
+    me the yellow bottle?" after she had looked away.  Now it waits for her again."""
+    state, reason, violations = run_text("clean-up-unreachable", CLEAN_UP.format(
+        name="helper-leaves", at="-0.35, 0.2",
+        profile="{speed: 1.27, script: [{at: 4.1s, leave: true}]}"))
+    assert violations == {}
+    assert state == "failed" and reason
+
+
+def test_a_person_who_looks_away_once_she_has_the_object_was_given_it():
+    """Found by ``shary fuzz living-room --replay 206``: Alice takes the bottle and
+    looks at her phone while the arm goes back; the robot waited for her attention,
+    gave up and said "You are busy, so I will not give you the yellow bottle." while
+    she held it.  The give is done once she has taken it."""
+    text = GIVE.format(name="taken-then-away", profile=(
+        "{answers: {ASK-TASK: {reply: H-AGREE, after: [2.2s, 3.3s]}}, takes: {after: "
+        "[2.4s, 3s]}, speed: 1.13, distractions: [{when: {at: 27.6s}, after: 0.9s, "
+        "look: away, for: never}]}")) + "    noise: {hold: 0.8s, flicker: {isHolding: 0.17}}\n"
+    state, _, violations = run_text("give-bottle", text, seed=206)
+    assert violations == {}
+    assert state == "achieved"
+
+
+def test_no_answer_to_a_no_is_said_to_someone_who_is_not_looking():
+    """Found by ``shary fuzz living-room --replay 248``: Alice says no, and the robot's
+    perception no longer sees her look at it (her gaze flickers): it said "I will not
+    give you the yellow bottle." all the same.  Now it says so only to her face."""
+    text = GIVE.format(name="no-then-away", profile=(
+        "{answers: {ASK-TASK: {reply: H-DISAGREE, after: 0.7s}}, speed: 0.95}")) + \
+        "    noise: {hold: 0s, flicker: {looksAt: 0.14}}\n"
+    state, _, violations = run_text("give-bottle", text, seed=248)
+    assert violations == {}
+    assert state == "failed"
+
+
+def test_thanks_are_said_to_a_helper_who_looks():
+    """Found by ``shary fuzz living-room --replay 96``: "Thank you for the yellow
+    bottle." said while the robot did not see Alice look at it."""
+    state, _, violations = run_text("clean-up-unreachable", CLEAN_UP.format(
+        name="thanks", at="-0.35, 0.2", profile=(
+            "{answers: {ASK-TASK: [{reply: H-AGREE, after: [0.7s, 2.4s]}], ASK-HELP: "
+            "[{reply: H-AGREE, after: [1.4s, 2.3s]}, {reply: H-AGREE, after: [1.7s, 2.5s]}]}, "
+            "distractions: [{when: {at: 38.4s}, after: 0.7s, look: away, for: 13.1s}], "
+            "takes: {after: [2.8s, 3.2s]}, helps: true, speed: 1.29}"
+        )) + "    noise: {hold: 0s, flicker: {looksAt: 0.07}}\n",
+        seed=96)
+    assert violations == {}
+    assert state == "achieved"
+
+
+STACK = """\
+    scenario: stack-{name}
+    robot: {{name: pr2, model: pr2like, at: coffee-area}}
+    people:
+      {partner}: {{at: coffee-north, profile: cooperative}}
+    action-models: [stack]
+    shared-plan:
+      problem: stack
+      partner: {partner}
+      decision-wait: {wait}
+      profile: {profile}
+    timeout: 300s
+    expect: {{}}
+"""
+
+
+def test_a_partner_who_never_looks_back_does_not_keep_the_run_going():
+    """Found by ``shary fuzz stack --replay 9``: Bob looks away for ten minutes as the
+    robot places the last cube; the plan is achieved, the robot calls him and gives up
+    telling him, and the run went on until its timeout waiting for his glance.  Now it
+    ends there, the untold inform in a ``belief`` row."""
+    text = STACK.format(name="never-looks-back", partner="bob", wait="6s", profile=(
+        "{choices: [Place, Place, Place], delay: 4.0, "
+        "look-away: {during: 'Place(pr2, blue_cube', for: 600}}"))
+    scenario = load_scenario(builtin_scenarios()["stack-nominal"], text=textwrap.dedent(text))
+    result = run_scenario(scenario, seed=9)
+    state, _, violations = judge("stack", scenario, result)
+    assert violations == {}
+    assert state == "achieved" and result.simulated_seconds < 100
+    assert any(kind == "belief" and data.get("why") == "untold"
+               for _, kind, _, _, data in result.events)
+
+
+def test_what_a_partner_who_left_missed_is_tried_once_the_plan_is_over():
+    """Found by ``shary fuzz stack --replay 128``: Carol walks to the door after her
+    last pick; the robot's last actions are NOT_SEEN in her view, it calls her at the
+    end of the plan and gives up.  That is all it can do: the invariant now reads the
+    ``belief ... why=untold`` row the end's inform writes (it counted only a failed
+    plan as over)."""
+    state, _, violations = run_text("stack-nominal", STACK.format(
+        name="partner-left", partner="carol", wait="4.4s", profile=(
+            "{choices: [placement_2], delay: 3.9, "
+            "leave: {after: 'Pick(carol, blue_cube_2)'}}")), family="stack", seed=128)
+    assert violations == {}
+    assert state == "achieved"
+
+
+def test_an_inform_is_not_said_to_a_partner_who_looks_away_as_it_starts():
+    """Found by ``shary fuzz stack --replay 155``: Carol's gaze flickers; she looked
+    away while the robot turned to her and it said "I placed the blue cube on the green
+    cube." all the same.  A look-away before the sentence starts now sends the inform
+    back to waiting for her attention (``recipes/dialogue.yaml``: ``until: speak``)."""
+    text = STACK.format(name="inform-flicker", partner="carol", wait="2.3s", profile=(
+        "{choices: [placement_1, placement_2, Place], delay: 2.2}")) + \
+        "    noise: {hold: 0s, flicker: {looksAt: 0.09}}\n"
+    state, _, violations = run_text("stack-nominal", text, family="stack", seed=155)
+    assert violations == {}
+    assert state == "achieved"
+
+
+def test_a_replan_keeps_the_partner_s_top_blue_cube():
+    """Found by ``shary fuzz stack --replay 58``: the robot's place failed twice, the
+    plan was made again, Bob left the first blue cube to the robot, and the new plan
+    ended with no blue cube on the green one: its agendas lacked ``HumanTopBlue``,
+    which the old branch had found already done (no primitive task).  The replan's
+    agendas now keep such tasks (``shary/plans/replan.py``)."""
+    text = STACK.format(name="replan-top-blue", partner="bob", wait="6.3s", profile=(
+        "{choices: [placement_1, wait], delay: 3.6}")) + \
+        "    faults: [{action: place, reason: the place slipped, times: 2}]\n"
+    state, _, violations = run_text("stack-nominal", text, family="stack", seed=58)
+    assert violations == {}
+    assert state == "achieved"
+
+
+def test_a_partner_cannot_take_a_cube_out_of_the_robot_s_hand():
+    """Found by ``shary fuzz stack --replay 140``: Dana means to do the robot's next
+    step (pick the green cube, put it on her blue one) but is late; the simulator let
+    her pull the green cube out of the robot's gripper while she held her blue cube,
+    and the plan waited 45 s for a place the robot could not do, then failed.  A
+    person's pick of something another agent holds now does nothing (sim/people.py)."""
+    state, _, violations = run_text("stack-nominal", STACK.format(
+        name="snatch", partner="dana", wait="2.3s", profile=(
+            "{choices: [], delay: 2.8, before: {'Pick(pr2, green_cube)': "
+            "[[Pick, green_cube], [Place, green_cube, blue_cube_2]]}}")),
+        family="stack", seed=140)
+    assert violations == {}
+    assert state == "achieved"
