@@ -252,6 +252,12 @@ class ChronicleRecognizer:
                                                   perspective=perspective)
                               for p in predicates]
 
+    @property
+    def timing(self) -> bool:
+        """Whether a chronicle waits for a fact to stay (a goal may come of it): a run
+        that ends when nothing is left to do waits for it."""
+        return any(partial.timer is not None for partial in self.partials)
+
     def close(self) -> None:
         for subscription in self.subscriptions:
             self.sup.facts.unsubscribe(subscription)

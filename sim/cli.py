@@ -45,6 +45,14 @@ def add_run(sub: argparse._SubParsersAction) -> None:
                    "(default: runs/SCENARIO, after the scenario's name)")
     p.add_argument("--snapshots", action="store_true", help="also write PNG views at each act")
     p.add_argument("--quiet", action="store_true", help="print only the verdict")
+    p.add_argument("--ros", action="store_true",
+                   help="run only the supervisor, reaching the robot through ROS 2: the world "
+                   "runs in another process ('shary world --ros SCENARIO')")
+    p.add_argument("--world", action="store_true",
+                   help="with --ros: start the world too ('shary world --ros SCENARIO'), as a "
+                   "process of its own, in a ROS domain of its own unless ROS_DOMAIN_ID is set")
+    p.add_argument("--wait", type=float, default=30.0, metavar="S",
+                   help="with --ros: how long to wait for the robot (default 30 s)")
     add_json_flag(p, "the verdict, the figures and the files written (no progress lines)")
     p.set_defaults(func=cmd_run)
 
@@ -75,6 +83,10 @@ def cmd_run(args: argparse.Namespace) -> int:
     except KeyError as err:
         return error(err.args[0], json_mode=args.json)
     out = args.out or Path("runs") / _name_of(path)
+    if args.ros:
+        from sim.rosrun import cmd_run_ros
+
+        return cmd_run_ros(args, path, out)
     replacing = earlier_run(out)
     if replacing and not (args.quiet or args.json):
         _out.print(f"[dim]{escape(replacing)}[/dim]")
@@ -287,13 +299,24 @@ def add_world(sub: argparse._SubParsersAction) -> None:
     from shary.commands.distributed import DEFAULT_ENDPOINT, add_common, endpoint
 
     p = sub.add_parser("world", help="run a seam-welding scenario's world (the PyBullet site) "
-                       "as an agent of a distributed team (Zenoh)",
+                       "as an agent of a distributed team (Zenoh), or with --ros a living-room "
+                       "scenario's world as the simulated Jido on ROS 2",
                        description="Run the scenario's world in this process: it joins the "
                        "team whose managers listen at --connect (shary team up SCENARIO), "
                        "performs the robots' atomic tasks and the people's work on site, and "
-                       "shares what it perceives.")
+                       "shares what it perceives.  With --ros, the living room serves the "
+                       "jido-sim binding's interfaces on ROS 2 for 'shary run SCENARIO --ros' "
+                       "(docs/ros2.md).")
     p.add_argument("scenario", metavar="SCENARIO",
-                   help="a seam-welding scenario (built-in name or file)")
+                   help="a seam-welding scenario (built-in name or file); with --ros, a "
+                   "living-room scenario")
+    p.add_argument("--ros", action="store_true",
+                   help="serve the scenario's living room as the simulated Jido on ROS 2 "
+                   "(the jido-sim binding's interfaces), for 'shary run SCENARIO --ros'")
+    p.add_argument("--seconds", type=float, metavar="S",
+                   help="with --ros: stop after S seconds (default: run until Ctrl-C)")
+    p.add_argument("--quiet", action="store_true",
+                   help="with --ros: do not print what happens in the world")
     p.add_argument("--connect", type=endpoint, default=DEFAULT_ENDPOINT,
                    metavar="tcp/HOST:PORT",
                    help=f"where the team's managers listen (default {DEFAULT_ENDPOINT})")
@@ -308,6 +331,10 @@ def cmd_world(args: argparse.Namespace) -> int:
         path = find_scenario(args.scenario)
     except KeyError as err:
         return error(err.args[0])
+    if args.ros:
+        from sim.rosrun import cmd_world_ros
+
+        return cmd_world_ros(args, path)
     if _weld_scenario(path) is None:
         return error(f"{args.scenario}: not a seam-welding scenario (site: seam-welding); "
                      "only those have a world that runs as its own agent")

@@ -155,8 +155,7 @@ def run_scenario(path: str | Path | Scenario | Any, *, seed: int = 0,
         wall = time.perf_counter()
         end = run.go()
         wall = time.perf_counter() - wall
-        happened = run.happened(end, log_path)
-        differences = judge(scenario.expect, happened)
+        differences = judge(scenario.expect, run.happened(end, log_path))
         if end >= scenario.timeout - 1e-9:
             differences.append(f"the run was still going at the timeout ({scenario.timeout:g}s)")
         result = RunResult(scenario.name, not differences, differences, end, wall, setup, seed,
@@ -222,6 +221,96 @@ def _log(path: Path | None, seed: int) -> Any:
     return ContextLog(path, seed=seed) if path is not None else MemoryLog()
 
 
+def arrange_objects(world: LivingRoom, sim: Simulation, scenario: Scenario,
+                    stack: StackSession | None) -> None:
+    """Add the scenario's new objects to the room, and put every object in its place."""
+    objects = {**(stack.objects() if stack else {}), **scenario.objects}
+    for obj, spec in objects.items():
+        furniture = spec.get("on", "coffee-table")
+        f = world.footprints[furniture]
+        x, y = spec.get("at", (f.x, f.y))
+        if is_new(spec):
+            world.add_object(new_object(obj, spec), x, y, world.top(furniture))
+        if "held-by" in spec:
+            sim.attach(obj, spec["held-by"])
+            continue
+        z = standing_height(world.top(furniture), world.sizes[obj][0])
+        world.call(pb.resetBasePositionAndOrientation, world.body(obj), [x, y, z], [0, 0, 0, 1])
+
+
+def a_priori(facts: FactDatabase, world: LivingRoom, scenario: Scenario,
+             stack: StackSession | None) -> None:
+    """What the robot knows before it looks: kinds of things, the planner's constants."""
+    robot = scenario.robot
+    for place in world.places:
+        facts.add(place, "type", "Place")
+    for furniture in FURNITURE:
+        facts.add(furniture, "type", "Furniture")
+        # its own kind too ("coffee-table" is a CoffeeTable): what people call it
+        facts.add(furniture, "type", "".join(
+            w.title() for w in furniture.split("-") if not w.isdigit()))
+        if furniture in MANIPULATION_PLACES:  # the others the robot cannot reach
+            facts.add(furniture, "place", MANIPULATION_PLACES[furniture])
+        facts.add(furniture, "container", furniture in CONTAINERS)
+        facts.add(furniture, "seat", furniture in SEATS)
+    for obj in BOTTLES:
+        facts.add(obj, "type", "Object")
+        facts.add(obj, "type", "Bottle")
+        facts.add(obj, "color", obj.split("-")[0])
+        facts.add(obj, "drink", True)
+        facts.add(obj, "robot_reach", True)
+    for added in world.added.values():
+        facts.add(added.name, "type", "Object")
+        facts.add(added.name, "type", added.kind[:1].upper() + added.kind[1:])
+        facts.add(added.name, "color", added.colour)
+        facts.add(added.name, "shape", added.shape)
+        facts.add(added.name, "drink", False)
+        facts.add(added.name, "robot_reach", True)
+    facts.add(robot, "type", "Agent")
+    facts.add(robot, "type", "Robot")
+    for attribute, value in ROBOT_ATTRIBUTES.items():
+        facts.add(robot, attribute, value)
+    if stack is not None:
+        stack.a_priori(facts)
+    for spec in scenario.people:
+        facts.add(spec.name, "type", "Agent")
+        facts.add(spec.name, "type", "Human")
+        for attribute, value in {**PERSON_ATTRIBUTES, **spec.attributes}.items():
+            facts.add(spec.name, attribute, value)
+
+
+def happened(events: list[tuple[float, str, Any, Any, dict[str, Any]]], facts: FactDatabase,
+             robot: str, end: float) -> Happened:
+    """What a run's logged events and the robot's final beliefs say happened (judged
+    against a scenario's expectations)."""
+    acts, actions, tasks = [], [], {}
+    plan, said, task_states, recognized = [], [], set(), []
+    requests: dict[str, tuple[str, str]] = {}
+    for t, kind, _, agent, data in events:
+        if kind == "shared-plan":
+            plan.append(data["state"])
+        elif kind == "speech" and agent == robot:
+            said.append(data["text"])
+        elif kind == "plan-task":
+            task_states.add((agent or "", data["name"], data["state"]))
+        elif kind == "recognition":
+            recognized.append((data["state"], data["action"], agent or ""))
+        if kind == "act":
+            acts.append((t, agent or "", data["act"]))
+        elif kind == "act-received":
+            acts.append((t, agent or "", data["act"]))
+        elif kind == "exec-request":
+            requests[data["request"]] = (agent or "", data["atomic"])
+            actions.append((t, agent or "", data["atomic"], "started"))
+        elif kind == "exec-result" and data["request"] in requests:
+            who, atomic = requests[data["request"]]
+            actions.append((t, who, atomic, data["status"]))
+        elif kind == "task-end":
+            tasks.setdefault(data["name"], []).append(data.get("outcome", "done"))
+    believed = {(str(s), str(p), str(o)) for s, p, o in facts.triples("robot")}
+    return Happened(acts, actions, tasks, believed, end, plan, said, task_states, recognized)
+
+
 class _Run:
     """One run's parts, wired together."""
 
@@ -271,8 +360,8 @@ class _Run:
         for action, reason, times in scenario.faults:
             self.executors.faults.setdefault(action, []).extend([reason] * times)
         self.sup.act_listeners.append(self._act_started)
-        self._arrange_objects()
-        self._a_priori()
+        arrange_objects(world, self.sim, scenario, self.stack)
+        a_priori(self.facts, world, scenario, self.stack)
         self.perception = (self.stack.perception_class if self.stack else Perception)(
             self.sim, self.facts, hold=scenario.hold,
             noise=Noise(dict(scenario.flicker), list(scenario.lost)), rng=self.loop.random)
@@ -284,61 +373,6 @@ class _Run:
                               if scenario.action_models else None)
 
     # -- setting up ----------------------------------------------------------------
-
-    def _arrange_objects(self) -> None:
-        """Add the scenario's new objects to the room, and put every object in its place."""
-        objects = {**(self.stack.objects() if self.stack else {}), **self.scenario.objects}
-        for obj, spec in objects.items():
-            furniture = spec.get("on", "coffee-table")
-            f = self.world.footprints[furniture]
-            x, y = spec.get("at", (f.x, f.y))
-            if is_new(spec):
-                self.world.add_object(new_object(obj, spec), x, y, self.world.top(furniture))
-            if "held-by" in spec:
-                self.sim.attach(obj, spec["held-by"])
-                continue
-            z = standing_height(self.world.top(furniture), self.world.sizes[obj][0])
-            self.world.call(pb.resetBasePositionAndOrientation, self.world.body(obj),
-                            [x, y, z], [0, 0, 0, 1])
-
-    def _a_priori(self) -> None:
-        """What the robot knows before it looks: kinds of things, the planner's constants."""
-        facts, robot = self.facts, self.scenario.robot
-        for place in self.world.places:
-            facts.add(place, "type", "Place")
-        for furniture in FURNITURE:
-            facts.add(furniture, "type", "Furniture")
-            # its own kind too ("coffee-table" is a CoffeeTable): what people call it
-            facts.add(furniture, "type", "".join(
-                w.title() for w in furniture.split("-") if not w.isdigit()))
-            if furniture in MANIPULATION_PLACES:  # the others the robot cannot reach
-                facts.add(furniture, "place", MANIPULATION_PLACES[furniture])
-            facts.add(furniture, "container", furniture in CONTAINERS)
-            facts.add(furniture, "seat", furniture in SEATS)
-        for obj in BOTTLES:
-            facts.add(obj, "type", "Object")
-            facts.add(obj, "type", "Bottle")
-            facts.add(obj, "color", obj.split("-")[0])
-            facts.add(obj, "drink", True)
-            facts.add(obj, "robot_reach", True)
-        for obj in self.world.added.values():
-            facts.add(obj.name, "type", "Object")
-            facts.add(obj.name, "type", obj.kind[:1].upper() + obj.kind[1:])
-            facts.add(obj.name, "color", obj.colour)
-            facts.add(obj.name, "shape", obj.shape)
-            facts.add(obj.name, "drink", False)
-            facts.add(obj.name, "robot_reach", True)
-        facts.add(robot, "type", "Agent")
-        facts.add(robot, "type", "Robot")
-        for attribute, value in ROBOT_ATTRIBUTES.items():
-            facts.add(robot, attribute, value)
-        if self.stack is not None:
-            self.stack.a_priori(facts)
-        for spec in self.scenario.people:
-            facts.add(spec.name, "type", "Agent")
-            facts.add(spec.name, "type", "Human")
-            for attribute, value in {**PERSON_ATTRIBUTES, **spec.attributes}.items():
-                facts.add(spec.name, attribute, value)
 
     # -- during the run ------------------------------------------------------------
 
@@ -433,32 +467,7 @@ class _Run:
             events = [(e.time, e.kind, e.task, e.agent, e.data) for e in read_events(log_path)]
         else:
             events = self.log.events
-        acts, actions, tasks = [], [], {}
-        plan, said, task_states, recognized = [], [], set(), []
-        requests: dict[str, tuple[str, str]] = {}
-        for t, kind, _, agent, data in events:
-            if kind == "shared-plan":
-                plan.append(data["state"])
-            elif kind == "speech" and agent == self.scenario.robot:
-                said.append(data["text"])
-            elif kind == "plan-task":
-                task_states.add((agent or "", data["name"], data["state"]))
-            elif kind == "recognition":
-                recognized.append((data["state"], data["action"], agent or ""))
-            if kind == "act":
-                acts.append((t, agent or "", data["act"]))
-            elif kind == "act-received":
-                acts.append((t, agent or "", data["act"]))
-            elif kind == "exec-request":
-                requests[data["request"]] = (agent or "", data["atomic"])
-                actions.append((t, agent or "", data["atomic"], "started"))
-            elif kind == "exec-result" and data["request"] in requests:
-                who, atomic = requests[data["request"]]
-                actions.append((t, who, atomic, data["status"]))
-            elif kind == "task-end":
-                tasks.setdefault(data["name"], []).append(data.get("outcome", "done"))
-        facts = {(str(s), str(p), str(o)) for s, p, o in self.facts.triples("robot")}
-        return Happened(acts, actions, tasks, facts, end, plan, said, task_states, recognized)
+        return happened(events, self.facts, self.scenario.robot, end)
 
     def write(self, out_dir: Path, log_path: Path | None) -> dict[str, str]:
         from shary.display import render_tree

@@ -41,7 +41,8 @@ def test_facts_in_stale_facts_out_speech_in_and_out(write, ros_domain, spawn):
         RosPerception(node, binding, facts, loop, act=lambda *a: acts.append(a),
                       hear=lambda *a: heard.append(a),
                       record=lambda kind, **data: rows.append((kind, data)))
-        executors = RosExecutors(node, binding, loop)
+        executors = RosExecutors(node, binding, loop,
+                                 record=lambda kind, **data: rows.append((kind, data)))
         robot.send(r"pub /robot/facts alice looksAt jido\nalice isAt sofa-area")
         run_until(loop, lambda: facts.holds("alice", "looksAt", "jido"))
         loop.run_for(0.3)  # three more identical messages: no change reaches the database
@@ -63,6 +64,8 @@ def test_facts_in_stale_facts_out_speech_in_and_out(write, ros_domain, spawn):
                         Reporter(outcomes.append, loop.call_soon))
         run_until(loop, lambda: "heard /robot/say Here is your bottle." in robot.lines)
         assert [o.status for o in outcomes] == ["done"]
+        # the log says what the robot said, as a simulated run's does (a scenario's `said`)
+        assert ("speech", {"agent": "jido", "text": "Here is your bottle."}) in rows
 
 
 def test_templates_make_one_fact_per_element_of_a_sequence():
@@ -77,3 +80,21 @@ def test_templates_make_one_fact_per_element_of_a_sequence():
         ("alice", "looksAt", "jido"), ("bob", "looksAt", "tv"),
         ("camera", "sees", "alice"), ("camera", "sees", "bob")}
 
+
+
+def test_lines_carry_truth_values_numbers_and_text_literals_as_such():
+    from rdflib import Literal
+    from std_msgs.msg import String
+
+    source = FactSource("/jido/facts", "std_msgs/msg/String", lines="data")
+    message = String(data='yellow-bottle robot_reach false\njido move_cost 2\n'
+                          'alice position "0.12 0.00 0.56"\nalice looksAt jido\n'
+                          'yellow-bottle color "yellow"')
+    found = RosPerception.triples(source, message)
+    assert found == {("yellow-bottle", "robot_reach", False), ("jido", "move_cost", 2),
+                     ("alice", "position", Literal("0.12 0.00 0.56")),
+                     ("alice", "looksAt", "jido"), ("yellow-bottle", "color", Literal("yellow"))}
+    facts = FactDatabase()
+    for triple in found:  # each one a fact the database takes
+        facts.add(*triple)
+    assert facts.objects("yellow-bottle", "robot_reach") == [False]

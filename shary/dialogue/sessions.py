@@ -176,6 +176,12 @@ class Sessions:
             self._leaving[person] = self.sup.loop.call_later(self.leave_after, self._left,
                                                              person, session)
 
+    @property
+    def timing(self) -> bool:
+        """Whether someone's leaving is being timed (a farewell may be due): a run that
+        ends when nothing is left to do waits for it."""
+        return bool(self._leaving)
+
     def _left(self, person: str, session: TaskRun) -> None:
         self._leaving.pop(person, None)
         if self.open.get(person) is session and not session.ended \

@@ -104,6 +104,14 @@ class RosExecutors:
         for atomic in self.binding.tasks:
             registry.register(atomic, self)
 
+    def ready(self) -> bool:
+        """Whether every bound action and service has its server (call it on the executor's
+        thread, e.g. through :meth:`RosNode.call`: for waiting on a robot before starting)."""
+        return all(self.binding.tasks[atomic].kind == "topic"
+                   or (entity.server_is_ready() if self.binding.tasks[atomic].kind == "action"
+                       else entity.service_is_ready())
+                   for atomic, entity in self._entities.items())
+
     # -- the executor port -------------------------------------------------------------
 
     def start(self, request: Any, reporter: Any) -> None:
@@ -124,6 +132,8 @@ class RosExecutors:
             reporter.failed(request, f"invalid goal: {err}")
             return
         goal = _Goal(request, reporter, task, message, self.loop.now())
+        if request.atomic == "speak":  # what the robot says, as in a simulated run's log
+            self.record("speech", agent=request.agent, text=str(request.args.get("text", "")))
         if task.kind == "topic":
             self.node.post(self._entities[request.atomic].publish, message)
             self._end(goal, "done", "succeeded", f"published on {task.name}")

@@ -147,6 +147,44 @@ class RosNode:
         self.waitables.append(server)
         return server
 
+    def serve_goals(self, cls: Any, name: str, start: Callable[..., Any],
+                    cancel: Callable[[bytes], Any]) -> Any:
+        """Serve action ``name`` whose goals are performed on the engine's side (a robot
+        simulated behind ROS 2): each accepted goal puts ``start(key, goal, end)`` on the
+        inbox; ``end(result, canceled=False)``, from any thread, ends it (CANCELED if it was
+        cancelled at a client's request, else SUCCEEDED with ``result``: the result says
+        whether it worked); a cancel request puts ``cancel(key)``.  The execute callback
+        awaits its end on the executor's thread, so no goal holds a thread."""
+        from rclpy.action import CancelResponse
+        from rclpy.task import Future
+
+        live: dict[bytes, Any] = {}
+
+        async def execute(handle: Any) -> Any:
+            key = bytes(handle.goal_id.uuid)
+            future = live[key] = Future()
+
+            def end(result: Any, canceled: bool = False) -> None:
+                self.post(_settle, future, (result, canceled))
+
+            self.put(start, key, handle.request, end)
+            result, canceled = await future
+            del live[key]
+            if canceled and handle.is_cancel_requested:
+                handle.canceled()
+            else:
+                handle.succeed()
+            return result
+
+        def on_cancel(handle: Any) -> Any:
+            key = bytes(handle.goal_id.uuid)
+            if key in live:
+                self.put(cancel, key)
+            return CancelResponse.ACCEPT
+
+        return self.action_server(cls, name, execute_callback=execute,
+                                  cancel_callback=on_cancel)
+
     def service_client(self, cls: Any, name: str) -> Any:
         return self.call(self.node.create_client, cls, name)
 
@@ -189,6 +227,12 @@ class RosNode:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _settle(future: Any, value: Any) -> None:
+    """End a served goal's wait (on the executor's thread), once."""
+    if not future.done():
+        future.set_result(value)
 
 
 def _raise(err: Exception) -> None:

@@ -3,7 +3,8 @@
 :class:`RosPerception` subscribes to a binding's ``facts`` and ``speech``
 topics.  Each message of a fact topic gives the topic's whole current set of
 facts (templates over its fields, once per element with ``each``, or lines
-``SUBJECT PREDICATE OBJECT``); only the difference with the topic's previous
+``SUBJECT PREDICATE OBJECT``, whose object ``true``, ``false``, a number or
+``"quoted text"`` is read as JSON reads it); only the difference with the topic's previous
 set is written to the fact database, in the robot's perspective, so monitors
 and chronicles hear of changes, not of messages (as the simulator's
 perception does).  A topic silent for longer than its ``stale`` time has its
@@ -20,8 +21,11 @@ the engine's loop.
 
 from __future__ import annotations
 
+import json
 from collections.abc import Callable
 from typing import Any
+
+from rdflib import Literal
 
 from shary.ros import messages
 from shary.ros.binding import Binding, FactSource, SpeechSource, import_interface
@@ -90,7 +94,7 @@ class RosPerception:
             for line in str(messages.read_field(message, source.lines) or "").splitlines():
                 parts = line.split(maxsplit=2)
                 if len(parts) == 3:
-                    found.add((parts[0], parts[1], parts[2]))
+                    found.add((parts[0], parts[1], _literal(parts[2])))
             return found
         items = messages.read_field(message, source.each) if source.each else [None]
         return {tuple(_part(p, message, item) for p in template)  # type: ignore[misc]
@@ -126,6 +130,25 @@ class RosPerception:
             self.act(speaker, answer)
         else:
             self.hear(speaker, sentence)
+
+
+def _literal(text: str) -> Any:
+    """An object written on a line: ``true``, ``false``, numbers and ``"quoted text"`` as
+    JSON reads them (a fact's truth value, quantity or text literal), anything else as a
+    name."""
+    if text[:1] == '"':
+        try:
+            return Literal(json.loads(text))
+        except ValueError:
+            return text
+    if text in ("true", "false") or text[:1].isdigit() or text[:1] == "-":
+        try:
+            value = json.loads(text)
+        except ValueError:
+            return text
+        if isinstance(value, (bool, int, float)):
+            return value
+    return text
 
 
 def _part(template: Any, message: Any, item: Any) -> Any:

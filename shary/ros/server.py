@@ -12,8 +12,14 @@ which any ROS node (``ros2 topic pub`` too) can use:
                          task's acts and the robot's actions happen
 ``~/run_task/result``    ``{"id": ID, "verdict": OUTCOME, "reason": …}``: the task's
                          outcome (``rejected`` when it cannot be started)
-``~/person_act``         ``{"agent": NAME, "act": ACT, "data": …}``: a person's act
-                         (H-AGREE …), given to the supervisor as if perceived.
+``~/person_act``         ``{"agent": NAME, "act": ACT, "data": …, "task": NODE}``: a
+                         person's act (H-AGREE …), given to the supervisor as if
+                         perceived (``task``, optional: the task it answers)
+``~/acts``               ``{"node": NODE, "task": NAME, "act": ACT, "agent": …, "roles":
+                         {ROLE: AGENT}, "env": {PARAM: VALUE}}`` as each act of a task
+                         begins, and ``{"ended": NODE}`` when the task ends: what the
+                         robot is doing with whom, for a simulated person (``shary
+                         world --ros``) or a dialogue manager
 
 The result topic is reliable with a depth of 100, so a client that subscribed
 before sending its goal gets its verdict.  Callbacks put the message on the
@@ -44,6 +50,8 @@ class RosTaskServer:
         node.subscription(String, "~/run_task/goal", lambda m: node.put(self._goal, m.data))
         node.subscription(String, "~/run_task/cancel", lambda m: node.put(self._cancel, m.data))
         node.subscription(String, "~/person_act", lambda m: node.put(self._act, m.data))
+        self.acts_pub = node.publisher(String, "~/acts", depth=100)
+        sup.act_listeners.append(self._act_started)
 
     def _send(self, publisher: Any, data: dict[str, Any]) -> None:
         from std_msgs.msg import String
@@ -88,14 +96,24 @@ class RosTaskServer:
 
     def _act(self, text: str) -> None:
         act = _json(text)
+        task = act.get("task")
         if isinstance(act.get("agent"), str) and isinstance(act.get("act"), str):
-            self.sup.receive_act(act["agent"], act["act"], act.get("data"))
+            self.sup.receive_act(act["agent"], act["act"], act.get("data"),
+                                 task=task if isinstance(task, str) else None)
+
+    def _act_started(self, run: Any, state: Any, agent: str) -> None:
+        self._send(self.acts_pub, {"node": run.node, "task": run.type.name, "act": state.act,
+                                   "agent": agent, "roles": dict(run.roles),
+                                   "env": {str(k): _plain(v) for k, v in run.env.items()}})
 
     # -- from the supervisor's log ---------------------------------------------------------
 
     def listener(self, time: float, kind: str, task: str | None, agent: str | None,
                  data: dict[str, Any]) -> None:
-        """Told every logged event: feedback while a requested task runs, its verdict."""
+        """Told every logged event: feedback while a requested task runs, its verdict;
+        a task's end on ``~/acts``."""
+        if kind == "task-end" and task is not None:
+            self._send(self.acts_pub, {"ended": task})
         if not self.runs:
             return
         if kind == "task-end" and task in self._by_node:
@@ -117,6 +135,11 @@ class RosTaskServer:
         for rid in self.runs:
             self._send(self.feedback_pub, {"id": rid, "kind": "act" if kind == "act"
                                            else "action", "text": text, "time": time})
+
+
+def _plain(value: Any) -> Any:
+    """A value as JSON carries it (a fact's object that is not a number or text: its name)."""
+    return value if isinstance(value, (str, int, float, bool)) or value is None else str(value)
 
 
 def _json(text: str) -> dict[str, Any]:

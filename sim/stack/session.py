@@ -47,14 +47,25 @@ class StackSession:
 
     def start(self, sup: Any, person: Any, decision_wait: float = 6.0) -> None:
         """Plan, and follow the plan with ``person`` (recognition must be running)."""
+        self.follow(sup, decision_wait)
+        self.join(person, self.follower)
+        self.follower.start()
+
+    def follow(self, sup: Any, decision_wait: float = 6.0) -> PlanFollower:
+        """The supervisor's side: the first plan and its follower (not started yet)."""
         self.follower = PlanFollower(
             sup, first_plan(self.files, self.names), humans=[self.partner_name],
             replan=Replanner(sup.facts, self.files, self.names,
                              lambda kind, **row: sup.record(kind, agent=sup.robot, **row)),
             decision_wait=decision_wait, name="StackBuildingTask")
-        self.partner = StackPartner(person, self.follower, self.spec.get("profile") or {})
+        return self.follower
+
+    def join(self, person: Any, follower: Any) -> StackPartner:
+        """The partner's side: ``person`` follows ``follower``'s plan (the follower itself,
+        or what a world on ROS 2 hears of it) as their profile says, looking at the robot."""
+        self.partner = StackPartner(person, follower, self.spec.get("profile") or {})
         person.look("robot")
-        self.follower.start()
+        return self.partner
 
     @property
     def busy(self) -> bool:

@@ -1,0 +1,260 @@
+"""A scenario with the robot reached only through ROS 2: both processes' commands.
+
+``shary world --ros SCENARIO`` serves the scenario's living room as the
+simulated Jido (:mod:`sim.rosworld`); ``shary run SCENARIO --ros`` runs the
+supervisor in another process, on the wall clock, with the scenario's recipe
+library, planner and goals, its ports filled by the Jido binding
+(:class:`shary.ros.bridge.RosSupervision`): it waits for the robot's first
+facts and its action servers, adds the goals, runs until nothing is left to
+do, and judges the run against the scenario's expectations exactly as a run
+in one process is judged (:func:`sim.run.happened`, :func:`sim.scenario.judge`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from shary.terminal import emit_json, error
+from shary.terminal import out as _out
+
+WAIT_FOR_ROBOT = 30.0
+"""Wall seconds ``shary run --ros`` waits for the robot's facts and action servers."""
+SETTLE = 1.0
+"""Wall seconds with nothing left to do before the run is over (an answer on its way)."""
+
+
+TEAM_SCENARIO = ("{}: a seam-welding scenario runs as a team over Zenoh ('shary team up', "
+                 "docs/distributed.md), not behind ROS 2")
+
+
+def _ros_ready() -> str | None:
+    """Why ROS 2 cannot be used here, after restarting the program with the wheels'
+    libraries found if it must."""
+    from shary.ros.env import reexec_with_libraries, unavailable
+
+    if Path(sys.argv[0]).name in ("shary", "__main__.py"):  # the program, not main() in-process
+        reexec_with_libraries()
+    return unavailable()
+
+
+def cmd_world_ros(args: argparse.Namespace, path: Path) -> int:
+    """``shary world --ros SCENARIO``: serve the living room until Ctrl-C or --seconds."""
+    from shary.ros.binding import load_binding
+    from userfiles.errors import FileError
+
+    from .narration import ConsoleReport
+    from .scenario import is_team_scenario
+    from .world import LivingRoom
+
+    if is_team_scenario(path):
+        return error(TEAM_SCENARIO.format(path.stem))
+    problem = _ros_ready()
+    if problem is not None:
+        return error(problem)
+    from shary.ros.node import RosNode
+
+    from .rosworld import JIDO_BINDING, RosWorld
+
+    try:
+        binding = load_binding(JIDO_BINDING)
+    except FileError as err:
+        return error(str(err))
+    stopping: list[int] = []
+    previous = signal.signal(signal.SIGTERM, lambda *_: stopping.append(1))
+    node = RosNode("jido_sim")
+    try:
+        with LivingRoom(gui=False, robot=None) as world:
+            try:
+                served = RosWorld(path, world, node, binding, seed=args.seed,
+                                  report=None if args.quiet else ConsoleReport(_out))
+            except ValueError as err:
+                return error(str(err))
+            _out.print(f"the simulated {served.scenario.robot} of {served.scenario.name} is on "
+                       f"ROS 2 ({binding.name}), waiting for a supervisor ('shary run "
+                       f"{served.scenario.name} --ros'); Ctrl-C stops it")
+            served.serve(args.seconds, stopping, lambda: _out.print(
+                "a supervisor is there: the scenario starts"))
+    except KeyboardInterrupt:
+        pass
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+        node.close()
+    _out.print("the world stopped")
+    return 0
+
+
+def cmd_run_ros(args: argparse.Namespace, path: Path, out: Path) -> int:
+    """``shary run SCENARIO --ros``: the supervisor of a scenario whose world is on ROS 2
+    (with ``--world``, both started here as processes of their own)."""
+    from .scenario import is_team_scenario
+
+    if is_team_scenario(path):
+        return error(TEAM_SCENARIO.format(path.stem), json_mode=args.json)
+    if args.world:
+        return _with_world(args, path, out)
+    problem = _ros_ready()
+    if problem is not None:
+        return error(problem, json_mode=args.json)
+    result = run_over_ros(path, out, wait=args.wait)
+    if isinstance(result, str):
+        return error(result, json_mode=args.json, status=1)
+    if args.json:
+        emit_json({**result, "out": str(out)})
+    else:
+        verdict = "[bold green]PASSED[/bold green]" if result["passed"] else \
+            "[bold red]FAILED[/bold red]"
+        _out.print(f"{verdict} {result['scenario']} over ROS 2: {result['seconds']:.1f} s")
+        for difference in result["differences"]:
+            _out.print(f"  - {difference}", markup=False)
+        _out.print(f"[dim]wrote {out}/: log.sqlite, summary.json[/dim]")
+    return 0 if result["passed"] else 1
+
+
+def _with_world(args: argparse.Namespace, path: Path, out: Path) -> int:
+    """Start ``shary world --ros`` and ``shary run --ros`` as two processes that meet only
+    on ROS 2, in a domain of their own unless ``ROS_DOMAIN_ID`` says which; the
+    supervisor's exit status.  This process does not use ROS itself, so it needs no
+    libraries found (a fresh shell, a test calling ``main``)."""
+    from shary.ros.env import ros_environment
+
+    env = ros_environment()
+    env.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 100))
+    shary = [sys.executable, "-m", "shary"]
+    problems = tempfile.TemporaryFile("w+")  # what the world says only if it fails
+    world = subprocess.Popen([*shary, "world", "--ros", str(path), "--quiet",
+                              "--seed", str(args.seed)], env=env,
+                             stdout=subprocess.DEVNULL, stderr=problems, text=True)
+    if not (args.quiet or args.json):
+        _out.print(f"[dim]the world runs in process {world.pid}, the supervisor in another, "
+                   f"in ROS domain {env['ROS_DOMAIN_ID']}[/dim]")
+    try:
+        run = subprocess.run([*shary, "run", str(path), "--ros", "--out", str(out),
+                              "--wait", str(args.wait),
+                              *(["--json"] if args.json else []),
+                              *(["--quiet"] if args.quiet else [])], env=env, check=False)
+    finally:
+        world.send_signal(signal.SIGINT)
+        try:
+            world.wait(15)
+        except subprocess.TimeoutExpired:
+            world.kill()
+            world.wait()
+    with problems:
+        problems.seek(0)
+        said = problems.read().strip()
+    if world.returncode not in (0, -signal.SIGINT) and said:
+        _out.print(said, markup=False)
+    return run.returncode
+
+
+def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict[str, Any] | str:
+    """Run the scenario's supervisor against the robot on ROS 2 (see the module's
+    docstring): the summary written to ``out``, or why it could not start."""
+    from std_msgs.msg import Bool, String
+
+    from shary.agenda import OVER, ChronicleRecognizer
+    from shary.dialogue.sessions import Sessions
+    from shary.log import ContextLog, read_events
+    from shary.loop import EventLoop, WallClock
+    from shary.planning import HatpPlanner
+    from shary.recognition.models import load_action_models
+    from shary.ros.binding import load_binding
+    from shary.ros.bridge import Fanout, RosSupervision
+    from shary.ros.node import RosNode
+    from shary.supervisor import Supervisor
+    from userfiles.outputs import output_folder, write_output
+
+    from .rosworld import JIDO_BINDING, QUIET, scenario_binding
+    from .run import happened, load
+    from .scenario import judge
+    from .stack.session import StackSession
+
+    scenario, library, domain = load(path)
+    binding = scenario_binding(load_binding(JIDO_BINDING), scenario)
+    stack = StackSession(scenario.shared_plan, scenario.robot) if scenario.shared_plan else None
+    output_folder(out)
+    log_path = out / "log.sqlite"
+    if log_path.exists():
+        log_path.unlink()
+    log = ContextLog(log_path)
+    fanout = Fanout(log)
+    loop = EventLoop(WallClock())
+    from shary.facts import FactDatabase
+
+    facts = FactDatabase()
+    sup = Supervisor(library, facts, robot=binding.robot, loop=loop, log=fanout,
+                     planners={"living-room": HatpPlanner(domain, budget_ms=300)})
+    facts.log_changes(sup.record)
+    node = RosNode("shary")
+    try:
+        ros = RosSupervision(sup, binding, node, fanout=fanout)
+        plan_pub = node.publisher(String, "~/plan", depth=100) if stack else None
+        world_quiet = [False]
+        node.subscription(Bool, QUIET, lambda m: node.put(world_quiet.__setitem__, 0, m.data))
+        listeners = [p for p in (ros.server.acts_pub, plan_pub) if p is not None]
+
+        def ready() -> bool:  # the robot's servers found, the world's people listening
+            return ros.executors.ready() and all(p.get_subscription_count() for p in listeners)
+
+        deadline = time.monotonic() + wait
+        while not (ros.perception.messages and node.call(ready)):
+            if time.monotonic() > deadline:
+                return (f"no simulated robot answered on ROS 2 within {wait:g} s (its facts on "
+                        f"{binding.facts[0].topic}, its action servers): start it with "
+                        f"'shary world --ros {scenario.name}' in the same ROS domain")
+            loop.run_for(0.1)
+        start = loop.now()
+        for goal in scenario.goals:
+            loop.call_later(goal.at, lambda g=goal: sup.agenda.add(g.task, g.args,
+                                                                   priority=g.priority))
+        chronicles = ChronicleRecognizer(sup) if library.chronicles else None
+        sessions = Sessions(sup)
+        sessions.start()
+        if scenario.action_models:  # what is there at the start was not done by anyone
+            sup.recognize(load_action_models(scenario.action_models, facts,
+                                             atomic=library.atomic))
+        if stack is not None and plan_pub is not None:
+            follower = stack.follow(sup, scenario.shared_plan["decision-wait"])
+            follower.watchers.append(lambda event, task: node.post(
+                plan_pub.publish, String(data=json.dumps(
+                    {"event": event, "task": task, "current": follower.current,
+                     "finished": follower.finished,
+                     "labels": {t: p.label() for t, p in follower.plan.primitive.items()}}))))
+            follower.start()
+        quiet_since = None
+        end = start + scenario.timeout
+        while loop.now() < end:
+            loop.run_for(0.1)
+            quiet = (not sup.runs and sup.agenda.active is None
+                     and all(g.state in OVER for g in sup.agenda.goals)
+                     and loop.now() - start > max((g.at for g in scenario.goals), default=0)
+                     and not (stack is not None and stack.busy) and world_quiet[0]
+                     and not sessions.timing
+                     and not (chronicles is not None and chronicles.timing))
+            quiet_since = (quiet_since or loop.now()) if quiet else None
+            if quiet_since is not None and loop.now() - quiet_since >= SETTLE:
+                break
+        elapsed = loop.now() - start
+        sup.record("run-end", scenario=scenario.name)
+    finally:
+        node.close()
+    log.flush()
+    events = [(e.time - start, e.kind, e.task, e.agent, e.data) for e in read_events(log_path)]
+    log.close()
+    differences = judge(scenario.expect, happened(events, facts, binding.robot, elapsed))
+    if elapsed >= scenario.timeout - 1e-9:
+        differences.append(f"the run was still going at the timeout ({scenario.timeout:g}s)")
+    summary = {"scenario": scenario.name, "passed": not differences,
+               "outcome": "passed" if not differences else "failed",
+               "differences": differences, "seconds": round(elapsed, 2), "over": "ros2"}
+    write_output(out / "summary.json", json.dumps(summary, indent=2) + "\n")
+    return summary

@@ -1,0 +1,63 @@
+"""A scenario with the robot reached only through ROS 2: ``shary world --ros SCENARIO``
+in one process (the PyBullet living room serving the Jido binding), ``shary run SCENARIO
+--ros`` in another (the supervisor), judged with the scenario's own expectations.  Each
+scenario takes its simulated duration in wall time (25-35 s each: give-bottle, the same
+with the goal cancelled and resumed, clean-up-unreachable, and stack-nominal, whose
+partner follows the supervisor's shared plan as ``/shary/plan`` tells it)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from rosfixtures import needs_ros
+
+from shary.log import read_events
+
+
+def over_ros(spawn, tmp_path, scenario: str) -> dict:
+    world = spawn("-m", "shary", "world", "--ros", scenario, "--quiet")
+    run = spawn("-m", "shary", "run", scenario, "--ros", "--out", str(tmp_path / "run"),
+                "--quiet")
+    status = run.popen.wait(200)
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert status == (0 if summary["passed"] else 1), run.lines
+    assert world.popen.poll() is None, world.lines  # served to the end
+    return summary
+
+
+@needs_ros
+@pytest.mark.parametrize("scenario", ["give-bottle", "give-bottle-distracted",
+                                      "clean-up-unreachable", "stack-nominal"])
+def test_a_scenario_passes_with_its_world_in_another_process(spawn, tmp_path, scenario):
+    summary = over_ros(spawn, tmp_path, scenario)
+    assert summary["differences"] == []
+    assert summary["passed"] and summary["over"] == "ros2"
+    rows = [(e.kind, e.data) for e in read_events(tmp_path / "run" / "log.sqlite")]
+    assert any(kind == "ros-goal" and data["interface"] == "/jido/give"
+               and data["outcome"] == "succeeded" for kind, data in rows) \
+        or scenario in ("clean-up-unreachable", "stack-nominal")
+    cancels = [data["action"] for kind, data in rows
+               if kind == "ros-cancel" and data["state"] == "confirmed"]
+    # Alice's phone call stops the arm: its goal is cancelled at the world's server
+    assert cancels == (["/jido/move_arm"] if scenario == "give-bottle-distracted" else [])
+
+
+@needs_ros
+def test_the_supervisor_says_when_no_robot_answers(spawn, tmp_path):
+    run = spawn("-m", "shary", "run", "give-bottle", "--ros", "--wait", "1", "--out",
+                str(tmp_path / "run"))
+    assert run.popen.wait(60) == 1
+    assert any("no simulated robot answered on ROS 2 within 1 s" in line
+               and "shary world --ros give-bottle" in line for line in run.lines), run.lines
+
+
+@pytest.mark.parametrize("command", [["world", "--ros"], ["run", "--ros", "--world"]])
+def test_a_team_scenario_is_refused_behind_ros(command, tmp_path, capsys):
+    from shary.cli import main
+
+    status = main([command[0], "weld-nominal", *command[1:], *(
+        ["--out", str(tmp_path)] if command[0] == "run" else [])])
+    assert status == 2
+    assert "weld-nominal: a seam-welding scenario runs as a team over Zenoh" in \
+        capsys.readouterr().err
