@@ -41,6 +41,12 @@ class TeamStory:
             say(t, who, "failed", f"{task} failed: {data.get('reason', '')}")
         elif kind == "task-given-up":
             say(t, "TM", "failed", f"gives up {task} after {data.get('attempts')} attempts")
+        elif kind == "agent-killed":
+            say(t, who, "failed", "killed: its process is gone")
+        elif kind == "agent-lost":
+            say(t, "TM", "failed", f"takes {task} back from {who} (lost)")
+        elif kind == "watchdog":
+            say(t, "TM", "failed", f"watchdog ({data.get('why')}): {data.get('action')}")
         elif kind == "respawn":
             say(t, "TM", "failed", f"respawns {task} (after {data.get('by')}: "
                 f"{data.get('reason', '')})")
@@ -87,5 +93,6 @@ class TeamStory:
                 f"takes control of {who}" if mode == "user" else f"hands {who} back")
         elif kind == "goal-over" and "tasks" in data:
             say(t, "TM", "act", f"goal {data.get('outcome')}: {data.get('done')} of "
-                f"{data.get('tasks')} tasks done")
+                f"{data.get('tasks')} tasks done"
+                + (f" ({data['reason']})" if data.get("reason") else ""))
 
