@@ -178,9 +178,10 @@ def measure(args: argparse.Namespace) -> dict[str, Any]:
     from shary.io.recipes import load_library
     from shary.loop import EventLoop, WallClock
     from shary.ros.binding import load_binding
-    from shary.ros.bridge import Fanout, RosSupervision
+    from shary.ros.bridge import RosSupervision
     from shary.ros.node import RosNode
     from shary.supervisor import Supervisor
+    from shary.told import Told
 
     os.environ.setdefault("ROS_DOMAIN_ID", str(50 + os.getpid() % 40))
     child = Child()
@@ -195,7 +196,7 @@ def measure(args: argparse.Namespace) -> dict[str, Any]:
     for triple in (("alice", "looksAt", "jido"), ("bottle", "isOn", "table"),
                    ("bottle", "isReachableBy", "jido")):
         facts.add(*triple)
-    fanout = Fanout()
+    fanout = Told()
     sup = Supervisor(library, facts, robot="jido", loop=loop, log=fanout,
                      executors=ExecutorRegistry())
     node = RosNode("shary_bench")

@@ -168,9 +168,10 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
     from shary.planning import HatpPlanner
     from shary.recognition.models import load_action_models
     from shary.ros.binding import load_binding
-    from shary.ros.bridge import Fanout, RosSupervision
+    from shary.ros.bridge import RosSupervision
     from shary.ros.node import RosNode
     from shary.supervisor import Supervisor
+    from shary.told import Told
     from userfiles.outputs import output_folder, write_output
 
     from .rosworld import JIDO_BINDING, QUIET, scenario_binding
@@ -186,7 +187,7 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
     if log_path.exists():
         log_path.unlink()
     log = ContextLog(log_path)
-    fanout = Fanout(log)
+    fanout = Told(log)
     loop = EventLoop(WallClock())
     from shary.facts import FactDatabase
 

@@ -21,7 +21,6 @@ from __future__ import annotations
 import json
 import math
 import time
-from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -36,6 +35,7 @@ from shary.loop import EventLoop
 from shary.planning import HatpPlanner
 from shary.recognition.models import load_action_models
 from shary.supervisor import Supervisor
+from shary.told import Told
 from userfiles.outputs import output_folder, write_output
 
 from .executors import RobotExecutors
@@ -170,10 +170,6 @@ def run_scenario(path: str | Path | Scenario | Any, *, seed: int = 0,
     return result
 
 
-Listener = Callable[[float, str, "str | None", "str | None", dict[str, Any]], Any]
-"""Told ``(time, kind, task, agent, data)`` for every event a run logs."""
-
-
 class MemoryLog:
     """The context log's interface, kept in memory when no output folder is asked for."""
 
@@ -193,28 +189,6 @@ class MemoryLog:
 
     def __exit__(self, *exc: object) -> None:
         pass
-
-
-class Told:
-    """The context log, each event also told to ``listeners`` in order (the run's story,
-    the console's attachment, ``--snapshots`` views): one log for the engine, several
-    audiences, none of which the engine knows."""
-
-    def __init__(self, log: Any, *listeners: Listener):
-        self.log = log
-        self.listeners = list(listeners)
-        if hasattr(log, "path"):
-            self.path = log.path  # the Context Manager reads the log's file
-
-    def record(self, t: float, kind: str, *, task: str | None = None,
-               agent: str | None = None, **data: Any) -> Any:
-        row = self.log.record(t, kind, task=task, agent=agent, **data)
-        for listener in self.listeners:
-            listener(t, kind, task, agent, data)
-        return row
-
-    def flush(self) -> None:
-        self.log.flush()
 
 
 def _log(path: Path | None, seed: int) -> Any:

@@ -34,9 +34,10 @@ def test_a_plain_rclpy_client_asks_for_a_task_and_gets_the_verdict(write, ros_do
 
     from shary.executors import ExecutorRegistry
     from shary.io.recipes import load_library
-    from shary.ros.bridge import Fanout, RosSupervision
+    from shary.ros.bridge import RosSupervision
     from shary.ros.node import RosNode
     from shary.supervisor import Supervisor
+    from shary.told import Told
 
     before = set(threading.enumerate())
     binding = load_binding(write("jido.yaml", """\
@@ -51,7 +52,7 @@ def test_a_plain_rclpy_client_asks_for_a_task_and_gets_the_verdict(write, ros_do
         facts.add(*triple)
     library = load_library()
     scripted = ScriptedExecutor(loop, durations=dict.fromkeys(library.atomic, 0.05))
-    fanout = Fanout()
+    fanout = Told()
     sup = Supervisor(library, facts, robot="jido", loop=loop, log=fanout,
                      executors=ExecutorRegistry({name: scripted for name in library.atomic}))
     client = spawn("tests/ros_robot.py", *TOPICS)

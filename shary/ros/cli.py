@@ -47,9 +47,10 @@ def cmd_ros(args: argparse.Namespace) -> int:
     from shary.log import ContextLog
     from shary.loop import EventLoop, WallClock
     from shary.ros.binding import load_binding
-    from shary.ros.bridge import Fanout, RosSupervision
+    from shary.ros.bridge import RosSupervision
     from shary.ros.node import RosNode
     from shary.supervisor import Supervisor
+    from shary.told import Told
     from userfiles.errors import FileError
 
     params: dict[str, Any] = {}
@@ -77,7 +78,7 @@ def cmd_ros(args: argparse.Namespace) -> int:
     if args.task is not None and args.task not in library.tasks:
         return error(f"no task {args.task!r} (known: {', '.join(sorted(library.tasks))})")
     log = ContextLog(args.log) if args.log is not None else None
-    fanout = Fanout(log)
+    fanout = Told(log)
     loop = EventLoop(WallClock())
     sup = Supervisor(library, facts, robot=binding.robot, loop=loop, log=fanout)
     facts.log_changes(sup.record)

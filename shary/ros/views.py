@@ -57,7 +57,7 @@ class RosViews:
 
     def listener(self, time: float, kind: str, task: str | None, agent: str | None,
                  data: dict[str, Any]) -> None:
-        """Told every logged event (see :class:`sim.run.Told`'s listeners)."""
+        """Told every logged event (see :class:`shary.told.Told`'s listeners)."""
         from std_msgs.msg import String
 
         self._seq += 1

@@ -40,10 +40,11 @@ from shary.loop import EventLoop
 from shary.team import Team
 from shary.team.spatial import SpatialReasoner
 from shary.team.world import connect_world
+from shary.told import Told
 from userfiles.outputs import output_folder, write_output
 
 from ..narration import Report
-from ..run import CHUNK, MemoryLog, RunResult, Told
+from ..run import CHUNK, MemoryLog, RunResult
 from .scenario import WeldScenario, judge, load_weld_scenario
 from .site import WeldSite
 from .story import TeamStory
