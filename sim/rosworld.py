@@ -48,9 +48,7 @@ from shary.facts import FactDatabase
 from shary.loop import EventLoop
 
 from .executors import RobotExecutors
-from .people import Person
-from .perception import Noise, Perception
-from .run import a_priori, arrange_objects
+from .run import furnish
 from .scenario import load_scenario
 from .simulation import Simulation
 from .stack.session import StackSession
@@ -171,22 +169,9 @@ class RosWorld:
             self.sim, self.say, self.facts.set,
             lambda who, kind, text: self.report(self.loop.now(), who, kind, text))
         self.supervisor = _Supervisor(self)
-        self.people: dict[str, Person] = {}
-        for spec in scenario.people:
-            self.sim.add_person(spec.name, spec.at, (*spec.shirt, 1.0))
-            person = Person(spec.name, spec.profile, self.sim, self.supervisor,
-                            self.loop.random, self.executors, self.say)
-            self.people[spec.name] = person
-            self.sim.tick_hooks.append(person.refresh)
-        self.executors.people = self.people
-        for action, reason, times in scenario.faults:
-            self.executors.faults.setdefault(action, []).extend([reason] * times)
-        arrange_objects(world, self.sim, scenario, self.stack)
-        a_priori(self.facts, world, scenario, self.stack)
-        self.perception = (self.stack.perception_class if self.stack else Perception)(
-            self.sim, self.facts, hold=scenario.hold,
-            noise=Noise(dict(scenario.flicker), list(scenario.lost)), rng=self.loop.random)
-        self.sim.observers.append(self.perception.update)
+        self.people, self.perception = furnish(
+            world, self.sim, scenario, self.stack, self.facts, self.executors,
+            self.supervisor, self.say)
         self.runs: dict[str, _Run] = {}
         self.goals: dict[bytes, _Goal] = {}
         self._goals = 0

@@ -21,6 +21,7 @@ from __future__ import annotations
 import json
 import math
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -195,6 +196,33 @@ def _log(path: Path | None, seed: int) -> Any:
     return ContextLog(path, seed=seed) if path is not None else MemoryLog()
 
 
+def furnish(world: LivingRoom, sim: Simulation, scenario: Scenario,
+            stack: StackSession | None, facts: FactDatabase, executors: Any,
+            supervisor: Any, say: Callable[[str, str], None],
+            ) -> tuple[dict[str, Person], Perception]:
+    """Put the scenario's people, faults and objects in the room, the a-priori facts in
+    ``facts``, and the robot's perception on the simulation: what a run in one process
+    and the world served over ROS 2 (:mod:`sim.rosworld`) both set up.  ``supervisor``
+    is what the people answer (the engine, or its stand-in across ROS)."""
+    people: dict[str, Person] = {}
+    for spec in scenario.people:
+        sim.add_person(spec.name, spec.at, (*spec.shirt, 1.0))
+        person = Person(spec.name, spec.profile, sim, supervisor, sim.loop.random,
+                        executors, say)
+        people[spec.name] = person
+        sim.tick_hooks.append(person.refresh)
+    executors.people = people
+    for action, reason, times in scenario.faults:
+        executors.faults.setdefault(action, []).extend([reason] * times)
+    arrange_objects(world, sim, scenario, stack)
+    a_priori(facts, world, scenario, stack)
+    perception = (stack.perception_class if stack else Perception)(
+        sim, facts, hold=scenario.hold,
+        noise=Noise(dict(scenario.flicker), list(scenario.lost)), rng=sim.loop.random)
+    sim.observers.append(perception.update)
+    return people, perception
+
+
 def arrange_objects(world: LivingRoom, sim: Simulation, scenario: Scenario,
                     stack: StackSession | None) -> None:
     """Add the scenario's new objects to the room, and put every object in its place."""
@@ -322,31 +350,17 @@ class _Run:
         if console is not None:
             console.attach(self.sup)
         self.facts.log_changes(self.sup.record)
-        self.people: dict[str, Person] = {}
-        for spec in scenario.people:
-            self.sim.add_person(spec.name, spec.at, (*spec.shirt, 1.0))
-            person = Person(spec.name, spec.profile, self.sim, self.sup, self.loop.random,
-                            self.executors, self.say)
-            self.people[spec.name] = person
+        self.people, self.perception = furnish(
+            world, self.sim, scenario, self.stack, self.facts, self.executors, self.sup,
+            self.say)
+        for person in self.people.values():
             self.sup.act_listeners.append(person.on_act)
-            self.sim.tick_hooks.append(person.refresh)
-        self.executors.people = self.people
-        for action, reason, times in scenario.faults:
-            self.executors.faults.setdefault(action, []).extend([reason] * times)
         self.sup.act_listeners.append(self._act_started)
-        arrange_objects(world, self.sim, scenario, self.stack)
-        a_priori(self.facts, world, scenario, self.stack)
-        self.perception = (self.stack.perception_class if self.stack else Perception)(
-            self.sim, self.facts, hold=scenario.hold,
-            noise=Noise(dict(scenario.flicker), list(scenario.lost)), rng=self.loop.random)
-        self.sim.observers.append(self.perception.update)
         self.chronicles = ChronicleRecognizer(self.sup) if library.chronicles else None
         self.sessions = Sessions(self.sup)
         self.action_models = (load_action_models(scenario.action_models, self.facts,
                                                  atomic=library.atomic)
                               if scenario.action_models else None)
-
-    # -- setting up ----------------------------------------------------------------
 
     # -- during the run ------------------------------------------------------------
 
