@@ -5,8 +5,8 @@ and keeps bookkeeping for that; the IPC 2020 HTN track, GTPyhop and the
 track's total-order planners only want *a* plan, fast.  This search does what
 they do -- the first task of the agenda is an action (its precondition is
 checked, its effects applied) or a compound task (each method in file order,
-each binding its binder proposes, replaces it by its subtasks) -- with three
-prunings that keep recursive domains finite:
+each binding its binder proposes, replaces it by its subtasks) -- with the
+prunings below, which keep recursive domains finite and fail early:
 
 * **seen nodes**: a search node is its state and its agenda (the tasks left).
   Both are hashed incrementally (a state's hash is the XOR of its true facts'
@@ -24,6 +24,14 @@ prunings that keep recursive domains finite:
   does for left recursion), so a plan that needs repetitions is still found.
 * **goal protection**, as in :mod:`planner.search`: an action that deletes a
   goal fact no task left may add again ends its branch.
+* **doomed decompositions**: a decomposition is refused where it is chosen when
+  one of its actions (arguments bound) needs a fact that is false and that no
+  subtask before it may add, or deletes a fact that an action among the
+  :data:`LOOKAHEAD` tasks after it on the agenda needs, with no task in between
+  that may add it again (a threat, in partial-order planning's words).
+  Factories' ``m_get_resource`` may build a factory on the very plot the
+  factory being built needs: without this, every way of fetching the resources
+  in between is tried before that last step fails.
 
 Early precondition checks are the binders' (:mod:`planner.binding`): a
 method's variables are bound from its precondition, its first action's
@@ -75,6 +83,9 @@ WINDOW = 64
 decompositions longer than this is left to the budgets)."""
 MAX_REPEATS = 4
 """The most repetitions of a decomposition in one state that the deepening allows."""
+LOOKAHEAD = 16
+"""How many tasks ahead on the agenda a deleted fact is looked for among the actions'
+preconditions (threat detection; beyond, the branch fails where the action is met)."""
 CHECK_EVERY = 256
 """Expansions between two looks at the clock."""
 BUDGET_EXHAUSTED = "search budget exhausted"
@@ -156,6 +167,29 @@ class DepthFirst:
         self.missed = ""
         """The goals the first complete decomposition missed (when one did)."""
         self.expansions = 0
+        changed = {pred for action in self.domain.actions.values()
+                   for pred, _ in action.removes}
+        changed |= {pred for adds in self.domain.adds.values() for pred in adds}
+        self.needers: dict[str, dict[str, list[Callable[[dict[str, Any]], tuple]]]] = {}
+        """For each predicate some action changes, the actions that need one of its facts
+        (and the functions of their arguments giving those facts)."""
+        for name, action in self.domain.actions.items():
+            for pred, key in action.needs:
+                if pred in changed:
+                    self.needers.setdefault(pred, {}).setdefault(name, []).append(key)
+        self.adders: dict[str, set[str]] = {}
+        """For each predicate, the tasks that may add one of its facts."""
+        for task, adds in self.domain.adds.items():
+            for pred in adds:
+                self.adders.setdefault(pred, set()).add(task)
+        self.checks: dict[str, tuple[tuple, tuple]] = {}
+        """For each action, what :meth:`_doomed` checks: the facts it needs that some
+        action changes, and those it deletes that some action needs."""
+        for name, action in self.domain.actions.items():
+            needs = tuple((p, k) for p, k in action.needs if p in changed)
+            removes = tuple((p, k) for p, k in action.removes if p in self.needers)
+            if needs or removes:
+                self.checks[name] = (needs, removes)
 
     # -- explanations ------------------------------------------------------------------
 
@@ -323,6 +357,59 @@ class DepthFirst:
         record = ("act", next(self.ids), parent[4], action.name, args, agent, price, length)
         return child, state_hash, rest, (record, trail)
 
+    def _doomed(self, agenda: Any, count: int, state: State) -> str | None:
+        """Why the first ``count`` tasks of ``agenda`` (a decomposition's subtasks) doom it,
+        if they do: one of their actions needs a fact that is false and that no task
+        before it may add, or deletes a fact that an action among the :data:`LOOKAHEAD`
+        tasks after it needs, with no task in between that may add it again."""
+        checks, may_add = self.checks, self.domain.may_add
+        before: list[tuple[str, tuple]] = []
+        entry = agenda
+        for position in range(count):
+            name, args, _, _, rest = entry
+            check = checks.get(name)
+            if check is not None:
+                needs, removes = check
+                env = dict(zip(self.domain.actions[name].names, args, strict=True))
+                # The first action's precondition is the binder's: it holds already.
+                for pred, key in needs if position else ():
+                    fact = key(env)
+                    if state.get(pred, fact) is not True:
+                        adders = self.adders.get(pred, ())
+                        if not any(n in adders and may_add(n, a, pred, fact)
+                                   for n, a in before):
+                            return (f"{_label(name, args)} needs "
+                                    f"({' '.join((pred, *fact))}), false, which no task "
+                                    "before it can make true")
+                for pred, key in removes:
+                    why = self._needed(pred, key(env), rest)
+                    if why is not None:
+                        return f"{_label(name, args)} deletes {why}"
+            before.append((name, args))
+            entry = rest
+        return None
+
+    def _needed(self, pred: str, fact: tuple, agenda: Any) -> str | None:
+        """Which later action needs ``pred(fact)``, if one does among the
+        :data:`LOOKAHEAD` next tasks on ``agenda`` with no task before it that may add
+        it again."""
+        needers, adders = self.needers[pred], self.adders.get(pred, ())
+        may_add, actions = self.domain.may_add, self.domain.actions
+        for _ in range(LOOKAHEAD):
+            if agenda is None:
+                return None
+            name, args, _, _, agenda = agenda
+            keys = needers.get(name)
+            if keys is not None:
+                env = dict(zip(actions[name].names, args, strict=True))
+                for key in keys:
+                    if key(env) == fact:
+                        return (f"({' '.join((pred, *fact))}), which {_label(name, args)} "
+                                "needs later, and no task before it can make it true again")
+            if name in adders and may_add(name, args, pred, fact):
+                return None
+        return None
+
     def _may_add(self, agenda: Any, pred: str, fact: tuple) -> bool:
         may_add = self.domain.may_add
         while agenda is not None:
@@ -382,6 +469,10 @@ class DepthFirst:
                               else tuple([a.fn(local, state.get) for a in sub.args]))
                     agenda = (sub.task, values, node,
                               hash((sub.task, values, agenda[3] if agenda else 0)), agenda)
+                why = self._doomed(agenda, len(dec.subtasks), state)
+                if why is not None:
+                    self._fail(parent, _label(method.name, args), f"{dec.name}: {why}")
+                    continue
                 record = ("method", node[4], parent[4], method.name, args, dec.name, binding)
                 yield state, state_hash, agenda, (record, trail)
             if not matched:

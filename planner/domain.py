@@ -59,6 +59,13 @@ class Action:
     deletes: tuple[tuple[str, Callable[[dict[str, Any]], tuple]], ...] = ()
     """HDDL: the goal facts it deletes whatever the state, as a predicate and a function
     of the arguments giving the fact's arguments (for the search's goal protection)."""
+    needs: tuple[tuple[str, Callable[[dict[str, Any]], tuple]], ...] = ()
+    """HDDL: the facts its precondition requires true (its top-level positive literals),
+    as ``deletes`` gives them: a plan whose step deletes one of them before this action
+    is on the agenda, with no task in between that may add it again, is doomed."""
+    removes: tuple[tuple[str, Callable[[dict[str, Any]], tuple]], ...] = ()
+    """HDDL: every fact its effect deletes whatever the state (``deletes`` are those of
+    them that are goal facts)."""
     assigns: tuple[tuple[str, tuple[Subtask, ...]], ...] = ()
     """Conditional plans: tasks this action puts at the head of another agent's agenda
     (by the parameter naming that agent) -- asking someone for help gives them a task."""

@@ -209,8 +209,13 @@ class _Translator:
         threats = tuple((f.children[0].children[0], args_of(f.children[0].children[1]))
                         for f in _conjuncts(action.effect)
                         if f.kind == "not" and f.children[0].children[0] in protected)
+        needs = tuple((f.children[0], args_of(f.children[1]))
+                      for f in _conjuncts(action.precondition) if f.kind == "pred")
+        removes = tuple((f.children[0].children[0], args_of(f.children[0].children[1]))
+                        for f in _conjuncts(action.effect)
+                        if f.kind == "not" and f.children[0].kind == "pred")
         return Action(action.name, action.params, None, pre, effects, 1.0, 1.0,
-                      deletes=threats)
+                      deletes=threats, needs=needs, removes=removes)
 
     def decomposition(self, method: hddl.HMethod, task_params: hddl.Params,
                       domain: hddl.HDDLDomain

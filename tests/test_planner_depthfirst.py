@@ -175,3 +175,61 @@ def test_the_command_improves_on_the_first_plan_only_when_asked(shary, write):
                              "--budget-ms", "1500")
     assert status == 0, err
     assert "first plan" not in out and "validated" in out
+
+
+PLOTS = """\
+(define (domain plots) (:requirements :typing :hierarchy :negative-preconditions)
+  (:types plot - object bit - plot)
+  (:predicates (free ?p - plot) (shed ?p - plot) (house ?p - plot) (on ?b - bit)
+               (next ?a ?b - bit) (last ?b - bit))
+  (:task settle :parameters (?p - plot))
+  (:task chores :parameters (?b - bit))
+  (:method build :parameters (?p ?s - plot ?b - bit) :task (settle ?p)
+    :precondition (and (last ?b))
+    :ordered-subtasks (and (put-shed ?s) (chores ?b) (put-house ?p)))
+  (:method built :parameters (?p - plot) :task (settle ?p) :precondition (house ?p)
+    :ordered-subtasks ())
+  (:method work :parameters (?b ?n - bit) :task (chores ?b) :precondition (next ?b ?n)
+    :ordered-subtasks (and (set ?b) (chores ?n)))
+  (:method rest :parameters (?b ?n - bit) :task (chores ?b) :precondition (next ?b ?n)
+    :ordered-subtasks (chores ?n))
+  (:method stop :parameters (?b - bit) :task (chores ?b) :ordered-subtasks ())
+  (:action put-shed :parameters (?s - plot) :precondition (free ?s)
+    :effect (and (not (free ?s)) (shed ?s)))
+  (:action put-house :parameters (?p - plot) :precondition (free ?p)
+    :effect (and (not (free ?p)) (house ?p)))
+  (:action set :parameters (?b - bit) :precondition (not (on ?b))
+    :effect (and (on ?b) (not (free ?b)))))
+"""
+
+
+def _plots(write, init: str, bits: int = 18):
+    objects = " ".join(f"b{i}" for i in range(bits))
+    chain = " ".join(f"(next b{i} b{i + 1})" for i in range(bits - 1))
+    return load_hddl(write("d.hddl", PLOTS), write("p.hddl", (
+        f"(define (problem p) (:domain plots) (:objects a z - plot {objects} - bit)\n"
+        "  (:htn :ordered-subtasks (and (settle a)))\n"
+        f"  (:init {init} {chain} (last b0)))\n")))
+
+
+def test_a_step_that_deletes_what_a_later_action_needs_dooms_its_decomposition(write):
+    """Factories' shape: the shed may go on the plot the house needs later (``?s = a``,
+    first in name order), and the chores in between have 2^18 ways that all end at
+    the house that cannot be built: the decomposition is refused where it is chosen,
+    because nothing between the shed and the house can free the plot again."""
+    result = first_plan(_plots(write, "(free a) (free z)"), 60_000, max_nodes=20_000)
+    assert result.plan is not None, result.explain()
+    assert [str(a) for a in result.plan.actions][::len(result.plan.actions) - 1] == [
+        "put-shed(z)", "put-house(a)"]
+    assert validate(_plots(write, "(free a) (free z)"), result.plan) == []
+
+
+def test_an_action_needing_a_false_fact_no_earlier_task_adds_dooms_its_decomposition(write):
+    """The house is built already (plot ``a`` not free): ``build`` (tried first) would
+    run every way of doing the chores (which delete facts of the same predicate, so the
+    binder cannot check ``(free a)`` on entry) before its last step fails."""
+    problem = _plots(write, "(house a) (free z)")
+    result = first_plan(problem, 60_000, max_nodes=20_000)
+    assert result.plan is not None, result.explain()
+    assert list(result.plan.actions) == []
+    assert [result.plan.tree[r].decomposition for r in result.plan.roots] == ["built"]
