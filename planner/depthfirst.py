@@ -60,7 +60,7 @@ import time
 from collections.abc import Callable, Iterator
 from typing import Any
 
-from planner.domain import SOLE_AGENT, Action, Method, Problem
+from planner.domain import SOLE_AGENT, Action, Decomposition, Method, Problem
 from planner.evaluate import Evaluator
 from planner.plan import Plan, fact_text
 from planner.search import Failure, Result, deleted_goal
@@ -83,7 +83,7 @@ WINDOW = 64
 decompositions longer than this is left to the budgets)."""
 MAX_REPEATS = 4
 """The most repetitions of a decomposition in one state that the deepening allows."""
-LOOKAHEAD = 16
+LOOKAHEAD = 64
 """How many tasks ahead on the agenda a deleted fact is looked for among the actions'
 preconditions (threat detection; beyond, the branch fails where the action is met)."""
 CHECK_EVERY = 256
@@ -182,6 +182,10 @@ class DepthFirst:
         for task, adds in self.domain.adds.items():
             for pred in adds:
                 self.adders.setdefault(pred, set()).add(task)
+        self.few_goals = [(pred, args) for pred, args, value in self.goals if value is True]
+        """The goal facts :meth:`_unreachable` checks (when there are landmarks)."""
+        self.has_checks: dict[int, bool] = {}
+        """For each decomposition (by id), :meth:`_checked`'s answer."""
         self.checks: dict[str, tuple[tuple, tuple]] = {}
         """For each action, what :meth:`_doomed` checks: the facts it needs that some
         action changes, and those it deletes that some action needs."""
@@ -357,6 +361,17 @@ class DepthFirst:
         record = ("act", next(self.ids), parent[4], action.name, args, agent, price, length)
         return child, state_hash, rest, (record, trail)
 
+    def _checked(self, dec: Decomposition) -> bool:
+        """Whether :meth:`_doomed` has anything to check in this decomposition: an action
+        among its subtasks that needs a fact some action changes (after the first, whose
+        precondition the binder checks) or deletes one some action needs."""
+        known = self.has_checks.get(id(dec))
+        if known is None:
+            known = any(sub.task in self.checks and (position or self.checks[sub.task][1])
+                        for position, sub in enumerate(dec.subtasks))
+            self.has_checks[id(dec)] = known
+        return known
+
     def _doomed(self, agenda: Any, count: int, state: State) -> str | None:
         """Why the first ``count`` tasks of ``agenda`` (a decomposition's subtasks) doom it,
         if they do: one of their actions needs a fact that is false and that no task
@@ -382,11 +397,44 @@ class DepthFirst:
                                     f"({' '.join((pred, *fact))}), false, which no task "
                                     "before it can make true")
                 for pred, key in removes:
-                    why = self._needed(pred, key(env), rest)
+                    fact = key(env)
+                    if state.get(pred, fact) is not True:  # rarely needed: not checked
+                        continue
+                    why = self._needed(pred, fact, rest)
                     if why is not None:
                         return f"{_label(name, args)} deletes {why}"
             before.append((name, args))
             entry = rest
+        return None
+
+    def _unreachable(self, agenda: Any, state: State) -> str | None:
+        """Which fact, false in ``state``, no task on ``agenda`` may add although the plan
+        must make it true: a goal fact, or a fact that every action adding a false goal
+        fact (or such a fact, and so on back) needs (``Problem.landmarks``; Monroe's plan
+        recognition, whose one goal says the observed actions were all done, in order)."""
+        landmarks = self.problem.landmarks
+        if not landmarks:
+            return None
+        may_add, get = self.domain.may_add, state.get
+        todo = list(self.few_goals)
+        seen: set[tuple[str, tuple]] = set()
+        while todo:
+            key = todo.pop()
+            if key in seen:
+                continue
+            seen.add(key)
+            pred, fact = key
+            if get(pred, fact) is True:
+                continue
+            entry = agenda
+            while entry is not None:
+                name, args, _, _, entry = entry
+                if may_add(name, args, pred, fact):
+                    break
+            else:
+                what = "goal" if key in self.problem.goals else "fact"
+                return f"no task left can make the {what} ({' '.join((pred, *fact))}) true"
+            todo.extend(landmarks.get(key, ()))
         return None
 
     def _needed(self, pred: str, fact: tuple, agenda: Any) -> str | None:
@@ -469,7 +517,9 @@ class DepthFirst:
                               else tuple([a.fn(local, state.get) for a in sub.args]))
                     agenda = (sub.task, values, node,
                               hash((sub.task, values, agenda[3] if agenda else 0)), agenda)
-                why = self._doomed(agenda, len(dec.subtasks), state)
+                why = ((self._doomed(agenda, len(dec.subtasks), state)
+                        if self._checked(dec) else None)
+                       or self._unreachable(agenda, state))
                 if why is not None:
                     self._fail(parent, _label(method.name, args), f"{dec.name}: {why}")
                     continue

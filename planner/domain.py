@@ -196,10 +196,12 @@ class Domain:
     """For each predicate, the argument positions the binders look facts up by (the
     state keeps an index for each)."""
 
-    adds: dict[str, dict[str, tuple[tuple[Any, ...], ...]]] = field(default_factory=dict)
+    adds: dict[str, dict[str, tuple[tuple[tuple[Any, ...], tuple[tuple[int, str], ...]], ...]]
+               ] = field(default_factory=dict)
     """HDDL: for each task, by predicate, the facts its decompositions may add, lifted:
     each argument is the index of a task parameter (int), a constant (str), or None
-    (any value).  A task absent from it adds nothing."""
+    (any value), with the guards under which it may: ``(index of a task parameter,
+    the constant it must be)``.  A task absent from it adds nothing."""
 
     uncontrolled: tuple[str, ...] = ("human",)
     """The agent kinds whose choices the robot does not control: in conditional plans
@@ -211,7 +213,9 @@ class Domain:
     def may_add(self, task: str, args: tuple, pred: str, fact: tuple) -> bool:
         """Whether some decomposition of ``task(args)`` may make the fact ``pred(fact)``
         true (a lifted over-approximation: False is a certainty)."""
-        for pattern in self.adds.get(task, {}).get(pred, ()):
+        for pattern, guards in self.adds.get(task, {}).get(pred, ()):
+            if guards and any(args[index] != constant for index, constant in guards):
+                continue
             for entry, value in zip(pattern, fact, strict=True):
                 if entry is None:
                     continue
@@ -290,6 +294,12 @@ class Problem:
     """HDDL problems: names the files spell otherwise than in lower case, with that
     spelling (:func:`planner.ipc.write_ipc` writes them so: the IPC verifier compares
     names case-sensitively)."""
+    landmarks: dict[tuple[str, tuple], tuple[tuple[str, tuple], ...]] = field(
+        default_factory=dict)
+    """HDDL problems with few goal facts: for each goal fact, and each fact found this
+    way, the facts every action that adds it needs (so a plan that makes it true makes
+    them true first, when they are false): :mod:`planner.depthfirst` refuses a
+    decomposition that leaves none of the tasks able to add one of them."""
     assigned: tuple[Assignment, ...] = ()
     """Steps given to an agent (:class:`Assignment`): a plan honours every one (the
     total-order search; plan negotiation, docs/communication.md)."""

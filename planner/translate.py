@@ -61,6 +61,14 @@ Condition = Callable[[dict[str, Any], Any], bool]
 Write = Callable[[dict[str, Any], Any, Any], None]
 
 
+FEW_GOALS = 16
+"""A problem with at most this many goal facts gets ``Problem.landmarks`` (beyond,
+checking them would cost more than the search it saves: Blocksworld's goals are its
+thousand blocks' places)."""
+MAX_LANDMARKS = 256
+"""The most facts ``Problem.landmarks`` gives."""
+
+
 def load_hddl(domain_path: str | os.PathLike[str],
               problem_path: str | os.PathLike[str]) -> Problem:
     """Read an HDDL domain and problem and translate them; ``FileError`` on any problem."""
@@ -159,44 +167,94 @@ class _Translator:
         domain = Domain(hdomain.name, self.types, actions, methods, {}, "", hdomain.file,
                         dict(hdomain.predicates),
                         {p: tuple(sorted(s)) for p, s in patterns.items()}, self.additions())
+        positive = [key for key, value in goals.items() if value is True]
         return Problem(hproblem.name, domain, dict(self.objects), initial, tasks, goals,
                        budget_ms=BUDGET_MS, file=hproblem.file,
-                       spelling={**hdomain.spelling, **hproblem.spelling})
+                       spelling={**hdomain.spelling, **hproblem.spelling},
+                       landmarks=self.landmarks(positive) if len(positive) <= FEW_GOALS
+                       else {})
 
     # -- actions and methods ---------------------------------------------------------
 
-    def additions(self) -> dict[str, dict[str, tuple[tuple[Any, ...], ...]]]:
+    def additions(self) -> dict[str, dict[str, tuple[Pattern, ...]]]:
         """What each task may add (``Domain.adds``): the actions' additions, lifted to
-        the compound tasks through their methods' subtasks until nothing changes."""
-        found: dict[str, set[tuple[str, tuple[Any, ...]]]] = {}
+        the compound tasks through their methods' subtasks until nothing changes.
+
+        A method whose task names a constant, or whose precondition fixes a task
+        parameter to one (``(= ?crew pcrew1)``), adds only for that argument: its
+        patterns keep it as a guard, so that ``cstring_wire`` adds Monroe's
+        observation fact for ``pcrew1`` only, and so does every task above it that
+        passes ``?crew`` down."""
+        found: dict[str, set[tuple[str, Pattern]]] = {}
         for name, action in self.hdomain.actions.items():
             index = {p: i for i, (p, _) in enumerate(action.params)}
-            found[name] = {(pred, tuple(index.get(t) if is_variable(t) else t for t in terms))
+            found[name] = {(pred, (tuple(index.get(t) if is_variable(t) else t
+                                         for t in terms), ()))
                            for pred, terms in _effect_atoms(action.effect, True)}
         heads = []
         for method in self.hdomain.methods:
             head: dict[str, int] = {}
+            guards: set[tuple[int, str]] = set()
             for position, term in enumerate(method.task.args):
-                head.setdefault(term, position)
-            heads.append((method, head))
+                if is_variable(term):
+                    head.setdefault(term, position)
+                else:
+                    guards.add((position, term))
+            fixed = _fixed(method)
+            guards |= {(head[var], value) for var, value in fixed.items() if var in head}
+            heads.append((method, head, fixed, tuple(sorted(guards))))
         changed = True
         while changed:
             changed = False
-            for method, head in heads:
+            for method, head, fixed, guards in heads:
                 target = found.setdefault(method.task.name, set())
                 for sub in method.subtasks:
                     for pred, pattern in list(found.get(sub.name, ())):
-                        lifted = (pred, tuple(_lift(entry, sub.args, head) for entry in pattern))
-                        if lifted not in target:
-                            target.add(lifted)
+                        lifted = _lift_pattern(pattern, sub.args, head, fixed, guards)
+                        if lifted is not None and (pred, lifted) not in target:
+                            target.add((pred, lifted))
                             changed = True
-        out: dict[str, dict[str, tuple[tuple[Any, ...], ...]]] = {}
+        out: dict[str, dict[str, tuple[Pattern, ...]]] = {}
         for task, atoms in found.items():
-            by_pred: dict[str, list[tuple[Any, ...]]] = {}
+            by_pred: dict[str, list[Pattern]] = {}
             for pred, pattern in sorted(atoms, key=repr):
                 by_pred.setdefault(pred, []).append(pattern)
             out[task] = {pred: tuple(patterns) for pred, patterns in by_pred.items()}
         return out
+
+    def landmarks(self, goals: list[tuple[str, tuple]]
+                  ) -> dict[tuple[str, tuple], tuple[tuple[str, tuple], ...]]:
+        """``Problem.landmarks`` for these goal facts: for each fact, from the goals
+        backwards, the facts that the precondition of every action adding it requires
+        (those the fact's arguments determine), up to :data:`MAX_LANDMARKS` facts.
+        Monroe's plan-recognition goal, the last observation done, needs the one before
+        it, which needs the one before, and so on back to the first."""
+        achievers: dict[str, list[tuple[tuple[str, ...], list[Atom]]]] = {}
+        for action in self.hdomain.actions.values():
+            needs = [(f.children[0], f.children[1]) for f in _conjuncts(action.precondition)
+                     if f.kind == "pred" and f.children[0] in self.changed]
+            for pred, terms in _effect_atoms(action.effect, True):
+                achievers.setdefault(pred, []).append((terms, needs))
+        found: dict[tuple[str, tuple], tuple[tuple[str, tuple], ...]] = {}
+        todo = list(reversed(goals))
+        while todo and len(found) < MAX_LANDMARKS:
+            pred, fact = todo.pop()
+            if (pred, fact) in found:
+                continue
+            common: set[tuple[str, tuple]] | None = None
+            for terms, needs in achievers.get(pred, ()):
+                binding = _unify(terms, fact)
+                if binding is None:
+                    continue
+                ground = set()
+                for need, needed in needs:
+                    values = tuple(binding.get(t) if is_variable(t) else t for t in needed)
+                    if None not in values and (need, values) != (pred, fact):
+                        ground.add((need, values))
+                common = ground if common is None else common & ground
+            found[(pred, fact)] = tuple(sorted(common or ()))
+            todo.extend(sorted(common or (), reverse=True))
+        return found
 
     def action(self, action: hddl.HAction, protected: set[str]) -> Action:
         pre = self.expr(action.precondition, action.params)
@@ -541,13 +599,69 @@ def _effect_atoms(formula: hddl.Formula | None, adding: bool) -> list[Atom]:
     return _effect_atoms(children[1], adding)  # when (condition, effect), forall (params, e)
 
 
-def _lift(entry: Any, args: tuple[str, ...], head: dict[str, int]) -> Any:
+def _unify(terms: tuple[str, ...], fact: tuple) -> dict[str, str] | None:
+    """The binding of ``terms``' variables that makes them ``fact`` (None: none does)."""
+    binding: dict[str, str] = {}
+    for term, value in zip(terms, fact, strict=True):
+        if not is_variable(term):
+            if term != value:
+                return None
+        elif binding.setdefault(term, value) != value:
+            return None
+    return binding
+
+
+Pattern = tuple[tuple[Any, ...], tuple[tuple[int, str], ...]]
+"""A fact a task may add (``Domain.adds``): its arguments (a task parameter's index, a
+constant or None) and the guards, ``(task parameter index, constant)``, that must hold."""
+
+
+def _fixed(method: hddl.HMethod) -> dict[str, str]:
+    """The method's variables that its precondition's top-level equalities fix to a
+    constant."""
+    whole = [*_conjuncts(method.precondition), *_conjuncts(method.constraints)]
+    fixed: dict[str, str] = {}
+    for formula in whole:
+        if formula.kind != "=":
+            continue
+        a, b = formula.children
+        if is_variable(a) and not is_variable(b):
+            fixed[a] = b
+        elif is_variable(b) and not is_variable(a):
+            fixed[b] = a
+    return fixed
+
+
+def _lift_pattern(pattern: Pattern, args: tuple[str, ...], head: dict[str, int],
+                  fixed: dict[str, str], guards: tuple[tuple[int, str], ...]) -> Pattern | None:
+    """A subtask's pattern seen from the method's task (None when the subtask's guards
+    cannot hold in this method): an argument is the index of the task parameter it is,
+    a constant, or None (a variable the task does not fix); a guard on a subtask
+    argument the task does not fix is dropped (it may hold)."""
+    entries, inner = pattern
+    lifted: set[tuple[int, str]] = set(guards)
+    for index, value in inner:
+        term = args[index]
+        if is_variable(term) and term not in fixed:
+            if term in head:
+                lifted.add((head[term], value))
+            continue
+        if fixed.get(term, term) != value:
+            return None
+    return (tuple(_lift(entry, args, head, fixed) for entry in entries),
+            tuple(sorted(lifted)))
+
+
+def _lift(entry: Any, args: tuple[str, ...], head: dict[str, int],
+          fixed: dict[str, str]) -> Any:
     """A subtask's lifted argument seen from the method's task: the index of the task
     parameter it is, a constant, or None (a variable the task does not fix)."""
     if entry.__class__ is not int:
         return entry
     term = args[entry]
-    return head.get(term) if is_variable(term) else term
+    if not is_variable(term):
+        return term
+    return head[term] if term in head else fixed.get(term)
 
 
 def _plain(formula: hddl.Formula) -> bool:

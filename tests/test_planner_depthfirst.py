@@ -107,7 +107,7 @@ def _counter(write, bits: int = 30):
     objects = " ".join(f"b{i}" for i in range(bits))
     return load_hddl(write("d.hddl", COUNTER), write("p.hddl", (
         f"(define (problem p) (:domain count) (:objects {objects} - bit)\n"
-        "  (:htn :ordered-subtasks (and (t))) (:goal (never)))\n")))
+        "  (:htn :ordered-subtasks (and (t))))\n")))
 
 
 def test_a_recursion_through_ever_new_states_ends_at_the_node_budget(write):
@@ -158,7 +158,7 @@ def test_the_command_says_the_budget_ran_out_and_exits_1(shary, write, bits):
     objects = " ".join(f"b{i}" for i in range(bits))
     domain = write("d.hddl", COUNTER)
     problem = write("p.hddl", f"(define (problem p) (:domain count) (:objects {objects} - bit)"
-                              " (:htn :ordered-subtasks (and (t))) (:goal (never)))\n")
+                              " (:htn :ordered-subtasks (and (t))))\n")
     status, out, err = shary("plan", "--hddl", domain, problem, "--budget-ms", "300")
     assert status == 1
     assert "no plan" in out and BUDGET_EXHAUSTED in out
@@ -233,3 +233,73 @@ def test_an_action_needing_a_false_fact_no_earlier_task_adds_dooms_its_decomposi
     assert result.plan is not None, result.explain()
     assert list(result.plan.actions) == []
     assert [result.plan.tree[r].decomposition for r in result.plan.roots] == ["built"]
+
+
+WATCH = """\
+(define (domain watch) (:requirements :typing :hierarchy :negative-preconditions :equality)
+  (:types bit agent)
+  (:constants ann bob - agent)
+  (:predicates (on ?b - bit) (next ?a ?b - bit) (ready) (seen))
+  (:task top :parameters ())
+  (:task chores :parameters (?b - bit))
+  (:task act :parameters (?who - agent))
+  (:method busy :parameters (?b - bit) :task (top) :precondition (first ?b)
+    :ordered-subtasks (and (chores ?b) (act bob)))
+  (:method watched :parameters (?who - agent) :task (top)
+    :ordered-subtasks (and (prepare) (act ?who)))
+  (:method observed :parameters (?who - agent) :task (act ?who)
+    :precondition (= ?who ann) :ordered-subtasks (observe))
+  (:method plain :parameters (?who - agent) :task (act ?who) :ordered-subtasks ())
+  (:method work :parameters (?b ?n - bit) :task (chores ?b) :precondition (next ?b ?n)
+    :ordered-subtasks (and (set ?b) (chores ?n)))
+  (:method rest :parameters (?b ?n - bit) :task (chores ?b) :precondition (next ?b ?n)
+    :ordered-subtasks (chores ?n))
+  (:method stop :parameters (?b - bit) :task (chores ?b) :ordered-subtasks ())
+  (:action set :parameters (?b - bit) :precondition (not (on ?b)) :effect (on ?b))
+  (:action prepare :parameters () :precondition () :effect (ready))
+  (:action observe :parameters () :precondition (ready) :effect (seen)))
+"""
+
+
+def _watch(write, bits: int = 18):
+    objects = " ".join(f"b{i}" for i in range(bits))
+    chain = " ".join(f"(next b{i} b{i + 1})" for i in range(bits - 1))
+    domain = WATCH.replace("(:predicates", "(:predicates (first ?b - bit)")
+    return load_hddl(write("d.hddl", domain), write("p.hddl", (
+        f"(define (problem p) (:domain watch) (:objects {objects} - bit)\n"
+        f"  (:htn :ordered-subtasks (and (top)))\n  (:init {chain} (first b0))\n"
+        "  (:goal (seen)))\n")))
+
+
+def test_what_a_task_may_add_is_guarded_by_the_constants_its_methods_require(write):
+    domain = _watch(write).domain
+    assert domain.may_add("act", ("ann",), "seen", ())
+    assert not domain.may_add("act", ("bob",), "seen", ())  # only 'observed' adds it
+
+
+def test_a_decomposition_leaving_no_task_able_to_reach_the_goal_is_refused(write):
+    """Monroe's plan recognition: ``busy`` (tried first) does 2^18 chores and then acts
+    as ``bob``, who cannot observe; refused where it is chosen."""
+    problem = _watch(write)
+    result = first_plan(problem, 60_000, max_nodes=20_000)
+    assert result.plan is not None, result.explain()
+    assert [str(a) for a in result.plan.actions] == ["prepare()", "observe()"]
+    assert validate(problem, result.plan) == []
+
+
+def test_a_fact_every_adder_of_a_goal_needs_is_a_landmark(write):
+    """``observe`` needs ``ready``, which only ``prepare`` adds: a decomposition whose
+    tasks may observe but never prepare is refused, before its chores are tried."""
+    problem = load_hddl(write("d.hddl", WATCH.replace(
+        "(:predicates", "(:predicates (first ?b - bit)").replace(
+        ":ordered-subtasks (and (chores ?b) (act bob)))",
+        ":ordered-subtasks (and (chores ?b) (act ann)))")), write("p.hddl", (
+            "(define (problem p) (:domain watch) (:objects "
+            + " ".join(f"b{i}" for i in range(18)) + " - bit)\n"
+            "  (:htn :ordered-subtasks (and (top)))\n  (:init "
+            + " ".join(f"(next b{i} b{i + 1})" for i in range(17))
+            + " (first b0))\n  (:goal (seen)))\n")))
+    assert problem.landmarks[("seen", ())] == (("ready", ()),)
+    result = first_plan(problem, 60_000, max_nodes=20_000)
+    assert result.plan is not None, result.explain()
+    assert [str(a) for a in result.plan.actions] == ["prepare()", "observe()"]
