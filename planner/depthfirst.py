@@ -24,6 +24,12 @@ prunings below, which keep recursive domains finite and fail early:
   does for left recursion), so a plan that needs repetitions is still found.
 * **goal protection**, as in :mod:`planner.search`: an action that deletes a
   goal fact no task left may add again ends its branch.
+* **goals out of reach** (a problem with at most :data:`FEW_GOALS` goal facts):
+  a decomposition after which no task left may add a false goal fact that the
+  decomposed task may add is refused; what a task may add is guarded by the
+  constants its methods fix (``Domain.may_add``).  Monroe's plan recognition
+  has one goal, that the observed actions were done, and ten top-level methods
+  of which one can do them.
 * **doomed decompositions**: a decomposition is refused where it is chosen when
   one of its actions (arguments bound) needs a fact that is false and that no
   subtask before it may add, or deletes a fact that an action among the
@@ -86,6 +92,12 @@ MAX_REPEATS = 4
 LOOKAHEAD = 64
 """How many tasks ahead on the agenda a deleted fact is looked for among the actions'
 preconditions (threat detection; beyond, the branch fails where the action is met)."""
+FEW_GOALS = 16
+"""A problem with at most this many goal facts has its decompositions checked for a goal
+fact no task left may add (beyond, the check costs more than it saves: Blocksworld's
+goals are its thousand blocks' places)."""
+MAX_KEPT = 1_000_000
+"""The most answers :meth:`DepthFirst._may_come` keeps (then it forgets them all)."""
 CHECK_EVERY = 256
 """Expansions between two looks at the clock."""
 BUDGET_EXHAUSTED = "search budget exhausted"
@@ -182,8 +194,11 @@ class DepthFirst:
         for task, adds in self.domain.adds.items():
             for pred in adds:
                 self.adders.setdefault(pred, set()).add(task)
-        self.few_goals = [(pred, args) for pred, args, value in self.goals if value is True]
-        """The goal facts :meth:`_unreachable` checks (when there are landmarks)."""
+        positive = [(pred, args) for pred, args, value in self.goals if value is True]
+        self.few_goals = positive if len(positive) <= FEW_GOALS else []
+        """The goal facts :meth:`_unreachable` checks."""
+        self.coming: dict[tuple[int, str, tuple], bool] = {}
+        """:meth:`_may_come`'s answers, by the hash of an agenda's tail and a fact."""
         self.has_checks: dict[int, bool] = {}
         """For each decomposition (by id), :meth:`_checked`'s answer."""
         self.checks: dict[str, tuple[tuple, tuple]] = {}
@@ -407,35 +422,45 @@ class DepthFirst:
             entry = rest
         return None
 
-    def _unreachable(self, agenda: Any, state: State) -> str | None:
-        """Which fact, false in ``state``, no task on ``agenda`` may add although the plan
-        must make it true: a goal fact, or a fact that every action adding a false goal
-        fact (or such a fact, and so on back) needs (``Problem.landmarks``; Monroe's plan
-        recognition, whose one goal says the observed actions were all done, in order)."""
-        landmarks = self.problem.landmarks
-        if not landmarks:
-            return None
+    def _unreachable(self, name: str, args: tuple, agenda: Any, state: State) -> str | None:
+        """Which goal fact, false in ``state``, no task on ``agenda`` may add (``agenda`` is
+        what decomposing ``name(args)`` leaves; checked when the problem has at most
+        :data:`FEW_GOALS` goal facts).  Only the goal facts ``name(args)`` may add are
+        looked at: the others, its subtasks cannot add either, and what follows is
+        unchanged.  Monroe's plan recognition: its one goal says that the observed
+        actions were all done, and only one of the ten top-level methods can do them."""
         may_add, get = self.domain.may_add, state.get
-        todo = list(self.few_goals)
-        seen: set[tuple[str, tuple]] = set()
-        while todo:
-            key = todo.pop()
-            if key in seen:
-                continue
-            seen.add(key)
-            pred, fact = key
-            if get(pred, fact) is True:
-                continue
-            entry = agenda
-            while entry is not None:
-                name, args, _, _, entry = entry
-                if may_add(name, args, pred, fact):
-                    break
-            else:
-                what = "goal" if key in self.problem.goals else "fact"
-                return f"no task left can make the {what} ({' '.join((pred, *fact))}) true"
-            todo.extend(landmarks.get(key, ()))
+        for pred, fact in self.few_goals:
+            if (may_add(name, args, pred, fact) and get(pred, fact) is not True
+                    and not self._may_come(agenda, pred, fact)):
+                return f"no task left can make the goal ({' '.join((pred, *fact))}) true"
         return None
+
+    def _may_come(self, agenda: Any, pred: str, fact: tuple) -> bool:
+        """Whether a task on ``agenda`` may add ``pred(fact)``: the answer for each tail of
+        the agenda is kept (by its hash, which stands for its tasks), so that the
+        decompositions that share what follows them only look at their own subtasks."""
+        known = self.coming
+        if len(known) > MAX_KEPT:
+            known.clear()
+        may_add = self.domain.may_add
+        passed = []
+        answer = False
+        entry = agenda
+        while entry is not None:
+            name, args, _, tail, rest = entry
+            found = known.get((tail, pred, fact))
+            if found is not None:
+                answer = found
+                break
+            if may_add(name, args, pred, fact):
+                answer = True
+                break
+            passed.append(tail)
+            entry = rest
+        for tail in passed:
+            known[(tail, pred, fact)] = answer
+        return answer
 
     def _needed(self, pred: str, fact: tuple, agenda: Any) -> str | None:
         """Which later action needs ``pred(fact)``, if one does among the
@@ -450,10 +475,9 @@ class DepthFirst:
             keys = needers.get(name)
             if keys is not None:
                 env = dict(zip(actions[name].names, args, strict=True))
-                for key in keys:
-                    if key(env) == fact:
-                        return (f"({' '.join((pred, *fact))}), which {_label(name, args)} "
-                                "needs later, and no task before it can make it true again")
+                if any(key(env) == fact for key in keys):
+                    return (f"({' '.join((pred, *fact))}), which {_label(name, args)} "
+                            "needs later, and no task before it can make it true again")
             if name in adders and may_add(name, args, pred, fact):
                 return None
         return None
@@ -519,7 +543,8 @@ class DepthFirst:
                               hash((sub.task, values, agenda[3] if agenda else 0)), agenda)
                 why = ((self._doomed(agenda, len(dec.subtasks), state)
                         if self._checked(dec) else None)
-                       or self._unreachable(agenda, state))
+                       or (self._unreachable(method.name, args, agenda, state)
+                           if self.few_goals else None))
                 if why is not None:
                     self._fail(parent, _label(method.name, args), f"{dec.name}: {why}")
                     continue

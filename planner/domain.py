@@ -294,12 +294,6 @@ class Problem:
     """HDDL problems: names the files spell otherwise than in lower case, with that
     spelling (:func:`planner.ipc.write_ipc` writes them so: the IPC verifier compares
     names case-sensitively)."""
-    landmarks: dict[tuple[str, tuple], tuple[tuple[str, tuple], ...]] = field(
-        default_factory=dict)
-    """HDDL problems with few goal facts: for each goal fact, and each fact found this
-    way, the facts every action that adds it needs (so a plan that makes it true makes
-    them true first, when they are false): :mod:`planner.depthfirst` refuses a
-    decomposition that leaves none of the tasks able to add one of them."""
     assigned: tuple[Assignment, ...] = ()
     """Steps given to an agent (:class:`Assignment`): a plan honours every one (the
     total-order search; plan negotiation, docs/communication.md)."""

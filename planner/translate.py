@@ -61,14 +61,6 @@ Condition = Callable[[dict[str, Any], Any], bool]
 Write = Callable[[dict[str, Any], Any, Any], None]
 
 
-FEW_GOALS = 16
-"""A problem with at most this many goal facts gets ``Problem.landmarks`` (beyond,
-checking them would cost more than the search it saves: Blocksworld's goals are its
-thousand blocks' places)."""
-MAX_LANDMARKS = 256
-"""The most facts ``Problem.landmarks`` gives."""
-
-
 def load_hddl(domain_path: str | os.PathLike[str],
               problem_path: str | os.PathLike[str]) -> Problem:
     """Read an HDDL domain and problem and translate them; ``FileError`` on any problem."""
@@ -167,12 +159,9 @@ class _Translator:
         domain = Domain(hdomain.name, self.types, actions, methods, {}, "", hdomain.file,
                         dict(hdomain.predicates),
                         {p: tuple(sorted(s)) for p, s in patterns.items()}, self.additions())
-        positive = [key for key, value in goals.items() if value is True]
         return Problem(hproblem.name, domain, dict(self.objects), initial, tasks, goals,
                        budget_ms=BUDGET_MS, file=hproblem.file,
-                       spelling={**hdomain.spelling, **hproblem.spelling},
-                       landmarks=self.landmarks(positive) if len(positive) <= FEW_GOALS
-                       else {})
+                       spelling={**hdomain.spelling, **hproblem.spelling})
 
     # -- actions and methods ---------------------------------------------------------
 
@@ -221,40 +210,6 @@ class _Translator:
                 by_pred.setdefault(pred, []).append(pattern)
             out[task] = {pred: tuple(patterns) for pred, patterns in by_pred.items()}
         return out
-
-    def landmarks(self, goals: list[tuple[str, tuple]]
-                  ) -> dict[tuple[str, tuple], tuple[tuple[str, tuple], ...]]:
-        """``Problem.landmarks`` for these goal facts: for each fact, from the goals
-        backwards, the facts that the precondition of every action adding it requires
-        (those the fact's arguments determine), up to :data:`MAX_LANDMARKS` facts.
-        Monroe's plan-recognition goal, the last observation done, needs the one before
-        it, which needs the one before, and so on back to the first."""
-        achievers: dict[str, list[tuple[tuple[str, ...], list[Atom]]]] = {}
-        for action in self.hdomain.actions.values():
-            needs = [(f.children[0], f.children[1]) for f in _conjuncts(action.precondition)
-                     if f.kind == "pred" and f.children[0] in self.changed]
-            for pred, terms in _effect_atoms(action.effect, True):
-                achievers.setdefault(pred, []).append((terms, needs))
-        found: dict[tuple[str, tuple], tuple[tuple[str, tuple], ...]] = {}
-        todo = list(reversed(goals))
-        while todo and len(found) < MAX_LANDMARKS:
-            pred, fact = todo.pop()
-            if (pred, fact) in found:
-                continue
-            common: set[tuple[str, tuple]] | None = None
-            for terms, needs in achievers.get(pred, ()):
-                binding = _unify(terms, fact)
-                if binding is None:
-                    continue
-                ground = set()
-                for need, needed in needs:
-                    values = tuple(binding.get(t) if is_variable(t) else t for t in needed)
-                    if None not in values and (need, values) != (pred, fact):
-                        ground.add((need, values))
-                common = ground if common is None else common & ground
-            found[(pred, fact)] = tuple(sorted(common or ()))
-            todo.extend(sorted(common or (), reverse=True))
-        return found
 
     def action(self, action: hddl.HAction, protected: set[str]) -> Action:
         pre = self.expr(action.precondition, action.params)
@@ -597,18 +552,6 @@ def _effect_atoms(formula: hddl.Formula | None, adding: bool) -> list[Atom]:
     if kind == "and":
         return [atom for child in children for atom in _effect_atoms(child, adding)]
     return _effect_atoms(children[1], adding)  # when (condition, effect), forall (params, e)
-
-
-def _unify(terms: tuple[str, ...], fact: tuple) -> dict[str, str] | None:
-    """The binding of ``terms``' variables that makes them ``fact`` (None: none does)."""
-    binding: dict[str, str] = {}
-    for term, value in zip(terms, fact, strict=True):
-        if not is_variable(term):
-            if term != value:
-                return None
-        elif binding.setdefault(term, value) != value:
-            return None
-    return binding
 
 
 Pattern = tuple[tuple[Any, ...], tuple[tuple[int, str], ...]]

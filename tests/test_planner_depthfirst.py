@@ -285,21 +285,3 @@ def test_a_decomposition_leaving_no_task_able_to_reach_the_goal_is_refused(write
     assert result.plan is not None, result.explain()
     assert [str(a) for a in result.plan.actions] == ["prepare()", "observe()"]
     assert validate(problem, result.plan) == []
-
-
-def test_a_fact_every_adder_of_a_goal_needs_is_a_landmark(write):
-    """``observe`` needs ``ready``, which only ``prepare`` adds: a decomposition whose
-    tasks may observe but never prepare is refused, before its chores are tried."""
-    problem = load_hddl(write("d.hddl", WATCH.replace(
-        "(:predicates", "(:predicates (first ?b - bit)").replace(
-        ":ordered-subtasks (and (chores ?b) (act bob)))",
-        ":ordered-subtasks (and (chores ?b) (act ann)))")), write("p.hddl", (
-            "(define (problem p) (:domain watch) (:objects "
-            + " ".join(f"b{i}" for i in range(18)) + " - bit)\n"
-            "  (:htn :ordered-subtasks (and (top)))\n  (:init "
-            + " ".join(f"(next b{i} b{i + 1})" for i in range(17))
-            + " (first b0))\n  (:goal (seen)))\n")))
-    assert problem.landmarks[("seen", ())] == (("ready", ()),)
-    result = first_plan(problem, 60_000, max_nodes=20_000)
-    assert result.plan is not None, result.explain()
-    assert [str(a) for a in result.plan.actions] == ["prepare()", "observe()"]
