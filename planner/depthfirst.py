@@ -92,10 +92,12 @@ MAX_REPEATS = 4
 LOOKAHEAD = 64
 """How many tasks ahead on the agenda a deleted fact is looked for among the actions'
 preconditions (threat detection; beyond, the branch fails where the action is met)."""
-FEW_GOALS = 16
+FEW_GOALS = 4
 """A problem with at most this many goal facts has its decompositions checked for a goal
-fact no task left may add (beyond, the check costs more than it saves: Blocksworld's
-goals are its thousand blocks' places)."""
+fact no task left may add.  The check costs a look-up per goal fact and decomposition,
+and pays when the goal says what the task network must reach (plan recognition: one
+goal fact); with a goal fact per child or block it cost Childsnack and Blocksworld more
+than it saved."""
 MAX_KEPT = 1_000_000
 """The most answers :meth:`DepthFirst._may_come` keeps (then it forgets them all)."""
 CHECK_EVERY = 256
@@ -197,6 +199,14 @@ class DepthFirst:
         positive = [(pred, args) for pred, args, value in self.goals if value is True]
         self.few_goals = positive if len(positive) <= FEW_GOALS else []
         """The goal facts :meth:`_unreachable` checks."""
+        self.relevant: dict[str, dict[str, tuple[list[Callable[[dict[str, Any]], tuple]],
+                                                  bool]]] = {}
+        """For each predicate some action needs, the tasks :meth:`_needed` looks at: the
+        functions giving the facts of it each needs, and whether it may add one."""
+        for pred, by_name in self.needers.items():
+            adders = self.adders.get(pred, set())
+            self.relevant[pred] = {name: (by_name.get(name, []), name in adders)
+                                   for name in {*by_name, *adders}}
         self.coming: dict[tuple[int, str, tuple], bool] = {}
         """:meth:`_may_come`'s answers, by the hash of an agenda's tail and a fact."""
         self.has_checks: dict[int, bool] = {}
@@ -464,21 +474,24 @@ class DepthFirst:
 
     def _needed(self, pred: str, fact: tuple, agenda: Any) -> str | None:
         """Which later action needs ``pred(fact)``, if one does among the
-        :data:`LOOKAHEAD` next tasks on ``agenda`` with no task before it that may add
-        it again."""
-        needers, adders = self.needers[pred], self.adders.get(pred, ())
-        may_add, actions = self.domain.may_add, self.domain.actions
+        :data:`LOOKAHEAD` next tasks on ``agenda`` with no task before it that may add a
+        fact of that predicate (not only this one: the scan stays cheap, and ends where
+        a long agenda of tasks of the same kind begins)."""
+        relevant, actions = self.relevant[pred], self.domain.actions
         for _ in range(LOOKAHEAD):
             if agenda is None:
                 return None
             name, args, _, _, agenda = agenda
-            keys = needers.get(name)
-            if keys is not None:
+            found = relevant.get(name)
+            if found is None:
+                continue
+            keys, adds = found
+            if keys:
                 env = dict(zip(actions[name].names, args, strict=True))
                 if any(key(env) == fact for key in keys):
                     return (f"({' '.join((pred, *fact))}), which {_label(name, args)} "
                             "needs later, and no task before it can make it true again")
-            if name in adders and may_add(name, args, pred, fact):
+            if adds:  # it may add a fact of this predicate
                 return None
         return None
 
