@@ -8,6 +8,9 @@ library, planner and goals, its ports filled by the Jido binding
 facts and its action servers, adds the goals, runs until nothing is left to
 do, and judges the run against the scenario's expectations exactly as a run
 in one process is judged (:func:`sim.run.happened`, :func:`sim.scenario.judge`).
+A world that dies mid-run (its liveliness lapses: :mod:`shary.ros.liveliness`)
+fails the goals in flight at once and ends the run a second later, failed,
+saying which node is gone, long before the scenario's timeout.
 """
 
 from __future__ import annotations
@@ -231,10 +234,17 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
                      "finished": follower.finished,
                      "labels": {t: p.label() for t, p in follower.plan.primitive.items()}}))))
             follower.start()
-        quiet_since = None
+        quiet_since = gone_since = None
         end = start + scenario.timeout
         while loop.now() < end:
             loop.run_for(0.1)
+            if ros.liveliness.gone:  # the robot's node is gone: its goals failed at once
+                if gone_since is None:
+                    gone_since = loop.now()
+                if loop.now() - gone_since >= SETTLE:  # what the failures do, logged
+                    break
+                continue
+            gone_since = None  # back before the run ended
             quiet = (not sup.runs and sup.agenda.active is None
                      and all(g.state in OVER for g in sup.agenda.goals)
                      and loop.now() - start > max((g.at for g in scenario.goals), default=0)
@@ -252,7 +262,10 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
     events = [(e.time - start, e.kind, e.task, e.agent, e.data) for e in read_events(log_path)]
     log.close()
     differences = judge(scenario.expect, happened(events, facts, binding.robot, elapsed))
-    if elapsed >= scenario.timeout - 1e-9:
+    if gone_since is not None and ros.liveliness.gone:
+        differences += [f"{reason}: the run ended at {gone_since - start:.1f} s"
+                        for reason in ros.liveliness.gone]
+    elif elapsed >= scenario.timeout - 1e-9:
         differences.append(f"the run was still going at the timeout ({scenario.timeout:g}s)")
     summary = {"scenario": scenario.name, "passed": not differences,
                "outcome": "passed" if not differences else "failed",

@@ -65,6 +65,10 @@ REPUBLISH = 1.0
 binding's fact topic goes stale after 2 s of silence)."""
 FAILURE_CODE = "nested_field.int32_value"
 """The field of the jido-sim binding's results that carries a failure's code."""
+LEASE = 0.5
+"""Seconds of the liveliness lease the robot's fact topic offers: a supervisor that asks
+for a lease at least this long (the binding's ``alive:``) notices the world gone within
+it (:mod:`shary.ros.liveliness`)."""
 QUIET = "/jido_sim/quiet"
 """Where the world says whether anything is left to happen in it (``std_msgs/Bool``)."""
 SUPERVISOR = "/shary"
@@ -187,7 +191,7 @@ class RosWorld:
             elif atomic == "speak":
                 node.subscription(import_interface(task.type), task.name,
                                   lambda m: node.put(self.speak, str(m.data)))
-        self.fact_pub = node.publisher(String, binding.facts[0].topic)
+        self.fact_pub = node.publisher(String, binding.facts[0].topic, lease=LEASE)
         self.quiet_pub = node.publisher(Bool, QUIET)
         self._quiet: bool | None = None
         self.speech_pubs = {s.speaker: node.publisher(String, s.topic) for s in binding.speech}

@@ -192,12 +192,20 @@ class RosNode:
     def service_client(self, cls: Any, name: str) -> Any:
         return self.call(self.node.create_client, cls, name)
 
-    def publisher(self, cls: Any, topic: str, *, latched: bool = False, depth: int = 10) -> Any:
-        from rclpy.qos import DurabilityPolicy, QoSProfile
+    def publisher(self, cls: Any, topic: str, *, latched: bool = False, depth: int = 10,
+                  lease: float | None = None) -> Any:
+        """A publisher; ``latched``: a late subscriber gets the last message; ``lease``:
+        it offers a liveliness lease of that many seconds, asserted as long as this
+        process runs (how a supervisor notices it gone: :mod:`shary.ros.liveliness`)."""
+        from rclpy.duration import Duration
+        from rclpy.qos import DurabilityPolicy, LivelinessPolicy, QoSProfile
 
         qos = QoSProfile(depth=1 if latched else depth)
         if latched:
             qos.durability = DurabilityPolicy.TRANSIENT_LOCAL
+        if lease is not None:
+            qos.liveliness = LivelinessPolicy.AUTOMATIC
+            qos.liveliness_lease_duration = Duration(seconds=lease)
         return self.call(self.node.create_publisher, cls, topic, qos)
 
     def subscription(self, cls: Any, topic: str, callback: Callable[[Any], Any], *,
