@@ -50,7 +50,8 @@ def _ros_ready() -> str | None:
 
 
 def cmd_world_ros(args: argparse.Namespace, path: Path) -> int:
-    """``shary world --ros SCENARIO``: serve the living room until Ctrl-C or --seconds."""
+    """``shary world --ros SCENARIO``: serve the living room for one run (until its
+    supervisor leaves), Ctrl-C or --seconds."""
     from shary.ros.binding import load_binding
     from userfiles.errors import FileError
 
@@ -81,11 +82,14 @@ def cmd_world_ros(args: argparse.Namespace, path: Path) -> int:
                                   report=None if args.quiet else ConsoleReport(_out))
             except ValueError as err:
                 return error(str(err))
-            _out.print(f"the simulated {served.scenario.robot} of {served.scenario.name} is on "
-                       f"ROS 2 ({binding.name}), waiting for a supervisor ('shary run "
-                       f"{served.scenario.name} --ros'); Ctrl-C stops it")
-            served.serve(args.seconds, stopping, lambda: _out.print(
-                "a supervisor is there: the scenario starts"))
+            name = served.scenario.name
+            _out.print(f"the simulated {served.scenario.robot} of {name} is on ROS 2 "
+                       f"({binding.name}), waiting for a supervisor ('shary run {name} "
+                       "--ros'); it serves one run; Ctrl-C stops it")
+            if served.serve(args.seconds, stopping, lambda: _out.print(
+                    "a supervisor is there: the scenario starts")):
+                _out.print(f"the supervisor left: this world served its run (for another, "
+                           f"start 'shary world --ros {name}' again)")
     except KeyboardInterrupt:
         pass
     finally:

@@ -24,7 +24,11 @@ def over_ros(spawn, tmp_path, scenario: str) -> dict:
     status = run.popen.wait(200)
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
     assert status == (0 if summary["passed"] else 1), run.lines
-    assert world.popen.poll() is None, world.lines  # served to the end
+    # served to the end, and that one run only: it stops once the supervisor has left
+    assert world.popen.wait(30) == 0, world.lines
+    assert world.lines[-2:] == [
+        f"the supervisor left: this world served its run (for another, start 'shary world "
+        f"--ros {scenario}' again)", "the world stopped"], world.lines
     return summary
 
 
