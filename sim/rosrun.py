@@ -220,6 +220,7 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
                         f"{binding.facts[0].topic}, its action servers): start it with "
                         f"'shary world --ros {scenario.name}' in the same ROS domain")
             loop.run_for(0.1)
+        loop.settle()  # set up: a collection of the whole heap would stall perception
         start = loop.now()
         for goal in scenario.goals:
             loop.call_later(goal.at, lambda g=goal: sup.agenda.add(g.task, g.args,
