@@ -222,7 +222,7 @@ class RosNode:
         that may carry thousands of messages a second (perception).
 
         rclpy's executor takes one message each time it wakes, and each wake rebuilds its
-        wait set in Python over every entity of the node: about 3,400 messages a second
+        wait set in Python over every entity of the node: 3,000-5,000 messages a second
         here, whatever the callback does (docs/benchmarks.md).  Taking the messages that
         wait with the subscription's own ``take_message``, as soon as the first is
         handed over, costs one wake and one event on the engine's loop per burst."""
