@@ -98,7 +98,7 @@ class RosPerception:
                 if text == self._last_text.get(index):
                     continue
                 self._last_text[index] = text
-            self._publish(index, self.triples(source, message))
+            self._publish(index, self.triples(source, message), source.topic)
 
     @staticmethod
     def triples(source: FactSource, message: Any) -> set[Triple]:
@@ -114,11 +114,20 @@ class RosPerception:
         return {tuple(_part(p, message, item) for p in template)  # type: ignore[misc]
                 for item in items or () for template in source.facts}
 
-    def _publish(self, index: int, now: set[Triple]) -> None:
+    def _publish(self, index: int, now: set[Triple], topic: str = "") -> None:
         """Make the topic's facts ``now``: one change of the fact database (kept as its
-        terms, so that a fact that goes is not converted again)."""
+        terms, so that a fact that goes is not converted again).  A robot may send
+        anything: a fact naming nothing the database can name (``foo:x`` with an unknown
+        prefix, ``a?b``) is refused with a ``refused`` row, and the others still count."""
         term = self.facts.term
-        now = {(term(s), term(p), term(o)) for s, p, o in now}
+        terms = set()
+        for fact in now:
+            try:
+                terms.add(tuple(term(part) for part in fact))
+            except (TypeError, ValueError) as error:
+                self.record("refused", topic=topic, line=" ".join(map(str, fact)),
+                            reason=str(error))
+        now = terms
         before = self.published.get(index, set())
         if now != before:
             self.facts.change(before - now, now - before, perspective=self.perspective)
