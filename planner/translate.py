@@ -204,9 +204,9 @@ class _Translator:
                         for f in conjuncts(action.effect)
                         if f.kind == "not" and f.children[0].children[0] in protected)
         needs = tuple((f.children[0], args_of(f.children[1]))
-                      for f in _conjuncts(action.precondition) if f.kind == "pred")
+                      for f in conjuncts(action.precondition) if f.kind == "pred")
         removes = tuple((f.children[0].children[0], args_of(f.children[0].children[1]))
-                        for f in _conjuncts(action.effect)
+                        for f in conjuncts(action.effect)
                         if f.kind == "not" and f.children[0].kind == "pred")
         return Action(action.name, action.params, None, pre, effects, 1.0, 1.0,
                       deletes=threats, needs=needs, removes=removes)
@@ -413,7 +413,7 @@ constant or None) and the guards, ``(task parameter index, constant)``, that mus
 def _fixed(method: hddl.HMethod) -> dict[str, str]:
     """The method's variables that its precondition's top-level equalities fix to a
     constant."""
-    whole = [*_conjuncts(method.precondition), *_conjuncts(method.constraints)]
+    whole = [*conjuncts(method.precondition), *conjuncts(method.constraints)]
     fixed: dict[str, str] = {}
     for formula in whole:
         if formula.kind != "=":
