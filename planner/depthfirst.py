@@ -39,6 +39,10 @@ prunings below, which keep recursive domains finite and fail early:
   factory being built needs: without this, every way of fetching the resources
   in between is tried before that last step fails.
 
+These last two check every decomposition; they cost most problems more than they
+save, so a first pass of :data:`PLAIN_NODES` nodes goes without them, and the
+search starts again with them only when that pass found no plan.
+
 Early precondition checks are the binders' (:mod:`planner.binding`): a
 method's variables are bound from its precondition, its first action's
 precondition and the static facts every later action needs.
@@ -92,6 +96,11 @@ MAX_REPEATS = 4
 LOOKAHEAD = 64
 """How many tasks ahead on the agenda a deleted fact is looked for among the actions'
 preconditions (threat detection; beyond, the branch fails where the action is met)."""
+PLAIN_NODES = 20_000
+"""The nodes of a first pass without the checks of decompositions (threats, goals out of
+reach): most problems have their plan by then (Blocksworld-GTOHP's 1,000 blocks in
+13,342), and would only pay for the checks; past them, the search starts again with
+them."""
 FEW_GOALS = 4
 """A problem with at most this many goal facts has its decompositions checked for a goal
 fact no task left may add.  The check costs a look-up per goal fact and decomposition,
@@ -173,6 +182,9 @@ class DepthFirst:
         """For each top task, the deepest failure: its depth, parent, label and reason."""
         self.repeats = 0
         self.repeated = False
+        self.careful = False
+        """Whether decompositions are checked (:meth:`_doomed`, :meth:`_unreachable`): not
+        in the first :data:`PLAIN_NODES` nodes, which find the plans of most problems."""
         self.cut = False
         """A branch was cut at ``max_depth`` in the last pass."""
         self.max_depth = MAX_DEPTH
@@ -260,6 +272,9 @@ class DepthFirst:
                 try:
                     trail, roots = self._search(deadline, max_nodes)
                 except _Stop as stop:
+                    if str(stop) == "plain":  # no plan in the first nodes: start again checking
+                        self.careful = True
+                        continue
                     stopped = str(stop)
                     break
                 if trail is not None:
@@ -329,6 +344,8 @@ class DepthFirst:
             self.expansions += 1
             if self.expansions >= max_nodes:
                 raise _Stop("nodes")
+            if self.expansions == PLAIN_NODES and not self.careful:
+                raise _Stop("plain")
             if self.expansions % CHECK_EVERY == 0 and time.perf_counter() > deadline:
                 raise _Stop("time")
             state, state_hash, agenda, trail = node
@@ -554,10 +571,12 @@ class DepthFirst:
                               else tuple([a.fn(local, state.get) for a in sub.args]))
                     agenda = (sub.task, values, node,
                               hash((sub.task, values, agenda[3] if agenda else 0)), agenda)
-                why = ((self._doomed(agenda, len(dec.subtasks), state)
-                        if self._checked(dec) else None)
-                       or (self._unreachable(method.name, args, agenda, state)
-                           if self.few_goals else None))
+                why = None
+                if self.careful:
+                    why = ((self._doomed(agenda, len(dec.subtasks), state)
+                            if self._checked(dec) else None)
+                           or (self._unreachable(method.name, args, agenda, state)
+                               if self.few_goals else None))
                 if why is not None:
                     self._fail(parent, _label(method.name, args), f"{dec.name}: {why}")
                     continue

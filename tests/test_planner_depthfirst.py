@@ -212,11 +212,12 @@ def _plots(write, init: str, bits: int = 18):
         f"  (:init {init} {chain} (last b0)))\n")))
 
 
-def test_a_step_that_deletes_what_a_later_action_needs_dooms_its_decomposition(write):
+def test_a_step_that_deletes_what_a_later_action_needs_dooms_its_decomposition(write, monkeypatch):
     """Factories' shape: the shed may go on the plot the house needs later (``?s = a``,
     first in name order), and the chores in between have 2^18 ways that all end at
     the house that cannot be built: the decomposition is refused where it is chosen,
     because nothing between the shed and the house can free the plot again."""
+    monkeypatch.setattr(depthfirst, "PLAIN_NODES", 1_000)  # the checks start after
     result = first_plan(_plots(write, "(free a) (free z)"), 60_000, max_nodes=20_000)
     assert result.plan is not None, result.explain()
     assert [str(a) for a in result.plan.actions][::len(result.plan.actions) - 1] == [
@@ -224,10 +225,12 @@ def test_a_step_that_deletes_what_a_later_action_needs_dooms_its_decomposition(w
     assert validate(_plots(write, "(free a) (free z)"), result.plan) == []
 
 
-def test_an_action_needing_a_false_fact_no_earlier_task_adds_dooms_its_decomposition(write):
+def test_an_action_needing_a_false_fact_no_earlier_task_adds_dooms_its_decomposition(
+        write, monkeypatch):
     """The house is built already (plot ``a`` not free): ``build`` (tried first) would
     run every way of doing the chores (which delete facts of the same predicate, so the
     binder cannot check ``(free a)`` on entry) before its last step fails."""
+    monkeypatch.setattr(depthfirst, "PLAIN_NODES", 1_000)  # the checks start after
     problem = _plots(write, "(house a) (free z)")
     result = first_plan(problem, 60_000, max_nodes=20_000)
     assert result.plan is not None, result.explain()
@@ -277,9 +280,10 @@ def test_what_a_task_may_add_is_guarded_by_the_constants_its_methods_require(wri
     assert not domain.may_add("act", ("bob",), "seen", ())  # only 'observed' adds it
 
 
-def test_a_decomposition_leaving_no_task_able_to_reach_the_goal_is_refused(write):
+def test_a_decomposition_leaving_no_task_able_to_reach_the_goal_is_refused(write, monkeypatch):
     """Monroe's plan recognition: ``busy`` (tried first) does 2^18 chores and then acts
     as ``bob``, who cannot observe; refused where it is chosen."""
+    monkeypatch.setattr(depthfirst, "PLAIN_NODES", 1_000)  # the checks start after
     problem = _watch(write)
     result = first_plan(problem, 60_000, max_nodes=20_000)
     assert result.plan is not None, result.explain()
