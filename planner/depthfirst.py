@@ -235,8 +235,9 @@ class DepthFirst:
                       plan is None and not stopped, elapsed, failures, improvements,
                       first=plan is not None)
 
-    def _search(self, deadline: float, max_nodes: int) -> tuple[Any, list[int]]:
-        """One pass; the trail of the first plan (or None) and the ids of the top tasks."""
+    def _start(self) -> tuple[list[int], tuple]:
+        """The ids of the top tasks and the first search node (the initial state, the
+        problem's tasks as the agenda; the search that plans from it makes the rest)."""
         problem = self.problem
         tops = [(None, _label(name, args), index, 0, next(self.ids), 0)
                 for index, (name, args) in enumerate(problem.tasks)]
@@ -251,9 +252,14 @@ class DepthFirst:
         for key, value in initial.items():
             if value:
                 state_hash ^= hash(key)
+        return roots, (state, state_hash, agenda, None)
+
+    def _search(self, deadline: float, max_nodes: int) -> tuple[Any, list[int]]:
+        """One pass; the trail of the first plan (or None) and the ids of the top tasks."""
+        roots, first = self._start()
         seen: set[int] = set()
         stack: list[Iterator[tuple]] = []
-        node: tuple | None = (state, state_hash, agenda, None)
+        node: tuple | None = first
         actions, methods = self.domain.actions, self.domain.methods
         while True:
             if node is None:
