@@ -48,6 +48,7 @@ from typing import Any
 from planner.depthfirst import BUDGET_EXHAUSTED, MAX_NODES, DepthFirst
 from planner.domain import Problem
 from planner.evaluate import Evaluator
+from planner.plan import fact_text
 from planner.search import Failure, Result
 from planner.translate import NETWORK
 
@@ -170,6 +171,9 @@ class BestFirst:
         steps = self.steps
         failures = [] if plan is not None else [
             steps._failure(*steps.failures[k]) for k in sorted(steps.failures)]
+        if plan is None and steps.missed:
+            failures.append(Failure(0, ("goals",), "a decomposition of every task ends "
+                                    "without " + steps.missed))
         if plan is None and stopped:
             why = {"nodes": f"the node budget ({max_nodes}) ran out",
                    "time": f"the time budget ({budget_ms:g} ms) ran out"}[stopped]
@@ -207,10 +211,13 @@ class BestFirst:
             state, state_hash, agenda, trail = node
             node = None
             if agenda is None:
-                if all(state.get(p, a) == v for p, a, v in goals):
+                missed = [f"{fact_text(p, a)} == {v!r}" for p, a, v in goals
+                          if state.get(p, a) != v]
+                if not missed:
                     settled = self._settle(trail, state)
                     if settled is not None:
                         return settled, roots
+                steps.missed = steps.missed or ", ".join(missed)
                 continue
             name, args, parent, agenda_hash, rest = agenda
             action = actions.get(name)
