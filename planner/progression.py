@@ -52,8 +52,10 @@ from planner.plan import fact_text
 from planner.search import Failure, Result
 from planner.translate import NETWORK
 
-GOAL_WEIGHT = 2
-"""How much one unmet goal fact weighs against one action of the task stack's least work."""
+GOAL_WEIGHT = 10
+"""How much one unmet goal fact weighs against one action of the task stack's least work:
+the goal first, the least work between nodes equally far from it (Multiarm-Blocksworld
+pfile_02_100, 100 blocks: 153,000 nodes to a plan with 10, none in 204,000 with 2)."""
 BATCH = 64
 """Successors drawn from a choice point at each of its turns."""
 CHECK_EVERY = 32
