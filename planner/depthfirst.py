@@ -217,6 +217,13 @@ class DepthFirst:
             if on_improvement is not None:
                 on_improvement(plan)
         elapsed = (time.perf_counter() - start) * 1000
+        return self._outcome(plan, stopped, elapsed, budget_ms, max_nodes)
+
+    def _outcome(self, plan: Plan | None, stopped: str, elapsed: float, budget_ms: float,
+                 max_nodes: int) -> Result:
+        """The result of a search that ended with ``plan`` (or none: then the failures
+        kept, in words, after the budget that ran out, ``stopped``: "nodes", "time" or
+        "")."""
         failures = [] if plan is not None else [
             self._failure(*self.failures[k]) for k in sorted(self.failures)]
         if plan is None and self.missed:

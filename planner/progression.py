@@ -45,11 +45,11 @@ import time
 from collections.abc import Iterator
 from typing import Any
 
-from planner.depthfirst import BUDGET_EXHAUSTED, MAX_NODES, DepthFirst
+from planner.depthfirst import MAX_NODES, DepthFirst
 from planner.domain import Problem
 from planner.evaluate import Evaluator
 from planner.plan import fact_text
-from planner.search import Failure, Result
+from planner.search import Result
 from planner.translate import NETWORK
 
 GOAL_WEIGHT = 10
@@ -169,23 +169,9 @@ class BestFirst:
             if collecting:
                 gc.enable()
         plan = None if trail is None else Evaluator(self.problem).plan(trail, roots)
-        elapsed = (time.perf_counter() - start) * 1000
-        steps = self.steps
-        failures = [] if plan is not None else [
-            steps._failure(*steps.failures[k]) for k in sorted(steps.failures)]
-        if plan is None and steps.missed:
-            failures.append(Failure(0, ("goals",), "a decomposition of every task ends "
-                                    "without " + steps.missed))
-        if plan is None and stopped:
-            why = {"nodes": f"the node budget ({max_nodes}) ran out",
-                   "time": f"the time budget ({budget_ms:g} ms) ran out"}[stopped]
-            failures.insert(0, Failure(0, (BUDGET_EXHAUSTED,), (
-                f"{why} after {self.expansions} search nodes, without a plan; the deepest "
-                "points reached follow")))
-        improvements = [(elapsed, plan.score)] if plan is not None else []
-        return Result(plan, int(plan is not None), self.expansions,
-                      plan is None and not stopped, elapsed, failures, improvements,
-                      first=plan is not None)
+        self.steps.expansions = self.expansions
+        return self.steps._outcome(plan, stopped, (time.perf_counter() - start) * 1000,
+                                   budget_ms, max_nodes)
 
     def _search(self, deadline: float, max_nodes: int) -> tuple[Any, list[int]]:
         """The trail of the first plan (or None) and the ids of the top tasks."""
