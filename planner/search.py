@@ -484,7 +484,7 @@ def plan(problem: Problem, budget_ms: float | None = None,
     depth budget ``max_depth`` and the node budget ``max_nodes`` (defaults:
     :data:`MAX_DEPTH`, :data:`MAX_NODES`); with ``first``, stop at the first plan."""
     budget = problem.budget_ms if budget_ms is None else budget_ms
-    if problem.domain.predicates:  # HDDL: the IPC mode's depth-first search first
+    if problem.domain.predicates:  # HDDL: the IPC mode's searches (planner.portfolio)
         from planner import depthfirst, portfolio
 
         if first:
