@@ -10,10 +10,8 @@ read into a :class:`~planner.domain.Domain` and :class:`~planner.domain.Problem`
   causal links and the validator's replay need nothing new;
 * preconditions, goals and effects become closures over ``(env, get)`` like the
   planner's own expressions (:class:`~planner.expr.Expr`,
-  :class:`~planner.expr.Effect`), with PDDL's semantics: conditions of
-  conditional effects are read in the state before the action, deletions are
-  applied before additions; ``forall`` and ``exists`` range over the objects of
-  the type and its subtypes;
+  :class:`~planner.expr.Effect`), with PDDL's semantics (:mod:`planner.formulas`
+  compiles them);
 * a compound task becomes a :class:`~planner.domain.Method` whose parameters are
   the task's own (without the ``?``); each HDDL method is one of its
   decompositions, with the method's variables as its variables, a precondition
@@ -37,15 +35,14 @@ conjunction of literals.
 
 from __future__ import annotations
 
-import itertools
 import os
-from collections.abc import Callable
 from typing import Any
 
 from planner import hddl
 from planner.binding import Atom, Test, args_of, compile_binder, is_variable
 from planner.domain import Action, Decomposition, Domain, EntityType, Method, Problem, Subtask
 from planner.expr import Effect, Expr
+from planner.formulas import Formulas, conjuncts, holds, is_literal, operand
 from userfiles.errors import FileError
 from userfiles.errors import Problem as FileProblem
 
@@ -56,9 +53,6 @@ MAX_ENTRY = 32
 NETWORK = ":htn"
 """The task standing for an initial task network with ``:parameters``: its one method
 binds them (no HDDL name starts with ':', so it cannot clash with the domain's)."""
-
-Condition = Callable[[dict[str, Any], Any], bool]
-Write = Callable[[dict[str, Any], Any, Any], None]
 
 
 def load_hddl(domain_path: str | os.PathLike[str],
@@ -78,27 +72,13 @@ def translate(domain: hddl.HDDLDomain, problem: hddl.HDDLProblem) -> Problem:
 
 def _refuse(problem: hddl.HDDLProblem) -> None:
     found = []
-    for formula in _conjuncts(problem.goal):
-        if not _literal(formula):
+    for formula in conjuncts(problem.goal):
+        if not is_literal(formula):
             found.append(FileProblem(problem.file, formula.line, formula.col,
                                      f"goal '{formula.kind}' is not supported: a goal is a "
                                      "conjunction of facts and negated facts"))
     if found:
         raise FileError(found)
-
-
-def _conjuncts(formula: hddl.Formula | None) -> list[hddl.Formula]:
-    """The top-level conjuncts of a formula (nested 'and's flattened)."""
-    if formula is None:
-        return []
-    if formula.kind != "and":
-        return [formula]
-    return [part for child in formula.children for part in _conjuncts(child)]
-
-
-def _literal(formula: hddl.Formula) -> bool:
-    return formula.kind == "pred" or (formula.kind == "not"
-                                      and formula.children[0].kind == "pred")
 
 
 class _Translator:
@@ -115,6 +95,7 @@ class _Translator:
                 if name in hddl.supertypes(domain, kind):
                     kinds.add(kind)
             self.typed[name] = sorted(o for o, t in self.objects.items() if t in kinds)
+        self.formulas = Formulas(self.typed)
         self.changed = {pred for action in domain.actions.values()
                         for adding in (True, False)
                         for pred, _ in _effect_atoms(action.effect, adding)}
@@ -125,7 +106,7 @@ class _Translator:
     def problem(self) -> Problem:
         hdomain, hproblem = self.hdomain, self.hproblem
         goals: dict[tuple[str, Any], Any] = {}
-        for formula in _conjuncts(hproblem.goal):
+        for formula in conjuncts(hproblem.goal):
             positive = formula.kind == "pred"
             pred, terms = (formula if positive else formula.children[0]).children
             goals[(pred, terms)] = True if positive else None
@@ -202,12 +183,12 @@ class _Translator:
         pre = self.expr(action.precondition, action.params)
         effects: tuple[Effect, ...] = ()
         if action.effect is not None:
-            apply = self.effect(action.effect)
+            apply = self.formulas.effect(action.effect)
             preds = {f.children[0] for f in action.effect.walk() if f.kind == "pred"}
             effects = (Effect(str(action.effect), apply, ",".join(sorted(preds)),
                               frozenset(p for p, _ in action.params), frozenset(preds)),)
         threats = tuple((f.children[0].children[0], args_of(f.children[0].children[1]))
-                        for f in _conjuncts(action.effect)
+                        for f in conjuncts(action.effect)
                         if f.kind == "not" and f.children[0].children[0] in protected)
         return Action(action.name, action.params, None, pre, effects, 1.0, 1.0,
                       deletes=threats)
@@ -221,7 +202,7 @@ class _Translator:
         if method.constraints is not None:  # '=' and 'not =' constraints are conditions too
             whole = (method.constraints if whole is None else
                      hddl.Formula("and", (whole, method.constraints), whole.line, whole.col))
-        condition = self.condition(whole) if whole else None
+        condition = self.formulas.condition(whole) if whole else None
 
         def matches(env: dict, get: Any) -> bool:
             for term, param in head:
@@ -233,13 +214,13 @@ class _Translator:
         text = f"task {call}, {whole or '()'}"
         reads = {f.children[0] for f in whole.walk() if f.kind == "pred"} if whole else set()
         pre = Expr(text, matches, frozenset(dict(method.params)), frozenset(reads), "bool")
-        conditions = list(_conjuncts(whole))
+        conditions = list(conjuncts(whole))
         for position, sub in enumerate(method.subtasks):
             action = domain.actions.get(sub.name)
             if action is None:
                 continue
             rename = {p: t for (p, _), t in zip(action.params, sub.args, strict=True)}
-            conditions += [_rename(f, rename) for f in _conjuncts(action.precondition)
+            conditions += [_rename(f, rename) for f in conjuncts(action.precondition)
                            if position == 0 or self.static(f)]
         conditions += self.hoisted(method)
         unique: dict[str, hddl.Formula] = {}
@@ -247,7 +228,7 @@ class _Translator:
             unique.setdefault(str(formula), formula)
         tests = [self.test(f) for f in unique.values()]
         bind, patterns = compile_binder(dict(method.params), head, tests, self.typed)
-        subtasks = tuple(Subtask(s.name, tuple(_term(t) for t in s.args),
+        subtasks = tuple(Subtask(s.name, tuple(operand(t) for t in s.args),
                                  f"({' '.join((s.name, *s.args))})", args_of(s.args))
                          for s in method.subtasks)
         return Decomposition(method.name, method.params, pre, subtasks, bind=bind), patterns
@@ -291,7 +272,7 @@ class _Translator:
         self._entry[task] = []
         action = self.hdomain.actions.get(task)
         if action is not None:
-            found = [f for f in _conjuncts(action.precondition) if _plain(f)]
+            found = [f for f in conjuncts(action.precondition) if _plain(f)]
         else:
             params = [p for p, _ in self.hdomain.tasks.get(task, ())]
             common: dict[str, hddl.Formula] | None = None
@@ -344,7 +325,7 @@ class _Translator:
         """The literals over a method's variables that must hold where it is entered: its
         precondition's, and each subtask's entry conditions that none of the subtasks
         before it may change (:meth:`hoisted`)."""
-        whole = [f for f in _conjuncts(method.precondition) if _plain(f)]
+        whole = [f for f in conjuncts(method.precondition) if _plain(f)]
         return whole + self.hoisted(method)
 
     def hoisted(self, method: hddl.HMethod) -> list[hddl.Formula]:
@@ -379,8 +360,8 @@ class _Translator:
         variables = frozenset(_free(formula))
         if formula.kind == "pred":
             pred, terms = formula.children
-            return Test(variables, _holds(pred, terms), (pred, terms))
-        return Test(variables, self.condition(formula))
+            return Test(variables, holds(pred, terms), (pred, terms))
+        return Test(variables, self.formulas.condition(formula))
 
     # -- conditions --------------------------------------------------------------------
 
@@ -388,138 +369,8 @@ class _Translator:
         if formula is None:
             return None
         reads = {f.children[0] for f in formula.walk() if f.kind == "pred"}
-        return Expr(str(formula), self.condition(formula), frozenset(p for p, _ in params),
+        return Expr(str(formula), self.formulas.condition(formula), frozenset(p for p, _ in params),
                     frozenset(reads), "bool")
-
-    def condition(self, formula: hddl.Formula) -> Condition:
-        """A closure telling whether ``formula`` holds, given the variables and the state."""
-        kind, children = formula.kind, formula.children
-        if kind == "pred":
-            return _holds(*children)
-        if kind == "=":
-            left, right = (_term(t) for t in children)
-            return lambda env, get: left.fn(env, get) == right.fn(env, get)
-        if kind == "not":
-            inner = self.condition(children[0])
-            return lambda env, get: not inner(env, get)
-        if kind in ("and", "or"):
-            parts = tuple(self.condition(c) for c in children)
-            if len(parts) == 1:
-                return parts[0]
-            if kind == "and":
-
-                def conjunction(env: dict, get: Any) -> bool:
-                    for part in parts:
-                        if not part(env, get):
-                            return False
-                    return True
-
-                return conjunction
-
-            def disjunction(env: dict, get: Any) -> bool:
-                for part in parts:
-                    if part(env, get):
-                        return True
-                return False
-
-            return disjunction
-        if kind == "imply":
-            a, b = (self.condition(c) for c in children)
-            return lambda env, get: not a(env, get) or b(env, get)
-        params, body = children
-        test = self.condition(body)
-        names = [v for v, _ in params]
-        domains = [self.typed.get(t, []) for _, t in params]
-        every = kind == "forall"
-
-        def quantified(env: dict, get: Any) -> bool:
-            local = dict(env)
-            for values in itertools.product(*domains):
-                local.update(zip(names, values, strict=True))
-                if test(local, get) is not every:
-                    return not every
-            return every
-
-        return quantified
-
-    # -- effects ---------------------------------------------------------------------------
-
-    def effect(self, formula: hddl.Formula) -> Write:
-        """A closure applying an effect: deletions first, then additions."""
-        literals = _conjuncts(formula)
-        if all(_literal(f) for f in literals):  # the common case, in one flat closure
-            deletes = tuple((f.children[0].children[0], args_of(f.children[0].children[1]))
-                            for f in literals if f.kind == "not")
-            adds = tuple((f.children[0], args_of(f.children[1]))
-                         for f in literals if f.kind == "pred")
-
-            def flat(env: dict, get: Any, set: Any) -> None:
-                for pred, key in deletes:
-                    set(pred, key(env), None)
-                for pred, key in adds:
-                    set(pred, key(env), True)
-
-            return flat
-        deleting, adding = self.write(formula, False), self.write(formula, True)
-
-        def apply(env: dict, get: Any, set: Any) -> None:
-            deleting(env, get, set)
-            adding(env, get, set)
-
-        return apply
-
-    def write(self, formula: hddl.Formula, adding: bool) -> Write:
-        """A closure making the additions (or the deletions) of an effect."""
-        kind, children = formula.kind, formula.children
-        if kind == "pred":
-            if not adding:
-                return _nothing
-            pred, key = children[0], args_of(children[1])
-            return lambda env, get, set: set(pred, key(env), True)
-        if kind == "not":
-            if adding:
-                return _nothing
-            pred, key = children[0].children[0], args_of(children[0].children[1])
-            return lambda env, get, set: set(pred, key(env), None)
-        if kind == "and":
-            parts = tuple(self.write(c, adding) for c in children)
-            parts = tuple(p for p in parts if p is not _nothing)
-            if not parts:
-                return _nothing
-
-            def every(env: dict, get: Any, set: Any) -> None:
-                for part in parts:
-                    part(env, get, set)
-
-            return every
-        if kind == "when":
-            condition, inner = self.condition(children[0]), self.write(children[1], adding)
-            if inner is _nothing:
-                return _nothing
-
-            def when(env: dict, get: Any, set: Any) -> None:
-                if condition(env, get):
-                    inner(env, get, set)
-
-            return when
-        params, body = children  # forall
-        inner = self.write(body, adding)
-        if inner is _nothing:
-            return _nothing
-        names = [v for v, _ in params]
-        domains = [self.typed.get(t, []) for _, t in params]
-
-        def each(env: dict, get: Any, set: Any) -> None:
-            local = dict(env)
-            for values in itertools.product(*domains):
-                local.update(zip(names, values, strict=True))
-                inner(local, get, set)
-
-        return each
-
-
-def _nothing(env: dict, get: Any, set: Any) -> None:
-    """An effect part with nothing to write in this pass."""
 
 
 def _effect_atoms(formula: hddl.Formula | None, adding: bool) -> list[Atom]:
@@ -593,26 +444,3 @@ def _rename(formula: hddl.Formula, rename: dict[str, str]) -> hddl.Formula:
     else:
         children = tuple(_rename(c, rename) for c in children)
     return hddl.Formula(kind, children, formula.line, formula.col)
-
-
-def _term(term: str) -> Expr:
-    """A subtask argument or an '=' operand: a variable's value or a constant."""
-    if is_variable(term):
-        return Expr(term, lambda env, get: env[term], frozenset({term}), frozenset(), None)
-    return Expr(term, lambda env, get: term, frozenset(), frozenset(), None)
-
-
-def _holds(pred: str, terms: tuple[str, ...]) -> Condition:
-    """Whether a fact holds; the common shapes get a closure of their own (the search
-    checks preconditions millions of times)."""
-    if not terms:
-        return lambda env, get: get(pred, ()) is True
-    if all(is_variable(t) for t in terms):
-        if len(terms) == 1:
-            (a,) = terms
-            return lambda env, get: get(pred, (env[a],)) is True
-        if len(terms) == 2:
-            a, b = terms
-            return lambda env, get: get(pred, (env[a], env[b])) is True
-    key = args_of(terms)
-    return lambda env, get: get(pred, key(env)) is True

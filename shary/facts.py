@@ -37,18 +37,13 @@ turns a term back into what :meth:`FactDatabase.term` accepts, so that
 is an ``xsd:decimal`` while Python's ``0.5`` is an ``xsd:double``: write
 ``5.0e-1`` in files whose numbers the engine compares with Python floats.
 
-**Where facts live.**  rdflib's store costs about 10 µs per change (a named
-graph's contexts and indexes, ``len`` before and after), a good part of the
-whole path from a perception change to the arm stopping.  So each
-perspective keeps its own index in front of its rdflib graph
-(:class:`_Perspective`: the set of its triples and the objects of each
-(subject, predicate)), which answers :meth:`holds`, :meth:`objects`,
-:meth:`triples` and tells whether a change changes anything; the rdflib graph
-stays the store for SPARQL and export, filled when first read and then
-receiving the net changes made since its last read just before it is read
-(:meth:`select`, :attr:`dataset`).  Turtle files are read by
-:mod:`shary.turtle`.  ``docs/architecture.md`` has the figures
-of the alternatives measured (oxrdflib, pyoxigraph).
+**Where facts live.**  Each perspective keeps its own index in front of its
+rdflib graph (:class:`shary.perspective.Perspective`), which answers
+:meth:`holds`, :meth:`objects`, :meth:`triples` and tells whether a change
+changes anything; the rdflib graph stays the store for SPARQL and export,
+brought up to date just before it is read (:meth:`select`, :attr:`dataset`).
+Turtle files are read by :mod:`shary.turtle`.  ``docs/architecture.md`` has
+the figures of the alternatives measured (oxrdflib, pyoxigraph).
 
 **Derived structures.**  :meth:`FactDatabase.derived` keeps a consumer's own
 index of one perspective (the referring expressions' index, say) current:
@@ -91,11 +86,12 @@ from itertools import count
 from urllib.parse import quote
 
 from pyparsing import ParseException
-from rdflib import OWL, RDF, RDFS, XSD, Dataset, Graph, Literal, URIRef
+from rdflib import OWL, RDF, RDFS, XSD, Dataset, Literal, URIRef
 from rdflib.plugins.sparql import prepareQuery
 from rdflib.plugins.sparql.sparql import Query
 from rdflib.term import Node
 
+from shary.perspective import Perspective
 from shary.turtle import Triple, read_turtle
 
 __all__ = ["FactDatabase", "FactEvent", "Subscription", "Value"]
@@ -169,102 +165,6 @@ def _prepare_select(text: str, namespace: str) -> Query:
     return query
 
 
-class _Perspective:
-    """One perspective's facts: an index in front of its rdflib graph (see the module's
-    documentation).
-
-    ``triples`` and ``objects`` are always current.  The rdflib graph is
-    filled from them the first time someone reads it (:meth:`sync`: a file
-    loaded only to be checked, or a world nobody queries with SPARQL, never
-    pays for rdflib's store); from then on it lags behind by the changes in
-    ``pending`` (each triple's last word: True added, False removed).
-    """
-
-    __slots__ = ("graph", "built", "triples", "objects", "pending", "derived", "watchers")
-
-    def __init__(self, graph: Graph, source: _Perspective | None = None):
-        self.graph = graph
-        self.built = False
-        self.pending: dict[Triple, bool] = {}
-        self.derived: dict[typing.Hashable, object] = {}
-        """Structures derived from these triples (:meth:`FactDatabase.derived`), by key."""
-        self.watchers: dict[Node, list[Callable[[bool, Triple], object]]] = {}
-        """What keeps each derived structure current, by the predicates it follows."""
-        if source is None:
-            self.triples: set[Triple] = set()
-            self.objects: dict[tuple[Node, Node], set[Node]] = {}
-        else:
-            self.triples = set(source.triples)
-            self.objects = {key: set(objects) for key, objects in source.objects.items()}
-
-    def add(self, triple: Triple) -> bool:
-        """Add a triple; False when it was already there."""
-        if triple in self.triples:
-            return False
-        self.triples.add(triple)
-        key = (triple[0], triple[1])
-        objects = self.objects.get(key)
-        if objects is None:
-            self.objects[key] = {triple[2]}
-        else:
-            objects.add(triple[2])
-        if self.built:
-            self.pending[triple] = True
-        if self.watchers:
-            for watcher in self.watchers.get(triple[1], ()):
-                watcher(True, triple)
-        return True
-
-    def remove(self, triple: Triple) -> bool:
-        """Remove a triple; False when it was not there."""
-        if triple not in self.triples:
-            return False
-        self.triples.discard(triple)
-        key = (triple[0], triple[1])
-        objects = self.objects[key]
-        objects.discard(triple[2])
-        if not objects:
-            del self.objects[key]
-        if self.built:
-            self.pending[triple] = False
-        if self.watchers:
-            for watcher in self.watchers.get(triple[1], ()):
-                watcher(False, triple)
-        return True
-
-    def load(self, triples: set[Triple]) -> None:
-        """Take in parsed triples (loading is setting up knowledge, not a change)."""
-        new = triples - self.triples
-        self.triples |= new
-        objects = self.objects
-        for s, p, o in new:
-            found = objects.get((s, p))
-            if found is None:
-                objects[(s, p)] = {o}
-            else:
-                found.add(o)
-        if self.built:
-            self.pending.update(dict.fromkeys(new, True))
-        if new:  # derived structures are rebuilt when next asked for: loading is rare
-            self.derived.clear()
-            self.watchers.clear()
-
-    def sync(self) -> Graph:
-        """Bring the rdflib graph up to date and return it."""
-        graph = self.graph
-        if not self.built:
-            graph.addN((s, p, o, graph) for s, p, o in self.triples)
-            self.built = True
-        elif self.pending:
-            for triple, present in self.pending.items():
-                if present:
-                    graph.add(triple)
-                else:
-                    graph.remove(triple)
-        self.pending.clear()
-        return graph
-
-
 def _order(term: Node) -> str:
     """A total, stable order on terms, so that lists and events never depend on hashing."""
     return term.n3()
@@ -281,8 +181,8 @@ class FactDatabase:
         self._namespace = namespace
         self._prefixes = {"w": namespace, **_PREFIXES}
         self._dataset = Dataset()
-        self._apriori = _Perspective(self._dataset.default_graph)
-        self._perspectives: dict[str, _Perspective] = {}
+        self._apriori = Perspective(self._dataset.default_graph)
+        self._perspectives: dict[str, Perspective] = {}
         # Caches both ways between names and IRIs: a world's vocabulary is small
         # and the same names come back with every perception update.
         self._terms: dict[str, Node] = {}
@@ -372,18 +272,18 @@ class FactDatabase:
         """The perspectives written to so far, in the order they were created."""
         return list(self._perspectives)
 
-    def _view(self, perspective: str) -> _Perspective:
+    def _view(self, perspective: str) -> Perspective:
         """The perspective to read from (the a-priori graph's until it diverges)."""
         return self._perspectives.get(perspective, self._apriori)
 
-    def _writable(self, perspective: str) -> _Perspective:
+    def _writable(self, perspective: str) -> Perspective:
         """The perspective to write to, created as a copy of the a-priori graph."""
         found = self._perspectives.get(perspective)
         if found is None:
             if not isinstance(perspective, str) or not perspective:
                 raise ValueError(f"a perspective is an agent's name, not {perspective!r}")
             graph = self._dataset.graph(URIRef(_PERSPECTIVE_GRAPH + quote(perspective, safe="")))
-            found = self._perspectives[perspective] = _Perspective(graph, self._apriori)
+            found = self._perspectives[perspective] = Perspective(graph, self._apriori)
         return found
 
     # -- loading ---------------------------------------------------------------------------------

@@ -7,7 +7,7 @@ library, planner and goals, its ports filled by the Jido binding
 (:class:`shary.ros.bridge.RosSupervision`): it waits for the robot's first
 facts and its action servers, adds the goals, runs until nothing is left to
 do, and judges the run against the scenario's expectations exactly as a run
-in one process is judged (:func:`sim.run.happened`, :func:`sim.scenario.judge`).
+in one process is judged (:func:`sim.run.happened`, :func:`sim.judge.judge`).
 """
 
 from __future__ import annotations
@@ -174,9 +174,9 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
     from shary.told import Told
     from userfiles.outputs import output_folder, write_output
 
+    from .judge import judge
     from .rosworld import JIDO_BINDING, QUIET, scenario_binding
     from .run import happened, load
-    from .scenario import judge
     from .stack.session import StackSession
 
     scenario, library, domain = load(path)

@@ -40,11 +40,12 @@ from shary.told import Told
 from userfiles.outputs import output_folder, write_output
 
 from .executors import RobotExecutors
+from .judge import Happened, judge
 from .narration import Narrator, Report
 from .objects import is_new, new_object
 from .people import Person
 from .perception import Noise, Perception
-from .scenario import Happened, Scenario, is_team_scenario, judge, load_scenario
+from .scenario import Scenario, is_team_scenario, load_scenario
 from .simulation import Simulation, standing_height
 from .stack.session import StackSession
 from .world import (

@@ -335,3 +335,34 @@ def test_a_person_killed_has_her_panel_offered_to_the_other_astronaut():
     done = {r[2]: r[3] for r in rows if r[1] == "task-done"}
     assert done["mount-P4"] == "EVA1"
     assert violations == {} and state == "achieved"
+
+
+def test_a_person_killed_while_carrying_a_panel_puts_it_down():
+    """EVA1 is killed 8 s in, carrying P3 to the frame: she stops where she is and the
+    panel is put down on the ground beside her (before: she walked on holding it and
+    tacked it, dead); EVA2, offered the task taken back, fetches it from there."""
+    (state, reason, violations), rows = weld_killed("weld-nominal", "EVA1", 8.0)
+    (down,) = [r for r in rows if r[1] == "put-down"]
+    assert down[0] == 8.0 and down[3] == "EVA1" and down[4]["panel"] == "P3"
+    p3_z = [r[4]["o"] for r in rows if r[0] >= 8.0 and r[1] == "fact-added"
+            and r[4].get("s") == "P3" and r[4].get("p") == "z"]
+    assert p3_z and float(p3_z[0]) < 0.05  # lying on the ground, not held at 1 m
+    walked = [r for r in rows if r[0] > 8.0 and r[1] == "fact-added"
+              and r[4].get("s") == "EVA1" and r[4].get("p") in ("x", "y")]
+    assert not walked, walked[:3]
+    done = {r[2]: r[3] for r in rows if r[1] == "task-done"}
+    assert done["mount-P3"] == "EVA2"
+    assert violations == {} and state == "achieved"
+
+
+def test_a_helper_killed_while_carrying_puts_the_panel_down_and_helps_no_more():
+    """EVA2 helps EVA1 carry P4 and is killed 9 s in: the panel is put down, EVA1 hears
+    her mount failed, and the retry (the team file names EVA2 as the helper) is refused
+    instead of a dead helper walking beside her."""
+    (state, reason, violations), rows = weld_killed("weld-robot-supports-human", "EVA2", 9.0)
+    (down,) = [r for r in rows if r[1] == "put-down"]
+    assert down[3] == "EVA2" and down[4]["carriers"] == ["EVA1", "EVA2"]
+    failed = [r[4]["reason"] for r in rows if r[1] == "task-failed" and r[2] == "mount-P4"]
+    assert failed == ["EVA2 left: P4 was put down",
+                      "EVA2 has left the site: nobody to carry P4 with"]
+    assert violations == {} and state == "failed" and "mount-P4" in reason

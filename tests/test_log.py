@@ -15,7 +15,8 @@ from pathlib import Path
 
 import pytest
 
-from shary.log import ContextLog, LogEvent, add_log_command, end_time, export_jsonl, read_events
+from shary.commands.log import add_log
+from shary.log import ContextLog, LogEvent, end_time, export_jsonl, read_events
 from userfiles.errors import FileError
 
 # (time, kind, task, agent, data): a short run of give-object.
@@ -228,9 +229,9 @@ def test_a_missing_log_is_a_file_error(tmp_path: Path):
 
 @pytest.fixture
 def shary_log(capsys):
-    """Run ``shary log ARGS`` through a parser built with add_log_command."""
+    """Run ``shary log ARGS`` through a parser built with add_log."""
     parser = argparse.ArgumentParser(prog="shary")
-    add_log_command(parser.add_subparsers(dest="command", required=True))
+    add_log(parser.add_subparsers(dest="command", required=True))
 
     def _run(*args: str | Path) -> tuple[int, str, str]:
         namespace = parser.parse_args(["log", *map(str, args)])

@@ -19,7 +19,8 @@ import pytest
 from sim.kinematics import reach, set_arm, set_gripper
 from sim.png import SIGNATURE, encode_png, read_png
 from sim.quiet import captured, silenced
-from sim.world import BOTTLE_HEIGHT, MODELS_DIR, LivingRoom, pb
+from sim.robots import MODELS_DIR
+from sim.world import BOTTLE_HEIGHT, LivingRoom, pb
 
 FURNITURE = ["coffee-table", "store-table", "trash", "sofa", "chair-1", "chair-2"]
 BOTTLES = ["yellow-bottle", "green-bottle", "orange-bottle", "blue-bottle"]

@@ -523,3 +523,21 @@ def test_a_task_that_never_ends_is_withdrawn_by_the_watchdog_and_the_goal_ends(
     assert dogs[0].time >= team.tasks.watchdog
     (given_up,) = kinds(path, "task-given-up")
     assert given_up.task == "weld-P1-P2" and "said nothing" in given_up.data["reason"]
+
+
+def test_the_team_file_sets_the_watchdog(tmp_path: Path) -> None:
+    """``goal: watchdog: 2min``: the Task Manager looks after two minutes without
+    progress, not after the default five (a key of the file, not a constructor's)."""
+    file = DATA / "seam-team.yaml"
+    text = file.read_text("utf-8").replace("goal:\n  tasks:", "goal:\n  watchdog: 2min\n  tasks:")
+    assert "watchdog: 2min" in text
+    spec = load_team(file, text=text)
+    assert spec.watchdog == 120.0 and load_team(file).watchdog == 300.0
+    team, log, _ = build(tmp_path, edit=lambda _: spec,
+                         durations={"drive": 2.0, "weld": 1e6, "scan": 3.0, "aim-light": 1.0})
+    assert team.run(3000) == "failed"
+    log.close()
+    dogs = kinds(tmp_path / "run.sqlite", "watchdog")
+    assert [d.data["idle"] for d in dogs] == [120.0] * len(dogs) and dogs
+    assert dogs[0].data["running"] == ["weld-P1-P2"]
+    assert dogs[0].time < 300.0  # the default would not have looked yet

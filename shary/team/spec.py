@@ -18,6 +18,11 @@ ACCEPT, REFUSE, IGNORE, ANSWER = "accept", "refuse", "ignore", "answer"
 Delay = tuple[float, float]
 """Seconds, drawn uniformly in [low, high] from the run's seeded generator."""
 
+WATCHDOG = 300.0
+"""Seconds without progress in the goal before the Task Manager's watchdog acts, unless
+the team file's ``goal: watchdog:`` says otherwise (HRI/OS gives no figure: five
+minutes outlasts any one step of the seam-welding goal)."""
+
 
 @dataclass(frozen=True)
 class Reply:
@@ -119,6 +124,9 @@ class TeamSpec:
     recipes: tuple[Path, ...] = ()
     doc: str = ""
     file: str = ""
+    watchdog: float = WATCHDOG
+    """Seconds without progress in the goal after which the Task Manager's watchdog acts
+    (``goal: watchdog:``; :mod:`shary.team.tasks`)."""
 
     def of_kind(self, kind: str) -> list[AgentSpec]:
         return [a for a in self.agents.values() if a.kind == kind]

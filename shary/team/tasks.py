@@ -18,7 +18,8 @@ inspected again.  Every agent's progress comes back as ``Progress``
 messages, all logged.
 
 A **watchdog** keeps the goal from stalling silently: when nothing has
-progressed for ``watchdog`` seconds (no task made ready, offered, accepted,
+progressed for ``watchdog`` seconds (the team file's ``goal: watchdog:``, five
+minutes unless it says otherwise; no task made ready, offered, accepted,
 done or failed), it writes a ``watchdog`` row (what is running, what is
 ready, what it does) and acts: a running task whose holder has said nothing
 since is withdrawn (retried, respawned or given up as the team file says);
@@ -78,7 +79,7 @@ class TaskManager:
 
     address = "tasks"
 
-    def __init__(self, team: Team, tasks: dict[str, TaskSpec], watchdog: float = 300.0):
+    def __init__(self, team: Team, tasks: dict[str, TaskSpec], watchdog: float):
         self.team = team
         self.watchdog = watchdog
         """Seconds without progress after which the watchdog acts (see the module)."""

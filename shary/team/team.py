@@ -74,7 +74,7 @@ class Team:
         """In process unless ``port`` makes another (a ZenohPort: a distributed team)."""
         self.resources = ResourceManager(spec.weights, self.loop.now, self.record)
         self.interaction = InteractionManager(self)
-        self.tasks = TaskManager(self, spec.tasks)
+        self.tasks = TaskManager(self, spec.tasks, spec.watchdog)
         self.attachments: dict[str, Attachment] = {}
         """Question topic -> what its questions carry (the weld world attaches a snapshot)."""
         self.agents: dict[str, Agent] = {}

@@ -25,6 +25,7 @@ from shary.team.spec import (
     HUMAN,
     ROBOT,
     SOFTWARE,
+    WATCHDOG,
     AgentSpec,
     Behaviour,
     Delay,
@@ -75,7 +76,8 @@ class _Meaning:
         self.constraints(tasks)
         self.requests(agents)
         return TeamSpec(data["team"], agents, tasks, self.weights(), questions,
-                        tuple(recipes), data.get("doc", ""), self.reader.file)
+                        tuple(recipes), data.get("doc", ""), self.reader.file,
+                        self.watchdog())
 
     # -- recipes ------------------------------------------------------------------
 
@@ -269,6 +271,22 @@ class _Meaning:
                         tuple(raw.get("by") or ()), needs, tuple(at) if at else None,
                         int(raw.get("attempts", 2)), raw.get("respawn"), within or 30.0,
                         raw.get("doc", ""))
+
+    def watchdog(self) -> float:
+        """The goal's ``watchdog``: a duration above 0 (a watchdog of 0s would act at once,
+        and again at once after each look, and the goal would never be left to run)."""
+        raw = self.reader.data["goal"].get("watchdog")
+        if raw is None:
+            return WATCHDOG
+        where, found = ("goal", "watchdog"), len(self.reader.problems)
+        idle = self.reader.duration(where, raw)
+        if len(self.reader.problems) > found:  # not a duration, or too long: said
+            return WATCHDOG
+        if idle <= 0:
+            self.problem(where, f"a watchdog of {raw} would act at once, and again after "
+                         "each look: give it more than 0s (the default is 5min)")
+            return WATCHDOG
+        return idle
 
     def constraints(self, tasks: dict[str, TaskSpec]) -> None:
         for task in tasks.values():

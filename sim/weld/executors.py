@@ -30,7 +30,7 @@ from ..kinematics import reach
 from ..motion import BaseMotion, Instant, JointMotion, Lazy, Sequence, Wait, wrap
 from ..simulation import Simulation, Walk
 from ..world import pb
-from .layout import PANEL_Y, PANEL_Z, PANELS, panel_x, seam_x
+from .layout import PANEL_HEIGHT, PANEL_Y, PANEL_Z, PANELS, panel_x, seam_x
 from .site import WeldSite
 
 WELDER_ARM = "left"
@@ -43,6 +43,8 @@ CARRY_HALF_SPAN = 0.9
 aimed at the panel's corner passes between them)."""
 ARMS = 0.3
 """How far in front of its carriers a panel is held, in metres."""
+SET_DOWN_BESIDE = 0.4
+"""How far behind its carriers (away from the frame) a panel they stop carrying is laid."""
 INSPECT_SECONDS = 2.0
 WELD_SECONDS_PER_POINT = 2.0
 LANE_Y = -1.6
@@ -298,6 +300,19 @@ class SiteActions:
                   Wait(1.0, label="align"),
                   Instant(lambda: site.tack(panel), "tack")]
         return self.sim.start(Sequence(parts, "mount"), done)
+
+    def set_down(self, panel: str, carriers: list[str]) -> bool:
+        """Carriers who stop (one of them left) put down the panel they hold: flat on the
+        ground beside them, on the side away from the frame.  False when they held
+        nothing: it was still on the pallet, or already tacked to the frame."""
+        site = self.site
+        if panel not in site.carried:
+            return False
+        people = [self.people[c] for c in carriers]
+        x = sum(p.x for p in people) / len(people)
+        y = sum(p.y for p in people) / len(people) - SET_DOWN_BESIDE - PANEL_HEIGHT / 2
+        site.lay_down(panel, x, y)
+        return True
 
     def _held(self, panel: str, people: list[Avatar], shift: float,
               orientation: tuple[float, ...]) -> None:

@@ -194,7 +194,9 @@ class _WeldRun:
             self.team.tasks.listeners.append(lambda outcome: timer.cancel())
 
     def _kill(self, name: str) -> None:
-        """``name``'s process dies: what it asked the world stops, then it falls silent."""
+        """``name``'s process dies: what it asked the world stops, what it carried is put
+        down, then it falls silent."""
+        self.world.left(name)
         link = self.links.get(name)
         if link is not None:
             link.cut()

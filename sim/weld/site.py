@@ -140,6 +140,16 @@ class WeldSite(LivingRoom):
         if cid is not None:
             self.call(pb.removeConstraint, cid)
 
+    def lay_down(self, panel: str, x: float, y: float) -> None:
+        """Carriers who stop lay the panel they hold flat on the ground at (x, y) and let
+        go: it rests there, where whoever carries it next finds it (let go in mid-air it
+        would float, as physics steps only while something is carried onto the frame)."""
+        self.put_down(panel)
+        body = self.panels[panel]
+        self.call(pb.resetBasePositionAndOrientation, body, [x, y, PANEL_THICKNESS / 2 + 1e-3],
+                  _flat())
+        self.call(pb.resetBaseVelocity, body, [0, 0, 0], [0, 0, 0])
+
     def tack(self, panel: str) -> None:
         """Tack-weld a panel to the frame where it is: a fixed constraint to the frame."""
         if panel in self.tacks:

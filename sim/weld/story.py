@@ -43,6 +43,8 @@ class TeamStory:
             say(t, "TM", "failed", f"gives up {task} after {data.get('attempts')} attempts")
         elif kind == "agent-killed":
             say(t, who, "failed", "killed: its process is gone")
+        elif kind == "put-down":
+            say(t, who, "failed", f"puts {data.get('panel')} down: {data.get('why')}")
         elif kind == "agent-lost":
             say(t, "TM", "failed", f"takes {task} back from {who} (lost)")
         elif kind == "watchdog":

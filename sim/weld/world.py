@@ -90,6 +90,11 @@ class WeldWorld:
         self.light = _Light(self)
         self.running: dict[str, Request] = {}
         """Request id -> the robot's atomic task being performed (to cancel it)."""
+        self.work: dict[str, tuple[Assignment, int, str, list[str]]] = {}
+        """Request id -> a person's work under way: the assignment, its activity, the
+        panel and its carriers (to stop it when one of them leaves)."""
+        self.gone: set[str] = set()
+        """People who left the site (:meth:`left`): no work is theirs any more."""
         self.sharing = FactSharing(facts, port, WORLD)
         facts.log_changes(record)  # the site as perceived, in the log (the Facts panel)
         self.perception = SitePerception(site, self.actions.people, facts)
@@ -158,8 +163,14 @@ class WeldWorld:
         """A person's ``mount-panel``: they (and their helper) carry the panel and tack it."""
         panel = str(message.args.get("panel", ""))
         carriers = [message.sender, *[h for h in [message.args.get("helper")] if h]]
+        gone = [c for c in carriers if c in self.gone]
+        if gone:
+            self._reply(message, "failed", f"{gone[0]} has left the site: nobody to carry "
+                        f"{panel} with")
+            return
 
         def over() -> None:
+            self.work.pop(message.id, None)
             if self.site.mounted(panel):
                 self._reply(message, "done")
             else:  # physics had the last word: something stood in the way
@@ -167,11 +178,33 @@ class WeldWorld:
                             "frame")
 
         try:
-            self.actions.mount(panel, carriers, over)
+            self.work[message.id] = (message, self.actions.mount(panel, carriers, over),
+                                     panel, carriers)
         except KeyError as err:
             self._reply(message, "failed", str(err.args[0]))
         except TypeError:
             self._reply(message, "failed", f"no such helper: {message.args.get('helper')!r}")
+
+    def left(self, name: str) -> None:
+        """``name`` left the site (their process died): the work they took part in stops
+        where it is, and the panel it carried is put down on the ground, as a person
+        leaving would put it down rather than walk off holding it; whoever else asked
+        for that work is told it failed, and the panel waits there for the next carrier."""
+        self.gone.add(name)
+        for request_id, (message, handle, panel, carriers) in list(self.work.items()):
+            if name not in carriers:
+                continue
+            del self.work[request_id]
+            self.sim.stop(handle)
+            put_down = self.actions.set_down(panel, carriers)
+            if put_down:
+                x, y, _ = self.site.position(panel)
+                self.record("put-down", agent=name, panel=panel, at=[round(x, 2), round(y, 2)],
+                            carriers=carriers, why=f"{name} left")
+                self.perception.update()
+            if message.sender != name:
+                self._reply(message, "failed", f"{name} left"
+                            + (f": {panel} was put down" if put_down else ""))
 
     def _serve(self, message: Act) -> None:
         service = message.data.get("service")
