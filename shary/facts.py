@@ -81,7 +81,7 @@ import os
 import re
 import typing
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from itertools import count
 from urllib.parse import quote
 
@@ -212,6 +212,8 @@ class FactDatabase:
             if term is None:
                 term = self._terms[value] = self._parse_name(value)
             return term
+        if type(value) is URIRef or type(value) is Literal:  # before the slower ABC check
+            return value
         if isinstance(value, Node):
             return value
         if isinstance(value, str):
@@ -416,6 +418,30 @@ class FactDatabase:
             changes.append(("added", s_term, p_term, o_term, perspective))
         self._deliver(*changes)
         return new
+
+    def change(self, removed: Iterable[tuple[Value, Value, Value]],
+               added: Iterable[tuple[Value, Value, Value]],
+               perspective: str = "robot") -> int:
+        """Remove some facts and add others as one change, in the order given; how many
+        facts changed.
+
+        As for :meth:`set`, every event is delivered once the whole change is made: no
+        subscriber sees the perspective half-changed (a person's old position gone and
+        the new one not there yet).  What a perception topic's message changes
+        (:mod:`shary.ros.perception`)."""
+        view = self._writable(perspective)
+        changes: list[tuple[EventKind, Node, Node, Node, str]] = []
+        for s, p, o in removed:
+            triple = self._triple(s, p, o)
+            if view.remove(triple):
+                changes.append(("removed", *triple, perspective))
+        for s, p, o in added:
+            triple = self._triple(s, p, o)
+            if view.add(triple):
+                changes.append(("added", *triple, perspective))
+        if changes:
+            self._deliver(*changes)
+        return len(changes)
 
     # -- events ----------------------------------------------------------------------------------
 

@@ -306,6 +306,7 @@ def add_world(sub: argparse._SubParsersAction) -> None:
                        "performs the robots' atomic tasks and the people's work on site, and "
                        "shares what it perceives.  With --ros, the living room serves the "
                        "jido-sim binding's interfaces on ROS 2 for 'shary run SCENARIO --ros' "
+                       "and serves that one run: it stops when the supervisor leaves "
                        "(docs/ros2.md).")
     p.add_argument("scenario", metavar="SCENARIO",
                    help="a seam-welding scenario (built-in name or file); with --ros, a "
@@ -314,7 +315,8 @@ def add_world(sub: argparse._SubParsersAction) -> None:
                    help="serve the scenario's living room as the simulated Jido on ROS 2 "
                    "(the jido-sim binding's interfaces), for 'shary run SCENARIO --ros'")
     p.add_argument("--seconds", type=float, metavar="S",
-                   help="with --ros: stop after S seconds (default: run until Ctrl-C)")
+                   help="with --ros: stop after S seconds (default: run until the "
+                   "supervisor leaves, or Ctrl-C)")
     p.add_argument("--quiet", action="store_true",
                    help="with --ros: do not print what happens in the world")
     p.add_argument("--connect", type=endpoint, default=DEFAULT_ENDPOINT,

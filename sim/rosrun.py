@@ -8,6 +8,9 @@ library, planner and goals, its ports filled by the Jido binding
 facts and its action servers, adds the goals, runs until nothing is left to
 do, and judges the run against the scenario's expectations exactly as a run
 in one process is judged (:func:`sim.run.happened`, :func:`sim.judge.judge`).
+A world that dies mid-run (its liveliness lapses: :mod:`shary.ros.liveliness`)
+fails the goals in flight at once and ends the run a second later, failed,
+saying which node is gone, long before the scenario's timeout.
 """
 
 from __future__ import annotations
@@ -47,7 +50,8 @@ def _ros_ready() -> str | None:
 
 
 def cmd_world_ros(args: argparse.Namespace, path: Path) -> int:
-    """``shary world --ros SCENARIO``: serve the living room until Ctrl-C or --seconds."""
+    """``shary world --ros SCENARIO``: serve the living room for one run (until its
+    supervisor leaves), Ctrl-C or --seconds."""
     from shary.ros.binding import load_binding
     from userfiles.errors import FileError
 
@@ -78,11 +82,14 @@ def cmd_world_ros(args: argparse.Namespace, path: Path) -> int:
                                   report=None if args.quiet else ConsoleReport(_out))
             except ValueError as err:
                 return error(str(err))
-            _out.print(f"the simulated {served.scenario.robot} of {served.scenario.name} is on "
-                       f"ROS 2 ({binding.name}), waiting for a supervisor ('shary run "
-                       f"{served.scenario.name} --ros'); Ctrl-C stops it")
-            served.serve(args.seconds, stopping, lambda: _out.print(
-                "a supervisor is there: the scenario starts"))
+            name = served.scenario.name
+            _out.print(f"the simulated {served.scenario.robot} of {name} is on ROS 2 "
+                       f"({binding.name}), waiting for a supervisor ('shary run {name} "
+                       "--ros'); it serves one run; Ctrl-C stops it")
+            if served.serve(args.seconds, stopping, lambda: _out.print(
+                    "a supervisor is there: the scenario starts")):
+                _out.print(f"the supervisor left: this world served its run (for another, "
+                           f"start 'shary world --ros {name}' again)")
     except KeyboardInterrupt:
         pass
     finally:
@@ -213,6 +220,7 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
                         f"{binding.facts[0].topic}, its action servers): start it with "
                         f"'shary world --ros {scenario.name}' in the same ROS domain")
             loop.run_for(0.1)
+        loop.settle()  # set up: a collection of the whole heap would stall perception
         start = loop.now()
         for goal in scenario.goals:
             loop.call_later(goal.at, lambda g=goal: sup.agenda.add(g.task, g.args,
@@ -231,10 +239,17 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
                      "finished": follower.finished,
                      "labels": {t: p.label() for t, p in follower.plan.primitive.items()}}))))
             follower.start()
-        quiet_since = None
+        quiet_since = gone_since = None
         end = start + scenario.timeout
         while loop.now() < end:
             loop.run_for(0.1)
+            if ros.liveliness.gone:  # the robot's node is gone: its goals failed at once
+                if gone_since is None:
+                    gone_since = loop.now()
+                if loop.now() - gone_since >= SETTLE:  # what the failures do, logged
+                    break
+                continue
+            gone_since = None  # back before the run ended
             quiet = (not sup.runs and sup.agenda.active is None
                      and all(g.state in OVER for g in sup.agenda.goals)
                      and loop.now() - start > max((g.at for g in scenario.goals), default=0)
@@ -252,7 +267,10 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
     events = [(e.time - start, e.kind, e.task, e.agent, e.data) for e in read_events(log_path)]
     log.close()
     differences = judge(scenario.expect, happened(events, facts, binding.robot, elapsed))
-    if elapsed >= scenario.timeout - 1e-9:
+    if gone_since is not None and ros.liveliness.gone:
+        differences += [f"{reason}: the run ended at {gone_since - start:.1f} s"
+                        for reason in ros.liveliness.gone]
+    elif elapsed >= scenario.timeout - 1e-9:
         differences.append(f"the run was still going at the timeout ({scenario.timeout:g}s)")
     summary = {"scenario": scenario.name, "passed": not differences,
                "outcome": "passed" if not differences else "failed",

@@ -31,7 +31,8 @@ processes (:func:`scenario_binding`).
 Only this module and :mod:`sim.rosrun` of ``sim`` touch ROS, and only through
 :mod:`shary.ros` (which alone imports rclpy).  The world's clock is the
 simulation's, kept in step with the wall clock from when a supervisor is there;
-a world serves one run (start another for the next).
+a world serves one run: it stops when its supervisor leaves (start another for
+the next).
 """
 
 from __future__ import annotations
@@ -60,11 +61,18 @@ STEP = 0.02
 """Wall seconds between two steps of the world (it advances by the time that passed)."""
 WAITING = 0.1
 """Wall seconds between two looks for a supervisor, before the scenario starts."""
+STILL_THERE = 0.5
+"""Wall seconds between two looks at whether the supervisor is still there, once the
+scenario has started (a world serves one run: it stops when its supervisor leaves)."""
 REPUBLISH = 1.0
 """Seconds after which the robot's facts are published again though unchanged (the
 binding's fact topic goes stale after 2 s of silence)."""
 FAILURE_CODE = "nested_field.int32_value"
 """The field of the jido-sim binding's results that carries a failure's code."""
+LEASE = 0.5
+"""Seconds of the liveliness lease the robot's fact topic offers: a supervisor that asks
+for a lease at least this long (the binding's ``alive:``) notices the world gone within
+it (:mod:`shary.ros.liveliness`)."""
 QUIET = "/jido_sim/quiet"
 """Where the world says whether anything is left to happen in it (``std_msgs/Bool``)."""
 SUPERVISOR = "/shary"
@@ -187,7 +195,7 @@ class RosWorld:
             elif atomic == "speak":
                 node.subscription(import_interface(task.type), task.name,
                                   lambda m: node.put(self.speak, str(m.data)))
-        self.fact_pub = node.publisher(String, binding.facts[0].topic)
+        self.fact_pub = node.publisher(String, binding.facts[0].topic, lease=LEASE)
         self.quiet_pub = node.publisher(Bool, QUIET)
         self._quiet: bool | None = None
         self.speech_pubs = {s.speaker: node.publisher(String, s.topic) for s in binding.speech}
@@ -293,12 +301,14 @@ class RosWorld:
         return bool(self.node.call(self.act_pub.get_subscription_count))
 
     def serve(self, seconds: float | None = None, stopping: list[int] | None = None,
-              starting: Any = None) -> None:
+              starting: Any = None) -> bool:
         """Run the world in step with the wall clock, from when a supervisor is there
-        (``starting()`` is told) until ``seconds`` or ``stopping``.  Until then the
-        world's clock waits, publishing what the robot knows: in one process the
-        people and the supervisor start together, and a person's first request must
-        not go out before anyone listens."""
+        (``starting()`` is told) until ``seconds``, ``stopping``, or the supervisor
+        leaves (True: a world serves one run, its scenario played once; the next run
+        needs a world of its own).  Until then the world's clock waits, publishing
+        what the robot knows: in one process the people and the supervisor start
+        together, and a person's first request must not go out before anyone
+        listens."""
         stopping = stopping if stopping is not None else []
         for person in self.people.values():  # who looks where at the start, as perceived
             person.refresh()
@@ -308,19 +318,24 @@ class RosWorld:
             self.publish(time.monotonic())
             time.sleep(WAITING)
         if stopping:
-            return
+            return False
         if starting is not None:
             starting()
         for person in self.people.values():
             person.begin()
-        origin = time.monotonic()
+        origin = looked = time.monotonic()
         while not stopping and (seconds is None or self.loop.now() < seconds):
             self.node.drain()
             wall = time.monotonic() - origin
             if wall > self.loop.now():
                 self.loop.advance(wall - self.loop.now())
             self.publish(time.monotonic())
+            if time.monotonic() - looked >= STILL_THERE:
+                looked = time.monotonic()
+                if not self.supervised():
+                    return True
             time.sleep(STEP)
+        return False
 
 
 class _Task:

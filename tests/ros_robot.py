@@ -3,7 +3,10 @@
 Reads commands on standard input, one a line: ``pub TOPIC TEXT`` publishes
 TEXT (``\\n`` for a new line) on TOPIC, repeated every 0.1 s (as perception
 does) until changed; ``stop TOPIC`` stops publishing there; ``once TOPIC TEXT``
-publishes TEXT once, when the topic has a subscriber (what a person says).
+publishes TEXT once, when the topic has a subscriber (what a person says);
+``burst TOPIC N TEXT`` publishes N messages at once, when the topic has a
+subscriber, ``{i}`` in TEXT replaced by each one's number (perception faster
+than one message per wake of the subscriber's executor).
 Prints ``ready``, ``heard TOPIC TEXT`` for each message on the topics named
 on the command line (the robot's speech, shary's state topics), each
 ``TOPIC`` (a String), ``TOPIC=latched`` (a latched String),
@@ -28,6 +31,7 @@ def main() -> None:
     publishers: dict[str, object] = {}
     current: dict[str, str] = {}
     once: list[tuple[str, str]] = []
+    bursts: list[tuple[str, int, str]] = []
 
     def listen(spec: str) -> None:
         from diagnostic_msgs.msg import DiagnosticArray
@@ -52,7 +56,7 @@ def main() -> None:
 
     def publisher(topic: str):
         if topic not in publishers:
-            publishers[topic] = node.create_publisher(String, topic, 10)
+            publishers[topic] = node.create_publisher(String, topic, 1000)  # a burst's room
         return publishers[topic]
 
     def tick() -> None:
@@ -63,6 +67,12 @@ def main() -> None:
                 if publisher(topic).get_subscription_count():
                     publisher(topic).publish(String(data=text))
                     once.remove((topic, text))
+            for topic, count, text in list(bursts):
+                if publisher(topic).get_subscription_count():
+                    for i in range(count):
+                        publisher(topic).publish(String(data=text.replace("{i}", str(i))
+                                                        .replace("\\n", "\n")))
+                    bursts.remove((topic, count, text))
 
     node.create_timer(0.1, tick)
 
@@ -75,6 +85,9 @@ def main() -> None:
                     current[topic] = text.replace("\\n", "\n")
                 elif word == "once":
                     once.append((topic, text))
+                elif word == "burst":
+                    count, _, text = text.partition(" ")
+                    bursts.append((topic, int(count), text))
                 elif word == "stop":
                     current.pop(topic, None)
         rclpy.try_shutdown()

@@ -241,6 +241,20 @@ def test_set_callbacks_see_the_finished_change(db):
     assert seen == [("removed", ["sofa"]), ("added", ["sofa"])]
 
 
+def test_change_removes_and_adds_as_one_change(db):
+    seen = []
+    db.subscribe(lambda e: seen.append((e.kind, e.object, db.objects("alice", "looksAt"))),
+                 subject="alice")
+    db.add("alice", "looksAt", "jido")
+    seen.clear()
+    # what a perception message does: her gaze moves; no subscriber sees her look nowhere
+    assert db.change([("alice", "looksAt", "jido"), ("alice", "isAt", "door")],
+                     [("alice", "looksAt", "tv"), ("alice", "looksAt", "tv")]) == 2
+    assert seen == [("removed", "jido", ["tv"]), ("added", "tv", ["tv"])]
+    seen.clear()
+    assert db.change([], [("alice", "looksAt", "tv")]) == 0 and seen == []
+
+
 # -- perspectives --------------------------------------------------------------------------------
 
 def test_perspectives_are_separate_and_share_a_priori(db):

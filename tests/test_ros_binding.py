@@ -66,6 +66,27 @@ def test_meaning_errors_are_positioned(shary, write):
     assert report["files"][0]["ok"] is False
 
 
+def test_alive_names_the_binding_s_tasks_and_a_lease(shary, write):
+    path = write("robot.yaml", """\
+        binding: alive
+        robot: jido
+        tasks:
+          navigate: {action: /nav, type: test_msgs/action/Fibonacci}
+        alive:
+          - {topic: /nav/alive, type: std_msgs/msg/Empty, lease: 0s, tasks: [navigate, fly]}
+          - {topic: /arm/alive, type: std_msgs/msg/Empty, lease: 500ms}
+        """)
+    status, _, err = shary("validate", path)
+    assert status == 2
+    found = {(int(m["line"]), int(m["col"])): m["message"] for m in problems(err)}
+    assert found == {(6, 58): "a lease must be longer than 0 s",
+                     (6, 80): "'fly' is not a task of this binding (navigate)"}
+    path.write_text(path.read_text().replace("0s, tasks: [navigate, fly]", "2s"))
+    binding = load_binding(path)
+    assert [(a.topic, a.lease, a.tasks) for a in binding.alive] == [
+        ("/nav/alive", 2.0, ("navigate",)), ("/arm/alive", 0.5, ("navigate",))]
+
+
 def test_a_schema_error_is_positioned(shary, write):
     path = write("robot.yaml", """\
         binding: bad

@@ -68,6 +68,29 @@ def test_facts_in_stale_facts_out_speech_in_and_out(write, ros_domain, spawn):
         assert ("speech", {"agent": "jido", "text": "Here is your bottle."}) in rows
 
 
+def test_a_burst_of_perception_becomes_facts_message_by_message(write, ros_domain, spawn):
+    """Messages that come faster than one a wake of the executor are taken together
+    (drained) and each one's facts are still a change of their own, made whole before
+    anyone hears of it: her gaze moves from one thing to the next, never to nothing."""
+    from shary.ros.node import RosNode
+
+    binding = load_binding(write("binding.yaml", BINDING))
+    robot = spawn("tests/ros_robot.py")
+    robot.wait_for("ready")
+    loop, facts = EventLoop(WallClock()), FactDatabase()
+    seen = []
+    facts.subscribe(lambda e: seen.append((e.kind, e.object, facts.objects("alice", "looksAt"))),
+                    subject="alice", predicate="looksAt")
+    with RosNode("shary_burst", domain_id=ros_domain) as node:
+        node.attach(loop)
+        perception = RosPerception(node, binding, facts, loop)
+        robot.send(r"burst /robot/facts 300 alice looksAt thing-{i}\nalice isAt sofa-area")
+        run_until(loop, lambda: facts.holds("alice", "looksAt", "thing-299"))
+    assert perception.messages == 300
+    assert [o for kind, o, _ in seen if kind == "added"] == [f"thing-{i}" for i in range(300)]
+    assert all(now == [f"thing-{int(o[6:]) + 1}"] for kind, o, now in seen if kind == "removed")
+
+
 def test_templates_make_one_fact_per_element_of_a_sequence():
     from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 
@@ -98,3 +121,29 @@ def test_lines_carry_truth_values_numbers_and_text_literals_as_such():
     for triple in found:  # each one a fact the database takes
         facts.add(*triple)
     assert facts.objects("yellow-bottle", "robot_reach") == [False]
+
+
+def test_a_line_that_names_nothing_is_refused_and_the_rest_are_facts(write, ros_domain):
+    """A robot's perception may send anything: a line whose name has an unknown prefix
+    (``foo:x``) or is no name at all is refused with a row that says why, and the other
+    lines of the message still become facts; the engine's loop goes on."""
+    from std_msgs.msg import String
+
+    from shary.ros.node import RosNode
+
+    binding = load_binding(write("binding.yaml", BINDING))
+    loop, facts, rows = EventLoop(WallClock()), FactDatabase(), []
+    with RosNode("shary_bad_lines", domain_id=ros_domain) as node:
+        node.attach(loop)
+        RosPerception(node, binding, facts, loop,
+                      record=lambda kind, **data: rows.append((kind, data)))
+        publish = node.publisher(String, "/robot/facts", depth=10)
+        node.post(publish.publish, String(data="alice looksAt jido\na b foo:x\nbob sees a?b"))
+        run_until(loop, lambda: facts.holds("alice", "looksAt", "jido"))
+        loop.run_for(0.2)
+        assert facts.objects("a", "b") == [] and facts.objects("bob", "sees") == []
+        refused = [data for kind, data in rows if kind == "refused"]
+        assert [r["line"] for r in refused] == ["a b foo:x", "bob sees a?b"]
+        assert all(r["topic"] == "/robot/facts" and r["reason"] for r in refused)
+        node.post(publish.publish, String(data="alice looksAt tv"))
+        run_until(loop, lambda: facts.holds("alice", "looksAt", "tv"))

@@ -8,6 +8,8 @@ partner follows the supervisor's shared plan as ``/shary/plan`` tells it)."""
 from __future__ import annotations
 
 import json
+import signal
+import time
 
 import pytest
 from rosfixtures import needs_ros
@@ -22,7 +24,11 @@ def over_ros(spawn, tmp_path, scenario: str) -> dict:
     status = run.popen.wait(200)
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
     assert status == (0 if summary["passed"] else 1), run.lines
-    assert world.popen.poll() is None, world.lines  # served to the end
+    # served to the end, and that one run only: it stops once the supervisor has left
+    assert world.popen.wait(30) == 0, world.lines
+    assert world.lines[-2:] == [
+        f"the supervisor left: this world served its run (for another, start 'shary world "
+        f"--ros {scenario}' again)", "the world stopped"], world.lines
     return summary
 
 
@@ -41,6 +47,34 @@ def test_a_scenario_passes_with_its_world_in_another_process(spawn, tmp_path, sc
                if kind == "ros-cancel" and data["state"] == "confirmed"]
     # Alice's phone call stops the arm: its goal is cancelled at the world's server
     assert cancels == (["/jido/move_arm"] if scenario == "give-bottle-distracted" else [])
+
+
+@needs_ros
+def test_a_world_killed_mid_run_fails_the_run_at_once(spawn, tmp_path):
+    """The robot's driver dies (SIGKILL) while the robot navigates: its liveliness lapses,
+    the goal in flight fails naming the node, and the run ends failed, saying why,
+    instead of waiting for the scenario's timeout (its servers would look ready for
+    20 s more)."""
+    world = spawn("-m", "shary", "world", "--ros", "give-bottle")
+    run = spawn("-m", "shary", "run", "give-bottle", "--ros", "--out", str(tmp_path / "run"),
+                "--json")
+    end = time.monotonic() + 120
+    while not any("navigate coffee-area" in line for line in world.lines):
+        assert time.monotonic() < end and world.popen.poll() is None, world.lines
+        time.sleep(0.05)
+    world.popen.send_signal(signal.SIGKILL)
+    assert run.popen.wait(60) == 1, run.lines
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    gone = "the robot's node /jido_sim is gone (its liveliness on /jido/facts lapsed: lease 1 s)"
+    assert summary["outcome"] == "failed"
+    assert any(d.startswith(f"{gone}: the run ended at") for d in summary["differences"])
+    assert not any("timeout" in d for d in summary["differences"]), summary
+    rows = [(e.kind, e.data) for e in read_events(tmp_path / "run" / "log.sqlite")]
+    assert ("ros-alive", {"topic": "/jido/facts", "nodes": ["/jido_sim"], "state": "gone",
+                          "reason": gone}) in rows
+    assert any(kind == "ros-goal" and data["interface"] == "/jido/navigate"
+               and data["outcome"] == "node gone" and data["reason"] == f"node gone: {gone}"
+               for kind, data in rows), rows
 
 
 @needs_ros

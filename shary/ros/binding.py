@@ -13,7 +13,10 @@ says, for one robot:
   (templates over the message's fields, once per element of a sequence with
   ``each``), dropped when the topic has been silent for ``stale``;
 * ``speech``: topics that carry what people say, each sentence read by the
-  communication manager's requests grammar.
+  communication manager's requests grammar;
+* ``alive``: how shary notices that a node of the robot is gone (a driver that
+  crashed): a topic whose publisher offers a ROS 2 liveliness lease, and the
+  atomic tasks that node performs (:mod:`shary.ros.liveliness`).
 
 ``codes`` numbers names for interfaces whose goals carry only numbers (the
 simulated Jido's, built from the message packages that are on PyPI).
@@ -87,6 +90,17 @@ class SpeechSource:
     speaker: str = ""
 
 
+@dataclass(frozen=True)
+class AliveSource:
+    """A topic whose publishers' liveliness says that a node of the robot is there."""
+
+    topic: str
+    type: str
+    lease: float
+    tasks: tuple[str, ...]
+    """The atomic tasks that node performs."""
+
+
 @dataclass
 class Binding:
     """A robot binding, loaded and checked (see the module's docstring)."""
@@ -98,6 +112,7 @@ class Binding:
     facts: list[FactSource] = field(default_factory=list)
     speech: list[SpeechSource] = field(default_factory=list)
     codes: dict[str, int] = field(default_factory=dict)
+    alive: list[AliveSource] = field(default_factory=list)
     doc: str = ""
     notes: list[Problem] = field(default_factory=list)
     """Types that cannot be imported here, each at its place in the file."""
@@ -223,8 +238,21 @@ def _meaning(reader: Reader, atomic: dict[str, tuple[str, ...]]) -> Binding:
             reader.problem((*where, "text"), f"{raw['type']} has no string field {raw['text']!r}")
         _check_fields(reader, (*where, "speaker"), raw.get("speaker", ""), cls)
         speech.append(SpeechSource(raw["topic"], raw["type"], raw["text"], raw.get("speaker", "")))
+    alive = []
+    for i, raw in enumerate(data.get("alive") or []):
+        where = ("alive", i)
+        _interface(reader, notes, (*where, "type"), raw["type"], "msg")
+        lease = reader.duration((*where, "lease"), raw["lease"])
+        if lease <= 0:
+            reader.problem((*where, "lease"), "a lease must be longer than 0 s")
+        for j, name in enumerate(raw.get("tasks") or []):
+            if name not in tasks:
+                reader.problem((*where, "tasks", j), f"{name!r} is not a task of this binding "
+                               f"({', '.join(sorted(tasks)) or 'it has none'})")
+        alive.append(AliveSource(raw["topic"], raw["type"], lease,
+                                 tuple(raw.get("tasks") or tasks)))
     return Binding(data["binding"], data["robot"], reader.file, tasks, facts, speech, codes,
-                   data.get("doc", ""), notes)
+                   alive, data.get("doc", ""), notes)
 
 
 def _interface(reader: Reader, notes: list[Problem], where: tuple, name: str,

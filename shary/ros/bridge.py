@@ -3,7 +3,8 @@
 :class:`RosSupervision` puts together what the other modules of
 :mod:`shary.ros` do, for a :class:`~shary.supervisor.Supervisor` whose loop
 runs on a wall clock: the binding's executors in its executor registry, the
-binding's fact and speech topics into its facts and dialogue, its state for
+binding's fact and speech topics into its facts and dialogue, the liveliness of
+the robot's nodes (a goal of a node that is gone fails at once), its state for
 ROS tools (:mod:`~shary.ros.views`), and ``~/run_task`` and ``~/person_act``
 (:mod:`~shary.ros.server`).  The views and the task server hear the
 supervisor's events through :class:`~shary.told.Told`, the log the supervisor is given.
@@ -15,6 +16,7 @@ from typing import Any
 
 from shary.ros.binding import Binding
 from shary.ros.executors import RosExecutors
+from shary.ros.liveliness import Liveliness
 from shary.ros.node import RosNode
 from shary.ros.perception import RosPerception
 from shary.ros.server import RosTaskServer
@@ -33,6 +35,8 @@ class RosSupervision:
         self.executors = RosExecutors(node, binding, sup.loop, record=sup.record,
                                       fact=self.fact)
         self.executors.register(sup.executors)
+        self.liveliness = Liveliness(node, binding, executors=self.executors,
+                                     record=sup.record)
         self.perception = RosPerception(node, binding, sup.facts, sup.loop,
                                         act=sup.receive_act, hear=sup.dialogue.hear,
                                         record=sup.record)

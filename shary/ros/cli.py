@@ -86,7 +86,10 @@ def cmd_ros(args: argparse.Namespace) -> int:
     stopping: list[int] = []
     previous = signal.signal(signal.SIGTERM, lambda *_: stopping.append(1))
     try:
-        RosSupervision(sup, binding, node, fanout=fanout)
+        ros = RosSupervision(sup, binding, node, fanout=fanout)
+        ros.liveliness.watchers.append(lambda reason: _out.print(
+            f"{reason}: its tasks fail until it is back", markup=False))
+        loop.settle()  # set up: a collection of the whole heap would stall perception
         _out.print(f"shary is node /{args.node_name} on robot {binding.robot} "
                    f"({binding.name}); Ctrl-C stops it")
         if args.task is not None:

@@ -13,7 +13,10 @@ failed (the outcome first in the reason) or cancelled:
                         once, before sending: fail fast, as BehaviorTree.ROS2);
 ``ack timeout``         no acceptance within the ``ack`` deadline;
 ``exec timeout``        no result within the ``exec`` deadline;
-``invalid goal``        the goal cannot be built (a fact the robot lacks).
+``invalid goal``        the goal cannot be built (a fact the robot lacks);
+``node gone``           the robot's node that performs it is gone (its liveliness
+                        lapsed, :mod:`shary.ros.liveliness`): a goal in flight
+                        fails at once, and a new one until the node is back.
 
 shary owns every deadline: a goal sent to an absent server hangs without an
 error, and a server killed with SIGKILL still looks ready for 20 s (the DDS
@@ -81,6 +84,8 @@ class RosExecutors:
         self._entities: dict[str, Any] = {}
         self._types: dict[str, Any] = {}
         self._goals: dict[str, _Goal] = {}
+        self.gone: dict[str, str] = {}
+        """Atomic tasks whose node is gone, and why (:meth:`node_gone`)."""
         shared: dict[tuple[str, str, str], Any] = {}
         """One client per interface: atomic tasks bound to the same action share it (each
         client hears every status and feedback message of its action)."""
@@ -123,6 +128,10 @@ class RosExecutors:
         if request.atomic not in self._types:
             reporter.failed(request, f"server unavailable: {task.type} is not installed here")
             return
+        if request.atomic in self.gone:
+            goal = _Goal(request, reporter, task, None, self.loop.now(), phase="over")
+            self._end(goal, "failed", "node gone", self.gone[request.atomic])
+            return
         cls = self._types[request.atomic]
         part = {"action": "Goal", "service": "Request"}.get(task.kind)
         try:
@@ -161,6 +170,24 @@ class RosExecutors:
                 self._forget(goal)
             detail = "cancelled before the goal was acknowledged"
         self._end(goal, "cancelled", "canceled", detail)
+
+    def node_gone(self, tasks: tuple[str, ...], reason: str) -> None:
+        """The node that performs ``tasks`` is gone: their goals in flight fail now (its
+        results will never come), and new ones at once until :meth:`node_back`."""
+        for atomic in tasks:
+            self.gone[atomic] = reason
+        for goal in list(self._goals.values()):
+            if goal.request.atomic in tasks and not goal.reported:
+                self._stop_timer(goal)
+                goal.cancel_wanted = True  # should it be acknowledged after all
+                goal.phase = "over"
+                self._forget(goal)
+                self._end(goal, "failed", "node gone", reason)
+
+    def node_back(self, tasks: tuple[str, ...]) -> None:
+        """The node that performs ``tasks`` is there again."""
+        for atomic in tasks:
+            self.gone.pop(atomic, None)
 
     # -- phases (on the supervisor's loop) -------------------------------------------------
 

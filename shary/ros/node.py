@@ -26,6 +26,10 @@ from typing import Any
 
 from shary.ros.env import keep_on_host
 
+BATCH = 500
+"""Most messages a drained subscription hands over at once: the executor's thread goes
+back to its other entities (a goal's answer) at least this often."""
+
 
 class RosNode:
     """One node, one executor thread, one inbox (see the module's docstring)."""
@@ -198,12 +202,20 @@ class RosNode:
     def service_client(self, cls: Any, name: str) -> Any:
         return self.call(self.node.create_client, cls, name)
 
-    def publisher(self, cls: Any, topic: str, *, latched: bool = False, depth: int = 10) -> Any:
-        from rclpy.qos import DurabilityPolicy, QoSProfile
+    def publisher(self, cls: Any, topic: str, *, latched: bool = False, depth: int = 10,
+                  lease: float | None = None) -> Any:
+        """A publisher; ``latched``: a late subscriber gets the last message; ``lease``:
+        it offers a liveliness lease of that many seconds, asserted as long as this
+        process runs (how a supervisor notices it gone: :mod:`shary.ros.liveliness`)."""
+        from rclpy.duration import Duration
+        from rclpy.qos import DurabilityPolicy, LivelinessPolicy, QoSProfile
 
         qos = QoSProfile(depth=1 if latched else depth)
         if latched:
             qos.durability = DurabilityPolicy.TRANSIENT_LOCAL
+        if lease is not None:
+            qos.liveliness = LivelinessPolicy.AUTOMATIC
+            qos.liveliness_lease_duration = Duration(seconds=lease)
         return self.call(self.node.create_publisher, cls, topic, qos)
 
     def subscription(self, cls: Any, topic: str, callback: Callable[[Any], Any], *,
@@ -211,6 +223,37 @@ class RosNode:
         """A subscription whose callback runs on the executor's thread (it must only
         :meth:`put` events)."""
         return self.call(self.node.create_subscription, cls, topic, callback, depth)
+
+    def drained_subscription(self, cls: Any, topic: str,
+                             callback: Callable[[list[Any]], Any], *, depth: int = 1000,
+                             batch: int = BATCH) -> Any:
+        """A subscription whose callback gets every message waiting (up to ``batch``) in
+        one list, on the executor's thread (it must only :meth:`put` events): for a topic
+        that may carry thousands of messages a second (perception).
+
+        rclpy's executor takes one message each time it wakes, and each wake rebuilds its
+        wait set in Python over every entity of the node: 3,000-5,000 messages a second
+        here, whatever the callback does (docs/benchmarks.md).  Taking the messages that
+        wait with the subscription's own ``take_message``, as soon as the first is
+        handed over, costs one wake and one event on the engine's loop per burst."""
+        holder: list[Any] = []
+
+        def drain(first: Any) -> None:
+            taken = [first]
+            handle = holder[0].handle
+            with handle:  # the handle is not destroyed while it is used
+                while len(taken) < batch:
+                    got = handle.take_message(cls, False)
+                    if got is None:
+                        break
+                    taken.append(got[0])
+            callback(taken)
+
+        def create() -> Any:  # on the executor's thread: before any message is handed over
+            holder.append(self.node.create_subscription(cls, topic, drain, depth))
+            return holder[0]
+
+        return self.call(create)
 
     # -- shutdown -----------------------------------------------------------------------
 

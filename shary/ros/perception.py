@@ -15,8 +15,12 @@ A sentence on a speech topic is a person's act: *yes* or *no* is an answer
 communication manager's requests grammar (``hear``: a request becomes the
 person's ASK-TASK).
 
-Callbacks only put the message on the node's inbox; everything else runs on
-the engine's loop.
+Callbacks only put the messages on the engine's loop; everything else runs
+there.  Perception may come thousands of times a second: each topic is taken
+in bursts (:meth:`~shary.ros.node.RosNode.drained_subscription`, one event on
+the loop for all the messages waiting), and a message whose facts are those
+of the topic's previous message (a robot republishing what it sees) costs
+one comparison of its text.
 """
 
 from __future__ import annotations
@@ -59,14 +63,16 @@ class RosPerception:
         self.record = record or (lambda *args, **data: None)
         self.published: dict[int, set[Triple]] = {}
         self.heard_at: dict[int, float] = {}
+        self._last_text: dict[int, str] = {}
+        """A ``lines`` topic's last text: the same again states the same facts."""
         self.messages = 0
         self.missing: list[str] = []
         """Topics whose type is not installed here (not subscribed)."""
         for index, source in enumerate(binding.facts):
-            self._subscribe(source, lambda msg, i=index, s=source: node.put(self._facts, i, s,
-                                                                            msg))
+            self._subscribe(source, lambda taken, i=index, s=source: node.put(
+                self._facts, i, s, taken))
         for source in binding.speech:
-            self._subscribe(source, lambda msg, s=source: node.put(self._speech, s, msg))
+            self._subscribe(source, lambda taken, s=source: node.put(self._speech, s, taken))
         stale = [s.stale for s in binding.facts if s.stale is not None]
         if stale:
             self._period = min(stale) / 4
@@ -77,14 +83,22 @@ class RosPerception:
         if cls is None:
             self.missing.append(source.topic)
             return
-        self.node.subscription(cls, source.topic, callback, depth=DEPTH)
+        self.node.drained_subscription(cls, source.topic, callback, depth=DEPTH)
 
     # -- facts (on the engine's loop) ---------------------------------------------------
 
-    def _facts(self, index: int, source: FactSource, message: Any) -> None:
-        self.messages += 1
+    def _facts(self, index: int, source: FactSource, taken: list[Any]) -> None:
+        """Messages of a fact topic, oldest first: each one's facts in turn (a fact seen
+        for one message is a change monitors hear of)."""
+        self.messages += len(taken)
         self.heard_at[index] = self.loop.now()
-        self._publish(index, self.triples(source, message))
+        for message in taken:
+            if source.lines:
+                text = messages.read_field(message, source.lines)
+                if text == self._last_text.get(index):
+                    continue
+                self._last_text[index] = text
+            self._publish(index, self.triples(source, message), source.topic)
 
     @staticmethod
     def triples(source: FactSource, message: Any) -> set[Triple]:
@@ -100,12 +114,23 @@ class RosPerception:
         return {tuple(_part(p, message, item) for p in template)  # type: ignore[misc]
                 for item in items or () for template in source.facts}
 
-    def _publish(self, index: int, now: set[Triple]) -> None:
+    def _publish(self, index: int, now: set[Triple], topic: str = "") -> None:
+        """Make the topic's facts ``now``: one change of the fact database (kept as its
+        terms, so that a fact that goes is not converted again).  A robot may send
+        anything: a fact naming nothing the database can name (``foo:x`` with an unknown
+        prefix, ``a?b``) is refused with a ``refused`` row, and the others still count."""
+        term = self.facts.term
+        terms = set()
+        for fact in now:
+            try:
+                terms.add(tuple(term(part) for part in fact))
+            except (TypeError, ValueError) as error:
+                self.record("refused", topic=topic, line=" ".join(map(str, fact)),
+                            reason=str(error))
+        now = terms
         before = self.published.get(index, set())
-        for triple in before - now:
-            self.facts.remove(*triple, perspective=self.perspective)
-        for triple in now - before:
-            self.facts.add(*triple, perspective=self.perspective)
+        if now != before:
+            self.facts.change(before - now, now - before, perspective=self.perspective)
         self.published[index] = now
 
     def _check_stale(self, sources: list[FactSource]) -> None:
@@ -115,21 +140,23 @@ class RosPerception:
                     and now - self.heard_at.get(index, now) > source.stale):
                 self.record("stale", topic=source.topic, facts=len(self.published[index]))
                 self._publish(index, set())
+                self._last_text.pop(index, None)
         self.loop.call_later(self._period, self._check_stale, sources)
 
     # -- speech ---------------------------------------------------------------------------
 
-    def _speech(self, source: SpeechSource, message: Any) -> None:
-        sentence = str(messages.read_field(message, source.text) or "").strip()
-        if not sentence:
-            return  # an empty final: nothing was said
-        speaker = messages.text(source.speaker, message) if source.speaker else "someone"
-        answer = ANSWERS.get(sentence.lower().strip(" .!"))
-        if answer is not None:
-            self.record("heard", agent=speaker, text=sentence)
-            self.act(speaker, answer)
-        else:
-            self.hear(speaker, sentence)
+    def _speech(self, source: SpeechSource, taken: list[Any]) -> None:
+        for message in taken:
+            sentence = str(messages.read_field(message, source.text) or "").strip()
+            if not sentence:
+                continue  # an empty final: nothing was said
+            speaker = messages.text(source.speaker, message) if source.speaker else "someone"
+            answer = ANSWERS.get(sentence.lower().strip(" .!"))
+            if answer is not None:
+                self.record("heard", agent=speaker, text=sentence)
+                self.act(speaker, answer)
+            else:
+                self.hear(speaker, sentence)
 
 
 def _literal(text: str) -> Any:
