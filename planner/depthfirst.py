@@ -295,6 +295,13 @@ class DepthFirst:
             if on_improvement is not None:
                 on_improvement(plan)
         elapsed = (time.perf_counter() - start) * 1000
+        return self._outcome(plan, stopped, elapsed, budget_ms, max_nodes)
+
+    def _outcome(self, plan: Plan | None, stopped: str, elapsed: float, budget_ms: float,
+                 max_nodes: int) -> Result:
+        """The result of a search that ended with ``plan`` (or none: then the failures
+        kept, in words, after the budget that ran out, ``stopped``: "nodes", "time" or
+        "")."""
         failures = [] if plan is not None else [
             self._failure(*self.failures[k]) for k in sorted(self.failures)]
         if plan is None and self.missed:
@@ -313,8 +320,9 @@ class DepthFirst:
                       plan is None and not stopped, elapsed, failures, improvements,
                       first=plan is not None)
 
-    def _search(self, deadline: float, max_nodes: int) -> tuple[Any, list[int]]:
-        """One pass; the trail of the first plan (or None) and the ids of the top tasks."""
+    def _start(self) -> tuple[list[int], tuple]:
+        """The ids of the top tasks and the first search node (the initial state, the
+        problem's tasks as the agenda; the search that plans from it makes the rest)."""
         problem = self.problem
         tops = [(None, _label(name, args), index, 0, next(self.ids), 0)
                 for index, (name, args) in enumerate(problem.tasks)]
@@ -329,9 +337,14 @@ class DepthFirst:
         for key, value in initial.items():
             if value:
                 state_hash ^= hash(key)
+        return roots, (state, state_hash, agenda, None)
+
+    def _search(self, deadline: float, max_nodes: int) -> tuple[Any, list[int]]:
+        """One pass; the trail of the first plan (or None) and the ids of the top tasks."""
+        roots, first = self._start()
         seen: set[int] = set()
         stack: list[Iterator[tuple]] = []
-        node: tuple | None = (state, state_hash, agenda, None)
+        node: tuple | None = first
         actions, methods = self.domain.actions, self.domain.methods
         while True:
             if node is None:

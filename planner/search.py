@@ -484,12 +484,12 @@ def plan(problem: Problem, budget_ms: float | None = None,
     depth budget ``max_depth`` and the node budget ``max_nodes`` (defaults:
     :data:`MAX_DEPTH`, :data:`MAX_NODES`); with ``first``, stop at the first plan."""
     budget = problem.budget_ms if budget_ms is None else budget_ms
-    if problem.domain.predicates:  # HDDL: the IPC mode's depth-first search first
-        from planner import depthfirst
+    if problem.domain.predicates:  # HDDL: the IPC mode's searches (planner.portfolio)
+        from planner import depthfirst, portfolio
 
         if first:
-            return depthfirst.first_plan(problem, budget, on_improvement,
-                                         max_nodes=max_nodes or depthfirst.MAX_NODES)
+            return portfolio.first_plan(problem, budget, on_improvement,
+                                        max_nodes=max_nodes or depthfirst.MAX_NODES)
         return depthfirst.improve(problem, budget, on_improvement)
     return Search(problem, on_improvement, max_depth=max_depth,
                   max_nodes=max_nodes).run(budget, first)

@@ -40,3 +40,19 @@ def test_no_file_names_a_folder_of_one_machine():
                                            .splitlines(), 1)
              if machine.search(line)]
     assert found == [], "\n".join(found)
+
+
+def test_the_ros_extra_builds_the_interface_package_of_this_checkout():
+    """``pip install '.[ros]'`` builds ``ros/shary_interfaces`` from the checkout it was
+    run in (setup.py gives its absolute address; a relative one is not a requirement)."""
+    from importlib.metadata import requires
+    from urllib.parse import unquote, urlparse
+
+    from packaging.requirements import Requirement
+
+    wanted = [Requirement(r) for r in requires("shary") or []
+              if r.startswith("shary-ros-interfaces")]
+    assert [str(r.marker) for r in wanted] == ['extra == "ros"']
+    folder = Path(unquote(urlparse(wanted[0].url).path))
+    assert folder == REPO / "ros" / "shary_interfaces"
+    assert (folder / "package.xml").is_file() and (folder / "pyproject.toml").is_file()

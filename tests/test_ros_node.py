@@ -1,7 +1,8 @@
-"""shary as a node other nodes talk to: a plain rclpy process asks for a task over
-``~/run_task``, answers for the person over ``~/person_act``, and sees the verdict, the
-feedback, the active states, the latched snapshot, ``/diagnostics`` and the markers; the
-node shuts down leaving no thread behind."""
+"""shary as a node other nodes talk to: a plain rclpy process asks for a task over the
+``~/run_task`` action (``tests/ros_client.py``), answers for the person over
+``~/person_act``, and sees the feedback, the verdict, a rejection, a cancel, the active
+states, the latched snapshot, ``/diagnostics`` and the markers; the node shuts down
+leaving no thread behind."""
 
 from __future__ import annotations
 
@@ -16,20 +17,23 @@ from shary.ros.binding import load_binding
 
 pytestmark = needs_ros
 
-TOPICS = ("/shary/run_task/result", "/shary/run_task/feedback", "/shary/active_state",
-          "/shary/snapshot=latched", "/diagnostics=DiagnosticArray",
+TOPICS = ("/shary/active_state", "/shary/snapshot=latched", "/diagnostics=DiagnosticArray",
           "/shary/markers=MarkerArray", "/jido/say")
 
 
-FEEDBACK = "/shary/run_task/feedback"
-
-
-def heard(process, topic: str) -> list[str]:
-    prefix = f"heard {topic} "
+def heard(process, word: str, gid: str | None = None) -> list[str]:
+    """What ``process`` printed after ``word`` (and the goal id ``gid``)."""
+    prefix = f"{word} {gid} " if gid is not None else f"{word} "
     return [line[len(prefix):] for line in process.lines if line.startswith(prefix)]
 
 
-def test_a_plain_rclpy_client_asks_for_a_task_and_gets_the_verdict(write, ros_domain, spawn):
+def said(process, line: str) -> bool:
+    return line in process.lines
+
+
+def supervision(write, ros_domain):
+    """A supervisor on the wall clock with a scripted robot, its ROS node, and the
+    events it logged."""
     from scripted import ScriptedExecutor
 
     from shary.executors import ExecutorRegistry
@@ -39,7 +43,6 @@ def test_a_plain_rclpy_client_asks_for_a_task_and_gets_the_verdict(write, ros_do
     from shary.supervisor import Supervisor
     from shary.told import Told
 
-    before = set(threading.enumerate())
     binding = load_binding(write("jido.yaml", """\
         binding: jido
         robot: jido
@@ -52,37 +55,76 @@ def test_a_plain_rclpy_client_asks_for_a_task_and_gets_the_verdict(write, ros_do
         facts.add(*triple)
     library = load_library()
     scripted = ScriptedExecutor(loop, durations=dict.fromkeys(library.atomic, 0.05))
+    events: list[tuple[str, str | None, dict]] = []
     fanout = Told()
+    fanout.listeners.append(lambda time, kind, task, agent, data:
+                            events.append((kind, task, data)))
     sup = Supervisor(library, facts, robot="jido", loop=loop, log=fanout,
                      executors=ExecutorRegistry({name: scripted for name in library.atomic}))
-    client = spawn("tests/ros_robot.py", *TOPICS)
-    client.wait_for("ready")
     node = RosNode("shary", domain_id=ros_domain)
     RosSupervision(sup, binding, node, fanout=fanout)
-    goal = {"id": "g1", "task": "give-object", "with": {"object": "bottle", "partner": "alice"}}
-    client.send("once /shary/run_task/goal " + json.dumps(goal))
-    run_until(loop, lambda: any('"jido: ASK' in f for f in heard(client, FEEDBACK)))
-    client.send("once /shary/person_act " + json.dumps({"agent": "alice", "act": "H-AGREE"}))
-    run_until(loop, lambda: heard(client, "/shary/run_task/result"))
-    result = json.loads(heard(client, "/shary/run_task/result")[0])
-    assert result == {"id": "g1", "verdict": "done", "reason": ""}
+    return loop, node, events
 
-    client.send("once /shary/run_task/goal " + json.dumps({"id": "g2", "task": "fly"}))
-    run_until(loop, lambda: len(heard(client, "/shary/run_task/result")) == 2)
-    rejected = json.loads(heard(client, "/shary/run_task/result")[1])
-    assert rejected["verdict"] == "rejected" and "no task 'fly'" in rejected["reason"]
+
+GIVE = "give-object object=bottle partner=alice"
+
+
+def test_a_plain_rclpy_client_asks_for_a_task_and_gets_the_verdict(write, ros_domain, spawn):
+    before = set(threading.enumerate())
+    client = spawn("tests/ros_client.py")
+    robot = spawn("tests/ros_robot.py", *TOPICS)
+    loop, node, events = supervision(write, ros_domain)
+    # the tools' topics reach the robot's process from the task's first state on
+    run_until(loop, lambda: node.node.count_subscribers("/shary/active_state") > 0)
+    client.send(f"goal g1 {GIVE}")
+    run_until(loop, lambda: "act n1 jido: ASK-TASK" in heard(client, "feedback", "g1"))
+    assert said(client, "accepted g1")
+    robot.send("once /shary/person_act " + json.dumps({"agent": "alice", "act": "H-AGREE"}))
+    run_until(loop, lambda: heard(client, "result", "g1"))
+    assert heard(client, "result", "g1") == ["SUCCEEDED done|"]
+    feedback = heard(client, "feedback", "g1")
+    assert feedback[:2] == ["act n1 jido: ASK-TASK",  # the task's first act, its node
+                            'action n3 jido look-at {"target": "alice"}']  # its first action
+    assert any(f.startswith("action ") and " jido give " in f for f in feedback)
 
     # the robot spoke through its binding; the tools saw the task's states
-    assert heard(client, "/jido/say")
-    states = heard(client, "/shary/active_state")
+    assert heard(robot, "heard /jido/say")
+    states = heard(robot, "heard /shary/active_state")
     assert states[0] == "give-object n1: ask" and states[-1] == "give-object n1: ended"
     assert "give-object n1: realize, engaged, handover" in states
     run_until(loop, lambda: any("shary/give-object" in d and "|0|ended: done" in d
-                                for d in heard(client, "/diagnostics")))
-    snapshot = json.loads(heard(client, "/shary/snapshot")[-1])
+                                for d in heard(robot, "heard /diagnostics")))
+    snapshot = json.loads(heard(robot, "heard /shary/snapshot")[-1])
     assert [t["outcome"] for t in snapshot["tasks"].values()] == ["done"]
-    assert any(m.startswith("jido: ") for m in heard(client, "/shary/markers"))
+    assert any(m.startswith("jido: ") for m in heard(robot, "heard /shary/markers"))
 
     node.close()
     left = {t for t in threading.enumerate() if t.name != "test-reader"}
     assert left <= before  # no thread left behind
+
+
+def test_a_goal_shary_cannot_do_is_rejected_and_a_cancel_cancels_the_task(write, ros_domain,
+                                                                          spawn):
+    client = spawn("tests/ros_client.py")
+    loop, node, events = supervision(write, ros_domain)
+    try:
+        client.send("goal g1 fly")
+        client.send("goal g2 give-object object=bottle")
+        run_until(loop, lambda: said(client, "rejected g1") and said(client, "rejected g2"))
+        reasons = {data["name"]: data["reason"] for kind, _, data in events
+                   if kind == "run-task" and data.get("verdict") == "rejected"}
+        assert reasons["fly"].startswith("no task 'fly' (known: ")
+        assert reasons["give-object"] == ("task 'give-object' takes object, partner; "
+                                          "missing: partner")
+
+        client.send(f"goal g3 {GIVE}")
+        run_until(loop, lambda: "act n1 jido: ASK-TASK" in heard(client, "feedback", "g3"))
+        client.send("cancel g3")
+        client.send("cancel g3")  # twice: the task is cancelled once
+        run_until(loop, lambda: heard(client, "result", "g3"))
+        assert heard(client, "result", "g3") == [
+            "CANCELED cancelled|cancelled by the client of ~/run_task"]
+        ends = [data for kind, task, data in events if kind == "task-end" and task == "n1"]
+        assert [e["outcome"] for e in ends] == ["cancelled"]
+    finally:
+        node.close()

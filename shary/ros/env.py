@@ -58,14 +58,17 @@ def keep_on_host() -> None:
 
 
 def unavailable() -> str | None:
-    """Why rclpy cannot be used in this interpreter (with what to do), or None."""
-    try:
-        importlib.import_module("rclpy")
-    except ImportError as err:
-        if "cannot open shared object" in str(err):
-            return (f"rclpy is installed but its libraries are not found ({err.msg}); "
-                    f"run with LD_LIBRARY_PATH={library_path()} (docs/ros2.md)")
-        return f"rclpy is not installed ({err}); install it with pip install '.[ros]'"
+    """Why rclpy, or shary's interface package, cannot be used in this interpreter (with
+    what to do), or None."""
+    for module, what in (("rclpy", "rclpy"),
+                         ("shary_interfaces.action", "shary's interface package")):
+        try:
+            importlib.import_module(module)
+        except ImportError as err:
+            if "cannot open shared object" in str(err):
+                return (f"{what} is installed but its libraries are not found ({err.msg}); "
+                        f"run with LD_LIBRARY_PATH={library_path()} (docs/ros2.md)")
+            return f"{what} is not installed ({err}); install it with pip install '.[ros]'"
     return None
 
 

@@ -152,32 +152,42 @@ class RosNode:
         return server
 
     def serve_goals(self, cls: Any, name: str, start: Callable[..., Any],
-                    cancel: Callable[[bytes], Any]) -> Any:
-        """Serve action ``name`` whose goals are performed on the engine's side (a robot
-        simulated behind ROS 2): each accepted goal puts ``start(key, goal, end)`` on the
-        inbox; ``end(result, canceled=False)``, from any thread, ends it (CANCELED if it was
-        cancelled at a client's request, else SUCCEEDED with ``result``: the result says
-        whether it worked); a cancel request puts ``cancel(key)``.  The execute callback
-        awaits its end on the executor's thread, so no goal holds a thread."""
-        from rclpy.action import CancelResponse
-        from rclpy.task import Future
+                    cancel: Callable[[bytes], Any], *,
+                    accept: Callable[[Any], str | None] | None = None) -> Any:
+        """Serve action ``name`` whose goals are performed on the engine's side: each
+        accepted goal puts ``start(key, goal, end)`` on the inbox, ``end`` a
+        :class:`ServedGoal` (call it, from any thread, to end the goal; ``end.feedback``
+        publishes feedback); a cancel request is accepted at once and puts ``cancel(key)``
+        (after ``start``, should it come before the goal runs).  ``accept(goal)``, on the
+        executor's thread, answers at once: a reason to reject the goal (logged), or None.
+        The execute callback awaits its end on the executor's thread, so no goal holds a
+        thread (the shared robot, ``shary world --ros``; ``~/run_task``)."""
+        from rclpy.action import CancelResponse, GoalResponse
 
         live: dict[bytes, Any] = {}
+        logger = self.node.get_logger()
+
+        def on_goal(goal: Any) -> Any:
+            reason = accept(goal) if accept is not None else None
+            if reason is None:
+                return GoalResponse.ACCEPT
+            logger.warning(f"{name}: goal rejected: {reason}")
+            return GoalResponse.REJECT
 
         async def execute(handle: Any) -> Any:
             key = bytes(handle.goal_id.uuid)
-            future = live[key] = Future()
-
-            def end(result: Any, canceled: bool = False) -> None:
-                self.post(_settle, future, (result, canceled))
-
+            end = live[key] = ServedGoal(self, handle)
             self.put(start, key, handle.request, end)
-            result, canceled = await future
+            if handle.is_cancel_requested:  # asked before it ran: on_cancel did not pass it
+                self.put(cancel, key)
+            result, status = await end.future
             del live[key]
-            if canceled and handle.is_cancel_requested:
+            if status == "canceled" and handle.is_cancel_requested:
                 handle.canceled()
-            else:
+            elif status == "succeeded":
                 handle.succeed()
+            else:
+                handle.abort()
             return result
 
         def on_cancel(handle: Any) -> Any:
@@ -187,7 +197,7 @@ class RosNode:
             return CancelResponse.ACCEPT
 
         return self.action_server(cls, name, execute_callback=execute,
-                                  cancel_callback=on_cancel)
+                                  goal_callback=on_goal, cancel_callback=on_cancel)
 
     def service_client(self, cls: Any, name: str) -> Any:
         return self.call(self.node.create_client, cls, name)
@@ -272,10 +282,37 @@ class RosNode:
         self.close()
 
 
+class ServedGoal:
+    """How the engine ends a goal of :meth:`RosNode.serve_goals` and tells its progress,
+    from any thread (the work is posted to the executor)."""
+
+    def __init__(self, node: RosNode, handle: Any):
+        from rclpy.task import Future
+
+        self._node, self._handle = node, handle
+        self.future = Future()
+        """Done with ``(result, status)`` when the goal ends (awaited by the server)."""
+
+    def __call__(self, result: Any, canceled: bool = False, failed: bool = False) -> None:
+        """End the goal with ``result``: CANCELED if ``canceled`` and a client asked for
+        it, ABORTED if ``failed`` (or cancelled unasked), else SUCCEEDED."""
+        status = "canceled" if canceled else "aborted" if failed else "succeeded"
+        self._node.post(_settle, self.future, (result, status))
+
+    def feedback(self, message: Any) -> None:
+        """Publish ``message`` as the goal's feedback (unless it has ended)."""
+        self._node.post(_publish_feedback, self.future, self._handle, message)
+
+
 def _settle(future: Any, value: Any) -> None:
     """End a served goal's wait (on the executor's thread), once."""
     if not future.done():
         future.set_result(value)
+
+
+def _publish_feedback(future: Any, handle: Any, message: Any) -> None:
+    if not future.done():
+        handle.publish_feedback(message)
 
 
 def _raise(err: Exception) -> None:

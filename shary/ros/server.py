@@ -1,29 +1,32 @@
 """shary as a node other nodes talk to: ask for a task, send a person's act.
 
-A ROS 2 *action* needs an interface package with a task's name and
-parameters in its goal; none on PyPI has one (the Jazzy wheels carry only the
-standard messages, and ``test_msgs``' actions carry numbers).  So
-``~/run_task`` is an action protocol over ``std_msgs/String`` JSON topics,
-which any ROS node (``ros2 topic pub`` too) can use:
+``~/run_task`` is a ROS 2 action of shary's own interface package
+(``shary_interfaces/action/RunTask``, built from ``ros/shary_interfaces`` by
+``pip install '.[ros]'``), so any node calls it with a plain action client:
 
-``~/run_task/goal``      ``{"id": ID, "task": NAME, "with": {PARAM: VALUE}}``
-``~/run_task/cancel``    ``{"id": ID}``
-``~/run_task/feedback``  ``{"id": ID, "kind": "act"|"action", "text": …}`` as the
-                         task's acts and the robot's actions happen
-``~/run_task/result``    ``{"id": ID, "verdict": OUTCOME, "reason": …}``: the task's
-                         outcome (``rejected`` when it cannot be started)
-``~/person_act``         ``{"agent": NAME, "act": ACT, "data": …, "task": NODE}``: a
-                         person's act (H-AGREE …), given to the supervisor as if
-                         perceived (``task``, optional: the task it answers)
-``~/acts``               ``{"node": NODE, "task": NAME, "act": ACT, "agent": …, "roles":
-                         {ROLE: AGENT}, "env": {PARAM: VALUE}}`` as each act of a task
-                         begins, and ``{"ended": NODE}`` when the task ends: what the
-                         robot is doing with whom, for a simulated person (``shary
-                         world --ros``) or a dialogue manager
+goal      ``task`` (a task of the recipe library) and ``parameters`` (name, value): a
+          goal naming an unknown task, or missing or adding parameters, is rejected at
+          once, the reason in the node's log and the context log (``run-task`` row)
+feedback  ``kind`` ``act`` (``jido: ASK``) or ``action`` (``jido navigate {…}``,
+          ``jido succeeded``) as the task's acts and the robot's actions happen,
+          ``node`` the task's node in the task tree, ``time`` the supervisor's clock
+result    ``verdict`` the task's outcome (``done``: SUCCEEDED; ``cancelled`` after the
+          client's cancel: CANCELED; anything else: ABORTED) and its ``reason``
 
-The result topic is reliable with a depth of 100, so a client that subscribed
-before sending its goal gets its verdict.  Callbacks put the message on the
-node's inbox; starting and cancelling tasks happen on the engine's loop.
+A cancel is accepted at once and cancels the task in the engine (twice: once).
+
+Two topics, ``std_msgs/String`` JSON, carry what a person does and what shary does to
+people (a dialogue manager, the simulated people of ``shary world --ros``):
+
+``~/person_act``  ``{"agent": NAME, "act": ACT, "data": …, "task": NODE}``: a person's
+                  act (H-AGREE …), given to the supervisor as if perceived (``task``,
+                  optional: the task it answers)
+``~/acts``        ``{"node": NODE, "task": NAME, "act": ACT, "agent": …, "roles": {ROLE:
+                  AGENT}, "env": {PARAM: VALUE}}`` as each act of a task begins, and
+                  ``{"ended": NODE}`` when a task ends
+
+Callbacks only put events on the engine's loop; tasks start and end there
+(:meth:`~shary.ros.node.RosNode.serve_goals`).
 """
 
 from __future__ import annotations
@@ -31,24 +34,30 @@ from __future__ import annotations
 import json
 from typing import Any
 
+from shary.recipes import ROBOT_PARAM
 from shary.ros.node import RosNode
+
+ACTION = "~/run_task"
 
 
 class RosTaskServer:
-    """``~/run_task`` and ``~/person_act`` for a supervisor (see the module's docstring)."""
+    """``~/run_task``, ``~/person_act`` and ``~/acts`` for a supervisor (see the module's
+    docstring)."""
 
     def __init__(self, node: RosNode, sup: Any):
+        from shary_interfaces.action import RunTask
         from std_msgs.msg import String
 
         self.node = node
         self.sup = sup
-        self.runs: dict[str, Any] = {}
-        """Request id -> its task run, until the verdict."""
-        self._by_node: dict[str, str] = {}
-        self.feedback_pub = node.publisher(String, "~/run_task/feedback", depth=100)
-        self.result_pub = node.publisher(String, "~/run_task/result", depth=100)
-        node.subscription(String, "~/run_task/goal", lambda m: node.put(self._goal, m.data))
-        node.subscription(String, "~/run_task/cancel", lambda m: node.put(self._cancel, m.data))
+        self._feedback = RunTask.Feedback
+        self._result = RunTask.Result
+        self.goals: dict[bytes, _Goal] = {}
+        """Goal key -> the goal, from its start to its verdict (on the engine's loop)."""
+        self._by_node: dict[str, _Goal] = {}
+        self._starting: _Goal | None = None
+        """The goal whose task is starting: the events told meanwhile are its own."""
+        node.serve_goals(RunTask, ACTION, self._start, self._cancel, accept=self._accept)
         node.subscription(String, "~/person_act", lambda m: node.put(self._act, m.data))
         self.acts_pub = node.publisher(String, "~/acts", depth=100)
         sup.act_listeners.append(self._act_started)
@@ -58,41 +67,69 @@ class RosTaskServer:
 
         self.node.post(publisher.publish, String(data=json.dumps(data)))
 
-    # -- from other nodes (on the engine's loop) ------------------------------------------
+    # -- goals ----------------------------------------------------------------------------
 
-    def _goal(self, text: str) -> None:
-        request = _json(text)
-        rid = str(request.get("id", ""))
-        name, args = request.get("task"), request.get("with") or {}
-        problem = None
-        if not rid or not isinstance(name, str) or not isinstance(args, dict):
-            problem = 'a goal is {"id": ID, "task": NAME, "with": {PARAM: VALUE}}'
-        elif rid in self.runs:
-            problem = f"a task with id {rid!r} is running"
-        elif name not in self.sup.library.tasks:
-            problem = f"no task {name!r} (known: {', '.join(sorted(self.sup.library.tasks))})"
-        if problem is None:
-            self.runs[rid] = None  # its first acts are feedback already
-            try:
-                run = self.sup.start_task(name, {str(k): v for k, v in args.items()})
-            except (KeyError, ValueError, TypeError) as err:
-                del self.runs[rid]
-                problem = f"{name} cannot start: {err}"
+    def _accept(self, goal: Any) -> str | None:
+        """Why ``goal`` cannot be a task (on the executor's thread: it reads only the
+        recipe library, which does not change), or None."""
+        problem = self._problem(goal.task, [p.name for p in goal.parameters])
         if problem is not None:
-            self.sup.record("run-task", request=rid or None, verdict="rejected", reason=problem)
-            self._send(self.result_pub, {"id": rid, "verdict": "rejected", "reason": problem})
-            return
-        self.runs[rid] = run
-        self._by_node[run.node] = rid
-        self.sup.record("run-task", task=run.node, request=rid, name=name)
+            self.node.put(self._rejected, goal.task, problem)
+        return problem
 
-    def _cancel(self, text: str) -> None:
-        run = self.runs.get(str(_json(text).get("id", "")))
-        if run is not None:
-            try:
-                self.sup.cancel_task(run.node, "cancelled by the client of ~/run_task")
-            except KeyError:
-                pass  # it has just ended: its verdict is on its way
+    def _problem(self, name: str, params: list[str]) -> str | None:
+        task = self.sup.library.tasks.get(name)
+        if task is None:
+            return f"no task {name!r} (known: {', '.join(sorted(self.sup.library.tasks))})"
+        twice = sorted({p for p in params if params.count(p) > 1})
+        missing = [p for p in task.params if p not in params]
+        unknown = [p for p in params if p not in task.params and p != ROBOT_PARAM]
+        if twice or missing or unknown:
+            return (f"task {name!r} takes {', '.join(task.params) or 'nothing'}"
+                    + "".join(f"; {what}: {', '.join(names)}" for what, names in (
+                        ("missing", missing), ("unknown", unknown), ("given twice", twice))
+                        if names))
+        return None
+
+    def _rejected(self, name: str, reason: str) -> None:
+        self.sup.record("run-task", name=name, verdict="rejected", reason=reason)
+
+    def _start(self, key: bytes, goal: Any, end: Any) -> None:
+        name, args = goal.task, {p.name: p.value for p in goal.parameters}
+        entry = self._starting = _Goal(key, end)
+        try:
+            run = self.sup.start_task(name, args)
+        except (KeyError, ValueError, TypeError) as err:
+            reason = f"{name} cannot start: {err}"
+            self.sup.record("run-task", name=name, verdict="failed", reason=reason)
+            end(self._result(verdict="failed", reason=reason), failed=True)
+            return
+        finally:
+            self._starting = None
+        entry.node = run.node
+        self.goals[key] = self._by_node[run.node] = entry
+        self.sup.record("run-task", task=run.node, name=name)
+        if run.ended:  # it ended as it started
+            self._ended(entry, run.outcome or "done", "")
+
+    def _cancel(self, key: bytes) -> None:
+        entry = self.goals.get(key)
+        if entry is None or entry.cancel_asked:
+            return
+        entry.cancel_asked = True
+        try:
+            self.sup.cancel_task(entry.node, "cancelled by the client of ~/run_task")
+        except KeyError:
+            pass  # it has just ended: its verdict is on its way
+
+    def _ended(self, entry: _Goal, outcome: str, reason: str) -> None:
+        self.goals.pop(entry.key, None)
+        self._by_node.pop(entry.node, None)
+        entry.end(self._result(verdict=outcome, reason=reason),
+                  canceled=outcome == "cancelled" and entry.cancel_asked,
+                  failed=outcome != "done")
+
+    # -- people -----------------------------------------------------------------------------
 
     def _act(self, text: str) -> None:
         act = _json(text)
@@ -110,18 +147,18 @@ class RosTaskServer:
 
     def listener(self, time: float, kind: str, task: str | None, agent: str | None,
                  data: dict[str, Any]) -> None:
-        """Told every logged event: feedback while a requested task runs, its verdict;
-        a task's end on ``~/acts``."""
+        """Told every logged event: a requested task's feedback and verdict; a task's end
+        on ``~/acts``."""
         if kind == "task-end" and task is not None:
             self._send(self.acts_pub, {"ended": task})
-        if not self.runs:
-            return
-        if kind == "task-end" and task in self._by_node:
-            rid = self._by_node.pop(task)
-            self.runs.pop(rid, None)
-            outcome = str(data.get("outcome", "done"))
-            self._send(self.result_pub, {"id": rid, "verdict": outcome,
-                                         "reason": data.get("reason") or ""})
+            entry = self._by_node.get(task)
+            if entry is not None:
+                outcome, state = str(data.get("outcome", "done")), data.get("state")
+                why = data.get("reason") or (f"ended in {state}" if state and outcome != "done"
+                                             else "")
+                self._ended(entry, outcome, str(why))
+                return
+        if task is None or not self._by_node and self._starting is None:
             return
         if kind == "act":
             text = f"{agent}: {data.get('act')}"
@@ -132,9 +169,32 @@ class RosTaskServer:
                                                       if data.get("reason") else "")
         else:
             return
-        for rid in self.runs:
-            self._send(self.feedback_pub, {"id": rid, "kind": "act" if kind == "act"
-                                           else "action", "text": text, "time": time})
+        entry = self._requested(task) or self._starting
+        if entry is not None:
+            entry.end.feedback(self._feedback(kind="act" if kind == "act" else "action",
+                                              text=text, node=task, time=float(time)))
+
+    def _requested(self, node: str) -> _Goal | None:
+        """The goal whose task is ``node`` or one of its ancestors in the task tree."""
+        tree = self.sup.tree
+        current: str | None = node
+        while current is not None:
+            entry = self._by_node.get(current)
+            if entry is not None or current not in tree:
+                return entry
+            current = tree.parent(current)
+        return None
+
+
+class _Goal:
+    """A goal of ``~/run_task`` whose task runs: its key, its task's node, how it ends."""
+
+    __slots__ = ("key", "node", "end", "cancel_asked")
+
+    def __init__(self, key: bytes, end: Any):
+        self.key, self.end = key, end
+        self.node = ""
+        self.cancel_asked = False
 
 
 def _plain(value: Any) -> Any:
