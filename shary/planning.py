@@ -193,3 +193,14 @@ def _leaves(plan: planner.Plan, node_id: int) -> list[int]:
             out.append(node.action)
         stack.extend(node.children)
     return out
+
+
+def planners_for(library: Any, *, budget_ms: float = 500.0) -> dict[str, HatpPlanner]:
+    """A planner for each domain the library's planner-backed recipes name, each domain
+    read now: a supervisor that is not a simulated run (``shary ros`` on a robot) finds
+    a bad or missing domain when it starts (``FileError``, at its line), not when a
+    person has already said yes to a task that needs it."""
+    domains = sorted({recipe.plan.domain for recipe in library.recipes
+                      if recipe.plan is not None})
+    return {name: HatpPlanner(planner.load_domain(name), budget_ms=budget_ms)
+            for name in domains}

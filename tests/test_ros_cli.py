@@ -27,3 +27,19 @@ def test_the_node_stops_cleanly_on_ctrl_c(spawn):
     process._reader.join(5)
     assert process.lines[-1] == "shary stopped"
     assert not any("Traceback" in line for line in process.lines)
+
+
+@needs_ros
+def test_the_node_plans_the_recipes_that_need_the_planner(spawn, tmp_path):
+    """``shary ros`` carries the planner of every domain its recipes name: a planned
+    recipe (fetch) is planned from what the robot knows (here nothing, so no plan),
+    instead of failing for want of a planner once the person has said yes."""
+    from shary.log import read_events
+
+    log = tmp_path / "log.sqlite"
+    process = spawn("-m", "shary", "ros", BINDING, "--task", "fetch",
+                    "--with", "object=yellow-bottle", "--seconds", "2", "--log", str(log))
+    assert process.popen.wait(30) == 0
+    reasons = [row.data["reason"] for row in read_events(log, kind="recipe-failed")]
+    assert reasons and not any("needs a planner" in reason for reason in reasons)
+    assert any("plan" in reason for reason in reasons)

@@ -46,6 +46,7 @@ def cmd_ros(args: argparse.Namespace) -> int:
     from shary.io.recipes import load_library
     from shary.log import ContextLog
     from shary.loop import EventLoop, WallClock
+    from shary.planning import planners_for
     from shary.ros.binding import load_binding
     from shary.ros.bridge import RosSupervision
     from shary.ros.node import RosNode
@@ -75,12 +76,18 @@ def cmd_ros(args: argparse.Namespace) -> int:
     if problem is not None:
         return error(problem)
     library = load_library()
+    try:
+        planners = planners_for(library)
+    except FileError as err:
+        print_problems(err.problems)
+        return EXIT_BAD_INPUT
     if args.task is not None and args.task not in library.tasks:
         return error(f"no task {args.task!r} (known: {', '.join(sorted(library.tasks))})")
     log = ContextLog(args.log) if args.log is not None else None
     fanout = Told(log)
     loop = EventLoop(WallClock())
-    sup = Supervisor(library, facts, robot=binding.robot, loop=loop, log=fanout)
+    sup = Supervisor(library, facts, robot=binding.robot, loop=loop, log=fanout,
+                     planners=planners)
     facts.log_changes(sup.record)
     node = RosNode(args.node_name)
     stopping: list[int] = []
