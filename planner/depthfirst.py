@@ -24,7 +24,7 @@ prunings below, which keep recursive domains finite and fail early:
   does for left recursion), so a plan that needs repetitions is still found.
 * **goal protection**, as in :mod:`planner.search`: an action that deletes a
   goal fact no task left may add again ends its branch.
-* **goals out of reach** (a problem with at most :data:`FEW_GOALS` goal facts):
+* **goals out of reach** (a problem with at most :data:`~planner.checks.FEW_GOALS` goal facts):
   a decomposition after which no task left may add a false goal fact that the
   decomposed task may add is refused; what a task may add is guarded by the
   constants its methods fix (``Domain.may_add``).  Monroe's plan recognition
@@ -33,15 +33,15 @@ prunings below, which keep recursive domains finite and fail early:
 * **doomed decompositions**: a decomposition is refused where it is chosen when
   one of its actions (arguments bound) needs a fact that is false and that no
   subtask before it may add, or deletes a fact that an action among the
-  :data:`LOOKAHEAD` tasks after it on the agenda needs, with no task in between
+  :data:`~planner.checks.LOOKAHEAD` tasks after it on the agenda needs, with no task in between
   that may add it again (a threat, in partial-order planning's words).
   Factories' ``m_get_resource`` may build a factory on the very plot the
   factory being built needs: without this, every way of fetching the resources
   in between is tried before that last step fails.
 
-These last two check every decomposition; they cost most problems more than they
-save, so a first pass of :data:`PLAIN_NODES` nodes goes without them, and the
-search starts again with them only when that pass found no plan.
+These last two (:mod:`planner.checks`) check every decomposition; they cost
+most problems more than they save, so a first pass of :data:`PLAIN_NODES`
+nodes goes without them, and the search starts again with them only when that pass found no plan.
 
 Early precondition checks are the binders' (:mod:`planner.binding`): a
 method's variables are bound from its precondition, its first action's
@@ -70,7 +70,8 @@ import time
 from collections.abc import Callable, Iterator
 from typing import Any
 
-from planner.domain import SOLE_AGENT, Action, Decomposition, Method, Problem
+from planner.checks import DecompositionChecks, task_call
+from planner.domain import SOLE_AGENT, Action, Method, Problem
 from planner.evaluate import Evaluator
 from planner.plan import Plan, fact_text
 from planner.search import Failure, Result, deleted_goal
@@ -93,22 +94,11 @@ WINDOW = 64
 decompositions longer than this is left to the budgets)."""
 MAX_REPEATS = 4
 """The most repetitions of a decomposition in one state that the deepening allows."""
-LOOKAHEAD = 64
-"""How many tasks ahead on the agenda a deleted fact is looked for among the actions'
-preconditions (threat detection; beyond, the branch fails where the action is met)."""
 PLAIN_NODES = 20_000
 """The nodes of a first pass without the checks of decompositions (threats, goals out of
 reach): most problems have their plan by then (Blocksworld-GTOHP's 1,000 blocks in
 13,342), and would only pay for the checks; past them, the search starts again with
 them."""
-FEW_GOALS = 4
-"""A problem with at most this many goal facts has its decompositions checked for a goal
-fact no task left may add.  The check costs a look-up per goal fact and decomposition,
-and pays when the goal says what the task network must reach (plan recognition: one
-goal fact); with a goal fact per child or block it cost Childsnack and Blocksworld more
-than it saved."""
-MAX_KEPT = 1_000_000
-"""The most answers :meth:`DepthFirst._may_come` keeps (then it forgets them all)."""
 CHECK_EVERY = 256
 """Expansions between two looks at the clock."""
 BUDGET_EXHAUSTED = "search budget exhausted"
@@ -162,10 +152,6 @@ def improve(problem: Problem, budget_ms: float | None = None,
                                           if score < first.plan.score)])
 
 
-def _label(name: str, args: tuple) -> str:
-    return f"{name}({', '.join(str(a) for a in args)})"
-
-
 class _Stop(Exception):
     """The node or time budget ran out."""
 
@@ -183,7 +169,7 @@ class DepthFirst:
         self.repeats = 0
         self.repeated = False
         self.careful = False
-        """Whether decompositions are checked (:meth:`_doomed`, :meth:`_unreachable`): not
+        """Whether decompositions are checked (:mod:`planner.checks`): not
         in the first :data:`PLAIN_NODES` nodes, which find the plans of most problems."""
         self.cut = False
         """A branch was cut at ``max_depth`` in the last pass."""
@@ -193,44 +179,8 @@ class DepthFirst:
         self.missed = ""
         """The goals the first complete decomposition missed (when one did)."""
         self.expansions = 0
-        changed = {pred for action in self.domain.actions.values()
-                   for pred, _ in action.removes}
-        changed |= {pred for adds in self.domain.adds.values() for pred in adds}
-        self.needers: dict[str, dict[str, list[Callable[[dict[str, Any]], tuple]]]] = {}
-        """For each predicate some action changes, the actions that need one of its facts
-        (and the functions of their arguments giving those facts)."""
-        for name, action in self.domain.actions.items():
-            for pred, key in action.needs:
-                if pred in changed:
-                    self.needers.setdefault(pred, {}).setdefault(name, []).append(key)
-        self.adders: dict[str, set[str]] = {}
-        """For each predicate, the tasks that may add one of its facts."""
-        for task, adds in self.domain.adds.items():
-            for pred in adds:
-                self.adders.setdefault(pred, set()).add(task)
-        positive = [(pred, args) for pred, args, value in self.goals if value is True]
-        self.few_goals = positive if len(positive) <= FEW_GOALS else []
-        """The goal facts :meth:`_unreachable` checks."""
-        self.relevant: dict[str, dict[str, tuple[list[Callable[[dict[str, Any]], tuple]],
-                                                  bool]]] = {}
-        """For each predicate some action needs, the tasks :meth:`_needed` looks at: the
-        functions giving the facts of it each needs, and whether it may add one."""
-        for pred, by_name in self.needers.items():
-            adders = self.adders.get(pred, set())
-            self.relevant[pred] = {name: (by_name.get(name, []), name in adders)
-                                   for name in {*by_name, *adders}}
-        self.coming: dict[tuple[int, str, tuple], bool] = {}
-        """:meth:`_may_come`'s answers, by the hash of an agenda's tail and a fact."""
-        self.has_checks: dict[int, bool] = {}
-        """For each decomposition (by id), :meth:`_checked`'s answer."""
-        self.checks: dict[str, tuple[tuple, tuple]] = {}
-        """For each action, what :meth:`_doomed` checks: the facts it needs that some
-        action changes, and those it deletes that some action needs."""
-        for name, action in self.domain.actions.items():
-            needs = tuple((p, k) for p, k in action.needs if p in changed)
-            removes = tuple((p, k) for p, k in action.removes if p in self.needers)
-            if needs or removes:
-                self.checks[name] = (needs, removes)
+        self.checks = DecompositionChecks(self.domain, self.goals)
+        """The checks of decompositions (:mod:`planner.checks`)."""
 
     # -- explanations ------------------------------------------------------------------
 
@@ -249,7 +199,7 @@ class DepthFirst:
         node: Path | None = parent
         while node is not None:
             node, text, _, _, _, _ = node
-            path.append(text if isinstance(text, str) else _label(*text))
+            path.append(text if isinstance(text, str) else task_call(*text))
         path.reverse()
         if len(path) > SHOWN:
             path[SHOWN // 2:-SHOWN // 2] = [f"... ({len(path) - SHOWN} more) ..."]
@@ -324,7 +274,7 @@ class DepthFirst:
         """The ids of the top tasks and the first search node (the initial state, the
         problem's tasks as the agenda; the search that plans from it makes the rest)."""
         problem = self.problem
-        tops = [(None, _label(name, args), index, 0, next(self.ids), 0)
+        tops = [(None, task_call(name, args), index, 0, next(self.ids), 0)
                 for index, (name, args) in enumerate(problem.tasks)]
         roots = [top[4] for top in tops]
         agenda = None
@@ -378,7 +328,7 @@ class DepthFirst:
                 # A loop goes through a decomposition: the nodes seen are those.
                 key = hash((state_hash, agenda_hash))
                 if key in seen:
-                    self._fail(parent, _label(name, args),
+                    self._fail(parent, task_call(name, args),
                                "searched before, in this very state (a loop)")
                     continue
                 seen.add(key)
@@ -391,7 +341,7 @@ class DepthFirst:
         env = dict(zip(action.names, args, strict=True))
         get = state.get
         if action.pre is not None and not action.pre.fn(env, get):
-            self._fail(parent, _label(action.name, args),
+            self._fail(parent, task_call(action.name, args),
                        f"precondition false: {action.pre.text}")
             return None
         writes: dict[tuple[str, Any], Any] = {}
@@ -408,122 +358,13 @@ class DepthFirst:
         if action.deletes:
             why = deleted_goal(self.problem, action, env, get, child, self._may_add, rest)
             if why is not None:
-                self._fail(parent, _label(action.name, args), why)
+                self._fail(parent, task_call(action.name, args), why)
                 return None
         agent = SOLE_AGENT if action.agent is None else env[action.agent]
         price = action.cost(env, get) if callable(action.cost) else action.cost
         length = action.duration(env, get) if callable(action.duration) else action.duration
         record = ("act", next(self.ids), parent[4], action.name, args, agent, price, length)
         return child, state_hash, rest, (record, trail)
-
-    def _checked(self, dec: Decomposition) -> bool:
-        """Whether :meth:`_doomed` has anything to check in this decomposition: an action
-        among its subtasks that needs a fact some action changes (after the first, whose
-        precondition the binder checks) or deletes one some action needs."""
-        known = self.has_checks.get(id(dec))
-        if known is None:
-            known = any(sub.task in self.checks and (position or self.checks[sub.task][1])
-                        for position, sub in enumerate(dec.subtasks))
-            self.has_checks[id(dec)] = known
-        return known
-
-    def _doomed(self, agenda: Any, count: int, state: State) -> str | None:
-        """Why the first ``count`` tasks of ``agenda`` (a decomposition's subtasks) doom it,
-        if they do: one of their actions needs a fact that is false and that no task
-        before it may add, or deletes a fact that an action among the :data:`LOOKAHEAD`
-        tasks after it needs, with no task in between that may add it again."""
-        checks, may_add = self.checks, self.domain.may_add
-        before: list[tuple[str, tuple]] = []
-        entry = agenda
-        for position in range(count):
-            name, args, _, _, rest = entry
-            check = checks.get(name)
-            if check is not None:
-                needs, removes = check
-                env = dict(zip(self.domain.actions[name].names, args, strict=True))
-                # The first action's precondition is the binder's: it holds already.
-                for pred, key in needs if position else ():
-                    fact = key(env)
-                    if state.get(pred, fact) is not True:
-                        adders = self.adders.get(pred, ())
-                        if not any(n in adders and may_add(n, a, pred, fact)
-                                   for n, a in before):
-                            return (f"{_label(name, args)} needs "
-                                    f"({' '.join((pred, *fact))}), false, which no task "
-                                    "before it can make true")
-                for pred, key in removes:
-                    fact = key(env)
-                    if state.get(pred, fact) is not True:  # rarely needed: not checked
-                        continue
-                    why = self._needed(pred, fact, rest)
-                    if why is not None:
-                        return f"{_label(name, args)} deletes {why}"
-            before.append((name, args))
-            entry = rest
-        return None
-
-    def _unreachable(self, name: str, args: tuple, agenda: Any, state: State) -> str | None:
-        """Which goal fact, false in ``state``, no task on ``agenda`` may add (``agenda`` is
-        what decomposing ``name(args)`` leaves; checked when the problem has at most
-        :data:`FEW_GOALS` goal facts).  Only the goal facts ``name(args)`` may add are
-        looked at: the others, its subtasks cannot add either, and what follows is
-        unchanged.  Monroe's plan recognition: its one goal says that the observed
-        actions were all done, and only one of the ten top-level methods can do them."""
-        may_add, get = self.domain.may_add, state.get
-        for pred, fact in self.few_goals:
-            if (may_add(name, args, pred, fact) and get(pred, fact) is not True
-                    and not self._may_come(agenda, pred, fact)):
-                return f"no task left can make the goal ({' '.join((pred, *fact))}) true"
-        return None
-
-    def _may_come(self, agenda: Any, pred: str, fact: tuple) -> bool:
-        """Whether a task on ``agenda`` may add ``pred(fact)``: the answer for each tail of
-        the agenda is kept (by its hash, which stands for its tasks), so that the
-        decompositions that share what follows them only look at their own subtasks."""
-        known = self.coming
-        if len(known) > MAX_KEPT:
-            known.clear()
-        may_add = self.domain.may_add
-        passed = []
-        answer = False
-        entry = agenda
-        while entry is not None:
-            name, args, _, tail, rest = entry
-            found = known.get((tail, pred, fact))
-            if found is not None:
-                answer = found
-                break
-            if may_add(name, args, pred, fact):
-                answer = True
-                break
-            passed.append(tail)
-            entry = rest
-        for tail in passed:
-            known[(tail, pred, fact)] = answer
-        return answer
-
-    def _needed(self, pred: str, fact: tuple, agenda: Any) -> str | None:
-        """Which later action needs ``pred(fact)``, if one does among the
-        :data:`LOOKAHEAD` next tasks on ``agenda`` with no task before it that may add a
-        fact of that predicate (not only this one: the scan stays cheap, and ends where
-        a long agenda of tasks of the same kind begins)."""
-        relevant, actions = self.relevant[pred], self.domain.actions
-        for _ in range(LOOKAHEAD):
-            if agenda is None:
-                return None
-            name, args, _, _, agenda = agenda
-            found = relevant.get(name)
-            if found is None:
-                continue
-            keys, adds = found
-            if keys:
-                env = dict(zip(actions[name].names, args, strict=True))
-                if any(key(env) == fact for key in keys):
-                    return (f"({' '.join((pred, *fact))}), which {_label(name, args)} "
-                            "needs later, and no task before it can make it true again")
-            if adds:  # it may add a fact of this predicate
-                return None
-        return None
 
     def _may_add(self, agenda: Any, pred: str, fact: tuple) -> bool:
         may_add = self.domain.may_add
@@ -557,7 +398,7 @@ class DepthFirst:
                    state_hash: int, rest: Any, trail: Any) -> Iterator[tuple]:
         if self._repeats(method.name, args, parent, state_hash):
             self.repeated = True
-            label = _label(method.name, args)
+            label = task_call(method.name, args)
             self._fail(parent, label, f"{label} again in the state where an ancestor "
                        "decomposed it (left recursion, or actions that change nothing), more "
                        f"than {self.repeats} time(s)")
@@ -565,7 +406,7 @@ class DepthFirst:
         depth = parent[5] + 1
         if depth > self.max_depth:
             self.cut = True
-            self._fail(parent, _label(method.name, args),
+            self._fail(parent, task_call(method.name, args),
                        f"deeper than {self.max_depth} decompositions: cut")
             return
         env = {p: a for (p, _), a in zip(method.params, args, strict=True)}
@@ -586,17 +427,18 @@ class DepthFirst:
                               hash((sub.task, values, agenda[3] if agenda else 0)), agenda)
                 why = None
                 if self.careful:
-                    why = ((self._doomed(agenda, len(dec.subtasks), state)
-                            if self._checked(dec) else None)
-                           or (self._unreachable(method.name, args, agenda, state)
-                               if self.few_goals else None))
+                    checks = self.checks
+                    why = ((checks.doomed(agenda, len(dec.subtasks), state)
+                            if checks.checked(dec) else None)
+                           or (checks.unreachable(method.name, args, agenda, state)
+                               if checks.few_goals else None))
                 if why is not None:
-                    self._fail(parent, _label(method.name, args), f"{dec.name}: {why}")
+                    self._fail(parent, task_call(method.name, args), f"{dec.name}: {why}")
                     continue
                 record = ("method", node[4], parent[4], method.name, args, dec.name, binding)
                 yield state, state_hash, agenda, (record, trail)
             if not matched:
                 tried.append(f"{dec.name}: {dec.pre.text if dec.pre else 'no binding'}")
         if tried and len(tried) == len(method.decompositions):
-            self._fail(parent, _label(method.name, args),
+            self._fail(parent, task_call(method.name, args),
                        "no decomposition applies (" + "; ".join(tried) + ")")
