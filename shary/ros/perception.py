@@ -120,18 +120,25 @@ class RosPerception:
         anything: a fact naming nothing the database can name (``foo:x`` with an unknown
         prefix, ``a?b``) is refused with a ``refused`` row, and the others still count."""
         term = self.facts.term
-        terms = set()
-        for fact in now:
-            try:
-                terms.add(tuple(term(part) for part in fact))
-            except (TypeError, ValueError) as error:
-                self.record("refused", topic=topic, line=" ".join(map(str, fact)),
-                            reason=str(error))
-        now = terms
+        try:
+            now = {(term(s), term(p), term(o)) for s, p, o in now}
+        except (TypeError, ValueError):  # rare: find which facts, and keep the others
+            now = self._terms(now, topic)
         before = self.published.get(index, set())
         if now != before:
             self.facts.change(before - now, now - before, perspective=self.perspective)
         self.published[index] = now
+
+    def _terms(self, facts: set[Triple], topic: str) -> set[Triple]:
+        """The facts as terms, one by one: each that names nothing is refused."""
+        term, terms = self.facts.term, set()
+        for fact in facts:
+            try:
+                terms.add((term(fact[0]), term(fact[1]), term(fact[2])))
+            except (TypeError, ValueError) as error:
+                self.record("refused", topic=topic, line=" ".join(map(str, fact)),
+                            reason=str(error))
+        return terms
 
     def _check_stale(self, sources: list[FactSource]) -> None:
         now = self.loop.now()
