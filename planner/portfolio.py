@@ -18,7 +18,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
-from planner import depthfirst, progression
+from planner import depthfirst, restarts
 from planner.domain import Problem
 from planner.plan import Plan
 from planner.search import Result
@@ -42,7 +42,7 @@ def first_plan(problem: Problem, budget_ms: float | None = None,
     left = budget - (time.perf_counter() - start) * 1000
     if left <= 0:
         return first
-    second = progression.best_first(problem, left, max_nodes=max_nodes)
+    second = restarts.best_first(problem, left, max_nodes=max_nodes)
     if second.plan is not None and on_improvement is not None:
         on_improvement(second.plan)
     elapsed = (time.perf_counter() - start) * 1000

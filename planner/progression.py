@@ -41,6 +41,7 @@ import gc
 import heapq
 import itertools
 import math
+import random
 import time
 from collections.abc import Iterator
 from typing import Any
@@ -118,8 +119,12 @@ class _Stop(Exception):
 class BestFirst:
     """One best-first search for one problem (see the module's docstring)."""
 
-    def __init__(self, problem: Problem):
+    def __init__(self, problem: Problem, rng: random.Random | None = None):
         self.problem = problem
+        self.rng = rng
+        """When given, each batch of successors drawn from a choice point is shuffled
+        before it goes on the open list (:mod:`planner.restarts`), so that successors
+        equally good for the estimate are tried in another order than the file's."""
         self.steps = DepthFirst(problem)
         """The depth-first search's successor generation (actions, decompositions, their
         prunings and the record of failures), shared so that both searches make the same
@@ -326,14 +331,15 @@ class BestFirst:
         """Put up to :data:`BATCH` successors of a choice point on the open list, and the
         choice point itself again (at its parent's estimate) if it has more."""
         estimate = self._estimate
-        for _ in range(BATCH):
-            child = next(choices, None)
-            if child is None:
-                return
+        batch = list(itertools.islice(choices, BATCH))
+        if self.rng is not None:
+            self.rng.shuffle(batch)
+        for child in batch:
             agenda = child[2]
             if agenda is not None and hash((child[1], agenda[3])) in seen:
                 continue
             value = estimate(child)
             if value < math.inf:
                 heapq.heappush(open_list, (value, next(order), child))
-        heapq.heappush(open_list, (h, next(order), choices))
+        if len(batch) == BATCH:  # the choice point may have more
+            heapq.heappush(open_list, (h, next(order), choices))
