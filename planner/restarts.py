@@ -35,7 +35,7 @@ from planner.progression import BestFirst
 from planner.search import Result
 
 FIRST_SHARE = 1 / 2
-"""The part of the budget the first run, in file order, has."""
+"""The part of the budgets (time and nodes) the first run, in file order, has."""
 RESTART_NODES = 50_000
 """The search nodes of each shuffled run: counted in nodes, not time, so that the runs,
 and the plan found, do not depend on the machine's load."""
@@ -49,7 +49,7 @@ def best_first(problem: Problem, budget_ms: float | None = None, *,
     module), within ``budget_ms`` (default: the problem's) and ``max_nodes`` in all."""
     budget = problem.budget_ms if budget_ms is None else budget_ms
     start = time.perf_counter()
-    result = BestFirst(problem).run(budget * FIRST_SHARE, max_nodes)
+    result = BestFirst(problem).run(budget * FIRST_SHARE, int(max_nodes * FIRST_SHARE))
     expansions = result.expansions
     seed, nodes = 0, RESTART_NODES
     while result.plan is None and not result.complete:
