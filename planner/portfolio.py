@@ -10,7 +10,9 @@ the least work left, at the price of keeping every open node.
 
 So the depth-first search runs first, with :data:`DEPTH_FIRST_SHARE` of the
 budget (and the whole node budget); when it ends without a plan before proving
-there is none, the best-first search gets what is left of the time.
+there is none, the best-first search gets what is left of the time, restarted
+with its ties broken in other orders when its first run finds nothing
+(:mod:`planner.restarts`).
 """
 
 from __future__ import annotations
