@@ -45,10 +45,12 @@ import time
 from collections.abc import Iterator
 from typing import Any
 
+from planner import grounding
 from planner.depthfirst import MAX_NODES, DepthFirst
 from planner.domain import Problem
 from planner.evaluate import Evaluator
 from planner.plan import fact_text
+from planner.relaxed import Relaxed
 from planner.search import Result
 from planner.translate import NETWORK
 
@@ -126,6 +128,10 @@ class BestFirst:
         nodes."""
         self.goals = tuple((pred, args, value) for (pred, args), value in problem.goals.items())
         self.work = least_work(problem)
+        model = None if problem.lifted is None else grounding.ground(*problem.lifted)
+        self.relaxed = None if model is None else Relaxed(model, problem.goals)
+        """The relaxed-composition heuristic (:mod:`planner.relaxed`) when the problem
+        grounds within limits: it replaces the goals unmet and the least work."""
         self.stack_work: dict[int, float] = {}
         """The least work of each task stack met, by its hash (stacks share their tails)."""
         self.unmet: dict[int, int] = {}
@@ -148,6 +154,9 @@ class BestFirst:
 
     def _estimate(self, node: tuple) -> float:
         state, state_hash, agenda, _ = node
+        if self.relaxed is not None:
+            plan, unmet = self.relaxed.estimate(state, state_hash, agenda)
+            return GOAL_WEIGHT * unmet + plan
         unmet = self.unmet.get(state_hash)
         if unmet is None:  # once per state: a decomposition's successors share theirs
             get = state.get
