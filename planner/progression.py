@@ -106,11 +106,20 @@ def least_work(problem: Problem) -> dict[str, float]:
 
 
 def best_first(problem: Problem, budget_ms: float | None = None, *,
-               max_nodes: int = MAX_NODES) -> Result:
+               max_nodes: int = MAX_NODES, relaxed: Relaxed | None = None) -> Result:
     """The first plan of a greedy best-first search of ``problem`` (HDDL: its methods
-    have binders), within ``budget_ms`` (default: the problem's) and ``max_nodes``."""
+    have binders), within ``budget_ms`` (default: the problem's) and ``max_nodes``,
+    guided by ``relaxed`` (:func:`relaxed_model`) when given, else by the goals unmet
+    and the task stack's least work."""
     budget = problem.budget_ms if budget_ms is None else budget_ms
-    return BestFirst(problem).run(budget, max_nodes)
+    return BestFirst(problem, relaxed).run(budget, max_nodes)
+
+
+def relaxed_model(problem: Problem) -> Relaxed | None:
+    """The relaxed-composition heuristic of an HDDL problem (:mod:`planner.relaxed`), or
+    None when the problem does not ground within :mod:`planner.grounding`'s limits."""
+    model = None if problem.lifted is None else grounding.ground(*problem.lifted)
+    return None if model is None else Relaxed(model, problem.goals)
 
 
 class _Stop(Exception):
@@ -120,7 +129,7 @@ class _Stop(Exception):
 class BestFirst:
     """One best-first search for one problem (see the module's docstring)."""
 
-    def __init__(self, problem: Problem):
+    def __init__(self, problem: Problem, relaxed: Relaxed | None = None):
         self.problem = problem
         self.steps = DepthFirst(problem)
         """The depth-first search's successor generation (actions, decompositions, their
@@ -128,10 +137,9 @@ class BestFirst:
         nodes."""
         self.goals = tuple((pred, args, value) for (pred, args), value in problem.goals.items())
         self.work = least_work(problem)
-        model = None if problem.lifted is None else grounding.ground(*problem.lifted)
-        self.relaxed = None if model is None else Relaxed(model, problem.goals)
-        """The relaxed-composition heuristic (:mod:`planner.relaxed`) when the problem
-        grounds within limits: it replaces the goals unmet and the least work."""
+        self.relaxed = relaxed
+        """The relaxed-composition heuristic (:mod:`planner.relaxed`), when given: it
+        replaces the goals unmet and the least work."""
         self.stack_work: dict[int, float] = {}
         """The least work of each task stack met, by its hash (stacks share their tails)."""
         self.unmet: dict[int, int] = {}
