@@ -122,6 +122,11 @@ class _Grounder:
                 self.of_type.setdefault(parent, []).append(name)
         self.type_sets = {kind: set(names) for kind, names in self.of_type.items()}
         self.index = _Index()
+        self.by_task: dict[str, list[hddl.HMethod]] = {}
+        for method in domain.methods:
+            self.by_task.setdefault(method.task.name, []).append(method)
+        self.candidates: dict[str, bool] = {}
+        """For each compound task asked, whether its possible arguments are known."""
         self.work = 0
         self.deadline = time.perf_counter() + TIME_LIMIT_S
 
@@ -214,9 +219,7 @@ class _Grounder:
 
     def run(self) -> Grounded:
         actions = self.reachable()
-        by_task: dict[str, list[hddl.HMethod]] = {}
-        for method in self.domain.methods:
-            by_task.setdefault(method.task.name, []).append(method)
+        by_task = self.by_task
         ground_actions = {(name, args): (pre, add)
                           for name, rows in actions.items() for args, pre, add in rows}
         methods: list[tuple[Fact, list[Fact], list[Fact]]] = []
@@ -236,7 +239,7 @@ class _Grounder:
                     subtasks = [(s.name, tuple(full.get(t, t) for t in s.args))
                                 for s in method.subtasks]
                     methods.append(((name, args),
-                                    [_apply(p, t, full) for p, t in atoms if p[0] != "@"],
+                                    [_apply(p, t, full) for p, t in atoms if p[0] not in "@#"],
                                     subtasks))
                     for sub in subtasks:
                         if sub not in seen:
@@ -245,8 +248,8 @@ class _Grounder:
                                 queue.append(sub)
         return _prune(initial, methods, ground_actions)
 
-    def _method(self, method: hddl.HMethod) -> tuple[list[Atom], list[tuple[bool, str, str]],
-                                                     dict[str, str]]:
+    def _base(self, method: hddl.HMethod) -> tuple[list[Atom], list[tuple[bool, str, str]],
+                                                   dict[str, str]]:
         """A method's atoms to match: its precondition's positive facts, and its action
         subtasks as ``@action`` atoms (matched with the reachable ground actions)."""
         atoms = _positives(method.precondition)
@@ -254,6 +257,48 @@ class _Grounder:
                   if s.name in self.domain.actions]
         tests = _tests(method.precondition) + _tests(method.constraints)
         return atoms, tests, dict(method.params)
+
+    def _method(self, method: hddl.HMethod) -> tuple[list[Atom], list[tuple[bool, str, str]],
+                                                     dict[str, str]]:
+        """:meth:`_base`, and a ``#task`` atom for each compound subtask with a variable
+        that neither the method's task nor those atoms bind, when the subtask's possible
+        arguments are known (:meth:`_candidates`): AssemblyHierarchical's ``m1`` binds
+        ``connect ?p1 ?p2`` to the pairs of ports some ``connect_k`` may join, not to
+        every pair of ports."""
+        atoms, tests, kinds = self._base(method)
+        covered = {t for t in method.task.args if is_variable(t)}
+        covered |= {t for _, terms in atoms for t in terms if is_variable(t)}
+        extra = [("#" + sub.name, tuple(sub.args)) for sub in method.subtasks
+                 if sub.name not in self.domain.actions
+                 and any(is_variable(t) and t not in covered for t in sub.args)
+                 and self._candidates(sub.name)]
+        return atoms + extra, tests, kinds
+
+    def _candidates(self, task: str) -> bool:
+        """Whether the arguments ``task`` can have are known, as ``#task`` atoms of the
+        index: those of its methods' bindings through their own atoms alone (an
+        over-approximation of the ground tasks some method ends).  Not known when a
+        method leaves an argument to a compound subtask or to its type."""
+        known = self.candidates.get(task)
+        if known is not None:
+            return known
+        self.candidates[task] = False  # a recursion through the task knows nothing
+        rows: set[tuple[str, ...]] = set()
+        for method in self.by_task.get(task, ()):
+            atoms, tests, kinds = self._base(method)
+            covered = {t for _, terms in atoms for t in terms if is_variable(t)}
+            if any(is_variable(t) and t not in covered for t in method.task.args):
+                return False
+            mine = [(equal, a, b) for equal, a, b in tests
+                    if all(not is_variable(x) or x in covered for x in (a, b))]
+            for env in self.bindings(atoms, {}, {v: k for v, k in kinds.items()
+                                                 if v in covered}, mine):
+                rows.add(tuple(env.get(t, t) if is_variable(t) else t
+                               for t in method.task.args))
+        for args in rows:
+            self.index.add("#" + task, args)
+        self.candidates[task] = True
+        return True
 
 
 def _unify(pattern: tuple[str, ...], args: tuple[str, ...]) -> dict[str, str] | None:
