@@ -50,7 +50,6 @@ class Relaxed:
     """The relaxed-composition model of one ground problem, and its estimates."""
 
     def __init__(self, model: Grounded, goals: dict[tuple[str, Any], Any]):
-        self.model = model
         facts = model.facts
         self.fact_keys = list(facts)
         n_facts = len(facts)
@@ -89,7 +88,7 @@ class Relaxed:
         self.states: dict[int, _Costs] = {}
         self.tails: dict[tuple[int, int], frozenset[int] | None] = {}
 
-    def estimate(self, state: Any, state_hash: int, agenda: Any) -> tuple[float, float]:
+    def estimate(self, state: Any, state_hash: int, agenda: Any) -> tuple[float, int]:
         """The relaxed plan's size for the stack ``agenda`` and the unmet goals in
         ``state`` (``inf``: a dead end), and the number of goal facts unmet."""
         costs = self.states.get(state_hash)
