@@ -119,3 +119,14 @@ def test_the_portfolio_runs_the_relaxed_search_after_the_depth_first_one(write):
     assert result.plan is not None, result.explain()
     assert validate(problem, result.plan) == []
     assert len(result.plan.actions) == 5
+
+
+def test_every_action_of_a_plan_found_without_it_is_in_the_ground_model(write):
+    # The model over-approximates what a plan can hold: a plan of the depth-first
+    # search, which knows nothing of it, names only ground actions it has.
+    problem = load_hddl(write("d.hddl", CABLING), write("p.hddl", _cables(2)))
+    found = plan(problem, 120_000, first=True)
+    assert found.plan is not None
+    model = grounding.ground(*problem.lifted)
+    assert model is not None
+    assert all((a.name, tuple(a.args)) in model.tasks for a in found.plan.actions)
