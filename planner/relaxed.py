@@ -40,8 +40,10 @@ from typing import Any
 
 from planner.grounding import Grounded
 
-MEMO = 200_000
-"""Task-stack tails whose relaxed plans are kept (the memo is emptied beyond)."""
+MEMO = 50_000
+"""Task-stack tails whose relaxed plans are kept (the memo is emptied beyond: a plan is
+a set of up to a few hundred action ids, and the tails of one state's stacks are what
+its successors share)."""
 STATES = 64
 """States whose explorations are kept (emptied beyond): a node's successors share one."""
 
