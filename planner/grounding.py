@@ -67,6 +67,9 @@ class Grounded:
     primitive: dict[int, int]
     methods: list[tuple[int, tuple[int, ...], tuple[int, ...]]]
     """Each method as its task's id, its precondition's facts, its subtasks' task ids."""
+    bindings: dict[Fact, dict[str, list[dict[str, str]]]]
+    """For each ground compound task, by method name, the bindings of the method's
+    variables (``?x``) that the model keeps, in the order they were found."""
 
 
 def is_variable(term: str) -> bool:
@@ -223,6 +226,7 @@ class _Grounder:
         ground_actions = {(name, args): (pre, add)
                           for name, rows in actions.items() for args, pre, add in rows}
         methods: list[tuple[Fact, list[Fact], list[Fact]]] = []
+        named: list[tuple[str, dict[str, str]]] = []
         initial = [(s.name, tuple(s.args)) for s in self.problem.htn_subtasks]
         seen: set[Fact] = set(initial)
         queue = deque(t for t in initial if t[0] not in self.domain.actions)
@@ -238,6 +242,7 @@ class _Grounder:
                     self._count()
                     subtasks = [(s.name, tuple(full.get(t, t) for t in s.args))
                                 for s in method.subtasks]
+                    named.append((method.name, {v: full[v] for v, _ in method.params}))
                     methods.append(((name, args),
                                     [_apply(p, t, full) for p, t in atoms if p[0] not in "@#"],
                                     subtasks))
@@ -246,7 +251,7 @@ class _Grounder:
                             seen.add(sub)
                             if sub[0] not in self.domain.actions:
                                 queue.append(sub)
-        return _prune(initial, methods, ground_actions)
+        return _prune(initial, methods, named, ground_actions)
 
     def _base(self, method: hddl.HMethod) -> tuple[list[Atom], list[tuple[bool, str, str]],
                                                    dict[str, str]]:
@@ -363,6 +368,7 @@ def _adds(formula: hddl.Formula | None, extra: dict[str, str] | None = None
 
 
 def _prune(initial: list[Fact], methods: list[tuple[Fact, list[Fact], list[Fact]]],
+           named: list[tuple[str, dict[str, str]]],
            actions: dict[Fact, tuple[list[Fact], list[Fact]]]) -> Grounded:
     """Keep the tasks some decomposition ends (bottom up), then those the initial network
     reaches through kept methods (top down), and number what is left."""
@@ -420,4 +426,9 @@ def _prune(initial: list[Fact], methods: list[tuple[Fact, list[Fact], list[Fact]
     ground_methods = [(tasks[task], tuple(dict.fromkeys(fact_id(f) for f in pre)),
                        tuple(tasks[s] for s in subtasks))
                       for task, pre, subtasks in (methods[i] for i in sorted(kept))]
-    return Grounded(facts, out_actions, action_pre, action_add, tasks, primitive, ground_methods)
+    bindings: dict[Fact, dict[str, list[dict[str, str]]]] = {}
+    for i in sorted(kept):
+        name, env = named[i]
+        bindings.setdefault(methods[i][0], {}).setdefault(name, []).append(env)
+    return Grounded(facts, out_actions, action_pre, action_add, tasks, primitive,
+                    ground_methods, bindings)

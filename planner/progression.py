@@ -139,7 +139,10 @@ class BestFirst:
         self.work = least_work(problem)
         self.relaxed = relaxed
         """The relaxed-composition heuristic (:mod:`planner.relaxed`), when given: it
-        replaces the goals unmet and the least work."""
+        replaces the goals unmet and the least work, and its ground model's bindings
+        decompose the tasks it holds."""
+        if relaxed is not None:
+            self.steps.ground = relaxed.bindings
         self.stack_work: dict[int, float] = {}
         """The least work of each task stack met, by its hash (stacks share their tails)."""
         self.unmet: dict[int, int] = {}

@@ -52,6 +52,9 @@ class Relaxed:
     """The relaxed-composition model of one ground problem, and its estimates."""
 
     def __init__(self, model: Grounded, goals: dict[tuple[str, Any], Any]):
+        self.bindings = model.bindings
+        """The ground model's method bindings, for the search that this heuristic guides
+        (:attr:`planner.depthfirst.DepthFirst.ground`)."""
         facts = model.facts
         self.fact_keys = list(facts)
         n_facts = len(facts)
