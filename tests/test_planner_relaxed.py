@@ -130,3 +130,24 @@ def test_every_action_of_a_plan_found_without_it_is_in_the_ground_model(write):
     model = grounding.ground(*problem.lifted)
     assert model is not None
     assert all((a.name, tuple(a.args)) in model.tasks for a in found.plan.actions)
+
+
+def test_the_relaxed_search_decomposes_by_the_ground_bindings_that_hold_in_the_state(write):
+    problem = load_hddl(write("d.hddl", CABLING), write("p.hddl", _cables(2)))
+    search = BestFirst(problem, relaxed_model(problem))
+    steps = search.steps
+    assert steps.ground is not None
+    _, first = steps._start()
+    state, state_hash, agenda, trail = first
+    methods = problem.domain.methods
+
+    def children(task: str, args: tuple) -> list[tuple[str, dict]]:
+        out = steps._decompose(methods[task], args, agenda[2], state, state_hash, None, trail)
+        return [(node[3][0][5], node[3][0][6]) for node in out]
+
+    plugs = [b for name, b in children("wire", ("src", "dst")) if name == "plug"]
+    assert plugs and len(plugs) == len(steps.ground[("wire", ("src", "dst"))]["plug"])
+    assert all(f"(fits {b['?a']} {b['?b']})" in _cables(2) for b in plugs)
+    # The model has the checks' hops (a link may be made), but nothing is linked yet.
+    assert steps.ground[("check", ("src", "dst"))]["hop"]
+    assert children("check", ("src", "dst")) == []
