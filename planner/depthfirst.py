@@ -177,11 +177,11 @@ class DepthFirst:
         self.decomposed: set[int] = set()
         """The (task, arguments, state) hashes of every decomposition made so far."""
         self.ground: dict[tuple[str, tuple], dict[str, list[dict[str, str]]]] | None = None
-        """The ground model's bindings of each ground task's methods
-        (:attr:`planner.grounding.Grounded.bindings`), when a search has one: a task it
-        holds is decomposed by those, each checked against the method's precondition in
-        the state, rather than by the binders (AssemblyHierarchical's ``m1``: the 240
-        pairs of ports some ``connect_k`` may join, not the 14,400 pairs of ports)."""
+        """The ground model's bindings of the methods that leave a variable to its type
+        (:attr:`planner.grounding.Grounded.bindings`), when a search has them: those
+        decompose the task, each checked against the method's precondition in the
+        state, rather than the binder (AssemblyHierarchical's ``m1``: the 240 pairs of
+        ports some ``connect_k`` may join, not the 14,400 pairs of ports)."""
         self.missed = ""
         """The goals the first complete decomposition missed (when one did)."""
         self.expansions = 0
@@ -422,8 +422,9 @@ class DepthFirst:
         for dec in method.decompositions:
             matched = False
             assert dec.bind is not None, "the depth-first search plans HDDL methods"
-            bindings = (dec.bind(env, state) if known is None else
-                        _holding(dec, env, known.get(dec.name, ()), state))
+            ground = None if known is None else known.get(dec.name)
+            bindings = (dec.bind(env, state) if ground is None else
+                        _holding(dec, env, ground, state))
             for binding in bindings:
                 matched = True
                 local = {**env, **binding}

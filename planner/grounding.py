@@ -68,8 +68,9 @@ class Grounded:
     methods: list[tuple[int, tuple[int, ...], tuple[int, ...]]]
     """Each method as its task's id, its precondition's facts, its subtasks' task ids."""
     bindings: dict[Fact, dict[str, list[dict[str, str]]]]
-    """For each ground compound task, by method name, the bindings of the method's
-    variables (``?x``) that the model keeps, in the order they were found."""
+    """For each ground compound task, by the name of each of its methods that leaves a
+    variable to its type (:func:`enumerating`), the bindings of the method's variables
+    (``?x``) that the model keeps, in the order they were found."""
 
 
 def is_variable(term: str) -> bool:
@@ -251,7 +252,8 @@ class _Grounder:
                             seen.add(sub)
                             if sub[0] not in self.domain.actions:
                                 queue.append(sub)
-        return _prune(initial, methods, named, ground_actions)
+        return _prune(initial, methods, named, ground_actions, enumerating(self.domain),
+                      self.by_task)
 
     def _base(self, method: hddl.HMethod) -> tuple[list[Atom], list[tuple[bool, str, str]],
                                                    dict[str, str]]:
@@ -304,6 +306,23 @@ class _Grounder:
             self.index.add("#" + task, args)
         self.candidates[task] = True
         return True
+
+
+def enumerating(domain: hddl.HDDLDomain) -> set[str]:
+    """The methods with a variable that neither their task, nor their precondition's
+    facts, nor their first subtask (when it is an action, whose precondition the
+    search's binders look up) bind: the binders try every object of its type for it,
+    where the ground model knows the few that can serve (AssemblyHierarchical's ``m1``,
+    whose ``?p1 ?p2`` only the compound ``connect`` constrains)."""
+    out = set()
+    for method in domain.methods:
+        bound = {t for t in method.task.args if is_variable(t)}
+        bound |= {t for _, terms in _positives(method.precondition) for t in terms}
+        if method.subtasks and method.subtasks[0].name in domain.actions:
+            bound |= set(method.subtasks[0].args)
+        if any(var not in bound for var, _ in method.params):
+            out.add(method.name)
+    return out
 
 
 def _unify(pattern: tuple[str, ...], args: tuple[str, ...]) -> dict[str, str] | None:
@@ -369,7 +388,8 @@ def _adds(formula: hddl.Formula | None, extra: dict[str, str] | None = None
 
 def _prune(initial: list[Fact], methods: list[tuple[Fact, list[Fact], list[Fact]]],
            named: list[tuple[str, dict[str, str]]],
-           actions: dict[Fact, tuple[list[Fact], list[Fact]]]) -> Grounded:
+           actions: dict[Fact, tuple[list[Fact], list[Fact]]], free: set[str],
+           methods_of: dict[str, list[hddl.HMethod]]) -> Grounded:
     """Keep the tasks some decomposition ends (bottom up), then those the initial network
     reaches through kept methods (top down), and number what is left."""
     done = {task for task in actions}
@@ -426,9 +446,12 @@ def _prune(initial: list[Fact], methods: list[tuple[Fact, list[Fact], list[Fact]
     ground_methods = [(tasks[task], tuple(dict.fromkeys(fact_id(f) for f in pre)),
                        tuple(tasks[s] for s in subtasks))
                       for task, pre, subtasks in (methods[i] for i in sorted(kept))]
-    bindings: dict[Fact, dict[str, list[dict[str, str]]]] = {}
+    bindings: dict[Fact, dict[str, list[dict[str, str]]]] = {
+        task: {m.name: [] for m in methods_of.get(task[0], ()) if m.name in free}
+        for task in tasks if task not in actions}
     for i in sorted(kept):
         name, env = named[i]
-        bindings.setdefault(methods[i][0], {}).setdefault(name, []).append(env)
+        if name in free:
+            bindings[methods[i][0]][name].append(env)
     return Grounded(facts, out_actions, action_pre, action_add, tasks, primitive,
                     ground_methods, bindings)
