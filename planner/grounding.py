@@ -35,6 +35,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 
 from planner import hddl
+from planner.formulas import conjuncts
 
 LIMIT = 150_000
 """Ground actions plus ground methods (and the bindings tried for them) beyond which the
@@ -340,26 +341,16 @@ def _apply(pred: str, terms: tuple[str, ...], env: dict[str, str]) -> Fact:
     return pred, tuple(env.get(t, t) if is_variable(t) else t for t in terms)
 
 
-def _conjuncts(formula: hddl.Formula | None) -> Iterator[hddl.Formula]:
-    if formula is None:
-        return
-    if formula.kind == "and":
-        for child in formula.children:
-            yield from _conjuncts(child)
-    else:
-        yield formula
-
-
 def _positives(formula: hddl.Formula | None) -> list[Atom]:
     """The positive facts of a condition's top-level conjunction (the rest is relaxed)."""
-    return [(f.children[0], tuple(f.children[1])) for f in _conjuncts(formula)
+    return [(f.children[0], tuple(f.children[1])) for f in conjuncts(formula)
             if f.kind == "pred"]
 
 
 def _tests(formula: hddl.Formula | None) -> list[tuple[bool, str, str]]:
     """The (in)equalities of a condition's top-level conjunction: (equal?, a, b)."""
     out = []
-    for f in _conjuncts(formula):
+    for f in conjuncts(formula):
         if f.kind == "=":
             out.append((True, f.children[0], f.children[1]))
         elif f.kind == "not" and f.children[0].kind == "=":
