@@ -19,10 +19,10 @@ to the fact in most runs (6-86 ms) while a bare rclpy subscriber draining in
 its own callback kept 0.6-1.0 ms: measured stage by stage, the tail was the
 hand-over between the two threads (the kernel's run queue and the GIL), not
 the engine's work (docs/benchmarks.md).  With one thread there is no hand-over:
-in seven runs interleaved with the threaded node (loads 4-9), the median p50
-to the fact went from 1.50 to 0.58 ms and the median p99 from 9.55 to 5.45 ms
-(what is left is the kernel's run queue); the cancel reaches the server as
-fast, and a goal's round trip takes as long as before.  The price: while the
+in twelve runs interleaved with the threaded node (loads 4-12), the median
+p99 to the fact went from 10.4 to 5.1 ms and the p50 fell too (what is left
+is the kernel's run queue); the cancel reaches the server as fast, and a
+goal's round trip is a little shorter.  The price: while the
 loop is busy nothing takes messages, so the DDS history (a subscription's
 depth) is the only buffer.  Goals are sent and answered on the thread that
 spins the executor, so the Jazzy wheel's action-client race between threads
