@@ -176,6 +176,12 @@ class DepthFirst:
         self.max_depth = MAX_DEPTH
         self.decomposed: set[int] = set()
         """The (task, arguments, state) hashes of every decomposition made so far."""
+        self.ground: dict[tuple[str, tuple], dict[str, list[dict[str, str]]]] | None = None
+        """The ground model's bindings of the methods that leave a variable to its type
+        (:attr:`planner.grounding.Grounded.bindings`), when a search has them: those
+        decompose the task, each checked against the method's precondition in the
+        state, rather than the binder (AssemblyHierarchical's ``m1``: the 240 pairs of
+        ports some ``connect_k`` may join, not the 14,400 pairs of ports)."""
         self.missed = ""
         """The goals the first complete decomposition missed (when one did)."""
         self.expansions = 0
@@ -412,10 +418,14 @@ class DepthFirst:
         env = {p: a for (p, _), a in zip(method.params, args, strict=True)}
         root = parent[2]
         tried = []
+        known = None if self.ground is None else self.ground.get((method.name, args))
         for dec in method.decompositions:
             matched = False
             assert dec.bind is not None, "the depth-first search plans HDDL methods"
-            for binding in dec.bind(env, state):
+            ground = None if known is None else known.get(dec.name)
+            bindings = (dec.bind(env, state) if ground is None else
+                        _holding(dec, env, ground, state))
+            for binding in bindings:
                 matched = True
                 local = {**env, **binding}
                 node = (parent, (method.name, args), root, state_hash, next(self.ids), depth)
@@ -442,3 +452,12 @@ class DepthFirst:
         if tried and len(tried) == len(method.decompositions):
             self._fail(parent, task_call(method.name, args),
                        "no decomposition applies (" + "; ".join(tried) + ")")
+
+
+def _holding(dec: Any, env: dict[str, Any], bindings: list[dict[str, str]],
+             state: State) -> Iterator[dict[str, str]]:
+    """The ground bindings of a decomposition whose precondition holds in ``state``."""
+    pre = dec.pre
+    for binding in bindings:
+        if pre is None or pre.fn({**env, **binding}, state.get):
+            yield binding

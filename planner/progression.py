@@ -46,10 +46,12 @@ import time
 from collections.abc import Iterator
 from typing import Any
 
+from planner import grounding
 from planner.depthfirst import MAX_NODES, DepthFirst
 from planner.domain import Problem
 from planner.evaluate import Evaluator
 from planner.plan import fact_text
+from planner.relaxed import Relaxed
 from planner.search import Result
 from planner.translate import NETWORK
 
@@ -105,11 +107,20 @@ def least_work(problem: Problem) -> dict[str, float]:
 
 
 def best_first(problem: Problem, budget_ms: float | None = None, *,
-               max_nodes: int = MAX_NODES) -> Result:
+               max_nodes: int = MAX_NODES, relaxed: Relaxed | None = None) -> Result:
     """The first plan of a greedy best-first search of ``problem`` (HDDL: its methods
-    have binders), within ``budget_ms`` (default: the problem's) and ``max_nodes``."""
+    have binders), within ``budget_ms`` (default: the problem's) and ``max_nodes``,
+    guided by ``relaxed`` (:func:`relaxed_model`) when given, else by the goals unmet
+    and the task stack's least work."""
     budget = problem.budget_ms if budget_ms is None else budget_ms
-    return BestFirst(problem).run(budget, max_nodes)
+    return BestFirst(problem, relaxed).run(budget, max_nodes)
+
+
+def relaxed_model(problem: Problem) -> Relaxed | None:
+    """The relaxed-composition heuristic of an HDDL problem (:mod:`planner.relaxed`), or
+    None when the problem does not ground within :mod:`planner.grounding`'s limits."""
+    model = None if problem.lifted is None else grounding.ground(*problem.lifted)
+    return None if model is None else Relaxed(model, problem.goals)
 
 
 class _Stop(Exception):
@@ -119,7 +130,8 @@ class _Stop(Exception):
 class BestFirst:
     """One best-first search for one problem (see the module's docstring)."""
 
-    def __init__(self, problem: Problem, rng: random.Random | None = None):
+    def __init__(self, problem: Problem, relaxed: Relaxed | None = None,
+                 rng: random.Random | None = None):
         self.problem = problem
         self.rng = rng
         """When given, each batch of successors drawn from a choice point is shuffled
@@ -131,6 +143,12 @@ class BestFirst:
         nodes."""
         self.goals = tuple((pred, args, value) for (pred, args), value in problem.goals.items())
         self.work = least_work(problem)
+        self.relaxed = relaxed
+        """The relaxed-composition heuristic (:mod:`planner.relaxed`), when given: it
+        replaces the goals unmet and the least work, and its ground model's bindings
+        decompose the tasks it holds."""
+        if relaxed is not None:
+            self.steps.ground = relaxed.bindings
         self.stack_work: dict[int, float] = {}
         """The least work of each task stack met, by its hash (stacks share their tails)."""
         self.unmet: dict[int, int] = {}
@@ -153,6 +171,9 @@ class BestFirst:
 
     def _estimate(self, node: tuple) -> float:
         state, state_hash, agenda, _ = node
+        if self.relaxed is not None:
+            plan, unmet = self.relaxed.estimate(state, state_hash, agenda)
+            return GOAL_WEIGHT * unmet + plan
         unmet = self.unmet.get(state_hash)
         if unmet is None:  # once per state: a decomposition's successors share theirs
             get = state.get

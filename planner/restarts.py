@@ -59,7 +59,7 @@ def best_first(problem: Problem, budget_ms: float | None = None, *,
         seed += 1
         if seed > DOUBLE_AFTER:
             nodes *= 2
-        result = BestFirst(problem, random.Random(seed)).run(
+        result = BestFirst(problem, rng=random.Random(seed)).run(
             left, min(nodes, max_nodes - expansions))
         expansions += result.expansions
     elapsed = (time.perf_counter() - start) * 1000
