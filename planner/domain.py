@@ -69,6 +69,9 @@ class Action:
     assigns: tuple[tuple[str, tuple[Subtask, ...]], ...] = ()
     """Conditional plans: tasks this action puts at the head of another agent's agenda
     (by the parameter naming that agent) -- asking someone for help gives them a task."""
+    late: Any = None
+    """HDDL: the binder of its precondition for arguments not bound yet
+    (:func:`planner.late.compile_late`, used by the goal-guided search)."""
     names: tuple[str, ...] = field(init=False, repr=False, compare=False)
     """The parameters' names, in order (the search zips them with arguments)."""
 
@@ -121,6 +124,9 @@ class Decomposition:
     subtasks: tuple[Subtask, ...]
     doc: str = ""
     bind: Binder | None = None
+    late: Any = None
+    """HDDL: the binder that leaves unconstrained variables, and takes arguments, not bound
+    yet (:func:`planner.late.compile_late`, used by the goal-guided search)."""
     weight: float = 1.0
     """How likely an uncontrolled agent (a human) is to take this decomposition, relative
     to the others open at that point (conditional plans: :mod:`planner.conditional`)."""
