@@ -126,15 +126,21 @@ class LateBinder:
     plans may look up, for the states of the search that uses it."""
 
     def __init__(self, variables: dict[str, str], head: list[tuple[str, str]],
-                 tests: list[Test], typed: dict[str, list[str]], *, defer: bool):
+                 tests: list[Test], typed: dict[str, list[str]], *, defer: bool,
+                 later: list[Test] | None = None):
         self.variables = variables
         self.head = head
         self.tests = tests
+        self.later = later or []
+        """Conditions of later subtasks (static conjuncts, entry conditions): they narrow
+        the choice of variables bound anyway, and are left to those subtasks for a variable
+        nothing else reads (checked when they come to the front)."""
         self.typed = typed
         self.defer = defer
         self.members = {var: frozenset(typed.get(kind, ())) for var, kind in variables.items()}
         self.tested = frozenset(var for test in tests for var in test.variables)
-        """The variables some condition reads: the binder binds them."""
+        """The variables the method's own conditions read (its precondition, its first
+        action's): the binder binds them."""
         self.terms = [(term, param, is_variable(term)) for term, param in head]
         self.plans: dict[frozenset[str], tuple[list[tuple], int]] = {}
 
@@ -161,7 +167,7 @@ class LateBinder:
         late_head = sorted(late & head)
         found: set[tuple[str, tuple[int, ...]]] = set()
         if len(late_head) > MOST_LATE:
-            for test in self.tests:
+            for test in (*self.tests, *self.later):
                 if test.atom is not None:
                     arity = len(test.atom[1])
                     found |= {(test.atom[0], pattern) for size in range(arity + 1)
@@ -170,13 +176,22 @@ class LateBinder:
         for size in range(len(late_head) + 1):
             for unbound in itertools.combinations(late_head, size):
                 bound = fixed | (set(late_head) - set(unbound))
-                found |= {(s[1], s[2]) for s in plan_steps(self.variables, bound, self.tests)
+                found |= {(s[1], s[2]) for s in plan_steps(self.variables, bound,
+                                                            self._tests(bound))
                           if s[0] == _MATCH}
         return found
 
+    def _tests(self, bound: set[str] | frozenset[str]) -> list[Test]:
+        """The conditions a binding checks, given the variables ``bound`` at the start:
+        the later subtasks' conditions that read a variable left unbound are left out."""
+        if not self.defer:
+            return [*self.tests, *self.later]
+        left = {v for v in self.variables if v not in bound and v not in self.tested}
+        return [*self.tests, *(t for t in self.later if not t.variables & left)]
+
     def _plan(self, bound: frozenset[str]) -> tuple[list[tuple], int]:
         compiled: list[tuple] = []
-        for step in plan_steps(self.variables, set(bound), self.tests):
+        for step in plan_steps(self.variables, set(bound), self._tests(bound)):
             if step[0] == _MATCH:
                 compiled.append((_MATCH, step[1], step[2], args_of(step[3]), step[4]))
             elif step[0] == _TEST:
