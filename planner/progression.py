@@ -110,6 +110,10 @@ class BestFirst:
         """The number of goal facts unmet in each state met, by its hash, and which of the
         positive ones are false (their indexes in ``positive``)."""
         self.positive = [(pred, args) for pred, args, value in self.goals if value is True]
+        positive = iter(range(len(self.positive)))
+        self.checked = [(pred, args, value, next(positive) if value is True else -1)
+                        for pred, args, value in self.goals]
+        """The goal facts, each with its index in ``positive`` (-1: a negated one)."""
         self.reach = GoalReach(problem.domain, self.positive)
         self.expansions = 0
 
@@ -132,10 +136,13 @@ class BestFirst:
         known = self.unmet.get(state_hash)
         if known is None:  # once per state: a decomposition's successors share theirs
             get = state.get
-            unmet = sum(1 for pred, args, value in self.goals if get(pred, args) != value)
-            false = frozenset(i for i, (pred, args) in enumerate(self.positive)
-                              if get(pred, args) is not True)
-            known = self.unmet[state_hash] = (unmet, false)
+            unmet, false = 0, []
+            for pred, args, value, positive in self.checked:
+                if get(pred, args) != value:
+                    unmet += 1
+                    if positive >= 0:
+                        false.append(positive)
+            known = self.unmet[state_hash] = (unmet, frozenset(false))
         unmet, false = known
         if false:
             lost = false - self.reach.addable(agenda)
