@@ -182,6 +182,9 @@ class DepthFirst:
         self.expansions = 0
         self.checks = DecompositionChecks(self.domain, self.goals)
         """The checks of decompositions (:mod:`planner.checks`)."""
+        self.defer = True
+        """With the late binders: whether a method's variables that its own conditions do
+        not read are left unbound (:mod:`planner.late`)."""
 
     # -- explanations ------------------------------------------------------------------
 
@@ -421,7 +424,8 @@ class DepthFirst:
         for dec in method.decompositions:
             matched = False
             assert dec.bind is not None, "the depth-first search plans HDDL methods"
-            for binding in (dec.late(env, state) if late else dec.bind(env, state)):
+            for binding in (dec.late(env, state, self.defer) if late
+                            else dec.bind(env, state)):
                 matched = True
                 subst = None
                 if late:

@@ -117,8 +117,11 @@ def resolve(value: Any, subst: dict[str, Any]) -> Any:
 
 
 class LateBinder:
-    """The late binder of a method (``defer``: its variables no test reads are left
-    unbound) or of an action's precondition (every variable bound).
+    """The late binder of a method or of an action's precondition.
+
+    ``defer`` says whether it leaves unbound the variables its own conditions do not
+    read: ``"never"`` (an action: every argument bound), ``"always"`` (the initial task
+    network) or ``"choice"`` (a method: as the search asks, :meth:`__call__`).
 
     Built from what :func:`planner.binding.compile_binder` is given.  The order of the
     lookups depends on which head variables the task's arguments bind, so one plan is
@@ -126,7 +129,7 @@ class LateBinder:
     plans may look up, for the states of the search that uses it."""
 
     def __init__(self, variables: dict[str, str], head: list[tuple[str, str]],
-                 tests: list[Test], typed: dict[str, list[str]], *, defer: bool,
+                 tests: list[Test], typed: dict[str, list[str]], *, defer: str,
                  later: list[Test] | None = None):
         self.variables = variables
         self.head = head
@@ -142,7 +145,7 @@ class LateBinder:
         """The variables the method's own conditions read (its precondition, its first
         action's): the binder binds them."""
         self.terms = [(term, param, is_variable(term)) for term, param in head]
-        self.plans: dict[frozenset[str], tuple[list[tuple], int]] = {}
+        self.plans: dict[tuple[frozenset[str], bool], tuple[list[tuple], int]] = {}
 
     def late_terms(self, params: list[str], positions: set[int]) -> set[str]:
         """The head variables that receive the task's parameters at ``positions``."""
@@ -152,7 +155,7 @@ class LateBinder:
     def leaves_unbound(self, late: set[str]) -> set[str]:
         """The variables a binding may leave unbound, when the head variables ``late``
         may come unbound (its subtasks may receive these as placeholders)."""
-        if not self.defer:
+        if self.defer == "never":
             return set()
         head = {term for term, _, variable in self.terms if variable}
         return {var for var in self.variables
@@ -176,22 +179,31 @@ class LateBinder:
         for size in range(len(late_head) + 1):
             for unbound in itertools.combinations(late_head, size):
                 bound = fixed | (set(late_head) - set(unbound))
-                found |= {(s[1], s[2]) for s in plan_steps(self.variables, bound,
-                                                            self._tests(bound))
-                          if s[0] == _MATCH}
+                for defers in {self._defers(True), self._defers(False)}:
+                    found |= {(s[1], s[2]) for s in plan_steps(self.variables, bound,
+                                                                self._tests(bound, defers))
+                              if s[0] == _MATCH}
         return found
 
-    def _tests(self, bound: set[str] | frozenset[str]) -> list[Test]:
+    @property
+    def may_defer(self) -> bool:
+        """Whether a choice to leave variables unbound changes what this binder does."""
+        return self.defer == "choice" and bool(self.leaves_unbound(set()))
+
+    def _defers(self, choice: bool) -> bool:
+        return self.defer == "always" or (self.defer == "choice" and choice)
+
+    def _tests(self, bound: set[str] | frozenset[str], defers: bool) -> list[Test]:
         """The conditions a binding checks, given the variables ``bound`` at the start:
         the later subtasks' conditions that read a variable left unbound are left out."""
-        if not self.defer:
+        if not defers:
             return [*self.tests, *self.later]
         left = {v for v in self.variables if v not in bound and v not in self.tested}
         return [*self.tests, *(t for t in self.later if not t.variables & left)]
 
-    def _plan(self, bound: frozenset[str]) -> tuple[list[tuple], int]:
+    def _plan(self, bound: frozenset[str], defers: bool) -> tuple[list[tuple], int]:
         compiled: list[tuple] = []
-        for step in plan_steps(self.variables, set(bound), self._tests(bound)):
+        for step in plan_steps(self.variables, set(bound), self._tests(bound, defers)):
             if step[0] == _MATCH:
                 compiled.append((_MATCH, step[1], step[2], args_of(step[3]), step[4]))
             elif step[0] == _TEST:
@@ -199,18 +211,19 @@ class LateBinder:
             else:
                 var = step[1]
                 objects = tuple(self.typed.get(self.variables[var], ()))
-                if self.defer and var not in self.tested and objects:
+                if defers and var not in self.tested and objects:
                     compiled.append((_DEFER, var, partial(fresh, var, objects)))
                 else:
                     compiled.append((_EACH, var, objects))
-        self.plans[bound] = (compiled, len(compiled))
-        return self.plans[bound]
+        self.plans[(bound, defers)] = (compiled, len(compiled))
+        return self.plans[(bound, defers)]
 
-    def __call__(self, env: dict[str, Any], state: FactState
+    def __call__(self, env: dict[str, Any], state: FactState, defer: bool = True
                  ) -> Iterator[tuple[dict[str, Any], dict[str, Any]]]:
         """For each binding, the binding (placeholders for what it leaves unbound) and the
         substitution of the placeholders among ``env``'s values that it bound (their names
-        to their values: objects or narrower placeholders)."""
+        to their values: objects or narrower placeholders); ``defer``: whether a method's
+        variables that its own conditions do not read are left unbound."""
         binding: dict[str, Any] = {}
         late: dict[str, list[Unbound]] = {}
         given: dict[str, Any] = {}
@@ -241,7 +254,8 @@ class LateBinder:
                     return
                 given[placeholder.name] = value
         key = frozenset(binding)
-        compiled, last = self.plans.get(key) or self._plan(key)
+        defers = self._defers(defer)
+        compiled, last = self.plans.get((key, defers)) or self._plan(key, defers)
         for found in run_steps(compiled, last, members, 0, binding, state):
             subst = dict(given)
             for term, placeholders in late.items():

@@ -211,7 +211,7 @@ class _Translator:
                         if f.kind == "not" and f.children[0].kind == "pred")
         late = LateBinder(dict(action.params), [(p, p) for p, _ in action.params],
                             [self.test(f) for f in conjuncts(action.precondition)],
-                            self.typed, defer=False)
+                            self.typed, defer="never")
         return Action(action.name, action.params, None, pre, effects, 1.0, 1.0,
                       deletes=threats, needs=needs, removes=removes, late=late)
 
@@ -259,7 +259,8 @@ class _Translator:
         subtasks = tuple(Subtask(s.name, tuple(operand(t) for t in s.args),
                                  f"({' '.join((s.name, *s.args))})", args_of(s.args))
                          for s in method.subtasks)
-        late = LateBinder(dict(method.params), head, tests[:mine], self.typed, defer=True,
+        late = LateBinder(dict(method.params), head, tests[:mine], self.typed,
+                          defer="always" if method.name == NETWORK else "choice",
                           later=tests[mine:])
         return (Decomposition(method.name, method.params, pre, subtasks, bind=bind, late=late),
                 patterns)

@@ -6,7 +6,7 @@ from __future__ import annotations
 from planner import load_hddl, validate
 from planner.ipc import read_ipc, write_ipc
 from planner.late import Unbound, search_patterns
-from planner.progression import best_first
+from planner.progression import BestFirst, best_first
 from planner.state import FactState
 
 # A workshop in Woodworking's shape: ``finish`` names a machine its method never looks at
@@ -59,7 +59,7 @@ def test_a_variable_no_condition_reads_is_left_unbound_by_the_late_binder(write)
 def test_a_placeholder_is_bound_by_the_facts_of_the_task_that_needs_it(write):
     goal = {0: "c3", 1: "c1", 2: "c4"}
     problem = load_hddl(write("d.hddl", WORKSHOP), write("p.hddl", _workshop(3, goal)))
-    result = best_first(problem, 60_000, max_nodes=200)
+    result = BestFirst(problem).run(60_000, 200)
     assert result.plan is not None, result.explain()
     assert validate(problem, result.plan) == []
     sprays = [a.args for a in result.plan.actions if a.name == "spray"]
@@ -81,6 +81,20 @@ def test_a_goal_fact_no_task_left_may_add_ends_the_branch(write):
     # no task left may colour it, and the search need not colour the other parts.
     goal = {0: "c9", 1: "c1"}
     problem = load_hddl(write("d.hddl", WORKSHOP), write("p.hddl", _workshop(7, goal)))
-    result = best_first(problem, 60_000, max_nodes=3_000)
+    result = BestFirst(problem).run(60_000, 3_000)
     assert result.plan is None and result.complete, result.explain()
     assert "(colour p0 c9) == True" in result.explain()
+
+
+def test_the_search_binds_every_variable_at_once_first_then_late(write):
+    # best_first's first search binds m-finish's machine at once (every sprayer tried,
+    # the last made first); what it finds is as valid as the late-bound plan.
+    goal = {0: "c3", 1: "c1"}
+    problem = load_hddl(write("d.hddl", WORKSHOP), write("p.hddl", _workshop(2, goal)))
+    eager = BestFirst(problem, defer=False).run(60_000, 200)
+    late = BestFirst(problem).run(60_000, 200)
+    result = best_first(problem, 60_000)
+    assert eager.plan is not None and late.plan is not None and result.plan is not None
+    assert validate(problem, result.plan) == []
+    assert write_ipc(result.plan, problem.spelling) == write_ipc(eager.plan, problem.spelling)
+    assert write_ipc(eager.plan) != write_ipc(late.plan)  # the machines differ
