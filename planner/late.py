@@ -129,21 +129,15 @@ class LateBinder:
     plans may look up, for the states of the search that uses it."""
 
     def __init__(self, variables: dict[str, str], head: list[tuple[str, str]],
-                 tests: list[Test], typed: dict[str, list[str]], *, defer: str,
-                 later: list[Test] | None = None):
+                 tests: list[Test], typed: dict[str, list[str]], *, defer: str):
         self.variables = variables
         self.head = head
         self.tests = tests
-        self.later = later or []
-        """Conditions of later subtasks (static conjuncts, entry conditions): they narrow
-        the choice of variables bound anyway, and are left to those subtasks for a variable
-        nothing else reads (checked when they come to the front)."""
         self.typed = typed
         self.defer = defer
         self.members = {var: frozenset(typed.get(kind, ())) for var, kind in variables.items()}
         self.tested = frozenset(var for test in tests for var in test.variables)
-        """The variables the method's own conditions read (its precondition, its first
-        action's): the binder binds them."""
+        """The variables some condition reads: the binder binds them."""
         self.terms = [(term, param, is_variable(term)) for term, param in head]
         self.plans: dict[tuple[frozenset[str], bool], tuple[list[tuple], int]] = {}
 
@@ -170,7 +164,7 @@ class LateBinder:
         late_head = sorted(late & head)
         found: set[tuple[str, tuple[int, ...]]] = set()
         if len(late_head) > MOST_LATE:
-            for test in (*self.tests, *self.later):
+            for test in self.tests:
                 if test.atom is not None:
                     arity = len(test.atom[1])
                     found |= {(test.atom[0], pattern) for size in range(arity + 1)
@@ -179,10 +173,8 @@ class LateBinder:
         for size in range(len(late_head) + 1):
             for unbound in itertools.combinations(late_head, size):
                 bound = fixed | (set(late_head) - set(unbound))
-                for defers in {self._defers(True), self._defers(False)}:
-                    found |= {(s[1], s[2]) for s in plan_steps(self.variables, bound,
-                                                                self._tests(bound, defers))
-                              if s[0] == _MATCH}
+                found |= {(s[1], s[2]) for s in plan_steps(self.variables, bound, self.tests)
+                          if s[0] == _MATCH}
         return found
 
     @property
@@ -193,17 +185,9 @@ class LateBinder:
     def _defers(self, choice: bool) -> bool:
         return self.defer == "always" or (self.defer == "choice" and choice)
 
-    def _tests(self, bound: set[str] | frozenset[str], defers: bool) -> list[Test]:
-        """The conditions a binding checks, given the variables ``bound`` at the start:
-        the later subtasks' conditions that read a variable left unbound are left out."""
-        if not defers:
-            return [*self.tests, *self.later]
-        left = {v for v in self.variables if v not in bound and v not in self.tested}
-        return [*self.tests, *(t for t in self.later if not t.variables & left)]
-
     def _plan(self, bound: frozenset[str], defers: bool) -> tuple[list[tuple], int]:
         compiled: list[tuple] = []
-        for step in plan_steps(self.variables, set(bound), self._tests(bound, defers)):
+        for step in plan_steps(self.variables, set(bound), self.tests):
             if step[0] == _MATCH:
                 compiled.append((_MATCH, step[1], step[2], args_of(step[3]), step[4]))
             elif step[0] == _TEST:

@@ -237,31 +237,24 @@ class _Translator:
         reads = {f.children[0] for f in whole.walk() if f.kind == "pred"} if whole else set()
         pre = Expr(text, matches, frozenset(dict(method.params)), frozenset(reads), "bool")
         conditions = list(conjuncts(whole))
-        later = []
         for position, sub in enumerate(method.subtasks):
             action = domain.actions.get(sub.name)
             if action is None:
                 continue
             rename = {p: t for (p, _), t in zip(action.params, sub.args, strict=True)}
-            for f in conjuncts(action.precondition):
-                if position == 0:
-                    conditions.append(_rename(f, rename))
-                elif self.static(f):
-                    later.append(_rename(f, rename))
-        own = len(conditions)
-        conditions += later + self.hoisted(method)
-        unique: dict[str, int] = {}
-        for index, formula in enumerate(conditions):  # each once, at its first place
-            unique.setdefault(str(formula), index)
-        tests = [self.test(conditions[i]) for i in unique.values()]
+            conditions += [_rename(f, rename) for f in conjuncts(action.precondition)
+                           if position == 0 or self.static(f)]
+        conditions += self.hoisted(method)
+        unique: dict[str, hddl.Formula] = {}
+        for formula in conditions:  # each once, at its first place
+            unique.setdefault(str(formula), formula)
+        tests = [self.test(f) for f in unique.values()]
         bind, patterns = compile_binder(dict(method.params), head, tests, self.typed)
-        mine = sum(1 for i in unique.values() if i < own)
+        late = LateBinder(dict(method.params), head, tests, self.typed,
+                          defer="always" if method.name == NETWORK else "choice")
         subtasks = tuple(Subtask(s.name, tuple(operand(t) for t in s.args),
                                  f"({' '.join((s.name, *s.args))})", args_of(s.args))
                          for s in method.subtasks)
-        late = LateBinder(dict(method.params), head, tests[:mine], self.typed,
-                          defer="always" if method.name == NETWORK else "choice",
-                          later=tests[mine:])
         return (Decomposition(method.name, method.params, pre, subtasks, bind=bind, late=late),
                 patterns)
 
