@@ -42,7 +42,7 @@ from planner.binding import (
     args_of,
     is_variable,
     plan_steps,
-    run_steps,
+    stepper,
 )
 from planner.domain import Domain
 from planner.state import FactState
@@ -139,7 +139,9 @@ class LateBinder:
         self.tested = frozenset(var for test in tests for var in test.variables)
         """The variables some condition reads: the binder binds them."""
         self.terms = [(term, param, is_variable(term)) for term, param in head]
-        self.plans: dict[tuple[frozenset[str], bool], tuple[list[tuple], int]] = {}
+        self.plans: dict[tuple[frozenset[str], bool], Any] = {}
+        """The compiled plan (:func:`planner.binding.stepper`) for each set of head
+        variables bound and choice of deferring."""
 
     def late_terms(self, params: list[str], positions: set[int]) -> set[str]:
         """The head variables that receive the task's parameters at ``positions``."""
@@ -185,7 +187,7 @@ class LateBinder:
     def _defers(self, choice: bool) -> bool:
         return self.defer == "always" or (self.defer == "choice" and choice)
 
-    def _plan(self, bound: frozenset[str], defers: bool) -> tuple[list[tuple], int]:
+    def _plan(self, bound: frozenset[str], defers: bool) -> Any:
         compiled: list[tuple] = []
         for step in plan_steps(self.variables, set(bound), self.tests):
             if step[0] == _MATCH:
@@ -199,8 +201,8 @@ class LateBinder:
                     compiled.append((_DEFER, var, partial(fresh, var, objects)))
                 else:
                     compiled.append((_EACH, var, objects))
-        self.plans[(bound, defers)] = (compiled, len(compiled))
-        return self.plans[(bound, defers)]
+        extend = self.plans[(bound, defers)] = stepper(compiled, self.members)
+        return extend
 
     def __call__(self, env: dict[str, Any], state: FactState, defer: bool = True
                  ) -> Iterator[tuple[dict[str, Any], dict[str, Any]]]:
@@ -239,8 +241,8 @@ class LateBinder:
                 given[placeholder.name] = value
         key = frozenset(binding)
         defers = self._defers(defer)
-        compiled, last = self.plans.get((key, defers)) or self._plan(key, defers)
-        for found in run_steps(compiled, last, members, 0, binding, state):
+        extend = self.plans.get((key, defers)) or self._plan(key, defers)
+        for found in extend(0, binding, state):
             subst = dict(given)
             for term, placeholders in late.items():
                 value = found[term]
