@@ -73,7 +73,7 @@ from typing import Any
 from planner.checks import DecompositionChecks, task_call
 from planner.domain import SOLE_AGENT, Action, Method, Problem
 from planner.evaluate import Evaluator
-from planner.late import substitute
+from planner.late import same, substitute
 from planner.plan import Plan, fact_text
 from planner.search import Failure, Result, deleted_goal
 from planner.state import FactState, State
@@ -393,7 +393,7 @@ class DepthFirst:
             if node is None:
                 break
             node, label, _, at, _, _ = node
-            if at == state_hash and label == (name, args):
+            if at == state_hash and label == (name, args) and same(label[1], args):
                 count += 1
                 if count > self.repeats:
                     return True

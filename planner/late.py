@@ -90,6 +90,15 @@ def has_unbound(args: tuple) -> bool:
     return any(a.__class__ is Unbound for a in args)
 
 
+def same(a: tuple, b: tuple) -> bool:
+    """Whether two argument tuples that ``==`` found equal are the same arguments: a
+    placeholder equals anything, so it is the same only as itself."""
+    if not (has_unbound(a) or has_unbound(b)):
+        return True
+    return all(x is y or (x.__class__ is not Unbound and y.__class__ is not Unbound)
+               for x, y in zip(a, b, strict=True))
+
+
 def substitute(agenda: Any, subst: dict[str, Any]) -> Any:
     """The task stack with each placeholder named in ``subst`` replaced by its value
     (entries are ``(task, args, path, hash, rest)``; the hashes are made again)."""

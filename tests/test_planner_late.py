@@ -4,6 +4,7 @@ still add (planner/reach.py), in the goal-guided search (planner/progression.py)
 from __future__ import annotations
 
 from planner import load_hddl, validate
+from planner.depthfirst import DepthFirst
 from planner.ipc import read_ipc, write_ipc
 from planner.late import Unbound, search_patterns
 from planner.progression import BestFirst, best_first
@@ -98,3 +99,40 @@ def test_the_search_binds_every_variable_at_once_first_then_late(write):
     assert validate(problem, result.plan) == []
     assert write_ipc(result.plan, problem.spelling) == write_ipc(eager.plan, problem.spelling)
     assert write_ipc(eager.plan) != write_ipc(late.plan)  # the machines differ
+
+
+ALCHEMY = """\
+(define (domain alchemy) (:requirements :typing :hierarchy :negative-preconditions)
+  (:types stuff)
+  (:predicates (have ?x - stuff))
+  (:task get :parameters (?x - stuff))
+  (:method already :parameters (?x - stuff) :task (get ?x) :precondition (have ?x)
+    :ordered-subtasks ())
+  (:method transmute :parameters (?x ?y - stuff) :task (get ?x)
+    :precondition (not (have ?x)) :ordered-subtasks (and (get ?y) (convert ?y ?x)))
+  (:action convert :parameters (?y ?x - stuff) :precondition (have ?y)
+    :effect (and (not (have ?y)) (have ?x))))
+"""
+
+
+def test_a_placeholder_is_not_taken_for_the_task_an_ancestor_decomposed(write):
+    # transmute's ?y is read by no condition: get(?y) is decomposed in the very state
+    # where get(gold) was, and is not the same task (a placeholder equals anything,
+    # but the repeated-decomposition check must not count it as get(gold)).
+    problem = load_hddl(write("d.hddl", ALCHEMY), write("p.hddl", (
+        "(define (problem p) (:domain alchemy) (:objects gold lead - stuff)\n"
+        "  (:htn :ordered-subtasks (and (get gold))) (:init (have lead)))\n")))
+    result = BestFirst(problem).run(60_000, 1_000)
+    assert result.plan is not None, result.explain()
+    assert validate(problem, result.plan) == []
+    assert [(a.name, a.args) for a in result.plan.actions] == [("convert", ("lead", "gold"))]
+    # The check itself: get(?y) below get(gold), in the same state, is not a repetition,
+    # nor is a placeholder the same as another placeholder; it is the same as itself.
+    steps = DepthFirst(problem)
+    placeholder, other = Unbound("?y#1", ("gold", "lead")), Unbound("?y#2", ("gold", "lead"))
+    parent = (None, ("get", ("gold",)), 0, 7, 1, 1)
+    for args in [(placeholder,), (placeholder,)]:  # the second time looks at the ancestors
+        assert not steps._repeats("get", args, parent, 7)
+    assert not steps._repeats("get", (other,), (parent, ("get", (placeholder,)), 0, 7, 2, 2), 7)
+    assert not steps._repeats("get", (other,), (parent, ("get", (placeholder,)), 0, 7, 2, 2), 7)
+    assert steps._repeats("get", (placeholder,), (parent, ("get", (placeholder,)), 0, 7, 2, 2), 7)
