@@ -1,8 +1,10 @@
 """shary's ROS 2 bridge against a bare rclpy client and its goals (issue 23), in one run.
 
-A child process (this script with ``--serve``) serves two
+A child process (this script with ``--serve``) serves
 ``test_msgs/action/NestedMessage`` actions, ``/bench/instant`` (succeeds at
-once) and ``/bench/long`` (runs until cancelled, printing when a cancel request
+once; the same again as ``/bench/instant_bare`` and ``/bench/instant_crowded``,
+one per client, so that no client hears the status messages of another's goals)
+and ``/bench/long`` (runs until cancelled, printing when a cancel request
 arrives, with its wall time), and publishes ``std_msgs/String`` perception
 messages on request.  Against it, in this process:
 
@@ -45,6 +47,11 @@ from typing import Any
 HERE = Path(__file__).resolve().parent
 
 
+INSTANT_PEERS = ("", "_bare", "_crowded")
+"""The instant action once per client (shary's, the bare one's, the crowded one's): an
+action's status messages carry every goal its server keeps (rclpy: for 15 minutes) and
+every client of the action takes each of them, so clients that share an action slow
+each other down, the more so the more of them spin beside the one measured."""
 TOPICS = ("/bench/facts", "/bench/bare", "/bench/drained")
 """Perception topics: into shary's facts, to a bare rclpy subscription with one callback
 per message, and to one that drains what waits with ``take_message``."""
@@ -90,7 +97,8 @@ def serve() -> None:
         print("cancel", time.time(), flush=True)
         return CancelResponse.ACCEPT
 
-    servers = [ActionServer(node, NestedMessage, "/bench/instant", instant, callback_group=group),
+    servers = [*(ActionServer(node, NestedMessage, f"/bench/instant{peer}", instant,
+                              callback_group=group) for peer in INSTANT_PEERS),
                ActionServer(node, NestedMessage, "/bench/long", long, cancel_callback=cancel,
                             callback_group=group)]
     publishers = {topic: node.create_publisher(String, topic, DEPTH) for topic in TOPICS}
@@ -220,7 +228,7 @@ def measure(args: argparse.Namespace) -> dict[str, Any]:
     bare_node = rclpy.create_node("bare_bench")
     bare_exec = rclpy.executors.SingleThreadedExecutor()
     bare_exec.add_node(bare_node)
-    bare_client = ActionClient(bare_node, NestedMessage, "/bench/instant")
+    bare_client = ActionClient(bare_node, NestedMessage, "/bench/instant_bare")
     threading.Thread(target=bare_exec.spin, daemon=True).start()
     bare_client.wait_for_server(timeout_sec=30)
     # the peer's peer: a bare client on a node with as many action clients as shary's
@@ -228,7 +236,7 @@ def measure(args: argparse.Namespace) -> dict[str, Any]:
     crowded_node = rclpy.create_node("crowded_bench")
     crowded_exec = rclpy.executors.SingleThreadedExecutor()
     crowded_exec.add_node(crowded_node)
-    crowded_client = ActionClient(crowded_node, NestedMessage, "/bench/instant")
+    crowded_client = ActionClient(crowded_node, NestedMessage, "/bench/instant_crowded")
     extra = [ActionClient(crowded_node, NestedMessage, f"/bench/other{i}")
              for i in range(len(binding.tasks) - 1)]
     threading.Thread(target=crowded_exec.spin, daemon=True).start()

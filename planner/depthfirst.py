@@ -177,6 +177,12 @@ class DepthFirst:
         self.max_depth = MAX_DEPTH
         self.decomposed: set[int] = set()
         """The (task, arguments, state) hashes of every decomposition made so far."""
+        self.ground: dict[tuple[str, tuple], dict[str, list[dict[str, str]]]] | None = None
+        """The ground model's bindings of the methods that leave a variable to its type
+        (:attr:`planner.grounding.Grounded.bindings`), when a search has them: those
+        decompose the task, each checked against the method's precondition in the
+        state, rather than the binder (AssemblyHierarchical's ``m1``: the 240 pairs of
+        ports some ``connect_k`` may join, not the 14,400 pairs of ports)."""
         self.missed = ""
         """The goals the first complete decomposition missed (when one did)."""
         self.expansions = 0
@@ -421,11 +427,20 @@ class DepthFirst:
         env = {p: a for (p, _), a in zip(method.params, args, strict=True)}
         root = parent[2]
         tried = []
+        known = None if self.ground is None else self.ground.get((method.name, args))
         for dec in method.decompositions:
             matched = False
             assert dec.bind is not None, "the depth-first search plans HDDL methods"
-            for binding in (dec.late(env, state, self.defer) if late
-                            else dec.bind(env, state)):
+            ground = None if known is None else known.get(dec.name)
+            if ground is not None:
+                bindings = _holding(dec, env, ground, state)
+                if late:
+                    bindings = ((binding, None) for binding in bindings)
+            elif late:
+                bindings = dec.late(env, state, self.defer)
+            else:
+                bindings = dec.bind(env, state)
+            for binding in bindings:
                 matched = True
                 subst = None
                 if late:
@@ -456,3 +471,12 @@ class DepthFirst:
         if tried and len(tried) == len(method.decompositions):
             self._fail(parent, task_call(method.name, args),
                        "no decomposition applies (" + "; ".join(tried) + ")")
+
+
+def _holding(dec: Any, env: dict[str, Any], bindings: list[dict[str, str]],
+             state: State) -> Iterator[dict[str, str]]:
+    """The ground bindings of a decomposition whose precondition holds in ``state``."""
+    pre = dec.pre
+    for binding in bindings:
+        if pre is None or pre.fn({**env, **binding}, state.get):
+            yield binding

@@ -300,6 +300,9 @@ class Problem:
     """HDDL problems: names the files spell otherwise than in lower case, with that
     spelling (:func:`planner.ipc.write_ipc` writes them so: the IPC verifier compares
     names case-sensitively)."""
+    lifted: tuple[Any, Any] | None = None
+    """HDDL problems: the domain and problem as read (:mod:`planner.hddl`), for the
+    analyses that ground them (:mod:`planner.grounding`)."""
     assigned: tuple[Assignment, ...] = ()
     """Steps given to an agent (:class:`Assignment`): a plan honours every one (the
     total-order search; plan negotiation, docs/communication.md)."""

@@ -45,12 +45,14 @@ import time
 from collections.abc import Iterator
 from typing import Any
 
+from planner import grounding
 from planner.depthfirst import MAX_NODES, DepthFirst
 from planner.domain import Problem
 from planner.evaluate import Evaluator
 from planner.late import Unbound, has_unbound, resolve, search_patterns, substitute
 from planner.plan import fact_text
 from planner.reach import GoalReach
+from planner.relaxed import Relaxed
 from planner.search import Result
 
 GOAL_WEIGHT = 10
@@ -85,16 +87,22 @@ def least_work(problem: Problem) -> dict[str, float]:
 
 
 def best_first(problem: Problem, budget_ms: float | None = None, *,
-               max_nodes: int = MAX_NODES) -> Result:
+               max_nodes: int = MAX_NODES, relaxed: Relaxed | None = None) -> Result:
     """The first plan of a greedy best-first search of ``problem`` (HDDL: its methods
-    have binders), within ``budget_ms`` (default: the problem's) and ``max_nodes``.
+    have binders), within ``budget_ms`` (default: the problem's) and ``max_nodes``,
+    guided by ``relaxed`` (:func:`relaxed_model`) when given, else by the goals unmet
+    and the task stack's least work.
 
-    When some method has variables the late binders may leave unbound, a first search
-    of :data:`BOUND_NODES` nodes binds them at once (the way the facts' index or name
-    order proposes values sometimes finds a plan that late binding misses: Woodworking's
-    ``09--p03-complete`` in 2,715 nodes, against none in 250,000), then the search
-    with late binding gets the rest of the budgets."""
+    Without ``relaxed``, when some method has variables the late binders may leave
+    unbound, a first search of :data:`BOUND_NODES` nodes binds them at once (the way
+    the facts' index or name order proposes values sometimes finds a plan that late
+    binding misses: Woodworking's ``09--p03-complete`` in 2,715 nodes, against none in
+    250,000), then the search with late binding gets the rest of the budgets.  With
+    ``relaxed``, its ground model binds the tasks it holds, and method variables are
+    bound at once."""
     budget = problem.budget_ms if budget_ms is None else budget_ms
+    if relaxed is not None:
+        return BestFirst(problem, relaxed, defer=False).run(budget, max_nodes)
     if not any(dec.late is not None and dec.late.may_defer
                for method in problem.domain.methods.values()
                for dec in method.decompositions):
@@ -110,6 +118,13 @@ def best_first(problem: Problem, budget_ms: float | None = None, *,
     return second
 
 
+def relaxed_model(problem: Problem) -> Relaxed | None:
+    """The relaxed-composition heuristic of an HDDL problem (:mod:`planner.relaxed`), or
+    None when the problem does not ground within :mod:`planner.grounding`'s limits."""
+    model = None if problem.lifted is None else grounding.ground(*problem.lifted)
+    return None if model is None else Relaxed(model, problem.goals)
+
+
 class _Stop(Exception):
     """The node or time budget ran out."""
 
@@ -117,7 +132,8 @@ class _Stop(Exception):
 class BestFirst:
     """One best-first search for one problem (see the module's docstring)."""
 
-    def __init__(self, problem: Problem, defer: bool = True):
+    def __init__(self, problem: Problem, relaxed: Relaxed | None = None,
+                 defer: bool = True):
         self.problem = problem
         self.steps = DepthFirst(problem)
         self.steps.defer = defer
@@ -126,6 +142,12 @@ class BestFirst:
         nodes."""
         self.goals = tuple((pred, args, value) for (pred, args), value in problem.goals.items())
         self.work = least_work(problem)
+        self.relaxed = relaxed
+        """The relaxed-composition heuristic (:mod:`planner.relaxed`), when given: it
+        replaces the goals unmet and the least work, and its ground model's bindings
+        decompose the tasks it holds."""
+        if relaxed is not None:
+            self.steps.ground = relaxed.bindings
         self.stack_work: dict[int, float] = {}
         """The least work of each task stack met, by its hash (stacks share their tails)."""
         self.unmet: dict[int, tuple[int, frozenset[int]]] = {}
@@ -155,6 +177,9 @@ class BestFirst:
 
     def _estimate(self, node: tuple) -> float:
         state, state_hash, agenda, _ = node
+        if self.relaxed is not None:
+            plan, unmet = self.relaxed.estimate(state, state_hash, agenda)
+            return GOAL_WEIGHT * unmet + plan
         known = self.unmet.get(state_hash)
         if known is None:  # once per state: a decomposition's successors share theirs
             get = state.get

@@ -143,7 +143,8 @@ class _Translator:
                         {p: tuple(sorted(s)) for p, s in patterns.items()}, self.additions())
         return Problem(hproblem.name, domain, dict(self.objects), initial, tasks, goals,
                        budget_ms=BUDGET_MS, file=hproblem.file,
-                       spelling={**hdomain.spelling, **hproblem.spelling})
+                       spelling={**hdomain.spelling, **hproblem.spelling},
+                       lifted=(hdomain, hproblem))
 
     # -- actions and methods ---------------------------------------------------------
 

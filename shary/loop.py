@@ -8,7 +8,11 @@ and a deterministic order for a given seed.
 
 With a :class:`~shary.clock.SimulatedClock` (headless runs, tests), whoever
 drives the world calls :meth:`EventLoop.advance`; with a :class:`WallClock`
-(a real robot), :meth:`EventLoop.run_for` sleeps until the next timer.
+(a real robot), :meth:`EventLoop.run_for` sleeps until the next timer in its
+*waiter*: by default a :class:`threading.Event` that other threads set, or a
+middleware's own wait, so that its callbacks run on the loop's thread (ROS 2:
+:class:`shary.ros.node.RosNode` waits in rcl's wait set, and the loop never
+imports rclpy).
 """
 
 from __future__ import annotations
@@ -19,7 +23,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Protocol
 
 from shary.clock import Clock, SimulatedClock, Timer
 
@@ -51,6 +55,34 @@ class WallClock(SimulatedClock):
         return super().call_later(delay, callback, *args)
 
 
+class Waiter(Protocol):
+    """Where :meth:`EventLoop.run_for` sleeps between timers."""
+
+    def wait(self, timeout: float) -> None:
+        """Sleep up to ``timeout`` seconds, less if woken or if work came (work of the
+        waiter's own, run on this thread, puts its events with :meth:`EventLoop.call_soon`)."""
+
+    def wake(self) -> None:
+        """From any thread: end the current or the next :meth:`wait` now."""
+
+
+class EventWaiter:
+    """The default waiter: a :class:`threading.Event` (a lock acquired with the timeout:
+    no polling), set by :meth:`EventLoop.call_soon_threadsafe`."""
+
+    def __init__(self) -> None:
+        self._event = threading.Event()
+
+    def wait(self, timeout: float) -> None:
+        self._event.wait(timeout)
+        # cleared before the loop takes what other threads gave: a wake after this has
+        # its work taken now, or wakes the next wait
+        self._event.clear()
+
+    def wake(self) -> None:
+        self._event.set()
+
+
 class EventLoop:
     """The supervisor's single-threaded loop: a clock, a FIFO of ready work, a seeded RNG."""
 
@@ -62,7 +94,9 @@ class EventLoop:
         self._soon = self.call_soon  # one bound method for every timer, not one each
         self._settled = False
         self._from_threads: deque[tuple[Callable[..., Any], tuple]] = deque()
-        self._wake = threading.Event()
+        self.waiter: Waiter = EventWaiter()
+        """Where :meth:`run_for` sleeps (replaced by a middleware that runs its callbacks
+        on this thread: :meth:`shary.ros.node.RosNode.attach`)."""
         self.idle_hooks: list[Callable[[], Any]] = []
         """Called each time the loop becomes idle after work (the context log's flush)."""
 
@@ -95,21 +129,20 @@ class EventLoop:
 
     def call_soon_threadsafe(self, callback: Callable[..., Any], *args: Any,
                              wake: bool = True) -> None:
-        """From another thread (a middleware's, e.g. ROS 2's executor): run
-        ``callback(*args)`` on this loop soon, waking it if it sleeps in :meth:`run_for`
+        """From another thread (a console's, a signal handler): run ``callback(*args)`` on
+        this loop soon, waking it if it sleeps in :meth:`run_for`
         (with ``wake=False``, the next time it wakes or goes round: news that can wait,
         spared a thread switch).  Such callbacks run in the order they were given, before
         the timers due at the same time.  The only entry that is safe from another thread."""
         self._from_threads.append((callback, args))
         if wake:
-            self._wake.set()
+            self.waiter.wake()
 
     def wake(self) -> None:
         """From another thread: wake the loop if it sleeps (to run what was given quietly)."""
-        self._wake.set()
+        self.waiter.wake()
 
     def _take_from_threads(self) -> None:
-        self._wake.clear()
         taken, ready = self._from_threads, self._ready
         while taken:
             ready.append(taken.popleft())
@@ -146,17 +179,18 @@ class EventLoop:
         self.run_until_idle()
 
     def run_for(self, seconds: float) -> None:
-        """Real time: run for ``seconds``, sleeping between timers (woken early by
-        :meth:`call_soon_threadsafe`)."""
+        """Real time: run for ``seconds``, sleeping between timers in the :attr:`waiter`
+        (woken early by :meth:`call_soon_threadsafe`, or by the waiter's own work)."""
         end = self.clock.now() + seconds
         self.run_until_idle()
         while self.clock.now() < end:
             due = self.clock.next_due() if isinstance(self.clock, SimulatedClock) else None
             wake = end if due is None else min(due, end)
             if not self._from_threads:
-                self._wake.wait(max(0.0, wake - self.clock.now()))
+                self.waiter.wait(max(0.0, wake - self.clock.now()))
             if self._from_threads:  # before the timers now due: a goal's answer that came
-                self._take_from_threads()  # before its deadline counts
+                self._take_from_threads()  # before its deadline counts (the waiter's own
+                # work is already on the ready queue, before them too)
             if isinstance(self.clock, SimulatedClock):
                 self.clock.advance_to(self.clock.now())
             self.run_until_idle()

@@ -214,7 +214,7 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
             return ros.executors.ready() and all(p.get_subscription_count() for p in listeners)
 
         deadline = time.monotonic() + wait
-        while not (ros.perception.messages and node.call(ready)):
+        while not (ros.perception.messages and ready()):
             if time.monotonic() > deadline:
                 return (f"no simulated robot answered on ROS 2 within {wait:g} s (its facts on "
                         f"{binding.facts[0].topic}, its action servers): start it with "
@@ -233,8 +233,8 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
                                              atomic=library.atomic))
         if stack is not None and plan_pub is not None:
             follower = stack.follow(sup, scenario.shared_plan["decision-wait"])
-            follower.watchers.append(lambda event, task: node.post(
-                plan_pub.publish, String(data=json.dumps(
+            follower.watchers.append(lambda event, task: plan_pub.publish(
+                String(data=json.dumps(
                     {"event": event, "task": task, "current": follower.current,
                      "finished": follower.finished,
                      "labels": {t: p.label() for t, p in follower.plan.primitive.items()}}))))

@@ -169,6 +169,7 @@ class RosWorld:
         self.world, self.node, self.binding = world, node, binding
         self.report = report or (lambda t, who, kind, text: None)
         self.loop = EventLoop(seed=seed)
+        node.attach(self.loop)  # what comes over ROS 2 runs on the world's loop
         self.facts = FactDatabase()
         robot = scenario.robot
         world.add_robot(robot, scenario.model, scenario.robot_at)
@@ -207,10 +208,10 @@ class RosWorld:
             node.subscription(String, f"{SUPERVISOR}/plan",
                               lambda m: node.put(self.follower.hear, m.data))
 
-    # -- goals (the callbacks run on the executor's thread; the work on the world's) -----
+    # -- goals (rclpy's callbacks put them on the world's loop) -------------------------
 
     def start(self, atomic: str, task: Any, key: bytes, message: Any, end: Any) -> None:
-        """Perform ``atomic`` for a goal (on the world's thread)."""
+        """Perform ``atomic`` for a goal (on the world's loop)."""
         from shary.ros.binding import import_interface
         from shary.ros.messages import read_field
 
@@ -260,14 +261,14 @@ class RosWorld:
         from std_msgs.msg import String
 
         message = {"agent": agent, "act": act, "data": data, "task": task}
-        self.node.post(self.act_pub.publish, String(data=json.dumps(message)))
+        self.act_pub.publish(String(data=json.dumps(message)))
 
     def send_speech(self, agent: str, sentence: str) -> None:
         from std_msgs.msg import String
 
         publisher = self.speech_pubs.get(agent)
         if publisher is not None:
-            self.node.post(publisher.publish, String(data=sentence))
+            publisher.publish(String(data=sentence))
 
     def say(self, who: str, text: str) -> None:
         self.report(self.loop.now(), who, "speech", text)
@@ -289,16 +290,16 @@ class RosWorld:
         again = wall - self._published_at >= REPUBLISH
         if self.quiet != self._quiet or again:
             self._quiet = self.quiet
-            self.node.post(self.quiet_pub.publish, Bool(data=self._quiet))
+            self.quiet_pub.publish(Bool(data=self._quiet))
         lines = "\n".join(sorted(f"{s} {p} {_literal(o)}"
                                  for s, p, o in self.facts.triples("robot")))
         if lines != self._published or again:
             self._published, self._published_at = lines, wall
-            self.node.post(self.fact_pub.publish, String(data=lines))
+            self.fact_pub.publish(String(data=lines))
 
     def supervised(self) -> bool:
         """Whether a supervisor listens to the people (its ``person_act`` subscription)."""
-        return bool(self.node.call(self.act_pub.get_subscription_count))
+        return bool(self.act_pub.get_subscription_count())
 
     def serve(self, seconds: float | None = None, stopping: list[int] | None = None,
               starting: Any = None) -> bool:
@@ -314,9 +315,9 @@ class RosWorld:
             person.refresh()
         self.perception.start()
         while not stopping and not self.supervised():
-            self.node.drain()
+            self.loop.run_until_idle()
             self.publish(time.monotonic())
-            time.sleep(WAITING)
+            self.node.spin_for(WAITING)
         if stopping:
             return False
         if starting is not None:
@@ -325,7 +326,7 @@ class RosWorld:
             person.begin()
         origin = looked = time.monotonic()
         while not stopping and (seconds is None or self.loop.now() < seconds):
-            self.node.drain()
+            self.loop.run_until_idle()
             wall = time.monotonic() - origin
             if wall > self.loop.now():
                 self.loop.advance(wall - self.loop.now())
@@ -334,7 +335,7 @@ class RosWorld:
                 looked = time.monotonic()
                 if not self.supervised():
                     return True
-            time.sleep(STEP)
+            self.node.spin_for(STEP)
         return False
 
 

@@ -96,3 +96,34 @@ def test_settle_freezes_the_loaded_world_once():
     finally:
         gc.unfreeze()
         gc.set_threshold(*before)
+
+
+def test_run_for_sleeps_in_its_waiter_whose_work_runs_before_the_timers_then_due():
+    """A middleware plugged in as the loop's waiter (ROS 2: the node) runs its callbacks
+    while the loop waits; what they put on the loop runs before the timers due by then,
+    and work given from another thread wakes the waiter."""
+    import time
+
+    loop = EventLoop(WallClock())
+    seen: list[str] = []
+
+    class Waiter:
+        def __init__(self) -> None:
+            self.timeouts: list[float] = []
+            self.woken = 0
+
+        def wait(self, timeout: float) -> None:
+            self.timeouts.append(timeout)
+            time.sleep(timeout)
+            loop.call_soon(seen.append, "waiter's work")
+
+        def wake(self) -> None:
+            self.woken += 1
+
+    waiter = loop.waiter = Waiter()
+    loop.call_later(0.05, seen.append, "timer")
+    loop.run_for(0.1)
+    assert seen[:2] == ["waiter's work", "timer"]
+    assert waiter.timeouts[0] <= 0.05  # up to the timer, not the whole run
+    loop.call_soon_threadsafe(seen.append, "given")
+    assert waiter.woken == 1

@@ -128,3 +128,73 @@ def test_a_goal_shary_cannot_do_is_rejected_and_a_cancel_cancels_the_task(write,
         assert [e["outcome"] for e in ends] == ["cancelled"]
     finally:
         node.close()
+
+
+def test_the_node_has_no_thread_its_callbacks_and_served_goals_run_on_the_loops(
+        ros_domain, monkeypatch):
+    """The engine's loop spins the node itself: no thread is started for ROS, a
+    subscription's callback and a served goal run on the loop's thread, and a goal served
+    and sent by the same node gets its result as soon as the engine ends it (not when the
+    loop's wait would have ended)."""
+    from std_msgs.msg import String
+    from test_msgs.action import NestedMessage
+
+    import shary.ros.node as ros_node
+    from shary.ros.node import RosNode
+
+    monkeypatch.setattr(ros_node, "LONGEST_WAIT", 60.0)  # no wait cut short by the cap
+    before = set(threading.enumerate())
+    loop = EventLoop(WallClock())
+    with RosNode("shary_one_thread", domain_id=ros_domain) as node:
+        node.attach(loop)
+        on: list[tuple[str, int]] = []
+        node.subscription(String, "/one/thread",
+                          lambda m: on.append((m.data, threading.get_ident())))
+
+        def start(key, goal, end):
+            on.append(("goal", threading.get_ident()))
+            loop.call_later(0.1, end, NestedMessage.Result())
+
+        node.serve_goals(NestedMessage, "/one/act", start, lambda key: None)
+        client = node.action_client(NestedMessage, "/one/act")
+        publisher = node.publisher(String, "/one/thread")
+        assert set(threading.enumerate()) == before
+        run_until(loop, lambda: publisher.get_subscription_count() and client.server_is_ready())
+        publisher.publish(String(data="hello"))
+        results: list = []
+        sent = loop.now()
+        client.send_goal_async(NestedMessage.Goal()).add_done_callback(
+            lambda f: f.result().get_result_async().add_done_callback(
+                lambda r: results.append((r.result().status, loop.now()))))
+        loop.run_for(3.0)
+        assert sorted(on) == [("goal", threading.get_ident()), ("hello", threading.get_ident())]
+        assert [status for status, _ in results] == [4]  # SUCCEEDED
+        assert results[0][1] - sent < 1.5
+        assert set(threading.enumerate()) == before
+    assert loop.waiter is not node
+
+
+def test_work_from_another_thread_wakes_the_loop_and_its_timers_keep_their_time(
+        ros_domain, monkeypatch):
+    """While the loop waits in rcl's wait set, work given from another thread runs at once,
+    and a timer that work sets fires when due: rclpy's executor, woken by the work's task,
+    would otherwise wait on with the timeout it began with (here the 3 s left)."""
+    import shary.ros.node as ros_node
+    from shary.ros.node import RosNode
+
+    monkeypatch.setattr(ros_node, "LONGEST_WAIT", 60.0)  # no wait cut short by the cap
+    loop = EventLoop(WallClock())
+    with RosNode("shary_waits", domain_id=ros_domain) as node:
+        node.attach(loop)
+        seen: list[tuple[str, float]] = []
+
+        def given() -> None:
+            seen.append(("given", loop.now()))
+            loop.call_later(0.1, lambda: seen.append(("timer", loop.now())))
+
+        threading.Timer(0.2, loop.call_soon_threadsafe, (given,)).start()
+        start = loop.now()
+        loop.run_for(3.0)
+    assert [what for what, _ in seen] == ["given", "timer"]
+    assert seen[0][1] - start < 1.5  # woken, not at the end of the wait
+    assert seen[1][1] - seen[0][1] < 1.5  # due after 0.1 s, not when the first wait ends

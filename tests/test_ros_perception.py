@@ -138,12 +138,12 @@ def test_a_line_that_names_nothing_is_refused_and_the_rest_are_facts(write, ros_
         RosPerception(node, binding, facts, loop,
                       record=lambda kind, **data: rows.append((kind, data)))
         publish = node.publisher(String, "/robot/facts", depth=10)
-        node.post(publish.publish, String(data="alice looksAt jido\na b foo:x\nbob sees a?b"))
+        publish.publish(String(data="alice looksAt jido\na b foo:x\nbob sees a?b"))
         run_until(loop, lambda: facts.holds("alice", "looksAt", "jido"))
         loop.run_for(0.2)
         assert facts.objects("a", "b") == [] and facts.objects("bob", "sees") == []
         refused = [data for kind, data in rows if kind == "refused"]
         assert sorted(r["line"] for r in refused) == ["a b foo:x", "bob sees a?b"]
         assert all(r["topic"] == "/robot/facts" and r["reason"] for r in refused)
-        node.post(publish.publish, String(data="alice looksAt tv"))
+        publish.publish(String(data="alice looksAt tv"))
         run_until(loop, lambda: facts.holds("alice", "looksAt", "tv"))

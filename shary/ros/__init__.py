@@ -5,7 +5,7 @@ Only this package imports rclpy (the ``ros`` extra: ``pip install '.[ros]'``);
 the engine, the planner and the simulator never do.  Its modules, one per
 concept: :mod:`~shary.ros.env` (the wheels' libraries, traffic kept on this
 host), :mod:`~shary.ros.binding` (the robot binding file), :mod:`~shary.ros.node`
-(the one node, its executor thread and the inbox), :mod:`~shary.ros.executors`
+(the one node, spun by the engine's loop), :mod:`~shary.ros.executors`
 (atomic tasks as actions, services and topics), :mod:`~shary.ros.perception`
 (topics into facts and person acts).
 """

@@ -6,8 +6,8 @@ other nodes ask it for tasks over ``~/run_task`` and it shows its state on
 ``~/snapshot``, ``~/active_state``, ``/diagnostics`` and ``~/markers``
 (docs/ros2.md).  ``--task`` starts one task at once; ``--facts`` loads what
 the robot knows beforehand (a Turtle file: places' positions, kinds of
-things).  Ctrl-C (or SIGTERM) stops it cleanly: the node's entities destroyed,
-its thread joined, the log written.
+things).  Ctrl-C (or SIGTERM) stops it cleanly: the node's entities destroyed (the
+loop spins the node: there is no ROS thread to join), the log written.
 """
 
 from __future__ import annotations

@@ -30,8 +30,9 @@ idempotent.  Whether the server confirmed is logged (``ros-cancel`` rows: the
 server's answer, then ``confirmed`` or ``unconfirmed`` after the ``cancel``
 deadline).  Feedback becomes ``exec-progress`` rows.
 
-All rclpy calls run on the node's executor thread (:meth:`RosNode.post`); the
-engine-side methods below run on the supervisor's loop only.
+Everything runs on the supervisor's loop, whose thread also spins the node
+(:class:`RosNode`): the engine calls rclpy directly, and rclpy's callbacks (a
+goal's acknowledgement, result, feedback) put their events on the loop.
 """
 
 from __future__ import annotations
@@ -60,13 +61,11 @@ class _Goal:
     phase: str = "server"
     """``server``, ``ack``, ``running``, then ``over`` once ROS has nothing more to say."""
     handle: Any = None
-    """The rclpy goal handle: only touched on the executor's thread."""
+    """The rclpy goal handle, once acknowledged."""
     timer: Any = None
     reported: bool = False
     cancel_wanted: bool = False
     cancel_sent: bool = False
-    attempting: bool = False
-    """A send attempt is on the executor's thread (its answer will come)."""
 
 
 class RosExecutors:
@@ -110,8 +109,8 @@ class RosExecutors:
             registry.register(atomic, self)
 
     def ready(self) -> bool:
-        """Whether every bound action and service has its server (call it on the executor's
-        thread, e.g. through :meth:`RosNode.call`: for waiting on a robot before starting)."""
+        """Whether every bound action and service has its server (for waiting on a robot
+        before starting)."""
         return all(self.binding.tasks[atomic].kind == "topic"
                    or (entity.server_is_ready() if self.binding.tasks[atomic].kind == "action"
                        else entity.service_is_ready())
@@ -144,7 +143,7 @@ class RosExecutors:
         if request.atomic == "speak":  # what the robot says, as in a simulated run's log
             self.record("speech", agent=request.agent, text=str(request.args.get("text", "")))
         if task.kind == "topic":
-            self.node.post(self._entities[request.atomic].publish, message)
+            self._entities[request.atomic].publish(message)
             self._end(goal, "done", "succeeded", f"published on {task.name}")
             return
         self._goals[request.id] = goal
@@ -163,11 +162,10 @@ class RosExecutors:
             detail = f"cancelled; the cancel is sent to {goal.task.name}"
         elif goal.phase in ("ack", "running"):  # cancelled once acknowledged (_acknowledged)
             detail = f"cancelled; the cancel reaches {goal.task.name} once it acknowledges"
-        else:  # its server was missing: no attempt on its way, or one that may send it
+        else:  # its server was missing: looked for again later, or never
             self._stop_timer(goal)
-            if not goal.attempting:
-                goal.phase = "over"
-                self._forget(goal)
+            goal.phase = "over"
+            self._forget(goal)
             detail = "cancelled before the goal was acknowledged"
         self._end(goal, "cancelled", "canceled", detail)
 
@@ -192,56 +190,37 @@ class RosExecutors:
     # -- phases (on the supervisor's loop) -------------------------------------------------
 
     def _try_send(self, goal: _Goal) -> None:
-        """Send the goal if its server is there, in one visit to the executor's thread
-        (the server check, the send, and on acceptance the request for the result)."""
+        """Send the goal if its server is there; rclpy's callbacks put its answers on the
+        loop (the acknowledgement, then on acceptance the result, and feedback)."""
         entity = self._entities[goal.request.atomic]
         node, kind = self.node, goal.task.kind
-        goal.attempting = True
-
-        def attempt() -> None:
-            if not (entity.server_is_ready() if kind == "action" else entity.service_is_ready()):
-                node.put(self._server_missing, goal)
-                return
-            if kind == "service":
-                future = entity.call_async(goal.message)
-                future.add_done_callback(lambda f: node.put(self._responded, goal, f.result()))
-                return
-            future = entity.send_goal_async(
-                goal.message, feedback_callback=lambda f: node.put(self._feedback, goal,
-                                                                   f.feedback, wake=False))
-            future.add_done_callback(acknowledged)
-
-        def acknowledged(future: Any) -> None:
-            handle = future.result()
-            # an accepted goal needs the engine at once only if it was cancelled meanwhile
-            # (the flag is the engine's, read after the event is queued: no cancel missed)
-            node.put(self._acknowledged, goal, handle, wake=not handle.accepted)
-            if goal.cancel_wanted:
-                node.wake()
-            if handle.accepted:
-                handle.get_result_async().add_done_callback(
-                    lambda f: node.put(self._result, goal, f.result()))
-
-        # as if sent: the deadline of the next phase runs from the attempt (a missing
-        # server comes back as _server_missing, which takes the goal back)
+        if not (entity.server_is_ready() if kind == "action" else entity.service_is_ready()):
+            self._server_missing(goal)
+            return
+        # the deadline of the next phase runs from the send
         if kind == "service":
             goal.phase = "running"
             goal.timer = self.loop.call_later(goal.task.deadlines["exec"], self._exec_timeout,
                                               goal)
-        else:
-            goal.phase = "ack"
-            goal.timer = self.loop.call_later(goal.task.deadlines["ack"], self._ack_timeout,
-                                              goal)
-        node.post(attempt)
+            future = entity.call_async(goal.message)
+            future.add_done_callback(lambda f: node.put(self._responded, goal, f.result()))
+            return
+        goal.phase = "ack"
+        goal.timer = self.loop.call_later(goal.task.deadlines["ack"], self._ack_timeout, goal)
+
+        def acknowledged(future: Any) -> None:
+            handle = future.result()
+            node.put(self._acknowledged, goal, handle)
+            if handle.accepted:
+                handle.get_result_async().add_done_callback(
+                    lambda f: node.put(self._result, goal, f.result()))
+
+        entity.send_goal_async(
+            goal.message, feedback_callback=lambda f: node.put(self._feedback, goal,
+                                                               f.feedback)
+        ).add_done_callback(acknowledged)
 
     def _server_missing(self, goal: _Goal) -> None:
-        goal.attempting = False
-        self._stop_timer(goal)
-        goal.phase = "server"
-        if goal.reported:  # cancelled while its server was looked for
-            goal.phase = "over"
-            self._forget(goal)
-            return
         waited = self.loop.now() - goal.since
         if waited + SERVER_POLL <= goal.task.deadlines["server"]:
             goal.timer = self.loop.call_later(SERVER_POLL, self._try_send, goal)
@@ -255,7 +234,7 @@ class RosExecutors:
 
     def _acknowledged(self, goal: _Goal, handle: Any) -> None:
         self._stop_timer(goal)
-        goal.handle = handle  # kept for the executor's thread, which alone uses it
+        goal.handle = handle
         if not handle.accepted:
             goal.phase = "over"
             self._forget(goal)
@@ -337,14 +316,9 @@ class RosExecutors:
         goal.cancel_sent = True
         self._stop_timer(goal)
 
-        def cancel() -> None:
-            if goal.handle is None:
-                return
-            future = goal.handle.cancel_goal_async()
-            future.add_done_callback(lambda f: self.node.put(self._cancel_answered, goal,
-                                                             f.result()))
-
-        self.node.post(cancel)
+        if goal.handle is not None:
+            goal.handle.cancel_goal_async().add_done_callback(
+                lambda f: self.node.put(self._cancel_answered, goal, f.result()))
         goal.timer = self.loop.call_later(goal.task.deadlines["cancel"], self._unconfirmed, goal)
 
     def _cancel_answered(self, goal: _Goal, response: Any) -> None:

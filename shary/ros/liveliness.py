@@ -30,8 +30,8 @@ shary's lease says so, not when ROS gets round to it.  A publisher that offers
 no lease short enough is logged once (``incompatible``): shary cannot notice
 that node go.
 
-The subscription's callbacks run on the executor's thread and only put events
-on the engine's loop.
+The subscription's callbacks run while the engine's loop waits, and only put events
+on it.
 """
 
 from __future__ import annotations
@@ -65,10 +65,10 @@ class Liveliness:
         for index, source in enumerate(binding.alive):
             cls = import_interface(source.type)
             if cls is not None:
-                node.call(self._subscribe, index, source, cls)
+                self._subscribe(index, source, cls)
 
     def _subscribe(self, index: int, source: AliveSource, cls: Any) -> Any:
-        """On the executor's thread: a subscription that asks for the source's lease."""
+        """A subscription that asks for the source's lease."""
         from rclpy.duration import Duration
         from rclpy.event_handler import SubscriptionEventCallbacks
         from rclpy.qos import LivelinessPolicy, QoSProfile

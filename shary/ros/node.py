@@ -1,44 +1,67 @@
-"""The one ROS 2 node of a shary process, its executor thread and its inbox.
+"""The one ROS 2 node of a shary process, spun by the engine's own loop.
 
-Threading follows what was measured with the Jazzy wheels (docs/ros2.md): one
-``Node`` and one ``SingleThreadedExecutor`` spinning in a daemon thread of its
-own.  The engine's loop never touches an rclpy object: it *posts* work to the
-executor (:meth:`RosNode.post`, which is ``executor.create_task``, the
-executor's thread-safe entry), and every ROS callback only *puts an event* on
-the inbox, a ``queue.Queue`` of ``(function, args)`` that the engine's loop
-drains (:meth:`RosNode.attach`).  Goals are then sent and answered on one
-thread, which avoids the wheels' races between threads (rclpy#1123 in Jazzy's
-``ActionClient``); ``EventsExecutor`` is not used (it deadlocked here).
+There is no ROS thread.  The node's ``SingleThreadedExecutor`` is the waiter of
+the engine's :class:`~shary.loop.EventLoop` (:meth:`RosNode.attach`): between
+two timers the loop waits in rcl's wait set (:meth:`RosNode.wait`, one
+``spin_once`` with the time to the next timer as its timeout), so every ROS
+callback (a drained subscription, an action client's answers, a served goal,
+a QoS event) runs on the engine's thread and only puts its event on the
+loop's ready queue (:meth:`RosNode.put`, run once the callback has returned);
+and the engine acts on ROS by calling rclpy directly (publish, send a goal,
+cancel it).  Another thread (a console, a signal handler) still wakes the
+loop: :meth:`RosNode.wake` gives the executor a task (``create_task``, its
+thread-safe entry), which ends the wait.
 
-Shutdown is ordered as rclpy needs it: action clients and servers destroyed on
-the executor's thread (``destroy_node`` does not destroy them), then the node,
-the executor stopped, the context shut down, and the thread joined, so that no
-thread is left behind.
+Why no thread.  The node first spun in an executor thread of its own, the
+engine's loop sleeping on a ``threading.Event`` that each ROS callback set.
+Topic messages into facts met 6,000 a second but missed item 8's p99 <= 5 ms
+to the fact in most runs (6-86 ms) while a bare rclpy subscriber draining in
+its own callback kept 0.6-1.0 ms: measured stage by stage, the tail was the
+hand-over between the two threads (the kernel's run queue and the GIL), not
+the engine's work (docs/benchmarks.md).  With one thread there is no hand-over:
+in twelve runs interleaved with the threaded node (loads 4-12), the median
+p99 to the fact went from 10.4 to 5.1 ms and the p50 fell too (what is left
+is the kernel's run queue); the cancel reaches the server as fast, and a
+goal's round trip is a little shorter.  The price: while the
+loop is busy nothing takes messages, so the DDS history (a subscription's
+depth) is the only buffer.  Goals are sent and answered on the thread that
+spins the executor, so the Jazzy wheel's action-client race between threads
+(rclpy#1123) cannot happen.  ``EventsExecutor`` is not used (it deadlocked
+here).
+
+Shutdown is ordered as rclpy needs it: action clients and servers destroyed
+(``destroy_node`` does not destroy them), then the node, the executor stopped
+and the context shut down; the loop gets its default waiter back.
 """
 
 from __future__ import annotations
 
-import queue
-import threading
-from collections import deque
+import time
 from collections.abc import Callable
 from typing import Any
 
+from shary.loop import EventWaiter
 from shary.ros.env import keep_on_host
 
 BATCH = 500
-"""Most messages a drained subscription hands over at once: the executor's thread goes
-back to its other entities (a goal's answer) at least this often."""
+"""Most messages a drained subscription hands over at once: the loop goes back to its
+timers and the node's other entities (a goal's answer) at least this often."""
+LONGEST_WAIT = 0.1
+"""Seconds one wait in rcl's wait set lasts at most: a signal (Ctrl-C) does not end it,
+so the loop comes round this often to let Python raise it."""
+NEARER = 0.001
+"""Seconds by which a wait must end sooner than the one before for the executor to be
+woken and begin again (:meth:`RosNode.wait`): less is the clocks' jitter."""
 
 
 class RosNode:
-    """One node, one executor thread, one inbox (see the module's docstring)."""
+    """One node whose executor the engine's loop spins (see the module's docstring)."""
 
     def __init__(self, name: str = "shary", *, domain_id: int | None = None,
                  namespace: str | None = None):
         keep_on_host()
         import rclpy
-        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.executors import SingleThreadedExecutor, TimeoutObject
 
         self._rclpy = rclpy
         self.context = rclpy.Context()
@@ -46,108 +69,71 @@ class RosNode:
         self.node = rclpy.create_node(name, context=self.context, namespace=namespace)
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
-        self._outbox: deque[tuple[Callable[..., Any], tuple]] = deque()
-        self.inbox: queue.SimpleQueue[tuple[Callable[..., Any], tuple]] = queue.SimpleQueue()
         self.waitables: list[Any] = []
         """Action clients and servers, destroyed before the node (rclpy does not)."""
         self._loop: Any = None
         self._closed = False
-        self._thread = threading.Thread(target=self._spin, name=f"ros-{name}", daemon=True)
-        self._thread.start()
+        self._timeout = TimeoutObject(0.0)
+        """One object for every wait: rclpy keeps its generator of ready callbacks while
+        the arguments of ``spin_once`` are the same (one wait set for all that is ready at
+        once), and reads the timeout from it when it makes the next one."""
+        self._armed = 0.0
+        """When the previous wait was to end (``time.monotonic``)."""
 
-    def _spin(self) -> None:
-        from rclpy.executors import ExternalShutdownException
-
-        try:
-            self.executor.spin()
-        except (ExternalShutdownException, KeyboardInterrupt):
-            pass
-
-    # -- the two directions ----------------------------------------------------------
-
-    def post(self, work: Callable[..., Any], *args: Any) -> None:
-        """Run ``work(*args)`` on the executor's thread, after the work posted before it:
-        the only way the engine acts on ROS.  (The executor runs its pending tasks last
-        in, first out; the outbox keeps the engine's order: a goal's cancel after its
-        send, a state's publication after the one before.)"""
-        if not self._closed:
-            self._outbox.append((work, args))
-            self.executor.create_task(self._run_outbox)
-
-    def _run_outbox(self) -> None:
-        while self._outbox:
-            work, args = self._outbox.popleft()
-            try:
-                work(*args)
-            except Exception as err:  # noqa: BLE001 -- raised again on the engine's loop
-                self.put(_raise, err)
-
-    def put(self, handler: Callable[..., Any], *args: Any, wake: bool = True) -> None:
-        """From a ROS callback: have ``handler(*args)`` run on the engine's loop (with
-        ``wake=False``, when the loop next wakes: news that can wait)."""
-        loop = self._loop
-        if loop is not None:
-            loop.call_soon_threadsafe(handler, *args, wake=wake)
-        else:
-            self.inbox.put((handler, args))
-
-    def wake(self) -> None:
-        """From a ROS callback: wake the engine's loop (for events put quietly)."""
-        if self._loop is not None:
-            self._loop.wake()
-
-    def drain(self) -> int:
-        """Run every event waiting in the inbox (on the caller's thread); how many ran."""
-        ran = 0
-        while True:
-            try:
-                handler, args = self.inbox.get_nowait()
-            except queue.Empty:
-                return ran
-            handler(*args)
-            ran += 1
+    # -- the engine's loop waits here -------------------------------------------------
 
     def attach(self, loop: Any) -> None:
-        """Deliver events to ``loop`` (an :class:`~shary.loop.EventLoop`) from now on,
-        starting with those waiting in the inbox."""
+        """Make this node the waiter of ``loop`` (an :class:`~shary.loop.EventLoop`):
+        its ROS callbacks run when the loop waits, and put their events on it."""
         self._loop = loop
-        self.drain()
+        loop.waiter = self
 
-    def call(self, work: Callable[..., Any], *args: Any, timeout: float = 10.0) -> Any:
-        """Run ``work(*args)`` on the executor's thread and wait for its value: for
-        set-up and shutdown (creating entities), never from the engine's running loop."""
-        done = threading.Event()
-        box: list[Any] = []
+    def wait(self, timeout: float) -> None:
+        """Wait in rcl's wait set up to ``timeout`` seconds and run one ROS callback that
+        is ready (the loop's waiter; on the loop's thread only).
 
-        def run() -> None:
-            try:
-                box.append((True, work(*args)))
-            except BaseException as err:  # noqa: BLE001 -- handed back to the caller
-                box.append((False, err))
-            finally:
-                done.set()
+        rclpy's executor yields the tasks it has pending (a served goal awaiting its end)
+        before it waits, one per ``spin_once``, and then waits with the timeout it was
+        given when it began: should the loop's next timer have come nearer since, the
+        executor is woken so that it begins again with the new timeout."""
+        timeout = min(timeout, LONGEST_WAIT)
+        deadline = time.monotonic() + timeout
+        if deadline < self._armed - NEARER:
+            self.executor.wake()
+        self._armed = deadline
+        self._timeout.timeout = timeout
+        self.executor.spin_once(self._timeout)
 
-        self.post(run)
-        if not done.wait(timeout):
-            raise TimeoutError(f"the ROS executor did not run {work!r} within {timeout:g} s")
-        ok, value = box[0]
-        if not ok:
-            raise value
-        return value
+    def wake(self) -> None:
+        """From any thread: end the current or the next :meth:`wait` now."""
+        if not self._closed:
+            self.executor.create_task(_nothing)
 
-    # -- entities (created on the executor's thread) ------------------------------------
+    def spin_for(self, seconds: float) -> None:
+        """Run the node's callbacks for ``seconds`` (a world stepped by the wall clock
+        between its steps; a supervisor's loop waits with :meth:`wait` instead)."""
+        end = time.monotonic() + seconds
+        while (left := end - time.monotonic()) > 0:
+            self.wait(left)
+
+    def put(self, handler: Callable[..., Any], *args: Any) -> None:
+        """From a ROS callback: have ``handler(*args)`` run on the engine's loop once the
+        callback has returned (after the work already there)."""
+        self._loop.call_soon(handler, *args)
+
+    # -- entities ---------------------------------------------------------------------
 
     def action_client(self, cls: Any, name: str) -> Any:
         from rclpy.action import ActionClient
 
-        client = self.call(ActionClient, self.node, cls, name)
+        client = ActionClient(self.node, cls, name)
         self.waitables.append(client)
         return client
 
     def action_server(self, cls: Any, name: str, **callbacks: Any) -> Any:
         from rclpy.action import ActionServer
 
-        server = self.call(lambda: ActionServer(self.node, cls, name, **callbacks))
+        server = ActionServer(self.node, cls, name, **callbacks)
         self.waitables.append(server)
         return server
 
@@ -155,13 +141,13 @@ class RosNode:
                     cancel: Callable[[bytes], Any], *,
                     accept: Callable[[Any], str | None] | None = None) -> Any:
         """Serve action ``name`` whose goals are performed on the engine's side: each
-        accepted goal puts ``start(key, goal, end)`` on the inbox, ``end`` a
-        :class:`ServedGoal` (call it, from any thread, to end the goal; ``end.feedback``
-        publishes feedback); a cancel request is accepted at once and puts ``cancel(key)``
-        (after ``start``, should it come before the goal runs).  ``accept(goal)``, on the
-        executor's thread, answers at once: a reason to reject the goal (logged), or None.
-        The execute callback awaits its end on the executor's thread, so no goal holds a
-        thread (the shared robot, ``shary world --ros``; ``~/run_task``)."""
+        accepted goal puts ``start(key, goal, end)`` on the loop, ``end`` a
+        :class:`ServedGoal` (call it to end the goal; ``end.feedback`` publishes
+        feedback); a cancel request is accepted at once and puts ``cancel(key)`` (after
+        ``start``, should it come before the goal runs).  ``accept(goal)`` answers at
+        once: a reason to reject the goal (logged), or None.  The execute callback is a
+        task of the executor that awaits its end, so no goal holds the thread (the shared
+        robot, ``shary world --ros``; ``~/run_task``)."""
         from rclpy.action import CancelResponse, GoalResponse
 
         live: dict[bytes, Any] = {}
@@ -200,7 +186,7 @@ class RosNode:
                                   goal_callback=on_goal, cancel_callback=on_cancel)
 
     def service_client(self, cls: Any, name: str) -> Any:
-        return self.call(self.node.create_client, cls, name)
+        return self.node.create_client(cls, name)
 
     def publisher(self, cls: Any, topic: str, *, latched: bool = False, depth: int = 10,
                   lease: float | None = None) -> Any:
@@ -216,19 +202,19 @@ class RosNode:
         if lease is not None:
             qos.liveliness = LivelinessPolicy.AUTOMATIC
             qos.liveliness_lease_duration = Duration(seconds=lease)
-        return self.call(self.node.create_publisher, cls, topic, qos)
+        return self.node.create_publisher(cls, topic, qos)
 
     def subscription(self, cls: Any, topic: str, callback: Callable[[Any], Any], *,
                      depth: int = 100) -> Any:
-        """A subscription whose callback runs on the executor's thread (it must only
+        """A subscription whose callback runs while the loop waits (it must only
         :meth:`put` events)."""
-        return self.call(self.node.create_subscription, cls, topic, callback, depth)
+        return self.node.create_subscription(cls, topic, callback, depth)
 
     def drained_subscription(self, cls: Any, topic: str,
                              callback: Callable[[list[Any]], Any], *, depth: int = 1000,
                              batch: int = BATCH) -> Any:
         """A subscription whose callback gets every message waiting (up to ``batch``) in
-        one list, on the executor's thread (it must only :meth:`put` events): for a topic
+        one list, while the loop waits (it must only :meth:`put` events): for a topic
         that may carry thousands of messages a second (perception).
 
         rclpy's executor takes one message each time it wakes, and each wake rebuilds its
@@ -236,11 +222,11 @@ class RosNode:
         here, whatever the callback does (docs/benchmarks.md).  Taking the messages that
         wait with the subscription's own ``take_message``, as soon as the first is
         handed over, costs one wake and one event on the engine's loop per burst."""
-        holder: list[Any] = []
+        subscription: Any = None
 
         def drain(first: Any) -> None:
             taken = [first]
-            handle = holder[0].handle
+            handle = subscription.handle
             with handle:  # the handle is not destroyed while it is used
                 while len(taken) < batch:
                     got = handle.take_message(cls, False)
@@ -249,31 +235,26 @@ class RosNode:
                     taken.append(got[0])
             callback(taken)
 
-        def create() -> Any:  # on the executor's thread: before any message is handed over
-            holder.append(self.node.create_subscription(cls, topic, drain, depth))
-            return holder[0]
-
-        return self.call(create)
+        subscription = self.node.create_subscription(cls, topic, drain, depth)
+        return subscription
 
     # -- shutdown -----------------------------------------------------------------------
 
     def close(self, timeout: float = 5.0) -> None:
-        """Destroy everything and join the executor's thread (idempotent)."""
+        """Destroy everything, in rclpy's order (idempotent); the loop it was attached to
+        sleeps on its default waiter again."""
         if self._closed:
             return
-
-        def destroy() -> None:
+        self._closed = True
+        if self._loop is not None and self._loop.waiter is self:
+            self._loop.waiter = EventWaiter()
+        try:
             for waitable in self.waitables:
                 waitable.destroy()
             self.node.destroy_node()
-
-        try:
-            self.call(destroy, timeout=timeout)
         finally:
-            self._closed = True
             self.executor.shutdown(timeout_sec=timeout)
             self._rclpy.try_shutdown(context=self.context)
-            self._thread.join(timeout)
 
     def __enter__(self) -> RosNode:
         return self
@@ -283,8 +264,7 @@ class RosNode:
 
 
 class ServedGoal:
-    """How the engine ends a goal of :meth:`RosNode.serve_goals` and tells its progress,
-    from any thread (the work is posted to the executor)."""
+    """How the engine ends a goal of :meth:`RosNode.serve_goals` and tells its progress."""
 
     def __init__(self, node: RosNode, handle: Any):
         from rclpy.task import Future
@@ -296,25 +276,18 @@ class ServedGoal:
     def __call__(self, result: Any, canceled: bool = False, failed: bool = False) -> None:
         """End the goal with ``result``: CANCELED if ``canceled`` and a client asked for
         it, ABORTED if ``failed`` (or cancelled unasked), else SUCCEEDED."""
+        if self.future.done():
+            return
         status = "canceled" if canceled else "aborted" if failed else "succeeded"
-        self._node.post(_settle, self.future, (result, status))
+        self.future.set_result((result, status))
+        # the executor resumes the goal's task when it next begins a wait: now
+        self._node.executor.wake()
 
     def feedback(self, message: Any) -> None:
         """Publish ``message`` as the goal's feedback (unless it has ended)."""
-        self._node.post(_publish_feedback, self.future, self._handle, message)
+        if not self.future.done():
+            self._handle.publish_feedback(message)
 
 
-def _settle(future: Any, value: Any) -> None:
-    """End a served goal's wait (on the executor's thread), once."""
-    if not future.done():
-        future.set_result(value)
-
-
-def _publish_feedback(future: Any, handle: Any, message: Any) -> None:
-    if not future.done():
-        handle.publish_feedback(message)
-
-
-def _raise(err: Exception) -> None:
-    """An error of work posted to the executor, raised where the engine sees it."""
-    raise err
+def _nothing() -> None:
+    """A task that ends a wait (:meth:`RosNode.wake`)."""

@@ -65,13 +65,13 @@ class RosTaskServer:
     def _send(self, publisher: Any, data: dict[str, Any]) -> None:
         from std_msgs.msg import String
 
-        self.node.post(publisher.publish, String(data=json.dumps(data)))
+        publisher.publish(String(data=json.dumps(data)))
 
     # -- goals ----------------------------------------------------------------------------
 
     def _accept(self, goal: Any) -> str | None:
-        """Why ``goal`` cannot be a task (on the executor's thread: it reads only the
-        recipe library, which does not change), or None."""
+        """Why ``goal`` cannot be a task (in rclpy's goal callback: it reads only the
+        recipe library), or None."""
         problem = self._problem(goal.task, [p.name for p in goal.parameters])
         if problem is not None:
             self.node.put(self._rejected, goal.task, problem)

@@ -70,7 +70,7 @@ class RosViews:
             if change[0] == "config":
                 run = self.view.tasks.get(change[1], {})
                 text = f"{run.get('name', '?')} {change[1]}: {', '.join(change[2]) or '-'}"
-                self.node.post(self.active_pub.publish, String(data=text))
+                self.active_pub.publish(String(data=text))
         if not self._scheduled and any(change[0] != "time" for change in changes):
             self._scheduled = True
             self.loop.call_later(self.period, self.publish)
@@ -80,9 +80,9 @@ class RosViews:
         from std_msgs.msg import String
 
         self._scheduled = False
-        self.node.post(self.snapshot_pub.publish, String(data=json.dumps(self.snapshot())))
-        self.node.post(self.diagnostics_pub.publish, self.diagnostics())
-        self.node.post(self.markers_pub.publish, self.markers())
+        self.snapshot_pub.publish(String(data=json.dumps(self.snapshot())))
+        self.diagnostics_pub.publish(self.diagnostics())
+        self.markers_pub.publish(self.markers())
 
     def snapshot(self) -> dict[str, Any]:
         """The state as JSON-able data (what ``~/snapshot`` carries)."""
