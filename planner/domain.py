@@ -222,12 +222,7 @@ class Domain:
         for pattern, guards in self.adds.get(task, {}).get(pred, ()):
             if guards and any(args[index] != constant for index, constant in guards):
                 continue
-            for entry, value in zip(pattern, fact, strict=True):
-                if entry is None:
-                    continue
-                if (args[entry] if entry.__class__ is int else entry) != value:
-                    break
-            else:
+            if fits(pattern, args, fact):
                 return True
         return False
 
@@ -241,6 +236,15 @@ class Domain:
             kind = etype.parent if etype is not None else None
             seen += 1
         return False
+
+
+def fits(pattern: tuple, args: tuple, fact: tuple) -> bool:
+    """Whether a fact a task may add (``Domain.adds``: each entry the index of a task
+    argument, a constant, or None for any value) is ``fact``, given the task's ``args``."""
+    for entry, value in zip(pattern, fact, strict=True):
+        if entry is not None and (args[entry] if entry.__class__ is int else entry) != value:
+            return False
+    return True
 
 
 @dataclass(frozen=True)

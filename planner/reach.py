@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from planner.domain import Domain
+from planner.domain import Domain, fits
 from planner.late import Unbound
 
 
@@ -76,12 +76,6 @@ class GoalReach:
                 for index in candidates:
                     if index in known or index in out:
                         continue
-                    fact = goals[index][1]
-                    for entry, value in zip(pattern, fact, strict=True):
-                        if entry is None:
-                            continue
-                        if (args[entry] if entry.__class__ is int else entry) != value:
-                            break
-                    else:
+                    if fits(pattern, args, goals[index][1]):
                         out.add(index)
         return out
