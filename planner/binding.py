@@ -46,7 +46,7 @@ class Test(NamedTuple):
     atom: Atom | None = None
 
 
-_MATCH, _TEST, _EACH = 0, 1, 2
+_MATCH, _TEST, _EACH, _DEFER = 0, 1, 2, 3
 
 
 def is_variable(term: str) -> bool:
@@ -120,42 +120,7 @@ def compile_binder(variables: dict[str, str], head: list[tuple[str, str]], tests
             compiled.append(step)
         else:
             compiled.append((_EACH, step[1], typed.get(variables[step[1]], [])))
-    last = len(compiled)
-
-    def extend(index: int, binding: dict[str, Any], state: FactState) -> Iterator[dict]:
-        while index < last and compiled[index][0] == _TEST:
-            if not compiled[index][1](binding, state.get):
-                return
-            index += 1
-        if index == last:
-            yield dict(binding)
-            return
-        step = compiled[index]
-        if step[0] == _MATCH:
-            _, pred, positions, known, free = step
-            for args in state.matching(pred, positions, known(binding)):
-                fresh = []
-                for position, var in free:
-                    value = args[position]
-                    if var in binding:  # the variable occurs twice in this fact
-                        if binding[var] != value:
-                            break
-                    elif value in members[var]:
-                        binding[var] = value
-                        fresh.append(var)
-                    else:
-                        break
-                else:
-                    yield from extend(index + 1, binding, state)
-                for var in fresh:
-                    del binding[var]
-        else:
-            var = step[1]
-            for value in step[2]:
-                binding[var] = value
-                yield from extend(index + 1, binding, state)
-            binding.pop(var, None)
-
+    extend = stepper(compiled, members)
     terms = [(term, param, is_variable(term)) for term, param in head]
 
     def unify(env: dict[str, Any]) -> dict[str, Any] | None:
@@ -196,6 +161,56 @@ def compile_binder(variables: dict[str, str], head: list[tuple[str, str]], tests
             yield from extend(0, binding, state)
 
     return bind, patterns
+
+
+def stepper(compiled: list[tuple], members: dict[str, frozenset[str]]
+            ) -> Callable[[int, dict[str, Any], FactState], Iterator[dict]]:
+    """The function giving every extension of a binding by the compiled steps from an
+    index on (lookups keep only values of each variable's type, in ``members``).  A
+    ``_DEFER`` step (:mod:`planner.late`) binds its variable to what its function makes:
+    a placeholder the search binds later."""
+    last = len(compiled)
+
+    def extend(index: int, binding: dict[str, Any], state: FactState) -> Iterator[dict]:
+        while index < last and compiled[index][0] == _TEST:
+            if not compiled[index][1](binding, state.get):
+                return
+            index += 1
+        if index == last:
+            yield dict(binding)
+            return
+        step = compiled[index]
+        if step[0] == _MATCH:
+            _, pred, positions, known, free = step
+            for args in state.matching(pred, positions, known(binding)):
+                fresh = []
+                for position, var in free:
+                    value = args[position]
+                    if var in binding:  # the variable occurs twice in this fact
+                        if binding[var] != value:
+                            break
+                    elif value in members[var]:
+                        binding[var] = value
+                        fresh.append(var)
+                    else:
+                        break
+                else:
+                    yield from extend(index + 1, binding, state)
+                for var in fresh:
+                    del binding[var]
+        elif step[0] == _EACH:
+            var = step[1]
+            for value in step[2]:
+                binding[var] = value
+                yield from extend(index + 1, binding, state)
+            binding.pop(var, None)
+        else:  # _DEFER
+            var = step[1]
+            binding[var] = step[2]()
+            yield from extend(index + 1, binding, state)
+            del binding[var]
+
+    return extend
 
 
 def args_of(terms: tuple[str, ...]) -> Callable[[dict[str, Any]], tuple[str, ...]]:

@@ -73,6 +73,7 @@ from typing import Any
 from planner.checks import DecompositionChecks, task_call
 from planner.domain import SOLE_AGENT, Action, Method, Problem
 from planner.evaluate import Evaluator
+from planner.late import same, substitute
 from planner.plan import Plan, fact_text
 from planner.search import Failure, Result, deleted_goal
 from planner.state import FactState, State
@@ -187,6 +188,9 @@ class DepthFirst:
         self.expansions = 0
         self.checks = DecompositionChecks(self.domain, self.goals)
         """The checks of decompositions (:mod:`planner.checks`)."""
+        self.defer = True
+        """With the late binders: whether a method's variables that its own conditions do
+        not read are left unbound (:mod:`planner.late`)."""
 
     # -- explanations ------------------------------------------------------------------
 
@@ -276,9 +280,10 @@ class DepthFirst:
                       plan is None and not stopped, elapsed, failures, improvements,
                       first=plan is not None)
 
-    def _start(self) -> tuple[list[int], tuple]:
+    def _start(self, patterns: Any = None) -> tuple[list[int], tuple]:
         """The ids of the top tasks and the first search node (the initial state, the
-        problem's tasks as the agenda; the search that plans from it makes the rest)."""
+        problem's tasks as the agenda; the search that plans from it makes the rest);
+        ``patterns``: the state's fact indexes, when not the domain's."""
         problem = self.problem
         tops = [(None, task_call(name, args), index, 0, next(self.ids), 0)
                 for index, (name, args) in enumerate(problem.tasks)]
@@ -287,8 +292,8 @@ class DepthFirst:
         for top, (name, args) in reversed(list(zip(tops, problem.tasks, strict=True))):
             agenda = (name, args, top, hash((name, args, agenda[3] if agenda else 0)), agenda)
         initial = dict(problem.initial)
-        state: State = (FactState(initial, self.domain.patterns) if self.domain.predicates
-                        else State(initial))
+        state: State = (FactState(initial, patterns or self.domain.patterns)
+                        if self.domain.predicates else State(initial))
         state_hash = 0
         for key, value in initial.items():
             if value:
@@ -394,14 +399,18 @@ class DepthFirst:
             if node is None:
                 break
             node, label, _, at, _, _ = node
-            if at == state_hash and label == (name, args):
+            if at == state_hash and label == (name, args) and same(label[1], args):
                 count += 1
                 if count > self.repeats:
                     return True
         return False
 
     def _decompose(self, method: Method, args: tuple, parent: Path, state: State,
-                   state_hash: int, rest: Any, trail: Any) -> Iterator[tuple]:
+                   state_hash: int, rest: Any, trail: Any, late: bool = False
+                   ) -> Iterator[tuple]:
+        """The successors of decomposing ``method(args)``; ``late``: with the late binders
+        (:mod:`planner.late`: variables left unbound, placeholders among ``args`` bound
+        and replaced throughout the stack, a ``bind`` record in the trail)."""
         if self._repeats(method.name, args, parent, state_hash):
             self.repeated = True
             label = task_call(method.name, args)
@@ -423,13 +432,22 @@ class DepthFirst:
             matched = False
             assert dec.bind is not None, "the depth-first search plans HDDL methods"
             ground = None if known is None else known.get(dec.name)
-            bindings = (dec.bind(env, state) if ground is None else
-                        _holding(dec, env, ground, state))
+            if ground is not None:
+                bindings = _holding(dec, env, ground, state)
+                if late:
+                    bindings = ((binding, None) for binding in bindings)
+            elif late:
+                bindings = dec.late(env, state, self.defer)
+            else:
+                bindings = dec.bind(env, state)
             for binding in bindings:
                 matched = True
+                subst = None
+                if late:
+                    binding, subst = binding
                 local = {**env, **binding}
                 node = (parent, (method.name, args), root, state_hash, next(self.ids), depth)
-                agenda = rest
+                agenda = substitute(rest, subst) if subst else rest
                 for sub in reversed(dec.subtasks):
                     values = (sub.values(local) if sub.values is not None
                               else tuple([a.fn(local, state.get) for a in sub.args]))
@@ -446,7 +464,8 @@ class DepthFirst:
                     self._fail(parent, task_call(method.name, args), f"{dec.name}: {why}")
                     continue
                 record = ("method", node[4], parent[4], method.name, args, dec.name, binding)
-                yield state, state_hash, agenda, (record, trail)
+                yield state, state_hash, agenda, (record, (("bind", subst), trail)
+                                                  if subst else trail)
             if not matched:
                 tried.append(f"{dec.name}: {dec.pre.text if dec.pre else 'no binding'}")
         if tried and len(tried) == len(method.decompositions):

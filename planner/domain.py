@@ -69,6 +69,9 @@ class Action:
     assigns: tuple[tuple[str, tuple[Subtask, ...]], ...] = ()
     """Conditional plans: tasks this action puts at the head of another agent's agenda
     (by the parameter naming that agent) -- asking someone for help gives them a task."""
+    late: Any = None
+    """HDDL: the binder of its precondition for arguments not bound yet
+    (:func:`planner.late.compile_late`, used by the goal-guided search)."""
     names: tuple[str, ...] = field(init=False, repr=False, compare=False)
     """The parameters' names, in order (the search zips them with arguments)."""
 
@@ -121,6 +124,9 @@ class Decomposition:
     subtasks: tuple[Subtask, ...]
     doc: str = ""
     bind: Binder | None = None
+    late: Any = None
+    """HDDL: the binder that leaves unconstrained variables, and takes arguments, not bound
+    yet (:func:`planner.late.compile_late`, used by the goal-guided search)."""
     weight: float = 1.0
     """How likely an uncontrolled agent (a human) is to take this decomposition, relative
     to the others open at that point (conditional plans: :mod:`planner.conditional`)."""
@@ -216,12 +222,7 @@ class Domain:
         for pattern, guards in self.adds.get(task, {}).get(pred, ()):
             if guards and any(args[index] != constant for index, constant in guards):
                 continue
-            for entry, value in zip(pattern, fact, strict=True):
-                if entry is None:
-                    continue
-                if (args[entry] if entry.__class__ is int else entry) != value:
-                    break
-            else:
+            if fits(pattern, args, fact):
                 return True
         return False
 
@@ -235,6 +236,15 @@ class Domain:
             kind = etype.parent if etype is not None else None
             seen += 1
         return False
+
+
+def fits(pattern: tuple, args: tuple, fact: tuple) -> bool:
+    """Whether a fact a task may add (``Domain.adds``: each entry the index of a task
+    argument, a constant, or None for any value) is ``fact``, given the task's ``args``."""
+    for entry, value in zip(pattern, fact, strict=True):
+        if entry is not None and (args[entry] if entry.__class__ is int else entry) != value:
+            return False
+    return True
 
 
 @dataclass(frozen=True)

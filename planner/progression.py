@@ -50,10 +50,11 @@ from planner import grounding
 from planner.depthfirst import MAX_NODES, DepthFirst
 from planner.domain import Problem
 from planner.evaluate import Evaluator
+from planner.late import Unbound, has_unbound, resolve, search_patterns, substitute
 from planner.plan import fact_text
+from planner.reach import GoalReach
 from planner.relaxed import Relaxed
 from planner.search import Result
-from planner.translate import NETWORK
 
 GOAL_WEIGHT = 10
 """How much one unmet goal fact weighs against one action of the task stack's least work:
@@ -61,31 +62,11 @@ the goal first, the least work between nodes equally far from it (Multiarm-Block
 pfile_02_100, 100 blocks: 153,000 nodes to a plan with 10, none in 204,000 with 2)."""
 BATCH = 64
 """Successors drawn from a choice point at each of its turns."""
+BOUND_NODES = 5_000
+"""The nodes of the first search with every method variable bound at once, when late
+binding would leave some unbound (:func:`best_first`)."""
 CHECK_EVERY = 32
 """Expansions between two looks at the clock."""
-
-
-class Unbound:
-    """A parameter of the initial task network not bound yet (:meth:`BestFirst._bind`):
-    it equals any value, so that goal protection (``Domain.may_add``) counts a task
-    that names it as one that may add any fact of its kind."""
-
-    __slots__ = ("name",)
-
-    def __init__(self, name: str):
-        self.name = name
-
-    def __eq__(self, other: object) -> bool:
-        return True
-
-    def __ne__(self, other: object) -> bool:
-        return False
-
-    def __hash__(self) -> int:
-        return hash(("?", self.name))
-
-    def __str__(self) -> str:
-        return self.name
 
 
 def least_work(problem: Problem) -> dict[str, float]:
@@ -111,9 +92,31 @@ def best_first(problem: Problem, budget_ms: float | None = None, *,
     """The first plan of a greedy best-first search of ``problem`` (HDDL: its methods
     have binders), within ``budget_ms`` (default: the problem's) and ``max_nodes``,
     guided by ``relaxed`` (:func:`relaxed_model`) when given, else by the goals unmet
-    and the task stack's least work."""
+    and the task stack's least work.
+
+    Without ``relaxed``, when some method has variables the late binders may leave
+    unbound, a first search of :data:`BOUND_NODES` nodes binds them at once (the way
+    the facts' index or name order proposes values sometimes finds a plan that late
+    binding misses: Woodworking's ``09--p03-complete`` in 2,715 nodes, against none in
+    250,000), then the search with late binding gets the rest of the budgets.  With
+    ``relaxed``, its ground model binds the tasks it holds, and method variables are
+    bound at once."""
     budget = problem.budget_ms if budget_ms is None else budget_ms
-    return BestFirst(problem, relaxed).run(budget, max_nodes)
+    if relaxed is not None:
+        return BestFirst(problem, relaxed, defer=False).run(budget, max_nodes)
+    if not any(dec.late is not None and dec.late.may_defer
+               for method in problem.domain.methods.values()
+               for dec in method.decompositions):
+        return BestFirst(problem).run(budget, max_nodes)
+    start = time.perf_counter()
+    first = BestFirst(problem, defer=False).run(budget, min(BOUND_NODES, max_nodes))
+    if first.plan is not None or first.complete:
+        return first
+    left = budget - (time.perf_counter() - start) * 1000
+    second = BestFirst(problem).run(max(left, 0.0), max(max_nodes - first.expansions, 1))
+    second.expansions += first.expansions
+    second.elapsed_ms = (time.perf_counter() - start) * 1000
+    return second
 
 
 def relaxed_model(problem: Problem) -> Relaxed | None:
@@ -131,13 +134,14 @@ class BestFirst:
     """One best-first search for one problem (see the module's docstring)."""
 
     def __init__(self, problem: Problem, relaxed: Relaxed | None = None,
-                 rng: random.Random | None = None):
+                 defer: bool = True, rng: random.Random | None = None):
         self.problem = problem
         self.rng = rng
         """When given, each batch of successors drawn from a choice point is shuffled
         before it goes on the open list (:mod:`planner.restarts`), so that successors
         equally good for the estimate are tried in another order than the file's."""
         self.steps = DepthFirst(problem)
+        self.steps.defer = defer
         """The depth-first search's successor generation (actions, decompositions, their
         prunings and the record of failures), shared so that both searches make the same
         nodes."""
@@ -151,8 +155,15 @@ class BestFirst:
             self.steps.ground = relaxed.bindings
         self.stack_work: dict[int, float] = {}
         """The least work of each task stack met, by its hash (stacks share their tails)."""
-        self.unmet: dict[int, int] = {}
-        """The number of goal facts unmet in each state met, by its hash."""
+        self.unmet: dict[int, tuple[int, frozenset[int]]] = {}
+        """The number of goal facts unmet in each state met, by its hash, and which of the
+        positive ones are false (their indexes in ``positive``)."""
+        self.positive = [(pred, args) for pred, args, value in self.goals if value is True]
+        positive = iter(range(len(self.positive)))
+        self.checked = [(pred, args, value, next(positive) if value is True else -1)
+                        for pred, args, value in self.goals]
+        """The goal facts, each with its index in ``positive`` (-1: a negated one)."""
+        self.reach = GoalReach(problem.domain, self.positive)
         self.expansions = 0
 
     def _stack(self, agenda: Any) -> float:
@@ -174,11 +185,24 @@ class BestFirst:
         if self.relaxed is not None:
             plan, unmet = self.relaxed.estimate(state, state_hash, agenda)
             return GOAL_WEIGHT * unmet + plan
-        unmet = self.unmet.get(state_hash)
-        if unmet is None:  # once per state: a decomposition's successors share theirs
+        known = self.unmet.get(state_hash)
+        if known is None:  # once per state: a decomposition's successors share theirs
             get = state.get
-            unmet = sum(1 for pred, args, value in self.goals if get(pred, args) != value)
-            self.unmet[state_hash] = unmet
+            unmet, false = 0, []
+            for pred, args, value, positive in self.checked:
+                if get(pred, args) != value:
+                    unmet += 1
+                    if positive >= 0:
+                        false.append(positive)
+            known = self.unmet[state_hash] = (unmet, frozenset(false))
+        unmet, false = known
+        if false:
+            lost = false - self.reach.addable(agenda)
+            if lost:  # goal facts false that no task left may add: a dead end
+                if not self.steps.missed:
+                    self.steps.missed = ", ".join(
+                        f"{fact_text(*self.positive[i])} == True" for i in sorted(lost))
+                return math.inf
         return GOAL_WEIGHT * unmet + self._stack(agenda)
 
     def run(self, budget_ms: float, max_nodes: int) -> Result:
@@ -202,7 +226,7 @@ class BestFirst:
     def _search(self, deadline: float, max_nodes: int) -> tuple[Any, list[int]]:
         """The trail of the first plan (or None) and the ids of the top tasks."""
         steps = self.steps
-        roots, first = steps._start()
+        roots, first = steps._start(search_patterns(steps.domain, self.problem.tasks))
         node: tuple | None = first
         seen: set[int] = set()
         order = itertools.count(0, -1)  # ties: the node made last first
@@ -228,114 +252,67 @@ class BestFirst:
                 missed = [f"{fact_text(p, a)} == {v!r}" for p, a, v in goals
                           if state.get(p, a) != v]
                 if not missed:
-                    settled = self._settle(trail, state)
-                    if settled is not None:
-                        return settled, roots
+                    return self._settle(trail), roots
                 steps.missed = steps.missed or ", ".join(missed)
                 continue
             name, args, parent, agenda_hash, rest = agenda
             action = actions.get(name)
-            if action is not None:  # one successor at most: follow it at once
+            if action is not None and not has_unbound(args):  # one successor at most
                 node = steps._apply(action, args, parent, state, state_hash, rest, trail)
                 continue
             key = hash((state_hash, agenda_hash))
             if key in seen:
                 continue
             seen.add(key)
-            if name == NETWORK:
-                choices = self._open_network(parent, state, state_hash, rest, trail)
-            elif any(a.__class__ is Unbound for a in args):
-                choices = self._bind(agenda, state, state_hash, trail)
+            if action is not None:  # its arguments hold placeholders: bind them first
+                choices = self._bind_action(agenda, state, state_hash, trail)
             else:
                 choices = steps._decompose(methods[name], args, parent, state, state_hash,
-                                           rest, trail)
+                                           rest, trail, late=True)
             self._draw(choices, estimate((state, state_hash, agenda, trail)), open_list,
                        order, seen)
 
-    # -- the initial task network's parameters, bound late -----------------------------
+    def _bind_action(self, agenda: Any, state: Any, state_hash: int, trail: Any
+                     ) -> Iterator[tuple]:
+        """The front action, whose arguments hold placeholders, with each binding of them
+        its precondition allows (:mod:`planner.late`), applied."""
+        name, args, parent, _, rest = agenda
+        action = self.steps.domain.actions[name]
+        env = dict(zip(action.names, args, strict=True))
+        for binding, subst in action.late(env, state):
+            node = self.steps._apply(action, tuple([binding[p] for p in action.names]),
+                                     parent, state, state_hash, substitute(rest, subst),
+                                     (("bind", subst), trail))
+            if node is not None:
+                yield node
 
-    def _open_network(self, parent: Any, state: Any, state_hash: int, rest: Any,
-                      trail: Any) -> Iterator[tuple]:
-        """The network's tasks, their parameters left :class:`Unbound`: each is bound when
-        the first task that names it comes to the front (:meth:`_bind`), to the objects of
-        its type, so that a wrong value is found out by that task alone -- not by the
-        whole network's every combination of values, as binding them all at once would."""
-        steps = self.steps
-        dec = steps.domain.methods[NETWORK].decompositions[0]
-        local = {var: Unbound(var) for var, _ in dec.vars}
-        node = (parent, (NETWORK, ()), parent[2], state_hash, next(steps.ids), parent[5] + 1)
-        agenda = rest
-        for sub in reversed(dec.subtasks):
-            values = sub.values(local) if sub.values is not None else tuple(
-                [a.fn(local, state.get) for a in sub.args])
-            agenda = (sub.task, values, node,
-                      hash((sub.task, values, agenda[3] if agenda else 0)), agenda)
-        record = ("method", node[4], parent[4], NETWORK, (), dec.name, None)
-        yield state, state_hash, agenda, (record, trail)
-
-    def _bind(self, agenda: Any, state: Any, state_hash: int, trail: Any
-              ) -> Iterator[tuple]:
-        """The front task's unbound parameters bound to every combination of the objects
-        of their types, through the whole task stack (only the network's tasks are left
-        on it: they are the bottom of the stack)."""
-        dec = self.steps.domain.methods[NETWORK].decompositions[0]
-        kinds = dict(dec.vars)
-        free = list(dict.fromkeys(a.name for a in agenda[1] if a.__class__ is Unbound))
-        domain, entities = self.problem.domain, self.problem.entities
-        choices = [sorted(o for o, t in entities.items() if domain.is_subtype(t, kinds[var]))
-                   for var in free]
-        entries = []
-        entry = agenda
-        while entry is not None:
-            entries.append(entry)
-            entry = entry[4]
-        for values in itertools.product(*choices):
-            chosen = dict(zip(free, values, strict=True))
-            rebuilt = None
-            for name, args, parent, _, _ in reversed(entries):
-                args = tuple([chosen.get(a.name, a) if a.__class__ is Unbound else a
-                              for a in args])
-                rebuilt = (name, args, parent, hash((name, args, rebuilt[3] if rebuilt else 0)),
-                           rebuilt)
-            yield state, state_hash, rebuilt, (("bind", chosen), trail)
-
-    def _settle(self, trail: Any, final: Any) -> Any:
-        """The trail of a plan with the network's record given its binding (the values
-        chosen by :meth:`_bind`; a parameter no task names: the first object of its type
-        that meets the network's constraints), or None when the constraints are not met."""
+    def _settle(self, trail: Any) -> Any:
+        """The trail of a plan with every placeholder in its records replaced by its value
+        (the ``bind`` records' substitutions; a placeholder never bound: the first object
+        it may be, since no condition reads it), the ``bind`` records left out."""
         records = []
         while trail is not None:
             records.append(trail[0])
             trail = trail[1]
         records.reverse()
-        if not any(r[0] == "bind" for r in records) and not any(
-                r[0] == "method" and r[3] == NETWORK for r in records):
-            out = None
-            for record in records:
-                out = (record, out)
-            return out
-        chosen: dict[str, Any] = {}
+        subst: dict[str, Any] = {}
         for record in records:
             if record[0] == "bind":
-                chosen.update(record[1])
-        dec = self.steps.domain.methods[NETWORK].decompositions[0]
-        domain, entities = self.problem.domain, self.problem.entities
-        initial = self.problem.initial.get
-        free = [(var, kind) for var, kind in dec.vars if var not in chosen]
-        options = [sorted(o for o, t in entities.items() if domain.is_subtype(t, kind))
-                   for _, kind in free]
-        for values in itertools.product(*options):
-            env = {**chosen, **{var: v for (var, _), v in zip(free, values, strict=True)}}
-            if dec.pre is None or dec.pre.fn(env, initial):
-                break
-        else:
-            return None
+                subst.update(record[1])
+
+        def value(v: Any) -> Any:
+            v = resolve(v, subst)
+            return v.objects[0] if v.__class__ is Unbound else v
+
         out = None
         for record in records:
             if record[0] == "bind":
                 continue
-            if record[0] == "method" and record[3] == NETWORK:
-                record = (*record[:6], {var: env[var] for var, _ in dec.vars})
+            if record[0] == "method":
+                binding = record[6]
+                record = (*record[:4], tuple([value(a) for a in record[4]]), record[5],
+                          binding if binding is None else
+                          {var: value(v) for var, v in binding.items()})
             out = (record, out)
         return out
 

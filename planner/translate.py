@@ -43,6 +43,7 @@ from planner.binding import Atom, Test, args_of, compile_binder, is_variable
 from planner.domain import Action, Decomposition, Domain, EntityType, Method, Problem, Subtask
 from planner.expr import Effect, Expr
 from planner.formulas import Formulas, conjuncts, holds, is_literal, operand
+from planner.late import LateBinder
 from userfiles.errors import FileError
 from userfiles.errors import Problem as FileProblem
 
@@ -209,8 +210,11 @@ class _Translator:
         removes = tuple((f.children[0].children[0], args_of(f.children[0].children[1]))
                         for f in conjuncts(action.effect)
                         if f.kind == "not" and f.children[0].kind == "pred")
+        late = LateBinder(dict(action.params), [(p, p) for p, _ in action.params],
+                            [self.test(f) for f in conjuncts(action.precondition)],
+                            self.typed, defer="never")
         return Action(action.name, action.params, None, pre, effects, 1.0, 1.0,
-                      deletes=threats, needs=needs, removes=removes)
+                      deletes=threats, needs=needs, removes=removes, late=late)
 
     def decomposition(self, method: hddl.HMethod, task_params: hddl.Params,
                       domain: hddl.HDDLDomain
@@ -247,10 +251,13 @@ class _Translator:
             unique.setdefault(str(formula), formula)
         tests = [self.test(f) for f in unique.values()]
         bind, patterns = compile_binder(dict(method.params), head, tests, self.typed)
+        late = LateBinder(dict(method.params), head, tests, self.typed,
+                          defer="always" if method.name == NETWORK else "choice")
         subtasks = tuple(Subtask(s.name, tuple(operand(t) for t in s.args),
                                  f"({' '.join((s.name, *s.args))})", args_of(s.args))
                          for s in method.subtasks)
-        return Decomposition(method.name, method.params, pre, subtasks, bind=bind), patterns
+        return (Decomposition(method.name, method.params, pre, subtasks, bind=bind, late=late),
+                patterns)
 
     # -- entry conditions ---------------------------------------------------------------
 
