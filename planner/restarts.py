@@ -29,6 +29,7 @@ from __future__ import annotations
 import random
 import time
 
+from planner import progression
 from planner.depthfirst import MAX_NODES
 from planner.domain import Problem
 from planner.progression import BestFirst
@@ -49,7 +50,8 @@ def best_first(problem: Problem, budget_ms: float | None = None, *,
     module), within ``budget_ms`` (default: the problem's) and ``max_nodes`` in all."""
     budget = problem.budget_ms if budget_ms is None else budget_ms
     start = time.perf_counter()
-    result = BestFirst(problem).run(budget * FIRST_SHARE, int(max_nodes * FIRST_SHARE))
+    result = progression.best_first(problem, budget * FIRST_SHARE,
+                                    max_nodes=int(max_nodes * FIRST_SHARE))
     expansions = result.expansions
     seed, nodes = 0, RESTART_NODES
     while result.plan is None and not result.complete:
