@@ -1,4 +1,4 @@
-"""The IPC mode's two searches, one after the other within one time budget.
+"""The IPC mode's searches, one after the other within one time budget.
 
 Depth-first decomposition (:mod:`planner.depthfirst`) is what most of the IPC
 2020 total-order domains need: their hierarchy says what to do, and following
