@@ -117,8 +117,22 @@ class _Index:
         return [args for args in shortest if all(args[p] == v for p, v in known)]
 
 
+def reachable_actions(domain: hddl.HDDLDomain, problem: hddl.HDDLProblem, limit: int,
+                      seconds: float) -> dict[str, list[tuple[tuple[str, ...], list[Fact],
+                                                               list[Fact]]]] | None:
+    """The first pass alone (:meth:`_Grounder.reachable`: every relaxed-reachable ground
+    action, by name, with its precondition's and its effect's facts), or None beyond
+    ``limit`` ground actions (and bindings tried) or ``seconds``: the actions of problems
+    whose methods are too many to ground (:mod:`planner.subgoals`)."""
+    try:
+        return _Grounder(domain, problem, limit, seconds).reachable()
+    except TooLarge:
+        return None
+
+
 class _Grounder:
-    def __init__(self, domain: hddl.HDDLDomain, problem: hddl.HDDLProblem):
+    def __init__(self, domain: hddl.HDDLDomain, problem: hddl.HDDLProblem,
+                 limit: int | None = None, seconds: float | None = None):
         self.domain, self.problem = domain, problem
         objects = hddl.all_objects(domain, problem)
         self.of_type: dict[str, list[str]] = {kind: [] for kind in domain.types}
@@ -133,11 +147,13 @@ class _Grounder:
         self.candidates: dict[str, bool] = {}
         """For each compound task asked, whether its possible arguments are known."""
         self.work = 0
-        self.deadline = time.perf_counter() + TIME_LIMIT_S
+        self.limit = LIMIT if limit is None else limit
+        self.deadline = time.perf_counter() + (TIME_LIMIT_S if seconds is None else seconds)
 
     def _count(self, n: int = 1) -> None:
         self.work += n
-        if self.work > LIMIT or (self.work % 1024 == 0 and time.perf_counter() > self.deadline):
+        if self.work > self.limit or (self.work % 1024 == 0
+                                      and time.perf_counter() > self.deadline):
             raise TooLarge
 
     # -- bindings ----------------------------------------------------------------------

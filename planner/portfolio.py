@@ -15,7 +15,9 @@ the problem grounds (:func:`planner.progression.relaxed_model`), guided by the
 relaxed-composition heuristic (:mod:`planner.relaxed`) for :data:`RELAXED_SHARE`
 of what is left, then by the goals and the least work for the rest, restarted
 with its ties broken in other orders when its first run finds nothing
-(:mod:`planner.restarts`).  The relaxed
+(:mod:`planner.restarts`); a problem with no ``:goal`` that does not ground has the
+facts its task stacks need, and their relaxed cost, added to the least work
+(:mod:`planner.subgoals`).  The relaxed
 heuristic sees through the hierarchy what the least work cannot
 (AssemblyHierarchical's connections), but each state it meets costs an
 exploration of the ground model: where that model is large (Towers,
@@ -32,6 +34,7 @@ from planner import depthfirst, progression, restarts
 from planner.domain import Problem
 from planner.plan import Plan
 from planner.search import Result
+from planner.subgoals import Subgoals
 
 DEPTH_FIRST_SHARE = 1 / 3
 """The part of the time budget the depth-first search has before the best-first one
@@ -61,13 +64,17 @@ def first_plan(problem: Problem, budget_ms: float | None = None,
     if first.plan is not None or first.complete:
         return first
     stages = [first]
+    relaxed = None
     if left() > 0:
         relaxed = progression.relaxed_model(problem)
         if relaxed is not None and left() > 0:
             stages.append(progression.best_first(problem, left() * RELAXED_SHARE,
                                                  max_nodes=max_nodes, relaxed=relaxed))
     if stages[-1].plan is None and not stages[-1].complete and left() > 0:
-        stages.append(restarts.best_first(problem, left(), max_nodes=max_nodes))
+        subgoals = (Subgoals.build(problem) if relaxed is None and not problem.goals
+                    else None)
+        stages.append(restarts.best_first(problem, left(), max_nodes=max_nodes,
+                                          subgoals=subgoals))
     last = stages[-1]
     if len(stages) == 1:
         return first
