@@ -78,13 +78,23 @@ def is_variable(term: str) -> bool:
     return term.startswith("?")
 
 
-def ground(domain: hddl.HDDLDomain, problem: hddl.HDDLProblem) -> Grounded | None:
+Reached = dict[str, list[tuple[tuple[str, ...], list[Fact], list[Fact]]]]
+"""The relaxed-reachable ground actions, by name: arguments, precondition facts, added
+facts (:meth:`_Grounder.reachable`)."""
+
+
+def ground(domain: hddl.HDDLDomain, problem: hddl.HDDLProblem,
+           reached: list[Reached] | None = None) -> Grounded | None:
     """The ground model of ``problem`` (see the module's docstring), or None when it is
-    too large or the initial task network has parameters."""
+    too large or the initial task network has parameters; ``reached``, when given, gets
+    the first pass's actions once that pass is over, for the estimate that needs only
+    them (:mod:`planner.subgoals`) when the model is given up (Freecell: 1-5 s saved)."""
     if problem.htn_params:
         return None
+    grounder = _Grounder(domain, problem)
+    grounder.reached = reached
     try:
-        return _Grounder(domain, problem).run()
+        return grounder.run()
     except TooLarge:
         return None
 
@@ -118,8 +128,7 @@ class _Index:
 
 
 def reachable_actions(domain: hddl.HDDLDomain, problem: hddl.HDDLProblem, limit: int,
-                      seconds: float) -> dict[str, list[tuple[tuple[str, ...], list[Fact],
-                                                               list[Fact]]]] | None:
+                      seconds: float) -> Reached | None:
     """The first pass alone (:meth:`_Grounder.reachable`: every relaxed-reachable ground
     action, by name, with its precondition's and its effect's facts), or None beyond
     ``limit`` ground actions (and bindings tried) or ``seconds``: the actions of problems
@@ -146,6 +155,8 @@ class _Grounder:
             self.by_task.setdefault(method.task.name, []).append(method)
         self.candidates: dict[str, bool] = {}
         """For each compound task asked, whether its possible arguments are known."""
+        self.reached: list[Reached] | None = None
+        """Where :meth:`run` puts the first pass's actions, when asked (:func:`ground`)."""
         self.work = 0
         self.limit = LIMIT if limit is None else limit
         self.deadline = time.perf_counter() + (TIME_LIMIT_S if seconds is None else seconds)
@@ -240,6 +251,8 @@ class _Grounder:
 
     def run(self) -> Grounded:
         actions = self.reachable()
+        if self.reached is not None:
+            self.reached.append(actions)
         by_task = self.by_task
         ground_actions = {(name, args): (pre, add)
                           for name, rows in actions.items() for args, pre, add in rows}

@@ -64,15 +64,15 @@ def first_plan(problem: Problem, budget_ms: float | None = None,
     if first.plan is not None or first.complete:
         return first
     stages = [first]
-    relaxed = None
+    relaxed, reached = None, []
     if left() > 0:
-        relaxed = progression.relaxed_model(problem)
+        relaxed = progression.relaxed_model(problem, reached)
         if relaxed is not None and left() > 0:
             stages.append(progression.best_first(problem, left() * RELAXED_SHARE,
                                                  max_nodes=max_nodes, relaxed=relaxed))
     if stages[-1].plan is None and not stages[-1].complete and left() > 0:
-        subgoals = (Subgoals.build(problem) if relaxed is None and not problem.goals
-                    else None)
+        subgoals = (Subgoals.build(problem, reached[0] if reached else None)
+                    if relaxed is None and not problem.goals else None)
         stages.append(restarts.best_first(problem, left(), max_nodes=max_nodes,
                                           subgoals=subgoals))
     last = stages[-1]

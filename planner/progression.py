@@ -126,10 +126,12 @@ def best_first(problem: Problem, budget_ms: float | None = None, *,
     return second
 
 
-def relaxed_model(problem: Problem) -> Relaxed | None:
+def relaxed_model(problem: Problem, reached: list[grounding.Reached] | None = None
+                  ) -> Relaxed | None:
     """The relaxed-composition heuristic of an HDDL problem (:mod:`planner.relaxed`), or
-    None when the problem does not ground within :mod:`planner.grounding`'s limits."""
-    model = None if problem.lifted is None else grounding.ground(*problem.lifted)
+    None when the problem does not ground within :mod:`planner.grounding`'s limits
+    (``reached``: see :func:`planner.grounding.ground`)."""
+    model = None if problem.lifted is None else grounding.ground(*problem.lifted, reached)
     return None if model is None else Relaxed(model, problem.goals)
 
 

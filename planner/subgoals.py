@@ -178,13 +178,17 @@ class Subgoals:
         self.size = len(rows)
 
     @classmethod
-    def build(cls, problem: Problem) -> Subgoals | None:
-        """The estimate of an HDDL ``problem``, or None when its actions do not ground
-        within :data:`ACTION_LIMIT` and :data:`ACTION_SECONDS`."""
+    def build(cls, problem: Problem, actions: grounding.Reached | None = None
+              ) -> Subgoals | None:
+        """The estimate of an HDDL ``problem`` (with its relaxed-reachable ``actions``,
+        when they were grounded already), or None when its actions do not ground within
+        :data:`ACTION_LIMIT` and :data:`ACTION_SECONDS`."""
         if problem.lifted is None:
             return None
         domain, hproblem = problem.lifted
-        actions = grounding.reachable_actions(domain, hproblem, ACTION_LIMIT, ACTION_SECONDS)
+        if actions is None:
+            actions = grounding.reachable_actions(domain, hproblem, ACTION_LIMIT,
+                                                  ACTION_SECONDS)
         if actions is None:
             return None
         return cls(task_needs(domain), actions, [(f.pred, f.args) for f in hproblem.init])

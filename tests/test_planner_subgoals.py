@@ -113,9 +113,9 @@ def test_the_portfolio_builds_it_for_a_problem_without_goals(levels, monkeypatch
     built = []
     original = Subgoals.build
 
-    def build(problem):
+    def build(problem, actions=None):
         built.append(problem)
-        return original(problem)
+        return original(problem, actions)
 
     monkeypatch.setattr(portfolio.Subgoals, "build", staticmethod(build))
     monkeypatch.setattr(grounding, "LIMIT", 10)  # as if its methods were too many
