@@ -343,8 +343,12 @@ class DepthFirst:
                                "searched before, in this very state (a loop)")
                     continue
                 seen.add(key)
-                stack.append(self._decompose(methods[name], args, parent, state, state_hash,
-                                             rest, trail))
+                successors = self._decompose(methods[name], args, parent, state, state_hash,
+                                             rest, trail)
+                chains = self.checks.chains
+                if chains and chains.may_add_any(name, args):
+                    successors = chains.ordered(successors, rest, state.get)
+                stack.append(successors)
 
     def _apply(self, action: Action, args: tuple, parent: Path, state: State, state_hash: int,
                rest: Any, trail: Any) -> tuple | None:
