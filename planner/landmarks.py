@@ -33,7 +33,7 @@ MAX_CHAINS = 16
 """The most chains kept (the longest): each costs a look-up per task a stack gains."""
 MAX_LENGTH = 64
 """The most facts of one chain (a goal's landmarks are followed down that far)."""
-ORDERED = 256
+ORDERED = 4096
 """The most successors of one decomposition :meth:`Chains.ordered` puts in order."""
 MAX_KEPT = 1_000_000
 """The most answers kept per chain (then they are all forgotten)."""
@@ -75,8 +75,10 @@ def _needs(domain: Domain, added: set[str], pred: str, fact: tuple) -> set[Fact]
 
 
 def chains_of(domain: Domain, goals: list[Fact]) -> list[tuple[Fact, ...]]:
-    """The chains ending in each goal fact (each at least two facts long, the longest
-    :data:`MAX_CHAINS`), first fact first."""
+    """The chains ending in each goal fact, first fact first: each at least two facts
+    long, none whose facts after its first are all in a longer one (Monroe: the chain
+    of the observations, not each observation's own precondition before its part of
+    it), the longest :data:`MAX_CHAINS`."""
     added = {pred for name in domain.actions for pred in domain.adds.get(name, {})}
     found: list[tuple[Fact, ...]] = []
     for goal in goals:
@@ -91,7 +93,11 @@ def chains_of(domain: Domain, goals: list[Fact]) -> list[tuple[Fact, ...]]:
             elif len(path) > 1:
                 found.append(tuple(reversed(path)))
     found.sort(key=len, reverse=True)
-    return found[:MAX_CHAINS]
+    kept: list[tuple[Fact, ...]] = []
+    for chain in found:
+        if not any(set(chain[1:]) <= set(other) for other in kept):
+            kept.append(chain)
+    return kept[:MAX_CHAINS]
 
 
 class Chains:
@@ -100,9 +106,13 @@ class Chains:
     def __init__(self, domain: Domain, goals: list[Fact]):
         self.domain = domain
         self.chains = chains_of(domain, goals)
-        self.facts = {fact for chain in self.chains for fact in chain}
-        self.adding: dict[tuple[str, tuple], bool] = {}
-        """:meth:`may_add_any`'s answers."""
+        self.facts = sorted({fact for chain in self.chains for fact in chain}, key=repr)
+        bit = {fact: 1 << position for position, fact in enumerate(self.facts)}
+        self.bits = [tuple(bit[fact] for fact in chain) for chain in self.chains]
+        """Each chain's facts, as bits of :attr:`facts`."""
+        self.masks: dict[tuple[str, tuple], tuple[int, int]] = {}
+        """For each task met: the facts of :attr:`facts` it may add, and those it may
+        add through a decomposition that names them (``Domain.may_add_named``)."""
         self.known: list[dict[int, int]] = [{} for _ in self.chains]
         """For each chain, by a stack's hash: the first fact of the chain from which
         the stack may add the rest, in order."""
@@ -110,90 +120,108 @@ class Chains:
     def __bool__(self) -> bool:
         return bool(self.chains)
 
+    def _masks(self, name: str, args: tuple) -> tuple[int, int]:
+        key = (name, args)
+        known = self.masks.get(key)
+        if known is None:
+            if len(self.masks) > MAX_KEPT:
+                self.masks.clear()
+            may_add, named = self.domain.may_add, self.domain.may_add_named
+            adds = names = 0
+            for position, (pred, fact) in enumerate(self.facts):
+                if may_add(name, args, pred, fact):
+                    adds |= 1 << position
+                    if named(name, args, pred, fact):
+                        names |= 1 << position
+            known = self.masks[key] = (adds, names)
+        return known
+
     def may_add_any(self, name: str, args: tuple) -> bool:
         """Whether ``name(args)`` may add a fact of some chain (else a decomposition
         of it changes no chain's answer)."""
-        key = (name, args)
-        known = self.adding.get(key)
-        if known is None:
-            if len(self.adding) > MAX_KEPT:
-                self.adding.clear()
-            may_add = self.domain.may_add
-            known = any(may_add(name, args, pred, fact) for pred, fact in self.facts)
-            self.adding[key] = known
-        return known
+        return self._masks(name, args)[0] != 0
 
-    def next_facts(self, get: Any) -> list[Fact]:
-        """The first fact of each chain that the state read by ``get`` still needs made
-        true (of the chains whose goal fact is false)."""
+    def _starts(self, get: Any) -> list[tuple[int, int]]:
+        """For each chain whose goal fact is false in the state read by ``get``: its
+        index and that of its first fact still to be made true (the facts from it on
+        are all false)."""
         out = []
-        for chain in self.chains:
+        for index, chain in enumerate(self.chains):
             if get(*chain[-1]) is True:
                 continue
             start = len(chain) - 1
             while start > 0 and get(*chain[start - 1]) is not True:
                 start -= 1
-            out.append(chain[start])
+            out.append((index, start))
         return out
 
     def ordered(self, successors: Iterator[tuple], rest: Any, get: Any) -> Iterator[tuple]:
         """The search nodes ``successors`` (a decomposition's, each ``(state, hash,
-        agenda, trail)`` whose agenda ends in ``rest``), those whose new tasks may add
-        the next fact of a chain first, in their order, then the others (the first
-        :data:`ORDERED` only: the rest follow as they come).  Monroe: the method that
-        does the next observation (``prefix_2``) before the one that does the same
-        action unobserved (``regular_2``), the vehicle the observed driver drives
-        before the others."""
-        wanted = self.next_facts(get)
-        if not wanted:
+        agenda, trail)`` whose agenda ends in ``rest``) in a better order: those
+        whose new tasks may add the next fact of a chain, and among them those whose
+        tasks name the most facts still to come (``Domain.may_add_named``: through
+        the constants a method fixes, not only through a variable that may be
+        anything), else in their order, and last those whose stack cannot complete a
+        chain (:meth:`broken`: the search refuses them once it checks decompositions);
+        the first :data:`ORDERED` only, the rest follow as they come.  Monroe: the
+        method that does the next observation (``prefix_2``) before the one that does
+        the same action unobserved (``regular_2``); the riot quelled where the
+        observed police drive to, of the 25 places the top-level method may choose."""
+        starts = self._starts(get)
+        if not starts:
             yield from successors
             return
-        may_add = self.domain.may_add
-        later = []
+        wanted = coming = 0
+        for index, start in starts:
+            bits = self.bits[index]
+            wanted |= bits[start]
+            for value in bits[start:]:
+                coming |= value
+        masks = self._masks
+        keyed = []
         for count, node in enumerate(successors):
+            adds = names = 0
             entry = node[2]
             while entry is not None and entry is not rest:
-                if any(may_add(entry[0], entry[1], pred, fact) for pred, fact in wanted):
-                    yield node
-                    break
+                mask, named = masks(entry[0], entry[1])
+                adds |= mask
+                names |= named
                 entry = entry[4]
-            else:
-                later.append(node)
+            broken = any(self._from(index, node[2]) > start for index, start in starts)
+            keyed.append((broken, not adds & wanted, -(names & coming).bit_count(), count,
+                          node))
             if count + 1 >= ORDERED:
                 break
-        yield from later
+        keyed.sort(key=lambda item: item[:4])
+        for *_, node in keyed:
+            yield node
         yield from successors
 
     def broken(self, agenda: Any, get: Any) -> str | None:
         """Which chain the stack ``agenda`` cannot complete from the state read by
         ``get(pred, args)`` (entries are ``(task, args, path, hash, rest)``)."""
-        for index, chain in enumerate(self.chains):
-            last = len(chain)
-            if get(*chain[-1]) is True:
-                continue
-            start = last - 1
-            while start > 0 and get(*chain[start - 1]) is not True:
-                start -= 1
+        for index, start in self._starts(get):
             if self._from(index, agenda) > start:
+                chain = self.chains[index]
                 pred, fact = chain[start]
                 return (f"no order of the tasks left can make ({' '.join((pred, *fact))}) "
-                        f"and the {last - start - 1} facts after it true in turn")
+                        f"and the {len(chain) - start - 1} facts after it true in turn")
         return None
 
     def _from(self, index: int, agenda: Any) -> int:
         known = self.known[index]
         if len(known) > MAX_KEPT:
             known.clear()
-        chain = self.chains[index]
+        bits = self.bits[index]
         pending = []
         while agenda is not None and agenda[3] not in known:
             pending.append(agenda)
             agenda = agenda[4]
-        first = len(chain) if agenda is None else known[agenda[3]]
-        may_add = self.domain.may_add
+        first = len(bits) if agenda is None else known[agenda[3]]
+        masks = self._masks
         for entry in reversed(pending):
-            name, args = entry[0], entry[1]
-            while first > 0 and may_add(name, args, *chain[first - 1]):
+            mask = masks(entry[0], entry[1])[0]
+            while first > 0 and mask & bits[first - 1]:
                 first -= 1
             known[entry[3]] = first
         return first
