@@ -29,7 +29,10 @@ prunings below, which keep recursive domains finite and fail early:
   decomposed task may add is refused; what a task may add is guarded by the
   constants its methods fix (``Domain.may_add``).  Monroe's plan recognition
   has one goal, that the observed actions were done, and ten top-level methods
-  of which one can do them.
+  of which one can do them.  The same check asks the chains of facts the goals
+  need in order (:mod:`planner.landmarks`): a stack that cannot add them in
+  turn is refused, and the successors of a task that may add one of them are
+  tried in the chains' order (in every pass).
 * **doomed decompositions**: a decomposition is refused where it is chosen when
   one of its actions (arguments bound) needs a fact that is false and that no
   subtask before it may add, or deletes a fact that an action among the
