@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pytest
+from chores import CHORES, chores_problem, plans_with_checks
 
 from planner import depthfirst, load_hddl, plan, validate
 from planner.depthfirst import BUDGET_EXHAUSTED, first_plan
@@ -253,25 +254,15 @@ WATCH = """\
   (:method observed :parameters (?who - agent) :task (act ?who)
     :precondition (= ?who ann) :ordered-subtasks (observe))
   (:method plain :parameters (?who - agent) :task (act ?who) :ordered-subtasks ())
-  (:method work :parameters (?b ?n - bit) :task (chores ?b) :precondition (next ?b ?n)
-    :ordered-subtasks (and (set ?b) (chores ?n)))
-  (:method rest :parameters (?b ?n - bit) :task (chores ?b) :precondition (next ?b ?n)
-    :ordered-subtasks (chores ?n))
-  (:method stop :parameters (?b - bit) :task (chores ?b) :ordered-subtasks ())
-  (:action set :parameters (?b - bit) :precondition (not (on ?b)) :effect (on ?b))
+""" + CHORES + """\
   (:action prepare :parameters () :precondition () :effect (ready))
   (:action observe :parameters () :precondition (ready) :effect (seen)))
 """
 
 
-def _watch(write, bits: int = 18):
-    objects = " ".join(f"b{i}" for i in range(bits))
-    chain = " ".join(f"(next b{i} b{i + 1})" for i in range(bits - 1))
+def _watch(write):
     domain = WATCH.replace("(:predicates", "(:predicates (first ?b - bit)")
-    return load_hddl(write("d.hddl", domain), write("p.hddl", (
-        f"(define (problem p) (:domain watch) (:objects {objects} - bit)\n"
-        f"  (:htn :ordered-subtasks (and (top)))\n  (:init {chain} (first b0))\n"
-        "  (:goal (seen)))\n")))
+    return chores_problem(write, domain, "(seen)")
 
 
 def test_what_a_task_may_add_is_guarded_by_the_constants_its_methods_require(write):
@@ -283,9 +274,4 @@ def test_what_a_task_may_add_is_guarded_by_the_constants_its_methods_require(wri
 def test_a_decomposition_leaving_no_task_able_to_reach_the_goal_is_refused(write, monkeypatch):
     """Monroe's plan recognition: ``busy`` (tried first) does 2^18 chores and then acts
     as ``bob``, who cannot observe; refused where it is chosen."""
-    monkeypatch.setattr(depthfirst, "PLAIN_NODES", 1_000)  # the checks start after
-    problem = _watch(write)
-    result = first_plan(problem, 60_000, max_nodes=20_000)
-    assert result.plan is not None, result.explain()
-    assert [str(a) for a in result.plan.actions] == ["prepare()", "observe()"]
-    assert validate(problem, result.plan) == []
+    plans_with_checks(_watch(write), monkeypatch, ["prepare()", "observe()"])

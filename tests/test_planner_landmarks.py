@@ -7,7 +7,9 @@ which needs ``seen1``, added by ``observe1`` only, which needs ``ready``."""
 
 from __future__ import annotations
 
-from planner import depthfirst, load_hddl, validate
+from chores import CHORES, chores_problem, plans_with_checks
+
+from planner import depthfirst
 from planner.depthfirst import first_plan
 from planner.landmarks import chains_of
 
@@ -25,25 +27,15 @@ WATCH = """\
   (:method idle :parameters (?b - bit) :task (look) :precondition (first ?b)
     :ordered-subtasks (chores ?b))
   (:method looked :parameters () :task (look) :ordered-subtasks (observe1))
-  (:method work :parameters (?b ?n - bit) :task (chores ?b) :precondition (next ?b ?n)
-    :ordered-subtasks (and (set ?b) (chores ?n)))
-  (:method rest :parameters (?b ?n - bit) :task (chores ?b) :precondition (next ?b ?n)
-    :ordered-subtasks (chores ?n))
-  (:method stop :parameters (?b - bit) :task (chores ?b) :ordered-subtasks ())
-  (:action set :parameters (?b - bit) :precondition (not (on ?b)) :effect (on ?b))
+""" + CHORES + """\
   (:action prepare :parameters () :precondition () :effect (ready))
   (:action observe1 :parameters () :precondition (ready) :effect (seen1))
   (:action observe2 :parameters () :precondition (seen1) :effect (seen2)))
 """
 
 
-def _watch(write, bits: int = 18):
-    objects = " ".join(f"b{i}" for i in range(bits))
-    chain = " ".join(f"(next b{i} b{i + 1})" for i in range(bits - 1))
-    return load_hddl(write("d.hddl", WATCH), write("p.hddl", (
-        f"(define (problem p) (:domain watch) (:objects {objects} - bit)\n"
-        f"  (:htn :ordered-subtasks (and (top)))\n  (:init {chain} (first b0))\n"
-        "  (:goal (seen2)))\n")))
+def _watch(write):
+    return chores_problem(write, WATCH, "(seen2)")
 
 
 def test_a_chain_is_the_facts_every_achiever_of_the_next_needs(write):
@@ -56,12 +48,7 @@ def test_a_chain_is_the_facts_every_achiever_of_the_next_needs(write):
 def test_a_stack_that_cannot_add_the_chain_in_turn_is_refused(write, monkeypatch):
     """``busy`` (tried first) may add the goal, ``seen2``, but nothing before it: the goal
     check alone let it do 2^18 ways of the chores before ``observe2`` failed."""
-    monkeypatch.setattr(depthfirst, "PLAIN_NODES", 1_000)  # the checks start after
-    problem = _watch(write)
-    result = first_plan(problem, 60_000, max_nodes=20_000)
-    assert result.plan is not None, result.explain()
-    assert [str(a) for a in result.plan.actions] == ["prepare()", "observe1()", "observe2()"]
-    assert validate(problem, result.plan) == []
+    plans_with_checks(_watch(write), monkeypatch, ["prepare()", "observe1()", "observe2()"])
 
 
 def test_the_decompositions_that_may_add_the_next_fact_are_tried_first(write, monkeypatch):

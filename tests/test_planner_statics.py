@@ -8,8 +8,7 @@ action changes), so neither ``busy`` way may reach the goal."""
 
 from __future__ import annotations
 
-from planner import depthfirst, load_hddl, validate
-from planner.depthfirst import first_plan
+from chores import CHORES, chores_problem, plans_with_checks
 
 WATCH = """\
 (define (domain watch) (:requirements :typing :hierarchy :negative-preconditions :equality)
@@ -31,25 +30,16 @@ WATCH = """\
   (:method observed :parameters (?who - agent) :task (act ?who)
     :precondition (= ?who ann) :ordered-subtasks (observe))
   (:method plain :parameters (?who - agent) :task (act ?who) :ordered-subtasks ())
-  (:method work :parameters (?b ?n - bit) :task (chores ?b) :precondition (next ?b ?n)
-    :ordered-subtasks (and (set ?b) (chores ?n)))
-  (:method rest :parameters (?b ?n - bit) :task (chores ?b) :precondition (next ?b ?n)
-    :ordered-subtasks (chores ?n))
-  (:method stop :parameters (?b - bit) :task (chores ?b) :ordered-subtasks ())
   (:action check :parameters (?who - agent) :precondition (trusted ?who) :effect ())
-  (:action set :parameters (?b - bit) :precondition (not (on ?b)) :effect (on ?b))
+""" + CHORES + """\
   (:action prepare :parameters () :precondition () :effect (ready))
   (:action observe :parameters () :precondition (ready) :effect (seen)))
 """
 
 
-def _watch(write, trusted: str = "bob", bits: int = 18):
-    objects = " ".join(f"b{i}" for i in range(bits))
-    chain = " ".join(f"(next b{i} b{i + 1})" for i in range(bits - 1))
-    return load_hddl(write("d.hddl", WATCH), write("p.hddl", (
-        f"(define (problem p) (:domain watch) (:objects {objects} - bit bob - helper)\n"
-        f"  (:htn :ordered-subtasks (and (top)))\n"
-        f"  (:init {chain} (first b0) (trusted {trusted}))\n  (:goal (seen)))\n")))
+def _watch(write, trusted: str = "bob"):
+    return chores_problem(write, WATCH, "(seen)", objects="bob - helper",
+                          init=f"(trusted {trusted})")
 
 
 def test_a_method_variable_whose_type_or_static_facts_exclude_a_value_does_not_add_for_it(
@@ -66,9 +56,4 @@ def test_a_method_variable_whose_type_or_static_facts_exclude_a_value_does_not_a
 def test_a_decomposition_whose_helpers_cannot_reach_the_goal_is_refused(write, monkeypatch):
     """Before the static filter, ``help`` "may add" ``seen`` and ``busy`` was searched
     through 2^18 ways of doing the chores."""
-    monkeypatch.setattr(depthfirst, "PLAIN_NODES", 1_000)  # the checks start after
-    problem = _watch(write)
-    result = first_plan(problem, 60_000, max_nodes=20_000)
-    assert result.plan is not None, result.explain()
-    assert [str(a) for a in result.plan.actions] == ["prepare()", "observe()"]
-    assert validate(problem, result.plan) == []
+    plans_with_checks(_watch(write), monkeypatch, ["prepare()", "observe()"])
