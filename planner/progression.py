@@ -24,6 +24,10 @@ smallest:
   that leaves less to do is preferred, and a stack that cannot be finished
   (a task with no finite decomposition) is infinite.
 
+A node with a false goal fact that no task left may add (:mod:`planner.reach`), or
+that no action below the task stack can add from the node's state, relaxed
+(:mod:`planner.support`), is dropped: it is a dead end.
+
 Ties go to the node made last (the search stays depth first between equally good
 nodes, as the plain search would).  A node's successors are drawn from its
 choice point :data:`BATCH` at a time: a task with millions of bindings (the
