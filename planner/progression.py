@@ -175,7 +175,7 @@ class BestFirst:
                         for pred, args, value in self.goals]
         """The goal facts, each with its index in ``positive`` (-1: a negated one)."""
         self.reach = GoalReach(problem.domain, self.positive)
-        self.support = (None if problem.lifted is None
+        self.support = (None if problem.lifted is None or not self.positive
                         else Support.of(*problem.lifted, self.positive))
         """The relaxed support of the goal facts false (:mod:`planner.support`): a node
         with one that no action below its stack can add from its state is dropped."""
