@@ -93,3 +93,22 @@ def test_the_search_leaves_a_part_glazed_at_once_and_plans(write):
     assert not any(a.name == "glaze" for a in result.plan.actions)
     assert sorted(a.args[0] for a in result.plan.actions if a.name == "varnish") == [
         f"p{i}" for i in range(10)]
+
+
+def test_the_check_gives_itself_up_when_it_drops_no_node(write):
+    # Where the lifted "may add" already tells the dead ends, the check drops nothing and
+    # only costs: after TRIAL nodes without a drop it is not asked again.
+    from planner.support import TRIAL
+
+    problem = load_hddl(write("d.hddl", FINISHING), write("p.hddl", _finishing(3)))
+    goals = [key for key, value in problem.goals.items() if value is True]
+    state = FactState(dict(problem.initial), problem.domain.patterns)
+    stack = _stack([("finish", ("p0", "c0")), ("finish", ("p1", "c1"))])
+    false = frozenset([goals.index(("varnished", ("p0",)))])
+    idle, busy = Support.of(*problem.lifted, goals), Support.of(*problem.lifted, goals)
+    assert idle is not None and busy is not None
+    assert busy.unsupported(false, state, stack[4]) is not None  # finish(p0) gone: a drop
+    for _ in range(TRIAL):
+        assert idle.useful and idle.unsupported(false, state, stack) is None
+        busy.unsupported(false, state, stack)
+    assert not idle.useful and busy.useful
