@@ -430,6 +430,7 @@ class DepthFirst:
         known = None if self.ground is None else self.ground.get((method.name, args))
         for dec in method.decompositions:
             matched = False
+            risky: list[tuple] = []
             assert dec.bind is not None, "the depth-first search plans HDDL methods"
             ground = None if known is None else known.get(dec.name)
             if ground is not None:
@@ -464,8 +465,14 @@ class DepthFirst:
                     self._fail(parent, task_call(method.name, args), f"{dec.name}: {why}")
                     continue
                 record = ("method", node[4], parent[4], method.name, args, dec.name, binding)
-                yield state, state_hash, agenda, (record, (("bind", subst), trail)
-                                                  if subst else trail)
+                child = state, state_hash, agenda, (record, (("bind", subst), trail)
+                                                    if subst else trail)
+                if (self.careful and checks.checked(dec)
+                        and checks.risky(agenda, len(dec.subtasks), state)):
+                    risky.append(child)
+                    continue
+                yield child
+            yield from risky
             if not matched:
                 tried.append(f"{dec.name}: {dec.pre.text if dec.pre else 'no binding'}")
         if tried and len(tried) == len(method.decompositions):
