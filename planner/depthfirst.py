@@ -441,7 +441,10 @@ class DepthFirst:
                 bindings = dec.late(env, state, self.defer)
             else:
                 bindings = dec.bind(env, state)
-            for binding in bindings:
+            bindings = iter(bindings)
+            following = next(bindings, None)
+            while following is not None:
+                binding, following = following, next(bindings, None)
                 matched = True
                 subst = None
                 if late:
@@ -467,7 +470,7 @@ class DepthFirst:
                 record = ("method", node[4], parent[4], method.name, args, dec.name, binding)
                 child = state, state_hash, agenda, (record, (("bind", subst), trail)
                                                     if subst else trail)
-                if (self.careful and checks.checked(dec)
+                if (following is not None and self.careful and checks.checked(dec)
                         and checks.risky(agenda, len(dec.subtasks), state)):
                     risky.append(child)
                     continue
