@@ -38,8 +38,15 @@ prunings below, which keep recursive domains finite and fail early:
   Factories' ``m_get_resource`` may build a factory on the very plot the
   factory being built needs: without this, every way of fetching the resources
   in between is tried before that last step fails.
+* **threats tried last**: a binding whose actions delete a true fact that an
+  action among those tasks needs, though a task in between *may* add it again
+  (so the threat is not proved), is tried after the other bindings of its
+  decomposition.  Factories' deliveries may pick a resource up where it waits
+  for a ``fuse``, which some later delivery might bring back but does not: the
+  search then tried every way of doing what lies between before the ``fuse``
+  failed.
 
-These last two (:mod:`planner.checks`) check every decomposition; they cost
+These last three (:mod:`planner.checks`) check every decomposition; they cost
 most problems more than they save, so a first pass of :data:`PLAIN_NODES`
 nodes goes without them, and the search starts again with them only when that pass found no plan.
 
