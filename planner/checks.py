@@ -104,6 +104,39 @@ class DecompositionChecks:
             self.has_checks[id(dec)] = known
         return known
 
+    def risky(self, agenda: Any, count: int, state: State) -> bool:
+        """Whether the first ``count`` tasks of ``agenda`` delete a true fact that an action
+        among the :data:`LOOKAHEAD` tasks after them needs, though a task in between may
+        add it again (which :meth:`doomed` lets pass): a threat that is not proved."""
+        checks = self.checks
+        entry = agenda
+        for _ in range(count):
+            name, args, _, _, rest = entry
+            check = checks.get(name)
+            if check is not None and check[1]:
+                env = dict(zip(self.domain.actions[name].names, args, strict=True))
+                for pred, key in check[1]:
+                    fact = key(env)
+                    if state.get(pred, fact) is True and self.wanted(pred, fact, rest):
+                        return True
+            entry = rest
+        return False
+
+    def wanted(self, pred: str, fact: tuple, agenda: Any) -> bool:
+        """Whether an action among the :data:`LOOKAHEAD` next tasks on ``agenda`` needs
+        ``pred(fact)``, whatever may add it before."""
+        relevant, actions = self.relevant[pred], self.domain.actions
+        for _ in range(LOOKAHEAD):
+            if agenda is None:
+                return False
+            name, args, _, _, agenda = agenda
+            found = relevant.get(name)
+            if found is not None and found[0]:
+                env = dict(zip(actions[name].names, args, strict=True))
+                if any(key(env) == fact for key in found[0]):
+                    return True
+        return False
+
     def doomed(self, agenda: Any, count: int, state: State) -> str | None:
         """Why the first ``count`` tasks of ``agenda`` (a decomposition's subtasks) doom it,
         if they do: one of their actions needs a fact that is false and that no task

@@ -239,6 +239,53 @@ def test_an_action_needing_a_false_fact_no_earlier_task_adds_dooms_its_decomposi
     assert [result.plan.tree[r].decomposition for r in result.plan.roots] == ["built"]
 
 
+STOCK = """\
+(define (domain stock) (:requirements :typing :hierarchy :negative-preconditions)
+  (:types pile bit)
+  (:constants a - pile)
+  (:predicates (stock ?p - pile) (spare ?p - pile) (got) (on ?b - bit)
+               (next ?a ?b - bit) (last ?b - bit))
+  (:task settle :parameters ())
+  (:task chores :parameters (?b - bit))
+  (:method build :parameters (?s - pile ?b - bit) :task (settle) :precondition (last ?b)
+    :ordered-subtasks (and (take ?s) (chores ?b) (use a)))
+  (:method work :parameters (?b ?n - bit) :task (chores ?b) :precondition (next ?b ?n)
+    :ordered-subtasks (and (set ?b) (chores ?n)))
+  (:method fill :parameters (?b ?n - bit ?p - pile) :task (chores ?b)
+    :precondition (and (next ?b ?n) (spare ?p)) :ordered-subtasks (and (restock ?p) (chores ?n)))
+  (:method rest :parameters (?b ?n - bit) :task (chores ?b) :precondition (next ?b ?n)
+    :ordered-subtasks (chores ?n))
+  (:method stop :parameters (?b - bit) :task (chores ?b) :ordered-subtasks ())
+  (:action take :parameters (?s - pile) :precondition (stock ?s)
+    :effect (and (not (stock ?s)) (got)))
+  (:action use :parameters (?p - pile) :precondition (and (stock ?p) (got)) :effect ())
+  (:action restock :parameters (?p - pile) :precondition (spare ?p) :effect (stock ?p))
+  (:action set :parameters (?b - bit) :precondition (not (on ?b)) :effect (on ?b)))
+"""
+
+
+def test_a_step_that_deletes_what_a_later_action_needs_is_tried_after_the_others(
+        write, monkeypatch):
+    """Factories' resources: ``take a`` empties the pile that ``use a`` needs at the end;
+    a chore in between may restock a pile (so the threat is not proved, and
+    the decomposition is not refused), but only ``z`` is ever restocked.  ``take a`` comes
+    first in the binder's order, and every way of doing the chores would be tried
+    before ``use a`` fails: the bindings that threaten a fact a later action needs are
+    tried after the others."""
+    monkeypatch.setattr(depthfirst, "PLAIN_NODES", 1_000)  # the checks start after
+    objects = " ".join(f"b{i}" for i in range(18))
+    chain = " ".join(f"(next b{i} b{i + 1})" for i in range(17))
+    problem = load_hddl(write("d.hddl", STOCK), write("p.hddl", (
+        f"(define (problem p) (:domain stock) (:objects z - pile {objects} - bit)\n"
+        "  (:htn :ordered-subtasks (and (settle)))\n"
+        f"  (:init (stock a) (stock z) (spare z) {chain} (last b0)))\n")))
+    result = first_plan(problem, 60_000, max_nodes=20_000)
+    assert result.plan is not None, result.explain()
+    assert [str(a) for a in result.plan.actions][::len(result.plan.actions) - 1] == [
+        "take(z)", "use(a)"]
+    assert validate(problem, result.plan) == []
+
+
 WATCH = """\
 (define (domain watch) (:requirements :typing :hierarchy :negative-preconditions :equality)
   (:types bit agent)
