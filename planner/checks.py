@@ -25,6 +25,7 @@ from collections.abc import Callable
 from typing import Any
 
 from planner.domain import Decomposition, Domain
+from planner.landmarks import Chains
 from planner.state import State
 
 LOOKAHEAD = 64
@@ -69,6 +70,8 @@ class DecompositionChecks:
         positive = [(pred, args) for pred, args, value in goals if value is True]
         self.few_goals = positive if len(positive) <= FEW_GOALS else []
         """The goal facts :meth:`unreachable` checks."""
+        self.chains = Chains(domain, self.few_goals)
+        """The chains of facts those goal facts need in order (:mod:`planner.landmarks`)."""
         self.relevant: dict[str, dict[str, tuple[list[Callable[[dict[str, Any]], tuple]],
                                                   bool]]] = {}
         """For each predicate some action needs, the tasks :meth:`needed` looks at: the
@@ -100,6 +103,39 @@ class DecompositionChecks:
                         for position, sub in enumerate(dec.subtasks))
             self.has_checks[id(dec)] = known
         return known
+
+    def risky(self, agenda: Any, count: int, state: State) -> bool:
+        """Whether the first ``count`` tasks of ``agenda`` delete a true fact that an action
+        among the :data:`LOOKAHEAD` tasks after them needs, though a task in between may
+        add it again (which :meth:`doomed` lets pass): a threat that is not proved."""
+        checks = self.checks
+        entry = agenda
+        for _ in range(count):
+            name, args, _, _, rest = entry
+            check = checks.get(name)
+            if check is not None and check[1]:
+                env = dict(zip(self.domain.actions[name].names, args, strict=True))
+                for pred, key in check[1]:
+                    fact = key(env)
+                    if state.get(pred, fact) is True and self.wanted(pred, fact, rest):
+                        return True
+            entry = rest
+        return False
+
+    def wanted(self, pred: str, fact: tuple, agenda: Any) -> bool:
+        """Whether an action among the :data:`LOOKAHEAD` next tasks on ``agenda`` needs
+        ``pred(fact)``, whatever may add it before."""
+        relevant, actions = self.relevant[pred], self.domain.actions
+        for _ in range(LOOKAHEAD):
+            if agenda is None:
+                return False
+            name, args, _, _, agenda = agenda
+            found = relevant.get(name)
+            if found is not None and found[0]:
+                env = dict(zip(actions[name].names, args, strict=True))
+                if any(key(env) == fact for key in found[0]):
+                    return True
+        return False
 
     def doomed(self, agenda: Any, count: int, state: State) -> str | None:
         """Why the first ``count`` tasks of ``agenda`` (a decomposition's subtasks) doom it,
@@ -142,12 +178,16 @@ class DecompositionChecks:
         :data:`FEW_GOALS` goal facts).  Only the goal facts ``name(args)`` may add are
         looked at: the others, its subtasks cannot add either, and what follows is
         unchanged.  Monroe's plan recognition: its one goal says that the observed
-        actions were all done, and only one of the ten top-level methods can do them."""
+        actions were all done, and only one of the ten top-level methods can do them.
+        Then the chains of facts those goals need in order (:mod:`planner.landmarks`):
+        a task left must be able to do the observations still to come, in turn."""
         may_add, get = self.domain.may_add, state.get
         for pred, fact in self.few_goals:
             if (may_add(name, args, pred, fact) and get(pred, fact) is not True
                     and not self.may_come(agenda, pred, fact)):
                 return f"no task left can make the goal ({' '.join((pred, *fact))}) true"
+        if self.chains and self.chains.may_add_any(name, args):
+            return self.chains.broken(agenda, get)
         return None
 
     def may_come(self, agenda: Any, pred: str, fact: tuple) -> bool:

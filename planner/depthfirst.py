@@ -29,7 +29,10 @@ prunings below, which keep recursive domains finite and fail early:
   decomposed task may add is refused; what a task may add is guarded by the
   constants its methods fix (``Domain.may_add``).  Monroe's plan recognition
   has one goal, that the observed actions were done, and ten top-level methods
-  of which one can do them.
+  of which one can do them.  The same check asks the chains of facts the goals
+  need in order (:mod:`planner.landmarks`): a stack that cannot add them in
+  turn is refused, and the successors of a task that may add one of them are
+  tried in the chains' order (in every pass).
 * **doomed decompositions**: a decomposition is refused where it is chosen when
   one of its actions (arguments bound) needs a fact that is false and that no
   subtask before it may add, or deletes a fact that an action among the
@@ -38,8 +41,15 @@ prunings below, which keep recursive domains finite and fail early:
   Factories' ``m_get_resource`` may build a factory on the very plot the
   factory being built needs: without this, every way of fetching the resources
   in between is tried before that last step fails.
+* **threats tried last**: a binding whose actions delete a true fact that an
+  action among those tasks needs, though a task in between *may* add it again
+  (so the threat is not proved), is tried after the other bindings of its
+  decomposition.  Factories' deliveries may pick a resource up where it waits
+  for a ``fuse``, which some later delivery might bring back but does not: the
+  search then tried every way of doing what lies between before the ``fuse``
+  failed.
 
-These last two (:mod:`planner.checks`) check every decomposition; they cost
+These last three (:mod:`planner.checks`) check every decomposition; they cost
 most problems more than they save, so a first pass of :data:`PLAIN_NODES`
 nodes goes without them, and the search starts again with them only when that pass found no plan.
 
@@ -343,8 +353,12 @@ class DepthFirst:
                                "searched before, in this very state (a loop)")
                     continue
                 seen.add(key)
-                stack.append(self._decompose(methods[name], args, parent, state, state_hash,
-                                             rest, trail))
+                successors = self._decompose(methods[name], args, parent, state, state_hash,
+                                             rest, trail)
+                chains = self.checks.chains
+                if chains and chains.may_add_any(name, args):
+                    successors = chains.ordered(successors, rest, state.get)
+                stack.append(successors)
 
     def _apply(self, action: Action, args: tuple, parent: Path, state: State, state_hash: int,
                rest: Any, trail: Any) -> tuple | None:
@@ -430,6 +444,7 @@ class DepthFirst:
         known = None if self.ground is None else self.ground.get((method.name, args))
         for dec in method.decompositions:
             matched = False
+            risky: list[tuple] = []
             assert dec.bind is not None, "the depth-first search plans HDDL methods"
             ground = None if known is None else known.get(dec.name)
             if ground is not None:
@@ -440,7 +455,10 @@ class DepthFirst:
                 bindings = dec.late(env, state, self.defer)
             else:
                 bindings = dec.bind(env, state)
-            for binding in bindings:
+            bindings = iter(bindings)
+            following = next(bindings, None)
+            while following is not None:
+                binding, following = following, next(bindings, None)
                 matched = True
                 subst = None
                 if late:
@@ -464,8 +482,14 @@ class DepthFirst:
                     self._fail(parent, task_call(method.name, args), f"{dec.name}: {why}")
                     continue
                 record = ("method", node[4], parent[4], method.name, args, dec.name, binding)
-                yield state, state_hash, agenda, (record, (("bind", subst), trail)
-                                                  if subst else trail)
+                child = state, state_hash, agenda, (record, (("bind", subst), trail)
+                                                    if subst else trail)
+                if (following is not None and self.careful and checks.checked(dec)
+                        and checks.risky(agenda, len(dec.subtasks), state)):
+                    risky.append(child)
+                    continue
+                yield child
+            yield from risky
             if not matched:
                 tried.append(f"{dec.name}: {dec.pre.text if dec.pre else 'no binding'}")
         if tried and len(tried) == len(method.decompositions):

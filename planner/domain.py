@@ -226,6 +226,17 @@ class Domain:
                 return True
         return False
 
+    def may_add_named(self, task: str, args: tuple, pred: str, fact: tuple) -> bool:
+        """Whether ``task(args)`` may add ``pred(fact)`` through a decomposition that
+        names some of its arguments (a pattern with guards: the constants its methods
+        fix), not only because a variable below it may be anything."""
+        for pattern, guards in self.adds.get(task, {}).get(pred, ()):
+            if not guards or any(args[index] != constant for index, constant in guards):
+                continue
+            if fits(pattern, args, fact):
+                return True
+        return False
+
     def is_subtype(self, kind: str | None, wanted: str) -> bool:
         """Whether ``kind`` is ``wanted`` or one of its subtypes."""
         seen = 0

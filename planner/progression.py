@@ -24,6 +24,10 @@ smallest:
   that leaves less to do is preferred, and a stack that cannot be finished
   (a task with no finite decomposition) is infinite.
 
+A node with a false goal fact that no task left may add (:mod:`planner.reach`), or
+that no action below the task stack can add from the node's state, relaxed
+(:mod:`planner.support`), is dropped: it is a dead end.
+
 Ties go to the node made last (the search stays depth first between equally good
 nodes, as the plain search would).  A node's successors are drawn from its
 choice point :data:`BATCH` at a time: a task with millions of bindings (the
@@ -56,6 +60,7 @@ from planner.reach import GoalReach
 from planner.relaxed import Relaxed
 from planner.search import Result
 from planner.subgoals import Subgoals
+from planner.support import Support
 
 GOAL_WEIGHT = 10
 """How much one unmet goal fact weighs against one action of the task stack's least work:
@@ -66,6 +71,11 @@ BATCH = 64
 BOUND_NODES = 5_000
 """The nodes of the first search with every method variable bound at once, when late
 binding would leave some unbound (:func:`best_first`)."""
+BOUND_SHARE = 1 / 4
+"""The most of the time budget that first search has: where the goal facts' support
+(:mod:`planner.support`) makes each node dearer (Woodworking from 7 parts: 5,000 nodes
+in 4.5 s), the late binders, which plan those problems in hundreds of nodes, keep the
+rest."""
 CHECK_EVERY = 32
 """Expansions between two looks at the clock."""
 
@@ -99,8 +109,8 @@ def best_first(problem: Problem, budget_ms: float | None = None, *,
     Without ``relaxed``, when some method has variables the late binders may leave
     unbound, a first search of :data:`BOUND_NODES` nodes binds them at once (the way
     the facts' index or name order proposes values sometimes finds a plan that late
-    binding misses: Woodworking's ``09--p03-complete`` in 2,715 nodes, against none in
-    250,000), then the search with late binding gets the rest of the budgets.  With
+    binding misses), within :data:`BOUND_SHARE` of the time, then the search with late
+    binding gets the rest of the budgets.  With
     ``relaxed``, its ground model binds the tasks it holds, and method variables are
     bound at once.  ``subgoals`` (:mod:`planner.subgoals`) adds to the least work what
     the facts the stack needs cost from the node's state; the search then binds late
@@ -114,13 +124,12 @@ def best_first(problem: Problem, budget_ms: float | None = None, *,
                                        for dec in method.decompositions):
         return BestFirst(problem, subgoals=subgoals).run(budget, max_nodes)
     start = time.perf_counter()
-    first = BestFirst(problem, defer=False, subgoals=subgoals).run(
-        budget, min(BOUND_NODES, max_nodes))
+    first = BestFirst(problem, defer=False).run(budget * BOUND_SHARE,
+                                                min(BOUND_NODES, max_nodes))
     if first.plan is not None or first.complete:
         return first
     left = budget - (time.perf_counter() - start) * 1000
-    second = BestFirst(problem, subgoals=subgoals).run(max(left, 0.0),
-                                                     max(max_nodes - first.expansions, 1))
+    second = BestFirst(problem).run(max(left, 0.0), max(max_nodes - first.expansions, 1))
     second.expansions += first.expansions
     second.elapsed_ms = (time.perf_counter() - start) * 1000
     return second
@@ -177,6 +186,10 @@ class BestFirst:
                         for pred, args, value in self.goals]
         """The goal facts, each with its index in ``positive`` (-1: a negated one)."""
         self.reach = GoalReach(problem.domain, self.positive)
+        self.support = (None if problem.lifted is None or not self.positive
+                        else Support.of(*problem.lifted, self.positive))
+        """The relaxed support of the goal facts false (:mod:`planner.support`): a node
+        with one that no action below its stack can add from its state is dropped."""
         self.expansions = 0
 
     def _stack(self, agenda: Any) -> float:
@@ -216,6 +229,12 @@ class BestFirst:
                     self.steps.missed = ", ".join(
                         f"{fact_text(*self.positive[i])} == True" for i in sorted(lost))
                 return math.inf
+            if self.support is not None and self.support.useful:
+                index = self.support.unsupported(false, state, agenda)
+                if index is not None:
+                    if not self.steps.missed:
+                        self.steps.missed = f"{fact_text(*self.positive[index])} == True"
+                    return math.inf
         if self.subgoals is not None:
             return (GOAL_WEIGHT * unmet + self._stack(agenda)
                     + self.subgoals.estimate(state, state_hash, agenda))

@@ -44,6 +44,7 @@ from planner.domain import Action, Decomposition, Domain, EntityType, Method, Pr
 from planner.expr import Effect, Expr
 from planner.formulas import Formulas, conjuncts, holds, is_literal, operand
 from planner.late import LateBinder
+from planner.statics import StaticFilter
 from userfiles.errors import FileError
 from userfiles.errors import Problem as FileProblem
 
@@ -156,7 +157,12 @@ class _Translator:
         parameter to one (``(= ?crew pcrew1)``), adds only for that argument: its
         patterns keep it as a guard, so that ``cstring_wire`` adds Monroe's
         observation fact for ``pcrew1`` only, and so does every task above it that
-        passes ``?crew`` down."""
+        passes ``?crew`` down.  A guard on a method variable the task does not pass
+        (``m_get_in_load_in``'s ``?person``) is dropped, after :class:`StaticFilter`
+        says the variable may take that value: a pattern whose guards the method's
+        types and static facts rule out is not lifted at all."""
+        statics = StaticFilter(self.hdomain, self.objects, self.typed,
+                               [(f.pred, f.args) for f in self.hproblem.init], self.changed)
         found: dict[str, set[tuple[str, Pattern]]] = {}
         for name, action in self.hdomain.actions.items():
             index = {p: i for i, (p, _) in enumerate(action.params)}
@@ -182,7 +188,8 @@ class _Translator:
                 target = found.setdefault(method.task.name, set())
                 for sub in method.subtasks:
                     for pred, pattern in list(found.get(sub.name, ())):
-                        lifted = _lift_pattern(pattern, sub.args, head, fixed, guards)
+                        lifted = _lift_pattern(pattern, sub.args, head, fixed, guards,
+                                               method, statics)
                         if lifted is not None and (pred, lifted) not in target:
                             target.add((pred, lifted))
                             changed = True
@@ -435,21 +442,28 @@ def _fixed(method: hddl.HMethod) -> dict[str, str]:
 
 
 def _lift_pattern(pattern: Pattern, args: tuple[str, ...], head: dict[str, int],
-                  fixed: dict[str, str], guards: tuple[tuple[int, str], ...]) -> Pattern | None:
+                  fixed: dict[str, str], guards: tuple[tuple[int, str], ...],
+                  method: hddl.HMethod, statics: StaticFilter) -> Pattern | None:
     """A subtask's pattern seen from the method's task (None when the subtask's guards
     cannot hold in this method): an argument is the index of the task parameter it is,
     a constant, or None (a variable the task does not fix); a guard on a subtask
-    argument the task does not fix is dropped (it may hold)."""
+    argument the task does not fix is dropped (it may hold) once ``statics`` says
+    that the method's variables may take the guards' values."""
     entries, inner = pattern
     lifted: set[tuple[int, str]] = set(guards)
+    binding: dict[str, str] = {}
     for index, value in inner:
         term = args[index]
         if is_variable(term) and term not in fixed:
+            if binding.setdefault(term, value) != value:
+                return None
             if term in head:
                 lifted.add((head[term], value))
             continue
         if fixed.get(term, term) != value:
             return None
+    if binding and not statics.may_be(method, binding):
+        return None
     return (tuple(_lift(entry, args, head, fixed) for entry in entries),
             tuple(sorted(lifted)))
 

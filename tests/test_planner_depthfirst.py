@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pytest
+from chores import CHORES, chores_problem, plans_with_checks
 
 from planner import depthfirst, load_hddl, plan, validate
 from planner.depthfirst import BUDGET_EXHAUSTED, first_plan
@@ -238,6 +239,53 @@ def test_an_action_needing_a_false_fact_no_earlier_task_adds_dooms_its_decomposi
     assert [result.plan.tree[r].decomposition for r in result.plan.roots] == ["built"]
 
 
+STOCK = """\
+(define (domain stock) (:requirements :typing :hierarchy :negative-preconditions)
+  (:types pile bit)
+  (:constants a - pile)
+  (:predicates (stock ?p - pile) (spare ?p - pile) (got) (on ?b - bit)
+               (next ?a ?b - bit) (last ?b - bit))
+  (:task settle :parameters ())
+  (:task chores :parameters (?b - bit))
+  (:method build :parameters (?s - pile ?b - bit) :task (settle) :precondition (last ?b)
+    :ordered-subtasks (and (take ?s) (chores ?b) (use a)))
+  (:method work :parameters (?b ?n - bit) :task (chores ?b) :precondition (next ?b ?n)
+    :ordered-subtasks (and (set ?b) (chores ?n)))
+  (:method fill :parameters (?b ?n - bit ?p - pile) :task (chores ?b)
+    :precondition (and (next ?b ?n) (spare ?p)) :ordered-subtasks (and (restock ?p) (chores ?n)))
+  (:method rest :parameters (?b ?n - bit) :task (chores ?b) :precondition (next ?b ?n)
+    :ordered-subtasks (chores ?n))
+  (:method stop :parameters (?b - bit) :task (chores ?b) :ordered-subtasks ())
+  (:action take :parameters (?s - pile) :precondition (stock ?s)
+    :effect (and (not (stock ?s)) (got)))
+  (:action use :parameters (?p - pile) :precondition (and (stock ?p) (got)) :effect ())
+  (:action restock :parameters (?p - pile) :precondition (spare ?p) :effect (stock ?p))
+  (:action set :parameters (?b - bit) :precondition (not (on ?b)) :effect (on ?b)))
+"""
+
+
+def test_a_step_that_deletes_what_a_later_action_needs_is_tried_after_the_others(
+        write, monkeypatch):
+    """Factories' resources: ``take a`` empties the pile that ``use a`` needs at the end;
+    a chore in between may restock a pile (so the threat is not proved, and
+    the decomposition is not refused), but only ``z`` is ever restocked.  ``take a`` comes
+    first in the binder's order, and every way of doing the chores would be tried
+    before ``use a`` fails: the bindings that threaten a fact a later action needs are
+    tried after the others."""
+    monkeypatch.setattr(depthfirst, "PLAIN_NODES", 1_000)  # the checks start after
+    objects = " ".join(f"b{i}" for i in range(18))
+    chain = " ".join(f"(next b{i} b{i + 1})" for i in range(17))
+    problem = load_hddl(write("d.hddl", STOCK), write("p.hddl", (
+        f"(define (problem p) (:domain stock) (:objects z - pile {objects} - bit)\n"
+        "  (:htn :ordered-subtasks (and (settle)))\n"
+        f"  (:init (stock a) (stock z) (spare z) {chain} (last b0)))\n")))
+    result = first_plan(problem, 60_000, max_nodes=20_000)
+    assert result.plan is not None, result.explain()
+    assert [str(a) for a in result.plan.actions][::len(result.plan.actions) - 1] == [
+        "take(z)", "use(a)"]
+    assert validate(problem, result.plan) == []
+
+
 WATCH = """\
 (define (domain watch) (:requirements :typing :hierarchy :negative-preconditions :equality)
   (:types bit agent)
@@ -253,25 +301,15 @@ WATCH = """\
   (:method observed :parameters (?who - agent) :task (act ?who)
     :precondition (= ?who ann) :ordered-subtasks (observe))
   (:method plain :parameters (?who - agent) :task (act ?who) :ordered-subtasks ())
-  (:method work :parameters (?b ?n - bit) :task (chores ?b) :precondition (next ?b ?n)
-    :ordered-subtasks (and (set ?b) (chores ?n)))
-  (:method rest :parameters (?b ?n - bit) :task (chores ?b) :precondition (next ?b ?n)
-    :ordered-subtasks (chores ?n))
-  (:method stop :parameters (?b - bit) :task (chores ?b) :ordered-subtasks ())
-  (:action set :parameters (?b - bit) :precondition (not (on ?b)) :effect (on ?b))
+""" + CHORES + """\
   (:action prepare :parameters () :precondition () :effect (ready))
   (:action observe :parameters () :precondition (ready) :effect (seen)))
 """
 
 
-def _watch(write, bits: int = 18):
-    objects = " ".join(f"b{i}" for i in range(bits))
-    chain = " ".join(f"(next b{i} b{i + 1})" for i in range(bits - 1))
+def _watch(write):
     domain = WATCH.replace("(:predicates", "(:predicates (first ?b - bit)")
-    return load_hddl(write("d.hddl", domain), write("p.hddl", (
-        f"(define (problem p) (:domain watch) (:objects {objects} - bit)\n"
-        f"  (:htn :ordered-subtasks (and (top)))\n  (:init {chain} (first b0))\n"
-        "  (:goal (seen)))\n")))
+    return chores_problem(write, domain, "(seen)")
 
 
 def test_what_a_task_may_add_is_guarded_by_the_constants_its_methods_require(write):
@@ -283,9 +321,4 @@ def test_what_a_task_may_add_is_guarded_by_the_constants_its_methods_require(wri
 def test_a_decomposition_leaving_no_task_able_to_reach_the_goal_is_refused(write, monkeypatch):
     """Monroe's plan recognition: ``busy`` (tried first) does 2^18 chores and then acts
     as ``bob``, who cannot observe; refused where it is chosen."""
-    monkeypatch.setattr(depthfirst, "PLAIN_NODES", 1_000)  # the checks start after
-    problem = _watch(write)
-    result = first_plan(problem, 60_000, max_nodes=20_000)
-    assert result.plan is not None, result.explain()
-    assert [str(a) for a in result.plan.actions] == ["prepare()", "observe()"]
-    assert validate(problem, result.plan) == []
+    plans_with_checks(_watch(write), monkeypatch, ["prepare()", "observe()"])
