@@ -117,24 +117,10 @@ class DecompositionChecks:
                 env = dict(zip(self.domain.actions[name].names, args, strict=True))
                 for pred, key in check[1]:
                     fact = key(env)
-                    if state.get(pred, fact) is True and self.wanted(pred, fact, rest):
+                    if (state.get(pred, fact) is True
+                            and self.needed(pred, fact, rest, past_adders=True)):
                         return True
             entry = rest
-        return False
-
-    def wanted(self, pred: str, fact: tuple, agenda: Any) -> bool:
-        """Whether an action among the :data:`LOOKAHEAD` next tasks on ``agenda`` needs
-        ``pred(fact)``, whatever may add it before."""
-        relevant, actions = self.relevant[pred], self.domain.actions
-        for _ in range(LOOKAHEAD):
-            if agenda is None:
-                return False
-            name, args, _, _, agenda = agenda
-            found = relevant.get(name)
-            if found is not None and found[0]:
-                env = dict(zip(actions[name].names, args, strict=True))
-                if any(key(env) == fact for key in found[0]):
-                    return True
         return False
 
     def doomed(self, agenda: Any, count: int, state: State) -> str | None:
@@ -216,11 +202,13 @@ class DecompositionChecks:
             known[(tail, pred, fact)] = answer
         return answer
 
-    def needed(self, pred: str, fact: tuple, agenda: Any) -> str | None:
+    def needed(self, pred: str, fact: tuple, agenda: Any,
+               past_adders: bool = False) -> str | None:
         """Which later action needs ``pred(fact)``, if one does among the
         :data:`LOOKAHEAD` next tasks on ``agenda`` with no task before it that may add a
         fact of that predicate (not only this one: the scan stays cheap, and ends where
-        a long agenda of tasks of the same kind begins)."""
+        a long agenda of tasks of the same kind begins); ``past_adders``: whatever may
+        add it before (:meth:`risky`)."""
         relevant, actions = self.relevant[pred], self.domain.actions
         for _ in range(LOOKAHEAD):
             if agenda is None:
@@ -235,6 +223,6 @@ class DecompositionChecks:
                 if any(key(env) == fact for key in keys):
                     return (f"({' '.join((pred, *fact))}), which {task_call(name, args)} "
                             "needs later, and no task before it can make it true again")
-            if adds:  # it may add a fact of this predicate
+            if adds and not past_adders:  # it may add a fact of this predicate
                 return None
         return None
