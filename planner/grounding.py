@@ -215,7 +215,7 @@ class _Grounder:
         for fact in self.problem.init:
             self.index.add(fact.pred, fact.args)
         compiled = {name: (_positives(a.precondition), _tests(a.precondition),
-                           _adds(a.effect), dict(a.params))
+                           added_atoms(a.effect), dict(a.params))
                     for name, a in self.domain.actions.items()}
         found: dict[str, dict[tuple[str, ...], tuple[list[Fact], list[Fact]]]] = {
             name: {} for name in compiled}
@@ -387,8 +387,8 @@ def _tests(formula: hddl.Formula | None) -> list[tuple[bool, str, str]]:
     return out
 
 
-def _adds(formula: hddl.Formula | None, extra: dict[str, str] | None = None
-          ) -> list[tuple[str, tuple[str, ...], dict[str, str]]]:
+def added_atoms(formula: hddl.Formula | None, extra: dict[str, str] | None = None
+                ) -> list[tuple[str, tuple[str, ...], dict[str, str]]]:
     """The atoms an effect may add, conditional ones included, with the variables of the
     ``forall`` they are under."""
     if formula is None:
@@ -398,11 +398,11 @@ def _adds(formula: hddl.Formula | None, extra: dict[str, str] | None = None
     if kind == "pred":
         return [(children[0], tuple(children[1]), extra)]
     if kind == "and":
-        return [atom for child in children for atom in _adds(child, extra)]
+        return [atom for child in children for atom in added_atoms(child, extra)]
     if kind == "when":
-        return _adds(children[1], extra)
+        return added_atoms(children[1], extra)
     if kind == "forall":
-        return _adds(children[1], {**extra, **dict(children[0])})
+        return added_atoms(children[1], {**extra, **dict(children[0])})
     return []
 
 

@@ -27,8 +27,9 @@ from typing import Any
 
 from planner import hddl
 from planner.formulas import conjuncts
+from planner.grounding import added_atoms
 from planner.late import Unbound
-from planner.translate import NETWORK
+from planner.translate import NETWORK, lift_term
 
 LIMIT = 50_000
 """The most lifted actions below all tasks beyond which the check is given up (their
@@ -68,7 +69,7 @@ def below(domain: hddl.HDDLDomain, problem: hddl.HDDLProblem
             target = found.setdefault(task, set())
             for sub in subtasks:
                 for action, terms in list(found.get(sub.name, ())):
-                    lifted = (action, tuple(_lift(term, sub.args, head) for term in terms))
+                    lifted = (action, tuple(lift_term(term, sub.args, head, {}) for term in terms))
                     if lifted not in target:
                         target.add(lifted)
                         total += 1
@@ -76,16 +77,6 @@ def below(domain: hddl.HDDLDomain, problem: hddl.HDDLProblem
                         if total > LIMIT:
                             return None
     return found
-
-
-def _lift(term: Term, args: tuple[str, ...], head: dict[str, int]) -> Term:
-    """A subtask's lifted argument seen from the method's task."""
-    if term.__class__ is not int:
-        return term
-    value = args[term]
-    if not value.startswith("?"):
-        return value
-    return head.get(value)
 
 
 def schemas(domain: hddl.HDDLDomain) -> dict[str, Schema]:
@@ -100,22 +91,9 @@ def schemas(domain: hddl.HDDLDomain) -> dict[str, Schema]:
 
         pre = tuple((f.children[0], terms(f.children[1]))
                     for f in conjuncts(action.precondition) if f.kind == "pred")
-        adds = tuple((pred, terms(args)) for pred, args in _added(action.effect))
+        adds = tuple((pred, terms(args)) for pred, args, _ in added_atoms(action.effect))
         out[name] = (pre, adds)
     return out
-
-
-def _added(formula: hddl.Formula | None) -> list[tuple[str, tuple[str, ...]]]:
-    if formula is None:
-        return []
-    kind, children = formula.kind, formula.children
-    if kind == "pred":
-        return [(children[0], tuple(children[1]))]
-    if kind == "and":
-        return [atom for child in children for atom in _added(child)]
-    if kind in ("when", "forall"):
-        return _added(children[1])
-    return []
 
 
 class _Entry:

@@ -464,12 +464,12 @@ def _lift_pattern(pattern: Pattern, args: tuple[str, ...], head: dict[str, int],
             return None
     if binding and not statics.may_be(method, binding):
         return None
-    return (tuple(_lift(entry, args, head, fixed) for entry in entries),
+    return (tuple(lift_term(entry, args, head, fixed) for entry in entries),
             tuple(sorted(lifted)))
 
 
-def _lift(entry: Any, args: tuple[str, ...], head: dict[str, int],
-          fixed: dict[str, str]) -> Any:
+def lift_term(entry: Any, args: tuple[str, ...], head: dict[str, int],
+              fixed: dict[str, str]) -> Any:
     """A subtask's lifted argument seen from the method's task: the index of the task
     parameter it is, a constant, or None (a variable the task does not fix)."""
     if entry.__class__ is not int:
