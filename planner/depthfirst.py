@@ -118,11 +118,15 @@ BUDGET_EXHAUSTED = "search budget exhausted"
 
 def first_plan(problem: Problem, budget_ms: float | None = None,
                on_improvement: Callable[[Plan], None] | None = None, *,
-               max_nodes: int = MAX_NODES) -> Result:
+               max_nodes: int = MAX_NODES, hand_over: bool = False) -> Result:
     """The first plan of a depth-first search of ``problem`` (HDDL: its methods have
-    binders), within ``budget_ms`` (default: the problem's) and ``max_nodes``."""
+    binders), within ``budget_ms`` (default: the problem's) and ``max_nodes``;
+    ``hand_over``: the search ends at the first branch it cuts, rather than going on and
+    then deeper (:mod:`planner.portfolio`: another search takes the time left)."""
     budget = problem.budget_ms if budget_ms is None else budget_ms
-    return DepthFirst(problem).run(budget, max_nodes, on_improvement)
+    search = DepthFirst(problem)
+    search.hand_over = hand_over
+    return search.run(budget, max_nodes, on_improvement)
 
 
 Path = tuple
@@ -201,6 +205,8 @@ class DepthFirst:
         self.defer = True
         """With the late binders: whether a method's variables that its own conditions do
         not read are left unbound (:mod:`planner.late`)."""
+        self.hand_over = False
+        """Whether the first branch cut ends the search (:func:`first_plan`)."""
 
     # -- explanations ------------------------------------------------------------------
 
@@ -280,14 +286,16 @@ class DepthFirst:
         if plan is None and (stopped or self.cut):
             why = {"nodes": f"the node budget ({max_nodes}) ran out",
                    "time": f"the time budget ({budget_ms:g} ms) ran out",
-                   "": f"branches deeper than {self.max_depth} decompositions were cut"
+                   "": f"branches deeper than {self.max_depth} decompositions were cut",
+                   "cut": f"a branch deeper than {self.max_depth} decompositions was cut"
                    }[stopped]
             failures.insert(0, Failure(0, (BUDGET_EXHAUSTED,), (
                 f"{why} after {self.expansions} search nodes, without a plan; the deepest "
                 "points reached follow")))
         improvements = [(elapsed, plan.score)] if plan is not None else []
         return Result(plan, int(plan is not None), self.expansions,
-                      plan is None and not stopped, elapsed, failures, improvements,
+                      plan is None and not stopped and not self.cut, elapsed, failures,
+                      improvements,
                       first=plan is not None)
 
     def _start(self, patterns: Any = None) -> tuple[list[int], tuple]:
@@ -437,6 +445,8 @@ class DepthFirst:
             self.cut = True
             self._fail(parent, task_call(method.name, args),
                        f"deeper than {self.max_depth} decompositions: cut")
+            if self.hand_over:
+                raise _Stop("cut")
             return
         env = {p: a for (p, _), a in zip(method.params, args, strict=True)}
         root = parent[2]

@@ -9,15 +9,22 @@ greedy best-first search (:mod:`planner.progression`) is guided by the goal and
 the least work left, at the price of keeping every open node.
 
 So the depth-first search runs first, with :data:`DEPTH_FIRST_SHARE` of the
-budget (and the whole node budget); when it ends without a plan before proving
+budget (and the whole node budget).  In a problem with no ``:goal``, a branch it
+cuts, :data:`planner.depthfirst.MAX_DEPTH` decompositions deep, ends it: the tasks
+alone say when the work is done, and a recursion that deep is a walk that has not
+found its way (Freecell's ``ACHIEVE-CLEAR2``, which moves a card anywhere and tries
+again, within 0.6-1.9 s; no other domain of the IPC 2020 track with no ``:goal``
+cuts a branch, in 10 s).  When it ends without a plan before proving
 there is none, the best-first search gets what is left of the time: first, when
 the problem grounds (:func:`planner.progression.relaxed_model`), guided by the
 relaxed-composition heuristic (:mod:`planner.relaxed`) for :data:`RELAXED_SHARE`
 of what is left, then by the goals and the least work for the rest, restarted
 with its ties broken in other orders when its first run finds nothing
 (:mod:`planner.restarts`); for a problem with no ``:goal`` that does not ground, that
-search runs :data:`PROBE_NODES` nodes as it is, then with the facts its task stacks need,
-and their relaxed cost, added to the least work (:mod:`planner.subgoals`).  The relaxed
+search runs :data:`PROBE_NODES` nodes as it is, then, for the rest of the time and in
+one run, with the sizes of relaxed plans to the facts its task stacks need added to the
+least work (:mod:`planner.subgoals`: an estimate that tells the nodes apart, where the
+restarts are for the ties of one that does not).  The relaxed
 heuristic sees through the hierarchy what the least work cannot
 (AssemblyHierarchical's connections), but each state it meets costs an
 exploration of the ground model: where that model is large (Towers,
@@ -68,7 +75,8 @@ def first_plan(problem: Problem, budget_ms: float | None = None,
         return budget - (time.perf_counter() - start) * 1000
 
     first = depthfirst.first_plan(problem, budget * DEPTH_FIRST_SHARE, on_improvement,
-                                  max_nodes=max_nodes)
+                                  max_nodes=max_nodes,
+                                  hand_over=not problem.goals and problem.lifted is not None)
     if first.plan is not None or first.complete:
         return first
     stages = [first]
@@ -86,8 +94,10 @@ def first_plan(problem: Problem, budget_ms: float | None = None,
         if stages[-1].plan is None and not stages[-1].complete and left() > 0:
             subgoals = Subgoals.build(problem, reached[0] if reached else None)
     if stages[-1].plan is None and not stages[-1].complete and left() > 0:
-        stages.append(restarts.best_first(problem, left(), max_nodes=max_nodes,
-                                          subgoals=subgoals))
+        stages.append(restarts.best_first(problem, left(), max_nodes=max_nodes)
+                      if subgoals is None else
+                      progression.best_first(problem, left(), max_nodes=max_nodes,
+                                             subgoals=subgoals))
     last = stages[-1]
     if len(stages) == 1:
         return first

@@ -50,7 +50,7 @@ import time
 from collections.abc import Iterator
 from typing import Any
 
-from planner import grounding
+from planner import depthfirst, grounding
 from planner.depthfirst import MAX_NODES, DepthFirst
 from planner.domain import Problem
 from planner.evaluate import Evaluator
@@ -167,6 +167,10 @@ class BestFirst:
         """The depth-first search's successor generation (actions, decompositions, their
         prunings and the record of failures), shared so that both searches make the same
         nodes."""
+        self.steps.max_depth = depthfirst.DEEPEST
+        """Not deepened pass after pass, as the depth-first search is: as deep as it goes
+        at once (the branches a depth-first search that handed over cut, :mod:`planner.
+        portfolio`, are this search's to follow)."""
         self.goals = tuple((pred, args, value) for (pred, args), value in problem.goals.items())
         self.work = least_work(problem)
         self.relaxed = relaxed

@@ -82,12 +82,45 @@ def test_a_fact_costs_the_actions_a_relaxed_plan_needs_from_the_state(levels):
             return initial.get((pred, args))
 
     costs = estimate.costs(State())
-    cost = {fact: costs[index] for fact, index in estimate.ids.items()}
+    cost = {fact: costs.additive[index] for fact, index in estimate.ids.items()}
     assert cost[("level", ("n11",))] == 0
     assert cost[("level", ("n05",))] == 6          # six steps down
+    assert costs.plan(estimate.ids[("level", ("n05",))]) == 6
     assert cost[("free", ("n02",))] == 0
     assert ("level", ("n12",)) not in cost         # no such level: out of reach
-    assert max(costs) <= UNREACHED
+    assert max(costs.additive) <= UNREACHED
+
+
+# ``d`` needs ``b`` and ``c``, which both need ``a``: additive costs count ``make-a`` twice.
+SHARED = """\
+(define (domain shared) (:requirements :hierarchy)
+  (:predicates (a) (b) (c) (d))
+  (:task finish :parameters ())
+  (:method by-d :parameters () :task (finish) :ordered-subtasks (and (use-d)))
+  (:action make-a :effect (a))
+  (:action make-b :precondition (a) :effect (b))
+  (:action make-c :precondition (a) :effect (c))
+  (:action make-d :precondition (and (b) (c)) :effect (d))
+  (:action use-d :precondition (d)))
+"""
+
+
+def test_a_relaxed_plan_counts_what_preconditions_share_once(write):
+    problem = load_hddl(write("d.hddl", SHARED), write("p.hddl", (
+        "(define (problem p) (:domain shared) (:htn :ordered-subtasks (and (finish)))"
+        " (:init))")))
+    estimate = Subgoals.build(problem)
+    assert estimate is not None
+
+    class Empty:
+        def get(self, pred, args):
+            return None
+
+    costs = estimate.costs(Empty())
+    d = estimate.ids[("d", ())]
+    assert costs.additive[d] == 5  # make-d, make-b and make-c, make-a twice
+    assert costs.plan(d) == 4      # make-a, make-b, make-c, make-d
+    assert costs.plan(estimate.ids[("b", ())]) == 2
 
 
 def test_the_estimate_takes_the_search_to_the_free_level(levels):
@@ -129,3 +162,29 @@ def test_the_portfolio_builds_it_for_a_problem_without_goals(levels, monkeypatch
 def test_actions_beyond_the_limit_give_no_estimate(levels, monkeypatch):
     monkeypatch.setattr(subgoals, "ACTION_LIMIT", 10)
     assert Subgoals.build(levels) is None
+
+
+def test_a_problem_without_goals_hands_over_at_the_first_branch_cut(levels, monkeypatch):
+    monkeypatch.setattr(depthfirst, "MAX_DEPTH", 2)
+    kept = depthfirst.first_plan(levels, 60_000)
+    assert kept.plan is not None  # it went deeper, pass after pass
+    handed = depthfirst.first_plan(levels, 60_000, hand_over=True)
+    assert handed.plan is None and not handed.complete
+    assert "a branch deeper than 2 decompositions was cut" in handed.explain()
+    assert handed.expansions < kept.expansions
+    assert best_first(levels, 60_000).plan is not None  # not deepened: deep at once
+    monkeypatch.setattr(depthfirst, "DEEPEST", 2)
+    cut = best_first(levels, 60_000)  # it cuts its branches too: it has proved nothing
+    assert cut.plan is None and not cut.complete
+    monkeypatch.undo()
+    asked = []
+    original = depthfirst.first_plan
+
+    def first_plan(problem, *args, **kwargs):
+        asked.append(kwargs.get("hand_over"))
+        return original(problem, *args, **kwargs)
+
+    monkeypatch.setattr(portfolio.depthfirst, "first_plan", first_plan)
+    result = plan(levels, 60_000, first=True)
+    assert result.plan is not None and validate(levels, result.plan) == []
+    assert asked == [True]
