@@ -34,7 +34,6 @@ from planner.depthfirst import MAX_NODES
 from planner.domain import Problem
 from planner.progression import BestFirst
 from planner.search import Result
-from planner.subgoals import Subgoals
 
 FIRST_SHARE = 1 / 2
 """The part of the budgets (time and nodes) the first run, in file order, has."""
@@ -46,14 +45,13 @@ DOUBLE_AFTER = 8
 
 
 def best_first(problem: Problem, budget_ms: float | None = None, *,
-               max_nodes: int = MAX_NODES, subgoals: Subgoals | None = None) -> Result:
+               max_nodes: int = MAX_NODES) -> Result:
     """The first plan of the best-first search of ``problem`` with restarts (see the
-    module), within ``budget_ms`` (default: the problem's) and ``max_nodes`` in all;
-    ``subgoals``: the estimate that guides every run with the least work."""
+    module), within ``budget_ms`` (default: the problem's) and ``max_nodes`` in all."""
     budget = problem.budget_ms if budget_ms is None else budget_ms
     start = time.perf_counter()
     result = progression.best_first(problem, budget * FIRST_SHARE,
-                                    max_nodes=int(max_nodes * FIRST_SHARE), subgoals=subgoals)
+                                    max_nodes=int(max_nodes * FIRST_SHARE))
     expansions = result.expansions
     seed, nodes = 0, RESTART_NODES
     while result.plan is None and not result.complete:
@@ -63,7 +61,7 @@ def best_first(problem: Problem, budget_ms: float | None = None, *,
         seed += 1
         if seed > DOUBLE_AFTER:
             nodes *= 2
-        result = BestFirst(problem, rng=random.Random(seed), subgoals=subgoals).run(
+        result = BestFirst(problem, rng=random.Random(seed)).run(
             left, min(nodes, max_nodes - expansions))
         expansions += result.expansions
     elapsed = (time.perf_counter() - start) * 1000
