@@ -21,10 +21,9 @@ relaxed-composition heuristic (:mod:`planner.relaxed`) for :data:`RELAXED_SHARE`
 of what is left, then by the goals and the least work for the rest, restarted
 with its ties broken in other orders when its first run finds nothing
 (:mod:`planner.restarts`); for a problem with no ``:goal`` that does not ground, that
-search runs :data:`PROBE_NODES` nodes as it is, then, for the rest of the time and in
-one run, with the sizes of relaxed plans to the facts its task stacks need added to the
-least work (:mod:`planner.subgoals`: an estimate that tells the nodes apart, where the
-restarts are for the ties of one that does not).  The relaxed
+search runs :data:`PROBE_NODES` nodes as it is, then, for the rest of the time and with
+the restarts, with the sizes of relaxed plans to the facts its task stacks need added to
+the least work (:mod:`planner.subgoals`).  The relaxed
 heuristic sees through the hierarchy what the least work cannot
 (AssemblyHierarchical's connections), but each state it meets costs an
 exploration of the ground model: where that model is large (Towers,
@@ -94,10 +93,8 @@ def first_plan(problem: Problem, budget_ms: float | None = None,
         if stages[-1].plan is None and not stages[-1].complete and left() > 0:
             subgoals = Subgoals.build(problem, reached[0] if reached else None)
     if stages[-1].plan is None and not stages[-1].complete and left() > 0:
-        stages.append(restarts.best_first(problem, left(), max_nodes=max_nodes)
-                      if subgoals is None else
-                      progression.best_first(problem, left(), max_nodes=max_nodes,
-                                             subgoals=subgoals))
+        stages.append(restarts.best_first(problem, left(), max_nodes=max_nodes,
+                                          subgoals=subgoals))
     last = stages[-1]
     if len(stages) == 1:
         return first

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from planner import depthfirst, grounding, load_hddl, plan, portfolio, subgoals, validate
+from planner import depthfirst, grounding, load_hddl, plan, portfolio, restarts, subgoals, validate
 from planner.progression import best_first
 from planner.subgoals import UNREACHED, Subgoals, task_needs
 
@@ -135,6 +135,19 @@ def test_the_estimate_takes_the_search_to_the_free_level(levels):
         ("x0", "n02"), ("x1", "n01"), ("x2", "n00")]
 
 
+def test_the_restarts_take_the_estimate(levels, monkeypatch):
+    result = restarts.best_first(levels, 60_000, max_nodes=5_000,
+                                 subgoals=Subgoals.build(levels))
+    assert result.plan is not None and validate(levels, result.plan) == []
+    assert result.expansions < 500
+    budgets = []
+    monkeypatch.setattr(restarts.progression, "best_first",
+                        lambda problem, budget, **kwargs: budgets.append(budget) or result)
+    restarts.best_first(levels, 60_000, subgoals=Subgoals.build(levels))
+    restarts.best_first(levels, 60_000)
+    assert budgets == [40_000, 30_000]  # the estimate's first run has the longer share
+
+
 def test_the_portfolio_builds_it_for_a_problem_without_goals(levels, monkeypatch):
     built = []
     original = Subgoals.build
@@ -145,15 +158,11 @@ def test_the_portfolio_builds_it_for_a_problem_without_goals(levels, monkeypatch
 
     monkeypatch.setattr(portfolio.Subgoals, "build", staticmethod(build))
     monkeypatch.setattr(grounding, "LIMIT", 10)  # as if its methods were too many
-    restarted = []  # the estimate's search runs once: the restarts are for ties
-    monkeypatch.setattr(portfolio.restarts, "best_first",
-                        lambda *args, **kwargs: restarted.append(args))
     assert depthfirst.first_plan(levels, 60_000, max_nodes=3_000).plan is None
     result = plan(levels, 60_000, first=True, max_nodes=3_000)
     assert result.plan is not None, result.explain()
     assert validate(levels, result.plan) == []
     assert built == [levels]
-    assert restarted == []
 
 
 def test_actions_beyond_the_limit_give_no_estimate(levels, monkeypatch):
