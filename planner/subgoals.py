@@ -229,6 +229,7 @@ class Subgoals:
                 cost[index] = 0.0
         reached = numpy.zeros(0)
         if self.size:
+            users = self.users
             reached = cost[self.pre].sum(axis=1) + 1.0
             while True:
                 cheapest = numpy.minimum.reduceat(reached[self.adders], self.starts)
@@ -237,7 +238,6 @@ class Subgoals:
                     break
                 changed = self.added[better]
                 cost[changed] = cheapest[better]
-                users = self.users
                 touched = numpy.concatenate([users[fact] for fact in changed.tolist()])
                 reached[touched] = cost[self.pre[touched]].sum(axis=1) + 1.0
         return Costs(self, numpy.minimum(cost, UNREACHED).tolist(), reached)
@@ -286,7 +286,7 @@ class Costs:
         self.subgoals = subgoals
         self.additive = additive
         self.reached = reached
-        """Each action's additive cost: its cheapest precondition costs plus one."""
+        """Each action's additive cost: its preconditions' costs plus one."""
         self.plans: dict[int, float] = {}
 
     def plan(self, fact: int) -> float:
