@@ -14,8 +14,8 @@ cuts, :data:`planner.depthfirst.MAX_DEPTH` decompositions deep, ends it: the tas
 alone say when the work is done, and a recursion that deep is a walk that has not
 found its way (Freecell's ``ACHIEVE-CLEAR2``, which moves a card anywhere and tries
 again: within 0.2-2.1 s in 50 of its 60 problems; no other domain of the IPC 2020
-track with no ``:goal`` cuts a branch, in 10 s).  When it ends without a plan before proving
-there is none, the best-first search gets what is left of the time: first, when
+track with no ``:goal`` cuts a branch, in 10 s).  When it ends without a plan before
+proving there is none, the best-first search gets what is left of the time: first, when
 the problem grounds (:func:`planner.progression.relaxed_model`), guided by the
 relaxed-composition heuristic (:mod:`planner.relaxed`) for :data:`RELAXED_SHARE`
 of what is left, then by the goals and the least work for the rest, restarted
@@ -73,9 +73,9 @@ def first_plan(problem: Problem, budget_ms: float | None = None,
     def left() -> float:
         return budget - (time.perf_counter() - start) * 1000
 
+    goalless = not problem.goals and problem.lifted is not None  # HDDL, its tasks its aim
     first = depthfirst.first_plan(problem, budget * DEPTH_FIRST_SHARE, on_improvement,
-                                  max_nodes=max_nodes,
-                                  hand_over=not problem.goals and problem.lifted is not None)
+                                  max_nodes=max_nodes, hand_over=goalless)
     if first.plan is not None or first.complete:
         return first
     stages = [first]
@@ -86,8 +86,7 @@ def first_plan(problem: Problem, budget_ms: float | None = None,
             stages.append(progression.best_first(problem, left() * RELAXED_SHARE,
                                                  max_nodes=max_nodes, relaxed=relaxed))
     subgoals = None
-    if (relaxed is None and not problem.goals and problem.lifted is not None
-            and not stages[-1].complete and left() > 0):
+    if relaxed is None and goalless and not stages[-1].complete and left() > 0:
         stages.append(progression.best_first(problem, left() * PROBE_SHARE,
                                              max_nodes=min(PROBE_NODES, max_nodes)))
         if stages[-1].plan is None and not stages[-1].complete and left() > 0:

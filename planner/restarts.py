@@ -41,9 +41,9 @@ FIRST_SHARE = 1 / 2
 """The part of the budgets (time and nodes) the first run, in file order, has."""
 GUIDED_SHARE = 2 / 3
 """That part when the subgoal estimate guides the runs (:mod:`planner.subgoals`): it
-tells the nodes apart, and its first run plans late in its time what it plans (Freecell's
-07-4: about 15 s of the 26 left), but goes astray early on some that a shuffled run plans in 5 s
-(06-4)."""
+tells the nodes apart, and its first run plans late in its time what it plans
+(Freecell's 07-4: about 15 s of the 26 left), but goes astray early on some that a
+shuffled run plans in 5 s (06-4)."""
 RESTART_NODES = 50_000
 """The search nodes of each shuffled run: counted in nodes, not time, so that the runs,
 and the plan found, do not depend on the machine's load."""

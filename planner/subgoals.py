@@ -193,7 +193,7 @@ class Subgoals:
         for index, pre in enumerate(self.needed):
             for fact in pre:
                 users[fact].append(index)
-        self.users = [numpy.array(actions, dtype=numpy.int64) for actions in users]
+        self.users = [numpy.array(indexes, dtype=numpy.int64) for indexes in users]
         """The actions each fact is a precondition of: those whose cost a round revises
         when the fact's cost falls."""
         self.states: dict[int, Costs] = {}

@@ -249,18 +249,13 @@ STOCK = """\
   (:task chores :parameters (?b - bit))
   (:method build :parameters (?s - pile ?b - bit) :task (settle) :precondition (last ?b)
     :ordered-subtasks (and (take ?s) (chores ?b) (use a)))
-  (:method work :parameters (?b ?n - bit) :task (chores ?b) :precondition (next ?b ?n)
-    :ordered-subtasks (and (set ?b) (chores ?n)))
   (:method fill :parameters (?b ?n - bit ?p - pile) :task (chores ?b)
     :precondition (and (next ?b ?n) (spare ?p)) :ordered-subtasks (and (restock ?p) (chores ?n)))
-  (:method rest :parameters (?b ?n - bit) :task (chores ?b) :precondition (next ?b ?n)
-    :ordered-subtasks (chores ?n))
-  (:method stop :parameters (?b - bit) :task (chores ?b) :ordered-subtasks ())
+""" + CHORES + """\
   (:action take :parameters (?s - pile) :precondition (stock ?s)
     :effect (and (not (stock ?s)) (got)))
   (:action use :parameters (?p - pile) :precondition (and (stock ?p) (got)) :effect ())
-  (:action restock :parameters (?p - pile) :precondition (spare ?p) :effect (stock ?p))
-  (:action set :parameters (?b - bit) :precondition (not (on ?b)) :effect (on ?b)))
+  (:action restock :parameters (?p - pile) :precondition (spare ?p) :effect (stock ?p)))
 """
 
 
