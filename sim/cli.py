@@ -13,8 +13,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from shary.terminal import add_json_flag, emit_json, error, escape, listing
-from shary.terminal import out as _out
+from shary.log.terminal import add_json_flag, emit_json, error, escape, listing
+from shary.log.terminal import out as _out
 from userfiles import yamlsafe
 from userfiles.errors import FileError
 from userfiles.schema import did_you_mean

@@ -26,7 +26,7 @@ from shary.console.operator import Refused, parse
 from shary.console.replay import Replay, named_schemes
 from shary.console.server import serving
 from shary.console.view import View
-from shary.log import ContextLog, read_events
+from shary.log.contextlog import ContextLog, read_events
 
 MESSAGES = HOSTILE / "console"
 LOGS = HOSTILE / "log"

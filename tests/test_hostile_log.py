@@ -24,7 +24,7 @@ sys.path.insert(0, str(HOSTILE / "log"))
 from make_corpus import CORPUS, TREE_ONLY, good_log  # noqa: E402
 
 from shary.commands import log as shary_log  # noqa: E402
-from shary.tasktree import MAX_DRAWN_NODES  # noqa: E402
+from shary.kernel.tasktree import MAX_DRAWN_NODES  # noqa: E402
 
 LOGS = HOSTILE / "log"
 TREE_KINDS = {"node", "task-state", "node-removed"}

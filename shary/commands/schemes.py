@@ -8,8 +8,8 @@ from pathlib import Path
 from typing import Any
 
 from shary import builtin
-from shary.terminal import EXIT_BAD_INPUT, add_json_flag, emit_json, error, escape, listing
-from shary.terminal import out as _out
+from shary.log.terminal import EXIT_BAD_INPUT, add_json_flag, emit_json, error, escape, listing
+from shary.log.terminal import out as _out
 from userfiles import yamlsafe
 from userfiles.errors import FileError, Problem
 from userfiles.outputs import output_file, write_output
@@ -45,10 +45,10 @@ _WAIT = re.compile(r"^[0-9]+(\.[0-9]+)?(ms|s|min|h)$")
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
-    from shary.clock import SimulatedClock
-    from shary.compiler import compile_scheme
-    from shary.instance import LivelockError, SchemeListener
     from shary.io.schemes import load_scheme
+    from shary.statechart.clock import SimulatedClock
+    from shary.statechart.compiler import compile_scheme
+    from shary.statechart.instance import LivelockError, SchemeListener
     from userfiles.limits import seconds
     from userfiles.schema import did_you_mean
 
@@ -143,8 +143,8 @@ def add_render(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_render_scheme(args: argparse.Namespace) -> int:
-    from shary.display import render_scheme
     from shary.io.schemes import load_scheme
+    from shary.log.display import render_scheme
 
     output_file(args.output)
     scheme = load_scheme(args.scheme)
@@ -167,9 +167,9 @@ def draw(drawing: Any, out: Path, detail: str = "", quiet: bool = False) -> int:
 
 
 def cmd_render_tree(args: argparse.Namespace) -> int:
-    from shary.display import TEXT_SUFFIXES, render_tree
-    from shary.log import end_time
-    from shary.tasktree import MAX_DRAWN_NODES, replay_log
+    from shary.kernel.tasktree import MAX_DRAWN_NODES, replay_log
+    from shary.log.contextlog import end_time
+    from shary.log.display import TEXT_SUFFIXES, render_tree
 
     output_file(args.output)
     tree = replay_log(args.log, args.at)
@@ -215,8 +215,8 @@ def add_conformance(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_conformance(args: argparse.Namespace) -> int:
-    from shary import w3c
-    from shary.conformance import find_tests, run_test
+    from shary.statechart import w3c
+    from shary.statechart.conformance import find_tests, run_test
 
     folder: Path = args.folder
     if not folder.is_dir():

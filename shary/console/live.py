@@ -31,13 +31,13 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from shary.acts import ACT_TYPES, builtin_acts
 from shary.console.operator import RUN_CONTROLS
 from shary.console.ports import Feed, StatusFeed
 from shary.console.teamlive import BREAK_EVENTS, TEAM_KINDS, TeamSteering
 from shary.console.view import View
-from shary.log import LogEvent
-from shary.model import Scheme
+from shary.log.contextlog import LogEvent
+from shary.statechart.acts import ACT_TYPES, builtin_acts
+from shary.statechart.model import Scheme
 
 Runner = Callable[["Attachment"], Any]
 """Runs the scenario with the attachment (``run_scenario(path, console=attachment)``)

@@ -328,7 +328,7 @@ def _check_bindings(files: list[Path], context: Any) -> list[Problem]:
 
 
 def _kinds() -> tuple[Any, ...]:
-    from shary.filekinds import FileKind
+    from shary.io.filekinds import FileKind
 
     return (FileKind("robot-binding", _check_bindings, 5, detect=lambda d: "binding" in d,
                      keys="binding:", shipped=shipped_bindings),)

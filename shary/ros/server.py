@@ -34,7 +34,7 @@ from __future__ import annotations
 import json
 from typing import Any
 
-from shary.recipes import ROBOT_PARAM
+from shary.kernel.recipes import ROBOT_PARAM
 from shary.ros.node import RosNode
 
 ACTION = "~/run_task"

@@ -7,7 +7,7 @@ from typing import Any
 
 from rich.table import Table
 
-from shary.terminal import escape
+from shary.log.terminal import escape
 
 from .campaign import Campaign, Outcome, command
 from .invariants import INVARIANTS
