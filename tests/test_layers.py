@@ -58,8 +58,8 @@ def leaf_breaks(graph: grimp.ImportGraph) -> list[str]:
                                               as_packages=source != "shary")
             if chain:
                 steps = " -> ".join(chain)
-                found.append(f"{source} reaches the leaf {leaf}: {steps}; first import: "
-                             + _where(graph, chain[0], chain[1]))
+                found.append(f"{source} reaches the leaf {leaf}: {steps}; the import into it: "
+                             + _where(graph, chain[-2], chain[-1]))
     return found
 
 
