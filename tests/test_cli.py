@@ -300,3 +300,34 @@ def test_json_simulate_an_event_no_state_takes(shary):
     doc = _json(shary, "simulate", "give-object", "H-AGRE", "--json", status=2)
     assert doc == {"error": "no state of give-object takes the event 'H-AGRE' "
                             "(did you mean 'H-AGREE'?)"}
+
+
+# -- slips a newcomer met ----------------------------------------------------------
+
+
+def test_validate_a_folder_checks_the_files_in_it(shary, tmp_path):
+    """Before: "FOLDER:1:1: error: cannot read file: Is a directory"."""
+    folder = tmp_path / "mine"
+    (folder / "below").mkdir(parents=True)
+    good = REPO / "docs" / "tutorial" / "ask-then-do.yaml"
+    (folder / "ask.yaml").write_text(good.read_text(encoding="utf-8"), encoding="utf-8")
+    (folder / "bad.yml").write_text("scheme: bad\ninitial: nowhere\n"
+                                    "states:\n  a: {act: ASK-TASK}\n")
+    (folder / "notes.txt").write_text("not a file of shary's")
+    (folder / "below" / "deep.yaml").write_text("scheme: [unclosed\n")
+    status, out, err = shary("validate", folder)
+    assert status == 2
+    assert out.split() == ["ok", str(folder / "ask.yaml")]
+    assert {m["file"] for m in problems(err)} == {str(folder / "bad.yml")}
+    assert "Is a directory" not in err
+
+
+def test_validate_a_folder_without_files_says_what_to_give(shary, tmp_path):
+    (tmp_path / "below").mkdir()
+    (tmp_path / "below" / "deep.yaml").write_text("acts: {}\n")
+    status, _, err = shary("validate", tmp_path)
+    assert status == 2
+    (problem,) = problems(err)
+    assert problem["file"] == str(tmp_path) and problem["message"] == (
+        "a folder with no .yaml, .yml or .ttl file in it (shary validate reads the files "
+        "directly in a folder, not those in folders below): name the files or folders to check")
