@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import re
+import shlex
 import time
 from pathlib import Path
 from typing import Any
@@ -338,8 +339,10 @@ def cmd_world(args: argparse.Namespace) -> int:
 
         return cmd_world_ros(args, path)
     if _weld_scenario(path) is None:
-        return error(f"{args.scenario}: not a seam-welding scenario (site: seam-welding); "
-                     "only those have a world that runs as its own agent")
+        return error(f"{args.scenario}: not a seam-welding scenario, whose world joins a "
+                     "Zenoh team as its own agent; a living-room scenario's world runs on "
+                     "ROS 2 as the simulated Jido: 'shary world --ros "
+                     f"{shlex.quote(args.scenario)}' (docs/ros2.md)")
     from sim.weld.agent import cmd_world as run_world
 
     return run_world(args, path)

@@ -331,3 +331,10 @@ def test_validate_a_folder_without_files_says_what_to_give(shary, tmp_path):
     assert problem["file"] == str(tmp_path) and problem["message"] == (
         "a folder with no .yaml, .yml or .ttl file in it (shary validate reads the files "
         "directly in a folder, not those in folders below): name the files or folders to check")
+
+
+def test_world_without_ros_on_a_living_room_scenario_says_to_add_ros(shary):
+    status, _, err = shary("world", "give-bottle")
+    assert status == 2
+    assert "not a seam-welding scenario" in err
+    assert "'shary world --ros give-bottle' (docs/ros2.md)" in err.replace("\n", " ")
