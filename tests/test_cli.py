@@ -338,3 +338,36 @@ def test_world_without_ros_on_a_living_room_scenario_says_to_add_ros(shary):
     assert status == 2
     assert "not a seam-welding scenario" in err
     assert "'shary world --ros give-bottle' (docs/ros2.md)" in err.replace("\n", " ")
+
+
+LOG = REPO / "tests" / "hostile" / "log" / "node-of-an-unknown-kind.sqlite"
+
+
+SCHEME = ["render", "scheme", "give-object"]
+TREE = ["render", "tree", str(LOG)]
+PLAN = ["plan", "fig6", str(REPO / "planner" / "problems" / "fig6.yaml"), "--render", "tree"]
+DOT = ".svg, .png, .dot, .gv"
+
+
+@pytest.mark.parametrize("argv, name, what, allowed", [
+    (SCHEME, "out.gif", "a .gif file", f"{DOT}, .mmd, .mermaid, .md"),
+    (TREE, "out.gif", "a .gif file", DOT), (TREE, "out.mmd", "a .mmd file", DOT),
+    (TREE, "tree", "a file without a suffix", DOT), (PLAN, "out.gif", "a .gif file", DOT),
+    (PLAN, "out.mmd", "a .mmd file", DOT)],
+    ids=["scheme-gif", "tree-gif", "tree-mermaid", "tree-no-suffix", "plan-gif",
+         "plan-mermaid"])
+def test_a_drawing_to_a_suffix_it_cannot_take_is_refused_before_the_work(
+        argv, name, what, allowed, shary, tmp_path):
+    """Before: exit 1 (the status of a run whose expectation failed), after the work."""
+    out = tmp_path / name
+    status, stdout, err = shary(*argv, "-o", out)
+    assert status == 2 and stdout == ""
+    assert err == f"{out}: error: cannot draw to {what} (use one of {allowed})\n"
+    assert not out.exists()
+
+
+def test_render_scheme_says_what_its_output_may_be(capsys):
+    with pytest.raises(SystemExit):
+        main(["render", "scheme", "--help"])
+    helped = " ".join(capsys.readouterr().out.split())
+    assert "-o OUT, --output OUT the file to draw; its suffix says how: .svg or .png" in helped
