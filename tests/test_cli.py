@@ -371,3 +371,10 @@ def test_render_scheme_says_what_its_output_may_be(capsys):
         main(["render", "scheme", "--help"])
     helped = " ".join(capsys.readouterr().out.split())
     assert "-o OUT, --output OUT the file to draw; its suffix says how: .svg or .png" in helped
+
+
+def test_conformance_on_a_missing_folder_points_to_the_external_suites(shary, tmp_path):
+    status, out, err = shary("conformance", tmp_path / "suites" / "scion")
+    assert status == 2 and out == ""
+    assert f"{tmp_path / 'suites' / 'scion'}: no such folder" in err
+    assert "the README's section 'External suites' says how to clone it" in err.replace("\n", " ")

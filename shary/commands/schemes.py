@@ -240,7 +240,10 @@ def cmd_conformance(args: argparse.Namespace) -> int:
 
     folder: Path = args.folder
     if not folder.is_dir():
-        return error(f"{folder} is not a folder", json_mode=args.json)
+        return error(f"{folder} is not a folder" if folder.exists() else
+                     f"{folder}: no such folder (SCION's statechart suite is not part of the "
+                     "repository: the README's section 'External suites' says how to clone "
+                     "it)", json_mode=args.json)
     irp = w3c.is_irp(folder)
     charts = w3c.irp_tests(folder) if irp else find_tests(folder)
     if args.only is not None:
