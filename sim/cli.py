@@ -39,7 +39,8 @@ def add_run(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("run", help="run a scenario on the simulated Jido (headless), judge it")
     p.add_argument("scenario", metavar="NAME|FILE",
                    help="a built-in scenario (see 'shary scenarios') or a scenario file")
-    p.add_argument("--seed", type=int, default=0, help="seed of the people's random choices")
+    p.add_argument("--seed", type=int, default=0,
+                   help="seed of the people's random choices (default 0)")
     p.add_argument("--gui", action="store_true", help="open PyBullet's window")
     p.add_argument("--out", type=Path, metavar="DIR",
                    help="where to write log.sqlite, tree.svg, timeline.svg, summary.json "
@@ -147,7 +148,8 @@ def add_serve(sub: argparse._SubParsersAction) -> None:
                    help="simulated seconds per wall second (default 1; 0: as fast as possible)")
     p.add_argument("--paused", action="store_true",
                    help="pause the run after its first step (set breakpoints, then Resume)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the people's random choices")
+    p.add_argument("--seed", type=int, default=0,
+                   help="seed of the people's random choices (default 0)")
     p.add_argument("--out", type=Path, metavar="DIR",
                    help="where the live run writes its files (default: runs/SCENARIO)")
     p.add_argument("--snapshots", action="store_true",

@@ -378,3 +378,11 @@ def test_conformance_on_a_missing_folder_points_to_the_external_suites(shary, tm
     assert status == 2 and out == ""
     assert f"{tmp_path / 'suites' / 'scion'}: no such folder" in err
     assert "the README's section 'External suites' says how to clone it" in err.replace("\n", " ")
+
+
+@pytest.mark.parametrize("command", ["run", "serve"])
+def test_the_seed_says_its_default(command, capsys):
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    helped = " ".join(capsys.readouterr().out.split())
+    assert "--seed SEED seed of the people's random choices (default 0)" in helped
