@@ -110,12 +110,16 @@ def cmd_run(args: argparse.Namespace) -> int:
                f"seed {result.seed}")
     for difference in result.differences:
         _out.print(f"  - {escape(difference)}")
-    _out.print(f"[dim]wrote {escape(str(out))}/: "
-               f"{', '.join(Path(v).name for k, v in result.outputs.items() if k != 'snapshots')}"
-               + (f" and {len(result.outputs['snapshots'].split(', '))} snapshots"
-                  if "snapshots" in result.outputs else "") + "[/dim]")
+    _out.print(wrote(out, result.outputs))
     return 0 if result.passed else 1
 
+
+def wrote(out: Path, outputs: dict[str, str]) -> str:
+    """The line that says which files a run wrote in ``out`` (the snapshots counted)."""
+    files = ", ".join(Path(v).name for k, v in outputs.items() if k != "snapshots")
+    snapshots = (f" and {len(outputs['snapshots'].split(', '))} snapshots"
+                 if "snapshots" in outputs else "")
+    return f"[dim]wrote {escape(str(out))}/: {escape(files)}{snapshots}[/dim]"
 
 
 def earlier_run(out: Path) -> str | None:
@@ -186,13 +190,30 @@ def cmd_serve(args: argparse.Namespace) -> int:
 
 
 def _serve_live(live: Any, host: str, port: int) -> int:
-    """Serve a live run, first saying whether it will replace an earlier run's files."""
+    """Serve a live run, first saying whether it will replace an earlier run's files; say
+    its verdict and the files it wrote when it ends (the server goes on, for the page),
+    or, when the server stops first, that it did not end."""
     from shary.console.server import serve
 
     replacing = earlier_run(live.folder) if live.folder is not None else None
     if replacing:
         _out.print(escape(replacing))
-    return serve(live, host, port)
+
+    def ended(summary: dict[str, Any]) -> None:
+        verdict = "[bold green]PASSED[/bold green]" if summary.get("passed") else \
+            "[bold red]FAILED[/bold red]"
+        _out.print(f"{verdict} {escape(live.title)}: "
+                   f"{summary['simulated_seconds']:.1f} s simulated")
+        for difference in summary["differences"]:
+            _out.print(f"  - {escape(difference)}")
+        _out.print(wrote(live.folder, summary["outputs"]))
+
+    live.ended = ended
+    status = serve(live, host, port)
+    if live.state == "ended" and live.summary is None:
+        _out.print(f"[dim]the run was stopped before its end: {escape(str(live.folder))}/ "
+                   "holds its log so far[/dim]")
+    return status
 
 
 def live_run(path: Path, *, out: Path | None = None, seed: int = 0, snapshots: bool = False,
