@@ -46,7 +46,8 @@ def add_run(sub: argparse._SubParsersAction) -> None:
                    help="where to write log.sqlite, tree.svg, timeline.svg, summary.json "
                    "(default: runs/SCENARIO, after the scenario's name)")
     p.add_argument("--snapshots", action="store_true", help="also write PNG views at each act")
-    p.add_argument("--quiet", action="store_true", help="print only the verdict")
+    p.add_argument("--quiet", action="store_true",
+                   help="print only the verdict (and, when it failed, why)")
     p.add_argument("--ros", action="store_true",
                    help="run only the supervisor, reaching the robot through ROS 2: the world "
                    "runs in another process ('shary world --ros SCENARIO')")
@@ -110,7 +111,8 @@ def cmd_run(args: argparse.Namespace) -> int:
                f"seed {result.seed}")
     for difference in result.differences:
         _out.print(f"  - {escape(difference)}")
-    _out.print(wrote(out, result.outputs))
+    if not args.quiet:
+        _out.print(wrote(out, result.outputs))
     return 0 if result.passed else 1
 
 

@@ -386,3 +386,23 @@ def test_the_seed_says_its_default(command, capsys):
         main([command, "--help"])
     helped = " ".join(capsys.readouterr().out.split())
     assert "--seed SEED seed of the people's random choices (default 0)" in helped
+
+
+def test_run_quiet_prints_the_verdict_alone(shary, tmp_path):
+    """Before: the verdict, then "wrote DIR/: log.sqlite, …"."""
+    status, out, err = shary("run", "give-bottle", "--quiet", "--out", tmp_path)
+    assert status == 0 and err == ""
+    (line,) = out.splitlines()
+    assert line.startswith("PASSED give-bottle: ") and line.endswith(", seed 0")
+    assert (tmp_path / "summary.json").is_file()
+
+
+def test_run_quiet_says_why_a_run_failed(shary, tmp_path):
+    scenario = (REPO / "sim" / "scenarios" / "give-bottle.yaml").read_text(encoding="utf-8")
+    bad = tmp_path / "unmet.yaml"
+    bad.write_text(scenario.replace("tasks: {give-object: done}",
+                                    "tasks: {give-object: failed}"), encoding="utf-8")
+    status, out, _ = shary("run", bad, "--quiet", "--out", tmp_path / "out")
+    assert status == 1
+    verdict, *why = out.splitlines()
+    assert verdict.startswith("FAILED give-bottle: ") and why and "wrote" not in out
