@@ -337,7 +337,7 @@ def test_world_without_ros_on_a_living_room_scenario_says_to_add_ros(shary):
     status, _, err = shary("world", "give-bottle")
     assert status == 2
     assert "not a seam-welding scenario" in err
-    assert "'shary world --ros give-bottle' (docs/ros2.md)" in err.replace("\n", " ")
+    assert "'shary world --ros give-bottle' (docs/ros2.md)" in err
 
 
 LOG = REPO / "tests" / "hostile" / "log" / "node-of-an-unknown-kind.sqlite"
@@ -377,7 +377,7 @@ def test_conformance_on_a_missing_folder_points_to_the_external_suites(shary, tm
     status, out, err = shary("conformance", tmp_path / "suites" / "scion")
     assert status == 2 and out == ""
     assert f"{tmp_path / 'suites' / 'scion'}: no such folder" in err
-    assert "the README's section 'External suites' says how to clone it" in err.replace("\n", " ")
+    assert "the README's section 'External suites' says how to clone it" in err
 
 
 @pytest.mark.parametrize("command", ["run", "serve"])
