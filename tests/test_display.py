@@ -208,7 +208,7 @@ def test_png_and_svg_without_system_graphviz(tmp_path):
 
 
 def test_render_dot_refuses_unknown_formats_and_reports_dot_errors(tmp_path):
-    with pytest.raises(ValueError, match=r"\.svg.*\.png.*\.dot.*\.gv.*\.mmd.*\.md"):
+    with pytest.raises(ValueError, match=r"use one of \.svg, \.png, \.dot, \.gv$"):
         render_dot("digraph {}", tmp_path / "g.pdf")
     with pytest.raises(RuntimeError, match="syntax"):
         render_dot("digraph { a -> }", tmp_path / "bad.svg")
@@ -225,8 +225,6 @@ def test_render_scheme_command(shary, tmp_path):
     status, out, _ = shary("render", "scheme", "ask-help", "-o", tmp_path / "a.svg",
                            "--active", "ask")
     assert status == 0 and (tmp_path / "a.svg").exists()
-    status, _, err = shary("render", "scheme", "ask-help", "-o", tmp_path / "a.pdf")
-    assert status == 1 and ".svg" in err
 
 
 def test_render_refuses_unknown_active_states(shary, tmp_path):

@@ -12,7 +12,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from shary.commands.schemes import draw
+from shary.commands.schemes import draw, drawing_output
 from shary.log.terminal import add_json_flag, emit_json, error, escape
 from shary.log.terminal import err as _err
 from shary.log.terminal import out as _out
@@ -44,7 +44,7 @@ def add_plan(sub: argparse._SubParsersAction) -> None:
                    help="conditional problems: print the plan (abstract and primitive tasks, "
                    "decisions, branches) as YAML")
     p.add_argument("-o", "--output", type=Path, metavar="OUT",
-                   help="where --render draws (.svg, .png, .dot)")
+                   help="where --render draws (.svg, .png, .dot, .gv)")
     p.add_argument("--hddl", action="store_true",
                    help="DOMAIN and PROBLEM are HDDL files (total order, as in the IPC 2020 "
                    "HTN track); the search stops at the first plan (see --improve)")
@@ -62,6 +62,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
         return error("--render needs -o OUT", json_mode=args.json)
     if args.output is not None:
         output_file(args.output)
+        drawing_output(args.output)
     if args.hddl:
         problem = planner.load_hddl(args.domain, args.problem)
         domain = problem.domain

@@ -20,7 +20,8 @@ def add_validate(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("validate", help="check schemes, acts, recipe libraries and Turtle files "
                        "(default: the built-in ones)")
     p.add_argument("paths", nargs="*", type=Path, metavar="PATH",
-                   help="files to check; acts files among them extend the acts of the others, "
+                   help="files to check, or folders (the .yaml, .yml and .ttl files directly "
+                   "in each); acts files among them extend the acts of the others, "
                    "recipe files are checked together with the built-in library")
     add_json_flag(p, "each file's report")
     p.set_defaults(func=cmd_validate)

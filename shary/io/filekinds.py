@@ -134,14 +134,18 @@ class Report:
         return report
 
 
+YAML_SUFFIXES = (".yaml", ".yml")
+
+
 def validate(paths: Sequence[str | os.PathLike[str]]) -> list[Report]:
     """One report per file: those given, in order, then the files they depend on that
-    have problems (each problem once, under the name the user gave the file)."""
-    given = {Path(p).resolve(): os.fspath(p) for p in paths}
+    have problems (each problem once, under the name the user gave the file).  A folder
+    stands for the files directly in it that a kind can be (see :func:`_in_folders`)."""
     known = kinds()
+    paths, problems = _in_folders(paths, known)
+    given = {Path(p).resolve(): os.fspath(p) for p in paths}
     batches: dict[str, list[Path]] = {}
     of_kind: dict[str, str | None] = {os.fspath(p): None for p in paths}
-    problems: set[Problem] = set()
     for path in map(Path, paths):
         kind = next((k for k in known if path.suffix in k.suffixes), None)
         outline = None
@@ -176,6 +180,30 @@ def validate(paths: Sequence[str | os.PathLike[str]]) -> list[Report]:
         report.notes = sorted(Problem(report.file, n.line, n.col, n.message)
                               for n in context.notes if Path(n.file).resolve() == full)
     return reports
+
+
+def _in_folders(paths: Sequence[str | os.PathLike[str]],
+                known: list[FileKind]) -> tuple[list[str | os.PathLike[str]], set[Problem]]:
+    """The paths given, each folder replaced by its YAML files and the files of a kind's
+    suffix (``.ttl``) directly in it, by name: ``shary validate my-robot/`` checks a
+    folder of files together, as naming them would.  Folders below are not entered (a
+    folder may hold a virtual environment, or files that are not the user's).  A folder
+    without such files is a problem of its own, which says what to give instead."""
+    suffixes = list(dict.fromkeys([*YAML_SUFFIXES, *(s for k in known for s in k.suffixes)]))
+    files: list[str | os.PathLike[str]] = []
+    problems: set[Problem] = set()
+    for path in paths:
+        if not Path(path).is_dir():
+            files.append(path)
+            continue
+        inside = sorted(f for f in Path(path).iterdir() if f.suffix in suffixes and f.is_file())
+        if not inside:
+            problems.add(Problem(os.fspath(path), 1, 1, (
+                f"a folder with no {', '.join(suffixes[:-1])} or {suffixes[-1]} file in it "
+                "(shary validate reads the files directly in a folder, not those in folders "
+                "below): name the files or folders to check")))
+        files.extend(inside)
+    return files, problems
 
 
 def _unknown(path: Path, outline: yamlsafe.Outline | None, known: list[FileKind]) -> Problem:

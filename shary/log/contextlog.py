@@ -44,6 +44,7 @@ import json
 import math
 import re
 import sqlite3
+import sys
 from collections.abc import Iterator, Sequence
 from contextlib import ExitStack, closing, contextmanager
 from dataclasses import dataclass
@@ -275,7 +276,8 @@ def stream_events(path: str | Path, *, task: str | None = None, agent: str | Non
 
     ``kind`` ending in ``*`` selects every kind that starts with what comes
     before it; ``kinds`` selects exact kinds; ``since`` and ``until`` bound the
-    event time, both inclusive; ``offset`` and ``limit`` page the result.  Only
+    event time, both inclusive (a row whose time is not a finite number passes both,
+    to be refused); ``offset`` and ``limit`` page the result.  Only
     committed events are seen, so reading while a run writes is safe.  The log
     is opened and checked on entering the block, so a bad file fails before the
     caller has written anything; a bad event (and :class:`BadEvent` raised in
@@ -298,12 +300,16 @@ def stream_events(path: str | Path, *, task: str | None = None, agent: str | Non
     if kinds is not None:
         clauses.append(f"kind IN ({', '.join('?' * len(kinds))})")
         params.extend(kinds)
+    # A row whose time is not a finite number is neither before nor after a bound: it
+    # is read, and refused by the reader, instead of being left out unseen.  SQLite
+    # orders text and blobs after every number, and an infinity lies beyond the
+    # largest float, so each bound stays ranges of the time index.
     if since is not None:
-        clauses.append("time >= ?")
-        params.append(since)
+        clauses.append("(time >= ? OR time < ? OR time IS NULL)")
+        params += [since, -sys.float_info.max]
     if until is not None:
-        clauses.append("time <= ?")
-        params.append(until)
+        clauses.append("(time <= ? OR time > ? OR time IS NULL)")
+        params += [until, sys.float_info.max]
     where = f" WHERE {' AND '.join(clauses)}" if clauses else ""
     page = ""
     if limit is not None or offset:

@@ -37,7 +37,10 @@ DOT_FORMATS = {".svg": "svg", ".png": "png"}
 TEXT_SUFFIXES = (".dot", ".gv")
 MERMAID_SUFFIXES = (".mmd", ".mermaid")
 MARKDOWN_SUFFIX = ".md"
-SUFFIXES = (*DOT_FORMATS, *TEXT_SUFFIXES, *MERMAID_SUFFIXES, MARKDOWN_SUFFIX)
+DOT_SUFFIXES = (*DOT_FORMATS, *TEXT_SUFFIXES)
+"""What a DOT graph (a task tree, a plan) is drawn to."""
+SUFFIXES = (*DOT_SUFFIXES, *MERMAID_SUFFIXES, MARKDOWN_SUFFIX)
+"""What a scheme is drawn to."""
 
 ACTIVE_FILL = "#ffe680"
 """Fill of an active state, the same in DOT and Mermaid."""
@@ -91,7 +94,7 @@ def render_dot(source: str, out: Path) -> None:
         write_output(out, source)
         return
     if suffix not in DOT_FORMATS:
-        raise ValueError(f"cannot draw to {out.name!r}: use one of {', '.join(SUFFIXES)}")
+        raise ValueError(f"cannot draw to {out.name!r}: use one of {', '.join(DOT_SUFFIXES)}")
     dot = find_dot()
     if suffix == ".png":
         # dot draws the picture itself: graphviz-pure has glyphs for Helvetica (and
