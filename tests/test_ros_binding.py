@@ -132,3 +132,18 @@ def test_a_name_rclpy_would_refuse_is_refused_when_validated(shary, write):
     status, _, err = shary("validate", path)
     assert status == 2
     assert [(m["line"], m["col"]) for m in problems(err)] == [("4", "22"), ("6", "13")]
+
+
+def test_each_task_uses_parts_of_the_robot_by_default_or_as_the_binding_says(write):
+    binding = load_binding(write("robot.yaml", """\
+        binding: parts
+        robot: jido
+        tasks:
+          navigate: {action: /nav, type: test_msgs/action/Fibonacci}
+          look-at: {action: /head, type: test_msgs/action/Fibonacci, resources: [head, base]}
+          give: {action: /arm, type: test_msgs/action/Fibonacci}
+          speak: {topic: /say, type: std_msgs/msg/String, goal: {data: "{text}"}}
+        """))
+    assert {name: task.resources for name, task in binding.tasks.items()} == {
+        "navigate": ("base",), "look-at": ("head", "base"), "give": ("arm",),
+        "speak": ("voice",)}

@@ -46,6 +46,12 @@ DEFAULT_DEADLINES = {"server": 0.0, "ack": 1.0, "exec": 300.0, "cancel": 2.0}
 (BehaviorTree.ROS2's behaviour), 1 s for the acknowledgement (its default), 5 min of
 execution, 2 s for a cancelled goal to end."""
 
+DEFAULT_RESOURCES = {"navigate": ("base",), "look-at": ("head",), "speak": ("voice",),
+                     **dict.fromkeys(("move-arm", "pick", "place", "dump", "give", "put-back"),
+                                     ("arm",))}
+"""The parts of the robot the core library's atomic tasks use when a binding does not say
+(``resources:``): one goal at a time per part (:mod:`shary.ros.resources`)."""
+
 TEMPLATE = re.compile(r"\{([^{}]*)\}")
 _PARAM = re.compile(r"^(?:(code):([A-Za-z_][\w-]*)|(fact):([A-Za-z_][\w-]*):([A-Za-z_][\w-]*)"
                     r"(?::(\d+))?|([A-Za-z_][\w-]*))$")
@@ -66,6 +72,8 @@ class TaskBinding:
     feedback: str = ""
     succeeded_if: dict[str, Any] = field(default_factory=dict)
     reason: str = ""
+    resources: tuple[str, ...] = ()
+    """The parts of the robot its goals use (the action's server is one besides)."""
 
 
 @dataclass(frozen=True)
@@ -211,9 +219,12 @@ def _meaning(reader: Reader, atomic: dict[str, tuple[str, ...]]) -> Binding:
             if result_cls is not None and field_type(result_cls, key) is None:
                 reader.problem((*where, "succeeded-if", key),
                                f"{raw['type']} has no result field {key!r}", key=True)
+        resources = tuple(raw["resources"]) if "resources" in raw else \
+            DEFAULT_RESOURCES.get(name, ())
         tasks[name] = TaskBinding(name, kind, raw[kind], raw["type"], dict(raw.get("goal") or {}),
                                   deadlines, raw.get("feedback", ""),
-                                  dict(raw.get("succeeded-if") or {}), raw.get("reason", ""))
+                                  dict(raw.get("succeeded-if") or {}), raw.get("reason", ""),
+                                  resources)
     facts = []
     for i, raw in enumerate(data.get("facts") or []):
         where = ("facts", i)

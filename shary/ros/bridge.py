@@ -8,6 +8,8 @@ the robot's nodes (a goal of a node that is gone fails at once), its state for
 ROS tools (:mod:`~shary.ros.views`), and ``~/run_task`` and ``~/person_act``
 (:mod:`~shary.ros.server`).  The views and the task server hear the
 supervisor's events through :class:`~shary.told.Told`, the log the supervisor is given.
+Closing the node stops the supervisor safely first (:mod:`~shary.ros.stop`): no robot goal
+is left running and every ``~/run_task`` goal is answered.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from shary.ros.liveliness import Liveliness
 from shary.ros.node import RosNode
 from shary.ros.perception import RosPerception
 from shary.ros.server import RosTaskServer
+from shary.ros.stop import StopReport, safe_stop
 from shary.ros.views import RosViews
 from shary.told import Told
 
@@ -43,6 +46,20 @@ class RosSupervision:
         self.views = RosViews(node, sup.loop, named_schemes(), robot=sup.robot)
         self.server = RosTaskServer(node, sup)
         fanout.listeners += [self.views.listener, self.server.listener]
+        self.stopped: StopReport | None = None
+        """What the safe stop did, once it has run."""
+        self.stop_reason = "the node is shutting down"
+        """The reason the stop gives when the node closes (the command sets the signal)."""
+        node.before_close.append(lambda: self.stop(self.stop_reason))
+
+    def stop(self, reason: str) -> StopReport:
+        """Stop safely (:mod:`shary.ros.stop`): tasks cancelled, robot goals cancelled and
+        their servers' answers awaited, ``~/run_task`` goals answered; once (the node's
+        closing runs it if nobody did before)."""
+        if self.stopped is None:
+            self.stopped = safe_stop(self.sup, self.executors, self.server, self.sup.loop,
+                                     reason)
+        return self.stopped
 
     def fact(self, subject: str, predicate: str) -> Any:
         """The robot's belief of ``subject``'s ``predicate`` (a goal's ``{fact:…}``)."""

@@ -6,14 +6,16 @@ other nodes ask it for tasks over ``~/run_task`` and it shows its state on
 ``~/snapshot``, ``~/active_state``, ``/diagnostics`` and ``~/markers``
 (docs/ros2.md).  ``--task`` starts one task at once; ``--facts`` loads what
 the robot knows beforehand (a Turtle file: places' positions, kinds of
-things).  Ctrl-C (or SIGTERM) stops it cleanly: the node's entities destroyed (the
-loop spins the node: there is no ROS thread to join), the log written.
+things).  Ctrl-C (or SIGTERM) stops it safely (:mod:`shary.ros.stop`): every task
+cancelled, every robot goal cancelled and its server's answer awaited up to the goal's
+``cancel`` deadline, every ``~/run_task`` goal answered, then the node's entities
+destroyed and the log written; a second Ctrl-C abandons the wait and says which goals it
+left (exit status 1).
 """
 
 from __future__ import annotations
 
 import argparse
-import signal
 import sys
 from pathlib import Path
 from typing import Any
@@ -50,6 +52,7 @@ def cmd_ros(args: argparse.Namespace) -> int:
     from shary.ros.binding import load_binding
     from shary.ros.bridge import RosSupervision
     from shary.ros.node import RosNode
+    from shary.ros.stop import StopSignals
     from shary.supervisor import Supervisor
     from shary.told import Told
     from userfiles.errors import FileError
@@ -90,27 +93,32 @@ def cmd_ros(args: argparse.Namespace) -> int:
                      planners=planners)
     facts.log_changes(sup.record)
     node = RosNode(args.node_name)
-    stopping: list[int] = []
-    previous = signal.signal(signal.SIGTERM, lambda *_: stopping.append(1))
-    try:
-        ros = RosSupervision(sup, binding, node, fanout=fanout)
-        ros.liveliness.watchers.append(lambda reason: _out.print(
-            f"{reason}: its tasks fail until it is back", markup=False))
-        loop.settle()  # set up: a collection of the whole heap would stall perception
-        _out.print(f"shary is node /{args.node_name} on robot {binding.robot} "
-                   f"({binding.name}); Ctrl-C stops it")
-        if args.task is not None:
-            sup.start_task(args.task, params)
-        end = loop.now() + args.seconds if args.seconds is not None else None
-        while not stopping and (end is None or loop.now() < end):
-            loop.run_for(0.1)
-    except KeyboardInterrupt:
-        pass
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-        node.close()
-        if log is not None:
-            log.flush()
-            log.close()
+    ros = None
+    with StopSignals(loop) as signals:
+        try:
+            ros = RosSupervision(sup, binding, node, fanout=fanout)
+            ros.liveliness.watchers.append(lambda reason: _out.print(
+                f"{reason}: its tasks fail until it is back", markup=False))
+            loop.settle()  # set up: a collection of the whole heap would stall perception
+            _out.print(f"shary is node /{args.node_name} on robot {binding.robot} "
+                       f"({binding.name}); Ctrl-C stops it")
+            if args.task is not None:
+                sup.start_task(args.task, params)
+            end = loop.now() + args.seconds if args.seconds is not None else None
+            while signals.requested is None and (end is None or loop.now() < end):
+                loop.run_for(0.1)
+            if ros is not None:
+                ros.stop_reason = (f"shary stopped by {signals.requested}" if signals.requested
+                                   else f"shary stopped after {args.seconds:g} s")
+        finally:
+            node.close()  # stops safely first (shary.ros.stop)
+            if log is not None:
+                log.flush()
+                log.close()
+    left = False
+    if ros is not None and ros.stopped is not None:
+        for line in ros.stopped.lines():
+            _out.print(line, markup=False)
+        left = bool(ros.stopped.left)
     _out.print("shary stopped")
-    return 0
+    return 1 if left else 0

@@ -29,7 +29,9 @@ spins the executor, so the Jazzy wheel's action-client race between threads
 (rclpy#1123) cannot happen.  ``EventsExecutor`` is not used (it deadlocked
 here).
 
-Shutdown is ordered as rclpy needs it: action clients and servers destroyed
+Shutdown is ordered as rclpy needs it: what must happen while the node still spins
+first (:attr:`RosNode.before_close`: a supervisor's safe stop, :mod:`shary.ros.stop`),
+then action clients and servers destroyed
 (``destroy_node`` does not destroy them), then the node, the executor stopped
 and the context shut down; the loop gets its default waiter back.
 """
@@ -79,6 +81,10 @@ class RosNode:
         once), and reads the timeout from it when it makes the next one."""
         self._armed = 0.0
         """When the previous wait was to end (``time.monotonic``)."""
+        self._open: dict[str, int] = {}
+        """Goals of each served action accepted and not yet answered (:meth:`serve_goals`)."""
+        self.before_close: list[Callable[[], Any]] = []
+        """Called first when the node closes, while it still spins (a safe stop)."""
 
     # -- the engine's loop waits here -------------------------------------------------
 
@@ -152,10 +158,12 @@ class RosNode:
 
         live: dict[bytes, Any] = {}
         logger = self.node.get_logger()
+        self._open[name] = 0
 
         def on_goal(goal: Any) -> Any:
             reason = accept(goal) if accept is not None else None
             if reason is None:
+                self._open[name] += 1
                 return GoalResponse.ACCEPT
             logger.warning(f"{name}: goal rejected: {reason}")
             return GoalResponse.REJECT
@@ -174,6 +182,7 @@ class RosNode:
                 handle.succeed()
             else:
                 handle.abort()
+            self._open[name] -= 1
             return result
 
         def on_cancel(handle: Any) -> Any:
@@ -184,6 +193,11 @@ class RosNode:
 
         return self.action_server(cls, name, execute_callback=execute,
                                   goal_callback=on_goal, cancel_callback=on_cancel)
+
+    def open_goals(self, name: str) -> int:
+        """Goals of action ``name`` (served with :meth:`serve_goals`) accepted and not yet
+        answered."""
+        return self._open.get(name, 0)
 
     def service_client(self, cls: Any, name: str) -> Any:
         return self.node.create_client(cls, name)
@@ -245,16 +259,21 @@ class RosNode:
         sleeps on its default waiter again."""
         if self._closed:
             return
-        self._closed = True
-        if self._loop is not None and self._loop.waiter is self:
-            self._loop.waiter = EventWaiter()
+        hooks, self.before_close = self.before_close, []
         try:
-            for waitable in self.waitables:
-                waitable.destroy()
-            self.node.destroy_node()
+            for hook in hooks:
+                hook()
         finally:
-            self.executor.shutdown(timeout_sec=timeout)
-            self._rclpy.try_shutdown(context=self.context)
+            self._closed = True
+            if self._loop is not None and self._loop.waiter is self:
+                self._loop.waiter = EventWaiter()
+            try:
+                for waitable in self.waitables:
+                    waitable.destroy()
+                self.node.destroy_node()
+            finally:
+                self.executor.shutdown(timeout_sec=timeout)
+                self._rclpy.try_shutdown(context=self.context)
 
     def __enter__(self) -> RosNode:
         return self
