@@ -123,6 +123,15 @@ def test_a_cancelled_run_task_goal_cancels_its_robot_goal(spawn, write, tmp_path
     client.wait_for("result g1 CANCELED cancelled|cancelled by the client of ~/run_task")
     server.wait_for("canceled long")
     assert executing(server, "long") == 0
+    shary.popen.send_signal(signal.SIGINT)
+    assert shary.popen.wait(30) == 0
+    # the client was answered once the server had ended the robot's goal
+    rows = [(e.kind, e.data) for e in read_events(tmp_path / "log.sqlite")
+            if e.kind in ("ros-cancel", "run-task")]
+    confirmed = rows.index(("ros-cancel", next(d for k, d in rows if k == "ros-cancel"
+                                               and d["state"] == "confirmed")))
+    answered = next(i for i, (k, d) in enumerate(rows) if d.get("verdict") == "cancelled")
+    assert confirmed < answered, shary.lines
 
 
 def test_closing_the_node_stops_the_supervisor_safely(write, ros_domain, spawn):

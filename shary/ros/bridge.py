@@ -45,6 +45,7 @@ class RosSupervision:
                                         record=sup.record)
         self.views = RosViews(node, sup.loop, named_schemes(), robot=sup.robot)
         self.server = RosTaskServer(node, sup)
+        self.server.unsettled = self.executors.unsettled
         fanout.listeners += [self.views.listener, self.server.listener]
         self.stopped: StopReport | None = None
         """What the safe stop did, once it has run."""

@@ -39,12 +39,15 @@ Callbacks only put events on the engine's loop; tasks start and end there
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from typing import Any
 
 from shary.recipes import ROBOT_PARAM
 from shary.ros.node import RosNode
 
 ACTION = "~/run_task"
+SETTLE_POLL = 0.02
+"""Seconds between two looks at a cancelled task's robot goals before its answer."""
 
 
 class RosTaskServer:
@@ -68,6 +71,10 @@ class RosTaskServer:
         """Who last said no (an ``act-received`` H-DISAGREE): a declined task's reason."""
         self.stopping: str | None = None
         """Why shary stops (no new goal is taken), or None."""
+        self.unsettled: Callable[[], list[Any]] = list
+        """The robot's goals that a server may still run (the executors')."""
+        self._asked_by: dict[str, _Goal] = {}
+        """Request id -> the requested task's goal whose step asked for it."""
         node.serve_goals(RunTask, ACTION, self._start, self._cancel, accept=self._accept)
         node.subscription(String, "~/person_act", lambda m: node.put(self._act, m.data))
         self.acts_pub = node.publisher(String, "~/acts", depth=100)
@@ -142,9 +149,14 @@ class RosTaskServer:
             pass  # it has just ended: its verdict is on its way
 
     def _ended(self, entry: _Goal, outcome: str, state: str, reason: str) -> None:
-        """Answer the goal: its verdict and the reason the log gave (module docstring)."""
+        """Answer the goal: its verdict and the reason the log gave (module docstring);
+        a cancelled task's once the robot's servers have answered the cancels of its
+        goals (the client knows the robot has stopped when it hears)."""
         self.goals.pop(entry.key, None)
         self._by_node.pop(entry.node, None)
+        if outcome == "cancelled" and self._robot_busy(entry):
+            self.sup.loop.call_later(SETTLE_POLL, self._ended, entry, outcome, state, reason)
+            return
         verdict = outcome
         if outcome != "cancelled" and entry.declined:
             verdict, reason = "declined", entry.declined
@@ -153,9 +165,19 @@ class RosTaskServer:
             cause = entry.failure or entry.timeout
             reason = reason or (f"{cause}; it ended in {state}" if cause
                                 else f"it ended in {state}")
-        entry.end(self._result(verdict=verdict, reason=reason if verdict != "done" else ""),
+        reason = reason if verdict != "done" else ""
+        for request in [r for r, asker in self._asked_by.items() if asker is entry]:
+            del self._asked_by[request]
+        self.sup.record("run-task", task=entry.node, verdict=verdict, reason=reason or None)
+        entry.end(self._result(verdict=verdict, reason=reason),
                   canceled=verdict == "cancelled" and entry.cancel_asked,
                   failed=verdict != "done")
+
+    def _robot_busy(self, entry: _Goal) -> bool:
+        """Whether a robot goal of ``entry``'s task (or of its subtasks) is still unsettled
+        (a cancelled task's steps are already cut from the tree: its requests are known
+        from their ``exec-request`` rows)."""
+        return any(self._asked_by.get(goal.request.id) is entry for goal in self.unsettled())
 
     # -- people -----------------------------------------------------------------------------
 
@@ -193,6 +215,9 @@ class RosTaskServer:
         if kind == "act":
             text = f"{agent}: {data.get('act')}"
         elif kind == "exec-request":
+            asker = self._requested(task) or self._starting
+            if asker is not None:
+                self._asked_by[str(data.get("request"))] = asker
             text = f"{agent} {data.get('atomic')} {json.dumps(data.get('args') or {})}"
         elif kind == "exec-result":
             text = f"{agent} {data.get('status')}" + (f": {data['reason']}"
