@@ -14,6 +14,8 @@ says, for one robot:
   ``each``), dropped when the topic has been silent for ``stale``;
 * ``speech``: topics that carry what people say, each sentence read by the
   communication manager's requests grammar;
+* each fact, speech or published topic's ``qos`` (:mod:`shary.ros.qos`), each task's
+  ``resources`` (the parts of the robot it uses: :mod:`shary.ros.resources`);
 * ``alive``: how shary notices that a node of the robot is gone (a driver that
   crashed): a topic whose publisher offers a ROS 2 liveliness lease, and the
   atomic tasks that node performs (:mod:`shary.ros.liveliness`).
@@ -74,6 +76,8 @@ class TaskBinding:
     reason: str = ""
     resources: tuple[str, ...] = ()
     """The parts of the robot its goals use (the action's server is one besides)."""
+    qos: Any = None
+    """A topic's quality of service (:mod:`shary.ros.qos`): a preset or policies."""
 
 
 @dataclass(frozen=True)
@@ -86,6 +90,7 @@ class FactSource:
     each: str = ""
     lines: str = ""
     stale: float | None = None
+    qos: Any = None
 
 
 @dataclass(frozen=True)
@@ -96,6 +101,7 @@ class SpeechSource:
     type: str
     text: str
     speaker: str = ""
+    qos: Any = None
 
 
 @dataclass(frozen=True)
@@ -208,6 +214,9 @@ def _meaning(reader: Reader, atomic: dict[str, tuple[str, ...]]) -> Binding:
             if goal_cls is not None and field_type(goal_cls, key) is None:
                 reader.problem((*where, "goal", key), f"{raw['type']} has no goal field {key!r}",
                                key=True)
+        if kind != "topic" and "qos" in raw:
+            reader.problem((*where, "qos"), f"{'an' if kind == 'action' else 'a'} {kind} has "
+                           "no qos: only a topic task has (what it publishes)", key=True)
         if kind != "action" and "feedback" in raw:
             reader.problem((*where, "feedback"), f"a {kind} has no feedback: only an action has",
                            key=True)
@@ -224,7 +233,7 @@ def _meaning(reader: Reader, atomic: dict[str, tuple[str, ...]]) -> Binding:
         tasks[name] = TaskBinding(name, kind, raw[kind], raw["type"], dict(raw.get("goal") or {}),
                                   deadlines, raw.get("feedback", ""),
                                   dict(raw.get("succeeded-if") or {}), raw.get("reason", ""),
-                                  resources)
+                                  resources, raw.get("qos"))
     facts = []
     for i, raw in enumerate(data.get("facts") or []):
         where = ("facts", i)
@@ -240,7 +249,8 @@ def _meaning(reader: Reader, atomic: dict[str, tuple[str, ...]]) -> Binding:
         stale = reader.duration((*where, "stale"), raw["stale"]) if "stale" in raw else None
         facts.append(FactSource(raw["topic"], raw["type"],
                                 tuple(tuple(t) for t in raw.get("facts") or []),
-                                raw.get("each", ""), raw.get("lines", ""), stale))
+                                raw.get("each", ""), raw.get("lines", ""), stale,
+                                raw.get("qos")))
     speech = []
     for i, raw in enumerate(data.get("speech") or []):
         where = ("speech", i)
@@ -248,7 +258,8 @@ def _meaning(reader: Reader, atomic: dict[str, tuple[str, ...]]) -> Binding:
         if cls is not None and field_type(cls, raw["text"]) != "string":
             reader.problem((*where, "text"), f"{raw['type']} has no string field {raw['text']!r}")
         _check_fields(reader, (*where, "speaker"), raw.get("speaker", ""), cls)
-        speech.append(SpeechSource(raw["topic"], raw["type"], raw["text"], raw.get("speaker", "")))
+        speech.append(SpeechSource(raw["topic"], raw["type"], raw["text"], raw.get("speaker", ""),
+                                   raw.get("qos")))
     alive = []
     for i, raw in enumerate(data.get("alive") or []):
         where = ("alive", i)

@@ -21,6 +21,7 @@ from shary.ros.executors import RosExecutors
 from shary.ros.liveliness import Liveliness
 from shary.ros.node import RosNode
 from shary.ros.perception import RosPerception
+from shary.ros.qos import QosWatch
 from shary.ros.server import RosTaskServer
 from shary.ros.stop import StopReport, safe_stop
 from shary.ros.views import RosViews
@@ -40,9 +41,11 @@ class RosSupervision:
         self.executors.register(sup.executors)
         self.liveliness = Liveliness(node, binding, executors=self.executors,
                                      record=sup.record)
+        self.qos = QosWatch(node, sup.loop, sup.record)
+        """Publishers the perception's subscriptions cannot hear (:mod:`~shary.ros.qos`)."""
         self.perception = RosPerception(node, binding, sup.facts, sup.loop,
                                         act=sup.receive_act, hear=sup.dialogue.hear,
-                                        record=sup.record)
+                                        record=sup.record, qos=self.qos)
         self.views = RosViews(node, sup.loop, named_schemes(), robot=sup.robot)
         self.server = RosTaskServer(node, sup)
         self.server.unsettled = self.executors.unsettled

@@ -99,6 +99,7 @@ def cmd_ros(args: argparse.Namespace) -> int:
             ros = RosSupervision(sup, binding, node, fanout=fanout)
             ros.liveliness.watchers.append(lambda reason: _out.print(
                 f"{reason}: its tasks fail until it is back", markup=False))
+            ros.qos.watchers.append(lambda text: _out.print(f"warning: {text}", markup=False))
             loop.settle()  # set up: a collection of the whole heap would stall perception
             _out.print(f"shary is node /{args.node_name} on robot {binding.robot} "
                        f"({binding.name}); Ctrl-C stops it")

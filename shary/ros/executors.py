@@ -47,6 +47,7 @@ from typing import Any
 from shary.ros import messages
 from shary.ros.binding import Binding, TaskBinding, import_interface
 from shary.ros.node import RosNode
+from shary.ros.qos import profile as qos_profile
 from shary.ros.resources import Resources
 
 SERVER_POLL = 0.05
@@ -112,7 +113,8 @@ class RosExecutors:
                 elif task.kind == "service":
                     shared[key] = node.service_client(cls, task.name)
                 else:
-                    shared[key] = node.publisher(cls, task.name)
+                    shared[key] = node.publisher(cls, task.name, qos=None if task.qos is None
+                                                 else qos_profile(task.qos, None))
             self._entities[atomic] = shared[key]
 
     def register(self, registry: Any) -> None:

@@ -203,13 +203,16 @@ class RosNode:
         return self.node.create_client(cls, name)
 
     def publisher(self, cls: Any, topic: str, *, latched: bool = False, depth: int = 10,
-                  lease: float | None = None) -> Any:
+                  lease: float | None = None, qos: Any = None) -> Any:
         """A publisher; ``latched``: a late subscriber gets the last message; ``lease``:
         it offers a liveliness lease of that many seconds, asserted as long as this
-        process runs (how a supervisor notices it gone: :mod:`shary.ros.liveliness`)."""
+        process runs (how a supervisor notices it gone: :mod:`shary.ros.liveliness`);
+        ``qos``: this ``QoSProfile`` instead (a binding's, :mod:`shary.ros.qos`)."""
         from rclpy.duration import Duration
         from rclpy.qos import DurabilityPolicy, LivelinessPolicy, QoSProfile
 
+        if qos is not None:
+            return self.node.create_publisher(cls, topic, qos)
         qos = QoSProfile(depth=1 if latched else depth)
         if latched:
             qos.durability = DurabilityPolicy.TRANSIENT_LOCAL
@@ -226,7 +229,7 @@ class RosNode:
 
     def drained_subscription(self, cls: Any, topic: str,
                              callback: Callable[[list[Any]], Any], *, depth: int = 1000,
-                             batch: int = BATCH) -> Any:
+                             batch: int = BATCH, qos: Any = None, events: Any = None) -> Any:
         """A subscription whose callback gets every message waiting (up to ``batch``) in
         one list, while the loop waits (it must only :meth:`put` events): for a topic
         that may carry thousands of messages a second (perception).
@@ -235,7 +238,10 @@ class RosNode:
         wait set in Python over every entity of the node: 3,000-5,000 messages a second
         here, whatever the callback does (docs/benchmarks.md).  Taking the messages that
         wait with the subscription's own ``take_message``, as soon as the first is
-        handed over, costs one wake and one event on the engine's loop per burst."""
+        handed over, costs one wake and one event on the engine's loop per burst.
+        ``qos`` (a ``QoSProfile``) replaces the reliable history of ``depth``; ``events``
+        are rclpy's ``SubscriptionEventCallbacks`` (an incompatible publisher:
+        :mod:`shary.ros.qos`)."""
         subscription: Any = None
 
         def drain(first: Any) -> None:
@@ -249,7 +255,8 @@ class RosNode:
                     taken.append(got[0])
             callback(taken)
 
-        subscription = self.node.create_subscription(cls, topic, drain, depth)
+        subscription = self.node.create_subscription(
+            cls, topic, drain, qos if qos is not None else depth, event_callbacks=events)
         return subscription
 
     # -- shutdown -----------------------------------------------------------------------
