@@ -25,10 +25,14 @@ simulated Jido's, built from the message packages that are on PyPI).
 
 Loading checks the file's shape, then its meaning: each task is an atomic task
 of the recipe library and its templates name only that task's parameters;
-each type is imported, and when it is, every field path is checked against it.
-A type that cannot be imported here (``nav2_msgs`` is not on PyPI) is a
-*note* ("not installed"), not an error: the binding is meant for a robot that
-has it.  Importing a message package never imports rclpy.
+each type is imported, and when it is, every field path (goal, feedback, reason,
+``succeeded-if``, facts, speech) is checked against its fields as rosidl generated
+them.  A type that an installed package does not have is an error, with the types
+it has and the closest (a misspelt ``test_msgs/action/Fibonaci``).  A type whose
+package cannot be imported here (``nav2_msgs`` is not on PyPI) is a *note* ("not
+installed"), not an error: the binding is meant for a robot that has it, and
+``shary ros`` warns of it as it starts (its tasks fail at once).  Importing a
+message package never imports rclpy.
 """
 
 from __future__ import annotations
@@ -211,9 +215,9 @@ def _meaning(reader: Reader, atomic: dict[str, tuple[str, ...]]) -> Binding:
         goal_cls = _part(cls, kind, "Goal" if kind == "action" else "Request")
         for key, value in (raw.get("goal") or {}).items():
             _check_goal_value(reader, (*where, "goal", key), value, atomic[name], codes)
-            if goal_cls is not None and field_type(goal_cls, key) is None:
-                reader.problem((*where, "goal", key), f"{raw['type']} has no goal field {key!r}",
-                               key=True)
+            if goal_cls is not None:
+                _check_goal_field(reader, (*where, "goal", key), goal_cls, raw["type"], key,
+                                  value)
         if kind != "topic" and "qos" in raw:
             reader.problem((*where, "qos"), f"{'an' if kind == 'action' else 'a'} {kind} has "
                            "no qos: only a topic task has (what it publishes)", key=True)
@@ -287,10 +291,37 @@ def _interface(reader: Reader, notes: list[Problem], where: tuple, name: str,
         return None
     cls = import_interface(name)
     if cls is None:
-        notes.append(reader.located.problem(where, f"{name} is not installed here (package "
-                                                   f"{name.split('/')[0]!r}): its fields are "
-                                                   "checked on a machine that has it"))
+        package, sort, cls_name = name.split("/")
+        known = installed_types(package, sort)
+        if known is None:
+            notes.append(reader.located.problem(where, f"{name} is not installed here (package "
+                                                       f"{package!r}): its fields are checked "
+                                                       "on a machine that has it"))
+        else:
+            from userfiles.schema import did_you_mean
+
+            listed = f" ({', '.join(known)})" if 0 < len(known) <= 12 else ""
+            reader.problem(where, f"{package} has no {sort} type {cls_name!r}"
+                           + (f"{listed}{did_you_mean(cls_name, known)}" if known
+                              else f" (it has no {sort} types)"))
     return cls
+
+
+def installed_types(package: str, sort: str) -> list[str] | None:
+    """The ``sort`` (msg, srv, action) types of an installed interface package, as rosidl
+    generated them (an empty list when it has none of that sort), or None when the package
+    is not installed here."""
+    try:
+        importlib.import_module(package)
+    except ImportError:
+        return None
+    try:
+        module = importlib.import_module(f"{package}.{sort}")
+    except ImportError:
+        return []
+    # an action's or service's parts (Fibonacci_SendGoal_Request) are no type of their own
+    return sorted(n for n in dir(module) if n[:1].isupper() and "_" not in n
+                  and not n.startswith("Metaclass") and isinstance(getattr(module, n), type))
 
 
 def _part(cls: Any, kind: str, part: str) -> Any | None:
@@ -299,6 +330,39 @@ def _part(cls: Any, kind: str, part: str) -> Any | None:
     if kind == "topic":
         return cls if part in ("Goal", "Request") else None
     return getattr(cls, part, None)
+
+
+def _check_goal_field(reader: Reader, where: tuple, cls: Any, type_name: str, path: str,
+                      value: Any) -> None:
+    """A goal's field path exists in the type, names a value (not a nested message), and
+    a constant fits it."""
+    from shary.ros.messages import convert
+
+    kind = field_type(cls, path)
+    if kind is None:
+        from userfiles.schema import did_you_mean
+
+        *parents, last = path.split(".")
+        siblings = list(_fields(cls, parents))
+        reader.problem(where, f"{type_name} has no goal field {path!r}"
+                       f"{did_you_mean(last, siblings)}", key=True)
+    elif "/" in kind and not kind.startswith("sequence<"):
+        reader.problem(where, f"{path} is a message ({kind}), not a value: give its fields "
+                       f"({path}.FIELD)", key=True)
+    elif not templates(value):
+        try:
+            convert(value, kind)
+        except (TypeError, ValueError):
+            reader.problem(where, f"{value!r} is not a {kind} (the type of {path})")
+
+
+def _fields(cls: Any, parents: list[str]) -> list[str]:
+    """The field names of the message at ``parents`` in ``cls`` (none when there is none)."""
+    current = cls
+    for part in parents:
+        kind = current.get_fields_and_field_types().get(part) if current is not None else None
+        current = _nested(kind) if kind else None
+    return list(current.get_fields_and_field_types()) if current is not None else []
 
 
 def _check_goal_value(reader: Reader, where: tuple, value: Any, params: tuple[str, ...],

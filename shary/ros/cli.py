@@ -84,6 +84,9 @@ def cmd_ros(args: argparse.Namespace) -> int:
     except FileError as err:
         print_problems(err.problems)
         return EXIT_BAD_INPUT
+    for note in binding.notes:  # a type not installed here: its tasks fail at once
+        _out.print(f"{note.file}:{note.line}:{note.col}: warning: {note.message}; its tasks "
+                   "fail at once (server unavailable)", markup=False)
     if args.task is not None and args.task not in library.tasks:
         return error(f"no task {args.task!r} (known: {', '.join(sorted(library.tasks))})")
     log = ContextLog(args.log) if args.log is not None else None
@@ -117,9 +120,10 @@ def cmd_ros(args: argparse.Namespace) -> int:
                 log.flush()
                 log.close()
     left = False
-    if ros is not None and ros.stopped is not None:
-        for line in ros.stopped.lines():
+    stopped = ros.stopped if ros is not None else None
+    if stopped is not None and (stopped.tasks or stopped.cancelled or stopped.left):
+        for line in stopped.lines():
             _out.print(line, markup=False)
-        left = bool(ros.stopped.left)
+        left = bool(stopped.left)
     _out.print("shary stopped")
     return 1 if left else 0
