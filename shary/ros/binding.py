@@ -16,6 +16,7 @@ says, for one robot:
   communication manager's requests grammar;
 * each fact, speech or published topic's ``qos`` (:mod:`shary.ros.qos`), each task's
   ``resources`` (the parts of the robot it uses: :mod:`shary.ros.resources`);
+* ``frames``: the TF frames of the markers shary shows (:mod:`shary.ros.views`);
 * ``alive``: how shary notices that a node of the robot is gone (a driver that
   crashed): a topic whose publisher offers a ROS 2 liveliness lease, and the
   atomic tasks that node performs (:mod:`shary.ros.liveliness`).
@@ -133,6 +134,8 @@ class Binding:
     alive: list[AliveSource] = field(default_factory=list)
     doc: str = ""
     notes: list[Problem] = field(default_factory=list)
+    frames: dict[str, str] = field(default_factory=dict)
+    """The TF frames of the markers: ``robot``, ``person`` (``{agent}``: the name)."""
     """Types that cannot be imported here, each at its place in the file."""
 
 
@@ -278,7 +281,7 @@ def _meaning(reader: Reader, atomic: dict[str, tuple[str, ...]]) -> Binding:
         alive.append(AliveSource(raw["topic"], raw["type"], lease,
                                  tuple(raw.get("tasks") or tasks)))
     return Binding(data["binding"], data["robot"], reader.file, tasks, facts, speech, codes,
-                   alive, data.get("doc", ""), notes)
+                   alive, data.get("doc", ""), notes, dict(data.get("frames") or {}))
 
 
 def _interface(reader: Reader, notes: list[Problem], where: tuple, name: str,

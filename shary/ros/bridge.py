@@ -46,7 +46,8 @@ class RosSupervision:
         self.perception = RosPerception(node, binding, sup.facts, sup.loop,
                                         act=sup.receive_act, hear=sup.dialogue.hear,
                                         record=sup.record, qos=self.qos)
-        self.views = RosViews(node, sup.loop, named_schemes(), robot=sup.robot)
+        self.views = RosViews(node, sup.loop, named_schemes(), robot=sup.robot,
+                              frames=binding.frames)
         self.server = RosTaskServer(node, sup)
         self.server.unsettled = self.executors.unsettled
         fanout.listeners += [self.views.listener, self.server.listener]

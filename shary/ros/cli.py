@@ -6,7 +6,8 @@ other nodes ask it for tasks over ``~/run_task`` and it shows its state on
 ``~/snapshot``, ``~/active_state``, ``/diagnostics`` and ``~/markers``
 (docs/ros2.md).  ``--task`` starts one task at once; ``--facts`` loads what
 the robot knows beforehand (a Turtle file: places' positions, kinds of
-things).  Ctrl-C (or SIGTERM) stops it safely (:mod:`shary.ros.stop`): every task
+things); ``--use-sim-time`` runs the engine on the simulation's ``/clock``
+(:mod:`shary.ros.clock`).  Ctrl-C (or SIGTERM) stops it safely (:mod:`shary.ros.stop`): every task
 cancelled, every robot goal cancelled and its server's answer awaited up to the goal's
 ``cancel`` deadline, every ``~/run_task`` goal answered, then the node's entities
 destroyed and the log written; a second Ctrl-C abandons the wait and says which goals it
@@ -37,10 +38,24 @@ def add_ros(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--facts", type=Path, metavar="FILE.ttl",
                    help="what the robot knows beforehand (Turtle)")
     p.add_argument("--log", type=Path, metavar="LOG.sqlite", help="write the context log here")
-    p.add_argument("--seconds", type=float, metavar="S",
+    p.add_argument("--seconds", type=_seconds, metavar="S",
                    help="stop after S seconds (default: run until Ctrl-C)")
     p.add_argument("--node-name", default="shary", metavar="NAME", help="the node's name")
+    p.add_argument("--use-sim-time", action="store_true",
+                   help="run on the simulation's time (/clock), as the robot's nodes do with "
+                   "use_sim_time")
     p.set_defaults(func=cmd_ros)
+
+
+def _seconds(text: str) -> float:
+    """A duration of at least 0 s (argparse's type: its error is a clean one)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not value >= 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: a duration is 0 s or more")
+    return value
 
 
 def cmd_ros(args: argparse.Namespace) -> int:
@@ -51,6 +66,7 @@ def cmd_ros(args: argparse.Namespace) -> int:
     from shary.planning import planners_for
     from shary.ros.binding import load_binding
     from shary.ros.bridge import RosSupervision
+    from shary.ros.clock import RosClock
     from shary.ros.node import RosNode
     from shary.ros.stop import StopSignals
     from shary.supervisor import Supervisor
@@ -63,6 +79,11 @@ def cmd_ros(args: argparse.Namespace) -> int:
         if not sep or not key:
             return error(f"--with {item!r}: write PARAM=VALUE")
         params[key] = value
+    if params and args.task is None:
+        return error("--with gives a parameter of --task, which is not given")
+    if args.log is not None and args.log.exists():
+        return error(f"{args.log}: the file exists (the context log is written to a new "
+                     "file: remove it or name another)")
     try:
         binding = load_binding(args.binding)
         facts = FactDatabase()
@@ -78,6 +99,14 @@ def cmd_ros(args: argparse.Namespace) -> int:
     problem = unavailable()
     if problem is not None:
         return error(problem)
+    from rclpy.exceptions import InvalidNodeNameException
+    from rclpy.validate_node_name import validate_node_name
+
+    try:
+        validate_node_name(args.node_name)
+    except InvalidNodeNameException:
+        return error(f"--node-name {args.node_name!r} is not a ROS node name (letters, digits "
+                     "and _, not starting with a digit)")
     library = load_library()
     try:
         planners = planners_for(library)
@@ -87,16 +116,26 @@ def cmd_ros(args: argparse.Namespace) -> int:
     for note in binding.notes:  # a type not installed here: its tasks fail at once
         _out.print(f"{note.file}:{note.line}:{note.col}: warning: {note.message}; its tasks "
                    "fail at once (server unavailable)", markup=False)
-    if args.task is not None and args.task not in library.tasks:
-        return error(f"no task {args.task!r} (known: {', '.join(sorted(library.tasks))})")
+    if args.task is not None:
+        task = library.tasks.get(args.task)
+        if task is None:
+            return error(f"no task {args.task!r} (known: {', '.join(sorted(library.tasks))})")
+        missing = [p for p in task.params if p not in params]
+        unknown = [p for p in params if p not in task.params]
+        if missing or unknown:
+            return error(f"--task {args.task} takes {', '.join(task.params) or 'nothing'} "
+                         f"(--with PARAM=VALUE each)"
+                         + (f"; missing: {', '.join(missing)}" if missing else "")
+                         + (f"; unknown: {', '.join(unknown)}" if unknown else ""))
     log = ContextLog(args.log) if args.log is not None else None
     fanout = Told(log)
-    loop = EventLoop(WallClock())
+    node = RosNode(args.node_name, use_sim_time=args.use_sim_time)
+    loop = EventLoop(RosClock(node) if args.use_sim_time else WallClock())
     sup = Supervisor(library, facts, robot=binding.robot, loop=loop, log=fanout,
                      planners=planners)
     facts.log_changes(sup.record)
-    node = RosNode(args.node_name)
     ros = None
+    failed = None
     with StopSignals(loop) as signals:
         try:
             ros = RosSupervision(sup, binding, node, fanout=fanout)
@@ -107,9 +146,13 @@ def cmd_ros(args: argparse.Namespace) -> int:
             _out.print(f"shary is node /{args.node_name} on robot {binding.robot} "
                        f"({binding.name}); Ctrl-C stops it")
             if args.task is not None:
-                sup.start_task(args.task, params)
+                try:
+                    sup.start_task(args.task, params)
+                except (KeyError, ValueError, LookupError) as err:
+                    failed = f"--task {args.task} cannot start: {err}"
             end = loop.now() + args.seconds if args.seconds is not None else None
-            while signals.requested is None and (end is None or loop.now() < end):
+            while failed is None and signals.requested is None and (end is None
+                                                                    or loop.now() < end):
                 loop.run_for(0.1)
             if ros is not None:
                 ros.stop_reason = (f"shary stopped by {signals.requested}" if signals.requested
@@ -126,4 +169,6 @@ def cmd_ros(args: argparse.Namespace) -> int:
             _out.print(line, markup=False)
         left = bool(stopped.left)
     _out.print("shary stopped")
+    if failed is not None:
+        return error(failed)
     return 1 if left else 0

@@ -60,15 +60,21 @@ class RosNode:
     """One node whose executor the engine's loop spins (see the module's docstring)."""
 
     def __init__(self, name: str = "shary", *, domain_id: int | None = None,
-                 namespace: str | None = None):
+                 namespace: str | None = None, use_sim_time: bool = False):
+        """``use_sim_time``: the node's clock follows ``/clock`` (the ROS parameter of that
+        name; :class:`~shary.ros.clock.RosClock` makes it the engine's)."""
         keep_on_host()
         import rclpy
         from rclpy.executors import SingleThreadedExecutor, TimeoutObject
+        from rclpy.parameter import Parameter
 
         self._rclpy = rclpy
         self.context = rclpy.Context()
         rclpy.init(context=self.context, domain_id=domain_id)
-        self.node = rclpy.create_node(name, context=self.context, namespace=namespace)
+        self.node = rclpy.create_node(
+            name, context=self.context, namespace=namespace,
+            parameter_overrides=[Parameter("use_sim_time", value=True)] if use_sim_time
+            else [])
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
         self.waitables: list[Any] = []

@@ -68,6 +68,7 @@ class StopReport:
 def safe_stop(sup: Any, executors: Any, server: Any, loop: Any, reason: str) -> StopReport:
     """Stop a supervisor on ROS 2 as the module's docstring says; what it did."""
     report = StopReport(reason)
+    _wall_time(loop)
     server.stopping = reason
     in_flight = list(executors.unsettled())
     for goal in sup.agenda.goals:
@@ -104,6 +105,14 @@ def safe_stop(sup: Any, executors: Any, server: Any, loop: Any, reason: str) -> 
     return report
 
 
+def _wall_time(loop: Any) -> None:
+    """A stop runs on real time: a simulation's clock may be paused
+    (:class:`~shary.ros.clock.RosClock`)."""
+    follow_wall = getattr(loop.clock, "follow_wall", None)
+    if follow_wall is not None:
+        follow_wall()
+
+
 def _state(goal: Any, left: list[str], describe: Any) -> str:
     """How a goal in flight ended in a stop."""
     if describe(goal) in left:
@@ -132,6 +141,7 @@ class StopSignals:
             raise KeyboardInterrupt
         self.requested = signal.Signals(signum).name
         if self.loop is not None:
+            _wall_time(self.loop)  # the loop's wait ends in real time, sim paused or not
             self.loop.call_soon_threadsafe(lambda: None)
 
     def __enter__(self) -> StopSignals:
