@@ -31,7 +31,10 @@ def add_ros(sub: argparse._SubParsersAction) -> None:
                        description="Run the supervisor as a ROS 2 node: the binding's actions, "
                        "services and topics perform atomic tasks and bring facts and speech; "
                        "other nodes ask for tasks on ~/run_task.")
-    p.add_argument("binding", type=Path, metavar="BINDING", help="a robot binding (.yaml)")
+    p.add_argument("binding", type=Path, metavar="BINDING",
+                   help="a robot binding (.yaml); or 'interfaces SRC…': build the robot's ROS 2 "
+                   "interface packages from their source folders into this environment")
+    p.add_argument("sources", nargs="*", type=Path, metavar="SRC", help=argparse.SUPPRESS)
     p.add_argument("--task", metavar="NAME", help="start this task at once")
     p.add_argument("--with", dest="params", action="append", default=[], metavar="PARAM=VALUE",
                    help="a parameter of --task (repeat for each)")
@@ -58,6 +61,25 @@ def _seconds(text: str) -> float:
     return value
 
 
+def cmd_interfaces(sources: list[Path]) -> int:
+    """``shary ros interfaces SRC…`` (:mod:`shary.ros.interfaces`)."""
+    from shary.ros.interfaces import build
+    from userfiles.errors import FileError
+
+    if not sources:
+        return error("shary ros interfaces SRC…: name the source folder of each interface "
+                     "package (package.xml and msg/, srv/, action/)")
+    try:
+        built = build(sources, say=lambda text: _out.print(text, markup=False))
+    except FileError as err:
+        print_problems(err.problems)
+        return EXIT_BAD_INPUT
+    except RuntimeError as err:
+        return error(str(err), status=1)
+    _out.print(f"built and installed: {', '.join(built)}")
+    return 0
+
+
 def cmd_ros(args: argparse.Namespace) -> int:
     from shary.facts import FactDatabase
     from shary.io.recipes import load_library
@@ -73,6 +95,11 @@ def cmd_ros(args: argparse.Namespace) -> int:
     from shary.told import Told
     from userfiles.errors import FileError
 
+    if str(args.binding) == "interfaces" and not args.binding.is_file():
+        return cmd_interfaces(args.sources)
+    if args.sources:
+        return error(f"unexpected {' '.join(map(str, args.sources))}: shary ros takes one "
+                     "binding")
     params: dict[str, Any] = {}
     for item in args.params:
         key, sep, value = item.partition("=")
