@@ -111,7 +111,10 @@ def cmd_run_ros(args: argparse.Namespace, path: Path, out: Path) -> int:
     problem = _ros_ready()
     if problem is not None:
         return error(problem, json_mode=args.json)
-    result = run_over_ros(path, out, wait=args.wait)
+    from shary.ros.stop import sigterm_as_ctrl_c
+
+    with sigterm_as_ctrl_c():  # the node's closing stops the supervisor safely
+        result = run_over_ros(path, out, wait=args.wait)
     if isinstance(result, str):
         return error(result, json_mode=args.json, status=1)
     if args.json:
@@ -132,22 +135,26 @@ def _with_world(args: argparse.Namespace, path: Path, out: Path) -> int:
     supervisor's exit status.  This process does not use ROS itself, so it needs no
     libraries found (a fresh shell, a test calling ``main``)."""
     from shary.ros.env import ros_environment
+    from shary.ros.lifeline import die_with_parent, wait_passing_interrupts
 
     env = ros_environment()
+    # both die with this process, even SIGKILLed; Ctrl-C reaches them through it, once each
+    alone = {"preexec_fn": die_with_parent(), "start_new_session": True}
     env.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 100))
     shary = [sys.executable, "-m", "shary"]
     problems = tempfile.TemporaryFile("w+")  # what the world says only if it fails
     world = subprocess.Popen([*shary, "world", "--ros", str(path), "--quiet",
                               "--seed", str(args.seed)], env=env,
-                             stdout=subprocess.DEVNULL, stderr=problems, text=True)
+                             stdout=subprocess.DEVNULL, stderr=problems, text=True, **alone)
     if not (args.quiet or args.json):
         _out.print(f"[dim]the world runs in process {world.pid}, the supervisor in another, "
                    f"in ROS domain {env['ROS_DOMAIN_ID']}[/dim]")
     try:
-        run = subprocess.run([*shary, "run", str(path), "--ros", "--out", str(out),
-                              "--wait", str(args.wait),
-                              *(["--json"] if args.json else []),
-                              *(["--quiet"] if args.quiet else [])], env=env, check=False)
+        run = subprocess.Popen([*shary, "run", str(path), "--ros", "--out", str(out),
+                                "--wait", str(args.wait),
+                                *(["--json"] if args.json else []),
+                                *(["--quiet"] if args.quiet else [])], env=env, **alone)
+        wait_passing_interrupts(run)
     finally:
         world.send_signal(signal.SIGINT)
         try:

@@ -6,7 +6,9 @@ does) until changed; ``stop TOPIC`` stops publishing there; ``once TOPIC TEXT``
 publishes TEXT once, when the topic has a subscriber (what a person says);
 ``burst TOPIC N TEXT`` publishes N messages at once, when the topic has a
 subscriber, ``{i}`` in TEXT replaced by each one's number (perception faster
-than one message per wake of the subscriber's executor).
+than one message per wake of the subscriber's executor); ``sensor TOPIC TEXT`` publishes
+like ``pub`` but best-effort (sensor data); ``latch TOPIC TEXT`` publishes TEXT once on a
+latched (transient local) publisher, at once, subscriber or not.
 Prints ``ready``, ``heard TOPIC TEXT`` for each message on the topics named
 on the command line (the robot's speech, shary's state topics), each
 ``TOPIC`` (a String), ``TOPIC=latched`` (a latched String),
@@ -30,6 +32,8 @@ def main() -> None:
     lock = threading.Lock()
     publishers: dict[str, object] = {}
     current: dict[str, str] = {}
+    kinds: dict[str, str] = {}
+    """A topic's publisher's kind: sensor (best-effort) or latched; reliable else."""
     once: list[tuple[str, str]] = []
     bursts: list[tuple[str, int, str]] = []
 
@@ -55,8 +59,13 @@ def main() -> None:
         listen(spec)
 
     def publisher(topic: str):
+        from rclpy.qos import DurabilityPolicy, QoSProfile, qos_profile_sensor_data
+
         if topic not in publishers:
-            publishers[topic] = node.create_publisher(String, topic, 1000)  # a burst's room
+            qos = {"sensor": qos_profile_sensor_data,
+                   "latched": QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+                   }.get(kinds.get(topic, ""), 1000)  # a burst's room
+            publishers[topic] = node.create_publisher(String, topic, qos)
         return publishers[topic]
 
     def tick() -> None:
@@ -81,8 +90,12 @@ def main() -> None:
             word, _, rest = line.rstrip("\n").partition(" ")
             topic, _, text = rest.partition(" ")
             with lock:
-                if word == "pub":
+                if word in ("pub", "sensor"):
+                    kinds.setdefault(topic, "sensor" if word == "sensor" else "")
                     current[topic] = text.replace("\\n", "\n")
+                elif word == "latch":
+                    kinds[topic] = "latched"
+                    publisher(topic).publish(String(data=text.replace("\\n", "\n")))
                 elif word == "once":
                     once.append((topic, text))
                 elif word == "burst":

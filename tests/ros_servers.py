@@ -3,8 +3,9 @@
 ``python tests/ros_servers.py`` serves ``test_msgs/action/NestedMessage`` on
 ``/test/NAME`` for each behaviour below and prints, one line each, what
 happens at the server (``ready``, ``clients`` once every action's client is
-discovered, ``goal NAME CODE``, ``cancel-requested
-NAME``, ``canceled NAME``), so a test can see what reached it.  The domain is
+discovered, ``goal NAME CODE``, ``running NAME`` and ``over NAME`` as a goal's
+execution begins and ends, ``cancel-requested NAME``, ``canceled NAME``), so a test can
+see what reached it and that no goal is left executing.  The domain is
 the environment's ``ROS_DOMAIN_ID`` (the test's own).
 
 succeed         three feedbacks, then SUCCEEDED with bool_value true
@@ -51,6 +52,13 @@ def serve(node, name: str) -> ActionServer:
         return CancelResponse.ACCEPT
 
     def execute(handle):
+        say("running", name)
+        try:
+            return run(handle)
+        finally:
+            say("over", name)
+
+    def run(handle):
         result = NestedMessage.Result()
         if name in ("succeed", "fail-result"):
             for i in range(3):

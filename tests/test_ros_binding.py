@@ -132,3 +132,79 @@ def test_a_name_rclpy_would_refuse_is_refused_when_validated(shary, write):
     status, _, err = shary("validate", path)
     assert status == 2
     assert [(m["line"], m["col"]) for m in problems(err)] == [("4", "22"), ("6", "13")]
+
+
+def test_each_task_uses_parts_of_the_robot_by_default_or_as_the_binding_says(write):
+    binding = load_binding(write("robot.yaml", """\
+        binding: parts
+        robot: jido
+        tasks:
+          navigate: {action: /nav, type: test_msgs/action/Fibonacci}
+          look-at: {action: /head, type: test_msgs/action/Fibonacci, resources: [head, base]}
+          give: {action: /arm, type: test_msgs/action/Fibonacci}
+          speak: {topic: /say, type: std_msgs/msg/String, goal: {data: "{text}"}}
+        """))
+    assert {name: task.resources for name, task in binding.tasks.items()} == {
+        "navigate": ("base",), "look-at": ("head", "base"), "give": ("arm",),
+        "speak": ("voice",)}
+
+
+def test_a_type_an_installed_package_lacks_is_an_error_with_the_closest(shary, write):
+    path = write("robot.yaml", """\
+        binding: typo
+        robot: jido
+        tasks:
+          navigate:
+            action: /nav
+            type: test_msgs/action/Fibonaci
+          look-at:
+            action: /look
+            type: std_msgs/action/Look
+          speak: {topic: /say, type: std_msgs/msg/Strin}
+        """)
+    status, _, err = shary("validate", path)
+    assert status == 2
+    found = {(int(m["line"]), int(m["col"])): m["message"] for m in problems(err)}
+    assert found[(6, 11)] == ("test_msgs has no action type 'Fibonaci' (Fibonacci, "
+                              "NestedMessage) (did you mean 'Fibonacci'?)")
+    assert found[(9, 11)] == "std_msgs has no action type 'Look' (it has no action types)"
+    assert found[(10, 30)] == "std_msgs has no msg type 'Strin' (did you mean 'String'?)"
+
+
+def test_goal_fields_are_checked_against_the_installed_type(shary, write):
+    path = write("robot.yaml", """\
+        binding: fields
+        robot: jido
+        tasks:
+          navigate:
+            action: /nav
+            type: test_msgs/action/NestedMessage
+            goal:
+              nested_field.int32_valu: 3
+              nested_field: 4
+              nested_field.int64_value: many
+        """)
+    status, _, err = shary("validate", path)
+    assert status == 2
+    found = {(int(m["line"]), int(m["col"])): m["message"] for m in problems(err)}
+    assert found[(8, 7)] == ("test_msgs/action/NestedMessage has no goal field "
+                             "'nested_field.int32_valu' (did you mean 'int32_value'?)")
+    assert found[(9, 7)].startswith("nested_field is a message (test_msgs/")
+    assert found[(10, 33)] == "'many' is not a int64 (the type of nested_field.int64_value)"
+    assert len(found) == 3
+
+
+def test_shary_ros_warns_of_types_not_installed_as_it_starts(write):
+    import subprocess
+    import sys
+
+    path = write("robot.yaml", """\
+        binding: absent
+        robot: jido
+        tasks:
+          navigate: {action: /nav, type: nav2_msgs/action/NavigateToPose}
+        """)
+    done = subprocess.run([sys.executable, "-m", "shary", "ros", str(path), "--seconds", "0"],
+                          capture_output=True, text=True, timeout=120)
+    assert f"{path}:4:34: warning: nav2_msgs/action/NavigateToPose is not installed here" in \
+        done.stdout.replace("\n", ""), done.stdout + done.stderr

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import signal
 
+import pytest
 from conftest import problems
 from rosfixtures import needs_ros
 
@@ -43,3 +44,31 @@ def test_the_node_plans_the_recipes_that_need_the_planner(spawn, tmp_path):
     reasons = [row.data["reason"] for row in read_events(log, kind="recipe-failed")]
     assert reasons and not any("needs a planner" in reason for reason in reasons)
     assert any("plan" in reason for reason in reasons)
+
+
+@pytest.mark.parametrize("args, said", [
+    (["--log", "EXISTING"], "the file exists (the context log is written to a new file"),
+    (["--with", "object=bottle"], "--with gives a parameter of --task, which is not given"),
+    (["--task", "give-object", "--with", "object=bottle"],
+     "--task give-object takes object, partner (--with PARAM=VALUE each); missing: partner"),
+    (["--task", "fly"], "no task 'fly' (known: "),
+    (["--with", "object"], "--with 'object': write PARAM=VALUE"),
+    (["--node-name", "bad name"], "--node-name 'bad name' is not a ROS node name"),
+])
+def test_every_misuse_is_a_clean_error(shary, tmp_path, args, said):
+    existing = tmp_path / "old.sqlite"
+    existing.write_text("a log of another run")
+    status, out, err = shary("ros", BINDING, *[str(existing) if a == "EXISTING" else a
+                                               for a in args])
+    assert status == 2
+    assert said in " ".join(err.split()) and "Traceback" not in err + out
+
+
+def test_a_negative_duration_is_refused_by_the_parser():
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-m", "shary", "ros", BINDING, "--seconds", "-1"],
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert "argument --seconds: '-1': a duration is 0 s or more" in done.stderr

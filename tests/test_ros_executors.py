@@ -63,9 +63,10 @@ class Robot:
                                  self.loop.call_soon)
         self._ids = 0
 
-    def start(self, atomic: str, n: int = 1) -> Request:
+    def start(self, atomic: str, n: int = 1, priority: int = 2) -> Request:
         self._ids += 1
-        request = Request(f"r{self._ids}", atomic, {"n": n}, "robot", f"node{self._ids}")
+        request = Request(f"r{self._ids}", atomic, {"n": n}, "robot", f"node{self._ids}",
+                          priority)
         self.executors.start(request, self.reporter)
         return request
 
@@ -248,3 +249,93 @@ def test_atomic_tasks_bound_to_one_action_share_its_client(write, ros_domain):
     with RosNode("shary_shared", domain_id=ros_domain) as node:
         RosExecutors(node, binding, EventLoop(WallClock()))
         assert len(node.waitables) == 2
+
+
+def _one_at_a_time(lines: list[str], name: str) -> bool:
+    """Whether the server never executed two goals of ``name`` at once."""
+    executing = 0
+    for line in lines:
+        executing += {f"running {name}": 1, f"over {name}": -1}.get(line, 0)
+        if executing > 1:
+            return False
+    return True
+
+
+def test_a_second_goal_on_a_busy_server_waits_for_the_first_to_end_there(robot, servers):
+    first, second = robot.start("long", 1), robot.start("long", 2)
+    run_until(robot.loop, lambda: "running long" in servers.lines)
+    robot.loop.run_for(0.5)
+    assert "goal long 2" not in servers.lines
+    [wait] = robot.rows_of("ros-resource", second)
+    assert (wait["action"], wait["parts"], wait["holders"]) == (
+        "wait", ["action /test/long"], ["r1"])
+    robot.executors.cancel(first)
+    run_until(robot.loop, lambda: "goal long 2" in servers.lines)
+    # sent once the server had ended the first: never two goals on it
+    assert servers.lines.index("canceled long") < servers.lines.index("goal long 2")
+    robot.executors.cancel(second)
+    assert robot.outcome(second).status == "cancelled"
+    run_until(robot.loop, lambda: servers.lines.count("canceled long") == 2)
+    assert _one_at_a_time(servers.lines, "long")
+
+
+def test_a_goal_of_higher_priority_preempts_the_one_on_its_server(robot, servers):
+    first = robot.start("long", 1)
+    run_until(robot.loop, lambda: "running long" in servers.lines)
+    urgent = robot.start("long", 2, priority=3)
+    outcome = robot.outcome(first)
+    assert outcome.status == "cancelled"
+    assert outcome.reason == ("preempted: action /test/long needed by long of node2 "
+                              "(priority 3 over 2)")
+    run_until(robot.loop, lambda: "goal long 2" in servers.lines)
+    assert servers.lines.index("canceled long") < servers.lines.index("goal long 2")
+    assert [r["action"] for r in robot.rows_of("ros-resource", urgent)] == ["preempt", "serve"]
+    robot.executors.cancel(urgent)
+    run_until(robot.loop, lambda: servers.lines.count("canceled long") == 2)
+    assert _one_at_a_time(servers.lines, "long")
+
+
+def test_a_goal_cancelled_while_it_waits_is_never_sent(robot, servers):
+    first, second = robot.start("long", 1), robot.start("long", 2)
+    run_until(robot.loop, lambda: "running long" in servers.lines)
+    robot.executors.cancel(second)
+    assert robot.outcome(second).reason == ("cancelled before it was sent (it waited for "
+                                            "action /test/long)")
+    robot.executors.cancel(first)
+    run_until(robot.loop, lambda: "canceled long" in servers.lines)
+    robot.loop.run_for(0.3)
+    assert "goal long 2" not in servers.lines
+
+
+def test_tasks_sharing_a_part_of_the_robot_wait_for_each_other(write, ros_domain, spawn):
+    """Two servers, one base: the second task's goal waits for the first's end."""
+    from shary.ros.executors import RosExecutors
+    from shary.ros.node import RosNode
+
+    binding = load_binding(write("base.yaml", """\
+        binding: base
+        robot: robot
+        tasks:
+          long: {action: /test/long, type: test_msgs/action/NestedMessage, resources: [base]}
+          succeed: {action: /test/succeed, type: test_msgs/action/NestedMessage,
+                    resources: [base]}
+        """), atomic=ATOMIC)
+    loop = EventLoop(WallClock())
+    outcomes: dict[str, object] = {}
+    reporter = Reporter(lambda o: outcomes.setdefault(o.request.id, o), loop.call_soon)
+    with RosNode("shary_base", domain_id=ros_domain) as node:
+        node.attach(loop)
+        executors = RosExecutors(node, binding, loop)
+        server = spawn("tests/ros_servers.py", "long", "succeed")
+        server.wait_for("clients")
+        moving = Request("r1", "long", {}, "robot", "n1")
+        executors.start(moving, reporter)
+        run_until(loop, lambda: "running long" in server.lines)
+        after = Request("r2", "succeed", {}, "robot", "n2")
+        executors.start(after, reporter)
+        loop.run_for(0.5)
+        assert "running succeed" not in server.lines
+        executors.cancel(moving)
+        run_until(loop, lambda: "r2" in outcomes)
+        assert outcomes["r2"].status == "done"
+        assert server.lines.index("over long") < server.lines.index("running succeed")

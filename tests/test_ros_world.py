@@ -95,3 +95,51 @@ def test_a_team_scenario_is_refused_behind_ros(command, tmp_path, capsys):
     assert status == 2
     assert "weld-nominal: a seam-welding scenario runs as a team over Zenoh" in \
         capsys.readouterr().err
+
+
+def _children(pid: int) -> list[int]:
+    path = f"/proc/{pid}/task/{pid}/children"
+    with open(path) as f:
+        return [int(p) for p in f.read().split()]
+
+
+def _alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/status") as f:
+            return not any(line.startswith("State:") and "Z" in line.split()[1] for line in f)
+    except FileNotFoundError:
+        return False
+
+
+def _navigating(log) -> bool:
+    try:
+        return any(e.data.get("atomic") == "navigate" for e in read_events(log,
+                                                                         kind="exec-request"))
+    except Exception:  # not written yet
+        return False
+
+
+@needs_ros
+@pytest.mark.parametrize("how", [signal.SIGKILL, signal.SIGINT])
+def test_the_world_and_the_supervisor_end_with_their_parent(spawn, tmp_path, how):
+    """``shary run --ros --world`` SIGKILLed or interrupted while the robot navigates:
+    neither child is left running, and the supervisor stopped safely (its goal in
+    flight cancelled at the world's server, the task ended)."""
+    run = spawn("-m", "shary", "run", "give-bottle", "--ros", "--world", "--quiet", "--out",
+                str(tmp_path / "run"))
+    end = time.monotonic() + 120
+    while not _navigating(tmp_path / "run" / "log.sqlite"):
+        assert time.monotonic() < end and run.popen.poll() is None, run.lines
+        time.sleep(0.2)
+    children = _children(run.popen.pid)
+    assert len(children) == 2
+    run.popen.send_signal(how)
+    end = time.monotonic() + 60
+    while any(_alive(pid) for pid in children):
+        assert time.monotonic() < end, f"left running: {children}"
+        time.sleep(0.1)
+    [stop] = [e.data for e in read_events(tmp_path / "run" / "log.sqlite", kind="ros-stop")]
+    assert not stop.get("left") and stop["tasks"]
+    assert all(g.endswith(": confirmed") or g.endswith(": ended") for g in stop["goals"])
+    assert any(e.data["outcome"] == "cancelled"
+               for e in read_events(tmp_path / "run" / "log.sqlite", kind="task-end"))

@@ -6,6 +6,8 @@ the engine, the planner and the simulator never do.  Its modules, one per
 concept: :mod:`~shary.ros.env` (the wheels' libraries, traffic kept on this
 host), :mod:`~shary.ros.binding` (the robot binding file), :mod:`~shary.ros.node`
 (the one node, spun by the engine's loop), :mod:`~shary.ros.executors`
-(atomic tasks as actions, services and topics), :mod:`~shary.ros.perception`
-(topics into facts and person acts).
+(atomic tasks as actions, services and topics), :mod:`~shary.ros.resources` (one
+goal per part of the robot and per server), :mod:`~shary.ros.perception` (topics into
+facts and person acts), :mod:`~shary.ros.stop` (stopping without leaving the robot
+moving), :mod:`~shary.ros.lifeline` (child processes that die with their parent).
 """

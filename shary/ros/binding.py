@@ -14,6 +14,9 @@ says, for one robot:
   ``each``), dropped when the topic has been silent for ``stale``;
 * ``speech``: topics that carry what people say, each sentence read by the
   communication manager's requests grammar;
+* each fact, speech or published topic's ``qos`` (:mod:`shary.ros.qos`), each task's
+  ``resources`` (the parts of the robot it uses: :mod:`shary.ros.resources`);
+* ``frames``: the TF frames of the markers shary shows (:mod:`shary.ros.views`);
 * ``alive``: how shary notices that a node of the robot is gone (a driver that
   crashed): a topic whose publisher offers a ROS 2 liveliness lease, and the
   atomic tasks that node performs (:mod:`shary.ros.liveliness`).
@@ -23,10 +26,14 @@ simulated Jido's, built from the message packages that are on PyPI).
 
 Loading checks the file's shape, then its meaning: each task is an atomic task
 of the recipe library and its templates name only that task's parameters;
-each type is imported, and when it is, every field path is checked against it.
-A type that cannot be imported here (``nav2_msgs`` is not on PyPI) is a
-*note* ("not installed"), not an error: the binding is meant for a robot that
-has it.  Importing a message package never imports rclpy.
+each type is imported, and when it is, every field path (goal, feedback, reason,
+``succeeded-if``, facts, speech) is checked against its fields as rosidl generated
+them.  A type that an installed package does not have is an error, with the types
+it has and the closest (a misspelt ``test_msgs/action/Fibonaci``).  A type whose
+package cannot be imported here (``nav2_msgs`` is not on PyPI) is a *note* ("not
+installed"), not an error: the binding is meant for a robot that has it, and
+``shary ros`` warns of it as it starts (its tasks fail at once).  Importing a
+message package never imports rclpy.
 """
 
 from __future__ import annotations
@@ -45,6 +52,12 @@ DEFAULT_DEADLINES = {"server": 0.0, "ack": 1.0, "exec": 300.0, "cancel": 2.0}
 """Seconds per phase when a binding does not say: fail at once without a server
 (BehaviorTree.ROS2's behaviour), 1 s for the acknowledgement (its default), 5 min of
 execution, 2 s for a cancelled goal to end."""
+
+DEFAULT_RESOURCES = {"navigate": ("base",), "look-at": ("head",), "speak": ("voice",),
+                     **dict.fromkeys(("move-arm", "pick", "place", "dump", "give", "put-back"),
+                                     ("arm",))}
+"""The parts of the robot the core library's atomic tasks use when a binding does not say
+(``resources:``): one goal at a time per part (:mod:`shary.ros.resources`)."""
 
 TEMPLATE = re.compile(r"\{([^{}]*)\}")
 _PARAM = re.compile(r"^(?:(code):([A-Za-z_][\w-]*)|(fact):([A-Za-z_][\w-]*):([A-Za-z_][\w-]*)"
@@ -66,6 +79,10 @@ class TaskBinding:
     feedback: str = ""
     succeeded_if: dict[str, Any] = field(default_factory=dict)
     reason: str = ""
+    resources: tuple[str, ...] = ()
+    """The parts of the robot its goals use (the action's server is one besides)."""
+    qos: Any = None
+    """A topic's quality of service (:mod:`shary.ros.qos`): a preset or policies."""
 
 
 @dataclass(frozen=True)
@@ -78,6 +95,7 @@ class FactSource:
     each: str = ""
     lines: str = ""
     stale: float | None = None
+    qos: Any = None
 
 
 @dataclass(frozen=True)
@@ -88,6 +106,7 @@ class SpeechSource:
     type: str
     text: str
     speaker: str = ""
+    qos: Any = None
 
 
 @dataclass(frozen=True)
@@ -115,6 +134,8 @@ class Binding:
     alive: list[AliveSource] = field(default_factory=list)
     doc: str = ""
     notes: list[Problem] = field(default_factory=list)
+    frames: dict[str, str] = field(default_factory=dict)
+    """The TF frames of the markers: ``robot``, ``person`` (``{agent}``: the name)."""
     """Types that cannot be imported here, each at its place in the file."""
 
 
@@ -197,9 +218,12 @@ def _meaning(reader: Reader, atomic: dict[str, tuple[str, ...]]) -> Binding:
         goal_cls = _part(cls, kind, "Goal" if kind == "action" else "Request")
         for key, value in (raw.get("goal") or {}).items():
             _check_goal_value(reader, (*where, "goal", key), value, atomic[name], codes)
-            if goal_cls is not None and field_type(goal_cls, key) is None:
-                reader.problem((*where, "goal", key), f"{raw['type']} has no goal field {key!r}",
-                               key=True)
+            if goal_cls is not None:
+                _check_goal_field(reader, (*where, "goal", key), goal_cls, raw["type"], key,
+                                  value)
+        if kind != "topic" and "qos" in raw:
+            reader.problem((*where, "qos"), f"{'an' if kind == 'action' else 'a'} {kind} has "
+                           "no qos: only a topic task has (what it publishes)", key=True)
         if kind != "action" and "feedback" in raw:
             reader.problem((*where, "feedback"), f"a {kind} has no feedback: only an action has",
                            key=True)
@@ -211,9 +235,12 @@ def _meaning(reader: Reader, atomic: dict[str, tuple[str, ...]]) -> Binding:
             if result_cls is not None and field_type(result_cls, key) is None:
                 reader.problem((*where, "succeeded-if", key),
                                f"{raw['type']} has no result field {key!r}", key=True)
+        resources = tuple(raw["resources"]) if "resources" in raw else \
+            DEFAULT_RESOURCES.get(name, ())
         tasks[name] = TaskBinding(name, kind, raw[kind], raw["type"], dict(raw.get("goal") or {}),
                                   deadlines, raw.get("feedback", ""),
-                                  dict(raw.get("succeeded-if") or {}), raw.get("reason", ""))
+                                  dict(raw.get("succeeded-if") or {}), raw.get("reason", ""),
+                                  resources, raw.get("qos"))
     facts = []
     for i, raw in enumerate(data.get("facts") or []):
         where = ("facts", i)
@@ -229,7 +256,8 @@ def _meaning(reader: Reader, atomic: dict[str, tuple[str, ...]]) -> Binding:
         stale = reader.duration((*where, "stale"), raw["stale"]) if "stale" in raw else None
         facts.append(FactSource(raw["topic"], raw["type"],
                                 tuple(tuple(t) for t in raw.get("facts") or []),
-                                raw.get("each", ""), raw.get("lines", ""), stale))
+                                raw.get("each", ""), raw.get("lines", ""), stale,
+                                raw.get("qos")))
     speech = []
     for i, raw in enumerate(data.get("speech") or []):
         where = ("speech", i)
@@ -237,7 +265,8 @@ def _meaning(reader: Reader, atomic: dict[str, tuple[str, ...]]) -> Binding:
         if cls is not None and field_type(cls, raw["text"]) != "string":
             reader.problem((*where, "text"), f"{raw['type']} has no string field {raw['text']!r}")
         _check_fields(reader, (*where, "speaker"), raw.get("speaker", ""), cls)
-        speech.append(SpeechSource(raw["topic"], raw["type"], raw["text"], raw.get("speaker", "")))
+        speech.append(SpeechSource(raw["topic"], raw["type"], raw["text"], raw.get("speaker", ""),
+                                   raw.get("qos")))
     alive = []
     for i, raw in enumerate(data.get("alive") or []):
         where = ("alive", i)
@@ -252,7 +281,7 @@ def _meaning(reader: Reader, atomic: dict[str, tuple[str, ...]]) -> Binding:
         alive.append(AliveSource(raw["topic"], raw["type"], lease,
                                  tuple(raw.get("tasks") or tasks)))
     return Binding(data["binding"], data["robot"], reader.file, tasks, facts, speech, codes,
-                   alive, data.get("doc", ""), notes)
+                   alive, data.get("doc", ""), notes, dict(data.get("frames") or {}))
 
 
 def _interface(reader: Reader, notes: list[Problem], where: tuple, name: str,
@@ -265,10 +294,37 @@ def _interface(reader: Reader, notes: list[Problem], where: tuple, name: str,
         return None
     cls = import_interface(name)
     if cls is None:
-        notes.append(reader.located.problem(where, f"{name} is not installed here (package "
-                                                   f"{name.split('/')[0]!r}): its fields are "
-                                                   "checked on a machine that has it"))
+        package, sort, cls_name = name.split("/")
+        known = installed_types(package, sort)
+        if known is None:
+            notes.append(reader.located.problem(where, f"{name} is not installed here (package "
+                                                       f"{package!r}): its fields are checked "
+                                                       "on a machine that has it"))
+        else:
+            from userfiles.schema import did_you_mean
+
+            listed = f" ({', '.join(known)})" if 0 < len(known) <= 12 else ""
+            reader.problem(where, f"{package} has no {sort} type {cls_name!r}"
+                           + (f"{listed}{did_you_mean(cls_name, known)}" if known
+                              else f" (it has no {sort} types)"))
     return cls
+
+
+def installed_types(package: str, sort: str) -> list[str] | None:
+    """The ``sort`` (msg, srv, action) types of an installed interface package, as rosidl
+    generated them (an empty list when it has none of that sort), or None when the package
+    is not installed here."""
+    try:
+        importlib.import_module(package)
+    except ImportError:
+        return None
+    try:
+        module = importlib.import_module(f"{package}.{sort}")
+    except ImportError:
+        return []
+    # an action's or service's parts (Fibonacci_SendGoal_Request) are no type of their own
+    return sorted(n for n in dir(module) if n[:1].isupper() and "_" not in n
+                  and not n.startswith("Metaclass") and isinstance(getattr(module, n), type))
 
 
 def _part(cls: Any, kind: str, part: str) -> Any | None:
@@ -277,6 +333,39 @@ def _part(cls: Any, kind: str, part: str) -> Any | None:
     if kind == "topic":
         return cls if part in ("Goal", "Request") else None
     return getattr(cls, part, None)
+
+
+def _check_goal_field(reader: Reader, where: tuple, cls: Any, type_name: str, path: str,
+                      value: Any) -> None:
+    """A goal's field path exists in the type, names a value (not a nested message), and
+    a constant fits it."""
+    from shary.ros.messages import convert
+
+    kind = field_type(cls, path)
+    if kind is None:
+        from userfiles.schema import did_you_mean
+
+        *parents, last = path.split(".")
+        siblings = list(_fields(cls, parents))
+        reader.problem(where, f"{type_name} has no goal field {path!r}"
+                       f"{did_you_mean(last, siblings)}", key=True)
+    elif "/" in kind and not kind.startswith("sequence<"):
+        reader.problem(where, f"{path} is a message ({kind}), not a value: give its fields "
+                       f"({path}.FIELD)", key=True)
+    elif not templates(value):
+        try:
+            convert(value, kind)
+        except (TypeError, ValueError):
+            reader.problem(where, f"{value!r} is not a {kind} (the type of {path})")
+
+
+def _fields(cls: Any, parents: list[str]) -> list[str]:
+    """The field names of the message at ``parents`` in ``cls`` (none when there is none)."""
+    current = cls
+    for part in parents:
+        kind = current.get_fields_and_field_types().get(part) if current is not None else None
+        current = _nested(kind) if kind else None
+    return list(current.get_fields_and_field_types()) if current is not None else []
 
 
 def _check_goal_value(reader: Reader, where: tuple, value: Any, params: tuple[str, ...],

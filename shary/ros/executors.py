@@ -22,6 +22,9 @@ shary owns every deadline: a goal sent to an absent server hangs without an
 error, and a server killed with SIGKILL still looks ready for 20 s (the DDS
 lease) while its result never comes (docs/ros2.md).
 
+A goal is sent once the parts of the robot it uses, and its action server, are free
+(:mod:`shary.ros.resources`: it waits, or preempts a goal of lower priority).
+
 Cancelling (a scheme stops or suspends the act) reports ``cancelled`` at once
 and reaches the server: a goal that is running is cancelled now, one not yet
 acknowledged is cancelled as soon as it is (the orphaned goals of Nav2 and
@@ -44,6 +47,8 @@ from typing import Any
 from shary.ros import messages
 from shary.ros.binding import Binding, TaskBinding, import_interface
 from shary.ros.node import RosNode
+from shary.ros.qos import profile as qos_profile
+from shary.ros.resources import Resources
 
 SERVER_POLL = 0.05
 """Seconds between two looks for a server while the ``server`` deadline runs."""
@@ -58,14 +63,19 @@ class _Goal:
     task: TaskBinding
     message: Any
     since: float
-    phase: str = "server"
-    """``server``, ``ack``, ``running``, then ``over`` once ROS has nothing more to say."""
+    phase: str = "queued"
+    """``queued`` (its parts of the robot are busy), ``server``, ``ack``, ``running``,
+    then ``over`` once ROS has nothing more to say."""
     handle: Any = None
     """The rclpy goal handle, once acknowledged."""
     timer: Any = None
     reported: bool = False
     cancel_wanted: bool = False
     cancel_sent: bool = False
+    unconfirmed: bool = False
+    """Cancelled, and its server did not end it within the ``cancel`` deadline."""
+    needs: tuple[str, ...] = ()
+    """The parts of the robot it holds while it runs (:mod:`shary.ros.resources`)."""
 
 
 class RosExecutors:
@@ -85,6 +95,9 @@ class RosExecutors:
         self._goals: dict[str, _Goal] = {}
         self.gone: dict[str, str] = {}
         """Atomic tasks whose node is gone, and why (:meth:`node_gone`)."""
+        self.resources = Resources(self._send, self._preempted, self.record)
+        self.stopping: str | None = None
+        """Why no goal is sent any more (:meth:`stop`), or None."""
         shared: dict[tuple[str, str, str], Any] = {}
         """One client per interface: atomic tasks bound to the same action share it (each
         client hears every status and feedback message of its action)."""
@@ -100,7 +113,8 @@ class RosExecutors:
                 elif task.kind == "service":
                     shared[key] = node.service_client(cls, task.name)
                 else:
-                    shared[key] = node.publisher(cls, task.name)
+                    shared[key] = node.publisher(cls, task.name, qos=None if task.qos is None
+                                                 else qos_profile(task.qos, None))
             self._entities[atomic] = shared[key]
 
     def register(self, registry: Any) -> None:
@@ -127,6 +141,9 @@ class RosExecutors:
         if request.atomic not in self._types:
             reporter.failed(request, f"server unavailable: {task.type} is not installed here")
             return
+        if self.stopping is not None:
+            reporter.failed(request, f"not sent: {self.stopping}")
+            return
         if request.atomic in self.gone:
             goal = _Goal(request, reporter, task, None, self.loop.now(), phase="over")
             self._end(goal, "failed", "node gone", self.gone[request.atomic])
@@ -146,28 +163,64 @@ class RosExecutors:
             self._entities[request.atomic].publish(message)
             self._end(goal, "done", "succeeded", f"published on {task.name}")
             return
+        goal.needs = (*task.resources, f"{task.kind} {task.name}") if task.kind == "action" \
+            else task.resources
         self._goals[request.id] = goal
-        self._try_send(goal)
+        self.resources.admit(goal)
 
-    def cancel(self, request: Any) -> None:
+    def cancel(self, request: Any, detail: str = "") -> None:
+        """Cancel the goal of ``request`` at its server (``detail``: why, told to the
+        supervisor; a cancel by default)."""
         goal = self._goals.get(request.id)
         if goal is None or goal.reported:
             return  # idempotent: an ended or cancelled goal stays as it is
         goal.cancel_wanted = True
-        if goal.task.kind == "service":
+        if goal.phase == "queued":
+            goal.phase = "over"
+            self._forget(goal)
+            detail = detail or "cancelled before it was sent (it waited for " \
+                f"{', '.join(goal.needs)})"
+        elif goal.task.kind == "service":
             self._stop_timer(goal)
-            detail = "cancelled; a service call cannot be stopped: its answer is ignored"
+            goal.phase = "over"  # its answer, should it come, is ignored
+            self._forget(goal)
+            detail = detail or "cancelled; a service call cannot be stopped: its answer is " \
+                "ignored"
         elif goal.phase == "running" and goal.handle is not None:
             self._send_cancel(goal)
-            detail = f"cancelled; the cancel is sent to {goal.task.name}"
+            detail = detail or f"cancelled; the cancel is sent to {goal.task.name}"
         elif goal.phase in ("ack", "running"):  # cancelled once acknowledged (_acknowledged)
-            detail = f"cancelled; the cancel reaches {goal.task.name} once it acknowledges"
+            detail = detail or f"cancelled; the cancel reaches {goal.task.name} once it " \
+                "acknowledges"
         else:  # its server was missing: looked for again later, or never
             self._stop_timer(goal)
             goal.phase = "over"
             self._forget(goal)
-            detail = "cancelled before the goal was acknowledged"
+            detail = detail or "cancelled before the goal was acknowledged"
         self._end(goal, "cancelled", "canceled", detail)
+
+    def _preempted(self, goal: _Goal, reason: str) -> None:
+        self.cancel(goal.request, reason)
+
+    # -- stopping ----------------------------------------------------------------------
+
+    def stop(self, reason: str) -> None:
+        """Send no goal any more and cancel every goal in flight, each told ``cancelled``
+        with ``reason`` (what is left to wait for: :meth:`unsettled`)."""
+        self.stopping = reason
+        for goal in list(self._goals.values()):
+            self.cancel(goal.request, reason)
+
+    def unsettled(self) -> list[Any]:
+        """The goals a server may still be running: neither over (their result came) nor
+        given up (a cancel unanswered past its deadline)."""
+        return [goal for goal in self._goals.values()
+                if goal.phase != "over" and not goal.unconfirmed]
+
+    @staticmethod
+    def describe(goal: Any) -> str:
+        """A goal as a person reads it in what a stop left behind."""
+        return f"{goal.request.atomic} on {goal.task.name} ({goal.request.id})"
 
     def node_gone(self, tasks: tuple[str, ...], reason: str) -> None:
         """The node that performs ``tasks`` is gone: their goals in flight fail now (its
@@ -175,7 +228,7 @@ class RosExecutors:
         for atomic in tasks:
             self.gone[atomic] = reason
         for goal in list(self._goals.values()):
-            if goal.request.atomic in tasks and not goal.reported:
+            if goal.request.atomic in tasks:  # its result will never come, nor a cancel's
                 self._stop_timer(goal)
                 goal.cancel_wanted = True  # should it be acknowledged after all
                 goal.phase = "over"
@@ -188,6 +241,12 @@ class RosExecutors:
             self.gone.pop(atomic, None)
 
     # -- phases (on the supervisor's loop) -------------------------------------------------
+
+    def _send(self, goal: _Goal) -> None:
+        """Its parts of the robot are its: send it (its ``server`` deadline runs from now)."""
+        goal.since = self.loop.now()
+        goal.phase = "server"
+        self._try_send(goal)
 
     def _try_send(self, goal: _Goal) -> None:
         """Send the goal if its server is there; rclpy's callbacks put its answers on the
@@ -295,11 +354,14 @@ class RosExecutors:
 
     def _ack_timeout(self, goal: _Goal) -> None:
         goal.timer = None
-        if goal.reported or goal.phase != "ack":
+        if goal.phase != "ack":
             return
         goal.cancel_wanted = True  # should it be accepted after all, it is cancelled then
-        self._end(goal, "failed", "ack timeout", f"{goal.task.name} did not acknowledge the "
-                  f"goal within {goal.task.deadlines['ack']:g} s")
+        if not goal.reported:
+            self._end(goal, "failed", "ack timeout", f"{goal.task.name} did not acknowledge "
+                      f"the goal within {goal.task.deadlines['ack']:g} s")
+        # its parts are given up once the cancel's time is over too
+        goal.timer = self.loop.call_later(goal.task.deadlines["cancel"], self._unconfirmed, goal)
 
     def _exec_timeout(self, goal: _Goal) -> None:
         goal.timer = None
@@ -330,8 +392,12 @@ class RosExecutors:
     def _unconfirmed(self, goal: _Goal) -> None:
         goal.timer = None
         if goal.phase != "over":
+            goal.unconfirmed = True
             self.record("ros-cancel", task=goal.request.node, agent=goal.request.agent,
-                        request=goal.request.id, action=goal.task.name, state="unconfirmed")
+                        request=goal.request.id, action=goal.task.name,
+                        state="unconfirmed" if goal.phase == "running"
+                        else "unconfirmed: never acknowledged")
+            self.resources.release(goal)
 
     # -- bookkeeping ---------------------------------------------------------------------
 
@@ -357,5 +423,8 @@ class RosExecutors:
             goal.timer = None
 
     def _forget(self, goal: _Goal) -> None:
+        """A goal over at its server: forgotten, its parts of the robot freed."""
         if goal.phase == "over" and self._goals.get(goal.request.id) is goal:
             del self._goals[goal.request.id]
+            self.resources.withdraw(goal)
+            self.resources.release(goal)

@@ -29,7 +29,9 @@ spins the executor, so the Jazzy wheel's action-client race between threads
 (rclpy#1123) cannot happen.  ``EventsExecutor`` is not used (it deadlocked
 here).
 
-Shutdown is ordered as rclpy needs it: action clients and servers destroyed
+Shutdown is ordered as rclpy needs it: what must happen while the node still spins
+first (:attr:`RosNode.before_close`: a supervisor's safe stop, :mod:`shary.ros.stop`),
+then action clients and servers destroyed
 (``destroy_node`` does not destroy them), then the node, the executor stopped
 and the context shut down; the loop gets its default waiter back.
 """
@@ -58,15 +60,21 @@ class RosNode:
     """One node whose executor the engine's loop spins (see the module's docstring)."""
 
     def __init__(self, name: str = "shary", *, domain_id: int | None = None,
-                 namespace: str | None = None):
+                 namespace: str | None = None, use_sim_time: bool = False):
+        """``use_sim_time``: the node's clock follows ``/clock`` (the ROS parameter of that
+        name; :class:`~shary.ros.clock.RosClock` makes it the engine's)."""
         keep_on_host()
         import rclpy
         from rclpy.executors import SingleThreadedExecutor, TimeoutObject
+        from rclpy.parameter import Parameter
 
         self._rclpy = rclpy
         self.context = rclpy.Context()
         rclpy.init(context=self.context, domain_id=domain_id)
-        self.node = rclpy.create_node(name, context=self.context, namespace=namespace)
+        self.node = rclpy.create_node(
+            name, context=self.context, namespace=namespace,
+            parameter_overrides=[Parameter("use_sim_time", value=True)] if use_sim_time
+            else [])
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
         self.waitables: list[Any] = []
@@ -79,6 +87,10 @@ class RosNode:
         once), and reads the timeout from it when it makes the next one."""
         self._armed = 0.0
         """When the previous wait was to end (``time.monotonic``)."""
+        self._open: dict[str, int] = {}
+        """Goals of each served action accepted and not yet answered (:meth:`serve_goals`)."""
+        self.before_close: list[Callable[[], Any]] = []
+        """Called first when the node closes, while it still spins (a safe stop)."""
 
     # -- the engine's loop waits here -------------------------------------------------
 
@@ -152,10 +164,12 @@ class RosNode:
 
         live: dict[bytes, Any] = {}
         logger = self.node.get_logger()
+        self._open[name] = 0
 
         def on_goal(goal: Any) -> Any:
             reason = accept(goal) if accept is not None else None
             if reason is None:
+                self._open[name] += 1
                 return GoalResponse.ACCEPT
             logger.warning(f"{name}: goal rejected: {reason}")
             return GoalResponse.REJECT
@@ -174,6 +188,7 @@ class RosNode:
                 handle.succeed()
             else:
                 handle.abort()
+            self._open[name] -= 1
             return result
 
         def on_cancel(handle: Any) -> Any:
@@ -185,17 +200,25 @@ class RosNode:
         return self.action_server(cls, name, execute_callback=execute,
                                   goal_callback=on_goal, cancel_callback=on_cancel)
 
+    def open_goals(self, name: str) -> int:
+        """Goals of action ``name`` (served with :meth:`serve_goals`) accepted and not yet
+        answered."""
+        return self._open.get(name, 0)
+
     def service_client(self, cls: Any, name: str) -> Any:
         return self.node.create_client(cls, name)
 
     def publisher(self, cls: Any, topic: str, *, latched: bool = False, depth: int = 10,
-                  lease: float | None = None) -> Any:
+                  lease: float | None = None, qos: Any = None) -> Any:
         """A publisher; ``latched``: a late subscriber gets the last message; ``lease``:
         it offers a liveliness lease of that many seconds, asserted as long as this
-        process runs (how a supervisor notices it gone: :mod:`shary.ros.liveliness`)."""
+        process runs (how a supervisor notices it gone: :mod:`shary.ros.liveliness`);
+        ``qos``: this ``QoSProfile`` instead (a binding's, :mod:`shary.ros.qos`)."""
         from rclpy.duration import Duration
         from rclpy.qos import DurabilityPolicy, LivelinessPolicy, QoSProfile
 
+        if qos is not None:
+            return self.node.create_publisher(cls, topic, qos)
         qos = QoSProfile(depth=1 if latched else depth)
         if latched:
             qos.durability = DurabilityPolicy.TRANSIENT_LOCAL
@@ -212,7 +235,7 @@ class RosNode:
 
     def drained_subscription(self, cls: Any, topic: str,
                              callback: Callable[[list[Any]], Any], *, depth: int = 1000,
-                             batch: int = BATCH) -> Any:
+                             batch: int = BATCH, qos: Any = None, events: Any = None) -> Any:
         """A subscription whose callback gets every message waiting (up to ``batch``) in
         one list, while the loop waits (it must only :meth:`put` events): for a topic
         that may carry thousands of messages a second (perception).
@@ -221,7 +244,10 @@ class RosNode:
         wait set in Python over every entity of the node: 3,000-5,000 messages a second
         here, whatever the callback does (docs/benchmarks.md).  Taking the messages that
         wait with the subscription's own ``take_message``, as soon as the first is
-        handed over, costs one wake and one event on the engine's loop per burst."""
+        handed over, costs one wake and one event on the engine's loop per burst.
+        ``qos`` (a ``QoSProfile``) replaces the reliable history of ``depth``; ``events``
+        are rclpy's ``SubscriptionEventCallbacks`` (an incompatible publisher:
+        :mod:`shary.ros.qos`)."""
         subscription: Any = None
 
         def drain(first: Any) -> None:
@@ -235,7 +261,8 @@ class RosNode:
                     taken.append(got[0])
             callback(taken)
 
-        subscription = self.node.create_subscription(cls, topic, drain, depth)
+        subscription = self.node.create_subscription(
+            cls, topic, drain, qos if qos is not None else depth, event_callbacks=events)
         return subscription
 
     # -- shutdown -----------------------------------------------------------------------
@@ -245,16 +272,21 @@ class RosNode:
         sleeps on its default waiter again."""
         if self._closed:
             return
-        self._closed = True
-        if self._loop is not None and self._loop.waiter is self:
-            self._loop.waiter = EventWaiter()
+        hooks, self.before_close = self.before_close, []
         try:
-            for waitable in self.waitables:
-                waitable.destroy()
-            self.node.destroy_node()
+            for hook in hooks:
+                hook()
         finally:
-            self.executor.shutdown(timeout_sec=timeout)
-            self._rclpy.try_shutdown(context=self.context)
+            self._closed = True
+            if self._loop is not None and self._loop.waiter is self:
+                self._loop.waiter = EventWaiter()
+            try:
+                for waitable in self.waitables:
+                    waitable.destroy()
+                self.node.destroy_node()
+            finally:
+                self.executor.shutdown(timeout_sec=timeout)
+                self._rclpy.try_shutdown(context=self.context)
 
     def __enter__(self) -> RosNode:
         return self

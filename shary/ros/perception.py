@@ -53,7 +53,7 @@ class RosPerception:
                  perspective: str = "robot",
                  act: Callable[[str, str], Any] | None = None,
                  hear: Callable[[str, str], Any] | None = None,
-                 record: Callable[..., Any] | None = None):
+                 record: Callable[..., Any] | None = None, qos: Any = None):
         self.node = node
         self.facts = facts
         self.loop = loop
@@ -63,6 +63,9 @@ class RosPerception:
         self.hear = hear or (lambda agent, sentence: None)
         """``hear(agent, sentence)``: anything else said (the dialogue's ``Initiative.hear``)."""
         self.record = record or (lambda *args, **data: None)
+        self.qos = qos
+        """Told of each subscription, to report publishers it cannot hear
+        (:class:`~shary.ros.qos.QosWatch`), or None."""
         self.published: dict[int, set[Triple]] = {}
         self.heard_at: dict[int, float] = {}
         self._last_text: dict[int, str] = {}
@@ -81,11 +84,20 @@ class RosPerception:
             loop.call_later(self._period, self._check_stale, list(binding.facts))
 
     def _subscribe(self, source: FactSource | SpeechSource, callback: Callable) -> None:
+        """Subscribe with the source's quality of service (shary's default: reliable,
+        volatile, :data:`DEPTH` deep)."""
+        from rclpy.qos import QoSProfile
+
+        from shary.ros.qos import profile
+
         cls = import_interface(source.type)
         if cls is None:
             self.missing.append(source.topic)
             return
-        self.node.drained_subscription(cls, source.topic, callback, depth=DEPTH)
+        asked = profile(source.qos, QoSProfile(depth=DEPTH))
+        self.node.drained_subscription(
+            cls, source.topic, callback, qos=asked,
+            events=self.qos.callbacks(source.topic, asked) if self.qos is not None else None)
 
     # -- facts (on the engine's loop) ---------------------------------------------------
 
