@@ -59,9 +59,13 @@ DEFAULT_RESOURCES = {"navigate": ("base",), "look-at": ("head",), "speak": ("voi
 """The parts of the robot the core library's atomic tasks use when a binding does not say
 (``resources:``): one goal at a time per part (:mod:`shary.ros.resources`)."""
 
+INTEGER_TYPES = {"int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64",
+                 "octet", "char"}
+FLOAT_TYPES = {"float", "double"}
 TEMPLATE = re.compile(r"\{([^{}]*)\}")
-_PARAM = re.compile(r"^(?:(code):([A-Za-z_][\w-]*)|(fact):([A-Za-z_][\w-]*):([A-Za-z_][\w-]*)"
+PARAM = re.compile(r"^(?:(code):([A-Za-z_][\w-]*)|(fact):([A-Za-z_][\w-]*):([A-Za-z_][\w-]*)"
                     r"(?::(\d+))?|([A-Za-z_][\w-]*))$")
+"""A template's text: ``PARAM``, ``code:PARAM`` or ``fact:PARAM:PREDICATE[:INDEX]``."""
 _FIELD = re.compile(r"^(item|[a-z][a-z0-9_]*)(\.[a-z][a-z0-9_]*)*$")
 
 
@@ -163,6 +167,19 @@ def field_type(cls: Any, path: str) -> str | None:
         kind = fields[part]
         current = _nested(kind)
     return kind
+
+
+def convert(value: Any, kind: str) -> Any:
+    """``value`` as a field of rosidl type ``kind`` wants it."""
+    if kind in INTEGER_TYPES:
+        return int(value)
+    if kind in FLOAT_TYPES:
+        return float(value)
+    if kind == "boolean":
+        return value if isinstance(value, bool) else str(value).lower() in ("true", "1", "yes")
+    if kind.startswith("string"):
+        return str(value)
+    return value
 
 
 def _nested(kind: str) -> Any | None:
@@ -339,8 +356,6 @@ def _check_goal_field(reader: Reader, where: tuple, cls: Any, type_name: str, pa
                       value: Any) -> None:
     """A goal's field path exists in the type, names a value (not a nested message), and
     a constant fits it."""
-    from shary.ros.messages import convert
-
     kind = field_type(cls, path)
     if kind is None:
         from userfiles.schema import did_you_mean
@@ -371,7 +386,7 @@ def _fields(cls: Any, parents: list[str]) -> list[str]:
 def _check_goal_value(reader: Reader, where: tuple, value: Any, params: tuple[str, ...],
                       codes: dict[str, int]) -> None:
     for text in templates(value):
-        m = _PARAM.match(text)
+        m = PARAM.match(text)
         if m is None:
             reader.problem(where, f"{{{text}}} is not a template (write {{PARAM}}, "
                            "{code:PARAM} or {fact:PARAM:PREDICATE[:INDEX]})")
