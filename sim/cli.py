@@ -10,7 +10,6 @@ from __future__ import annotations
 import argparse
 import re
 import shlex
-import time
 from pathlib import Path
 from typing import Any
 
@@ -19,6 +18,8 @@ from shary.log.terminal import out as _out
 from userfiles import yamlsafe
 from userfiles.errors import FileError
 from userfiles.schema import did_you_mean
+
+from .results import earlier_run, wrote
 
 
 def add_scenarios(sub: argparse._SubParsersAction) -> None:
@@ -86,11 +87,11 @@ def cmd_run(args: argparse.Namespace) -> int:
     except KeyError as err:
         return error(err.args[0], json_mode=args.json)
     out = args.out or Path("runs") / _name_of(path)
+    replacing = earlier_run(out)
     if args.ros:
         from sim.rosrun import cmd_run_ros
 
-        return cmd_run_ros(args, path, out)
-    replacing = earlier_run(out)
+        return cmd_run_ros(args, path, out, replacing)
     if replacing and not (args.quiet or args.json):
         _out.print(f"[dim]{escape(replacing)}[/dim]")
     try:
@@ -114,26 +115,6 @@ def cmd_run(args: argparse.Namespace) -> int:
     if not args.quiet:
         _out.print(wrote(out, result.outputs))
     return 0 if result.passed else 1
-
-
-def wrote(out: Path, outputs: dict[str, str]) -> str:
-    """The line that says which files a run wrote in ``out`` (the snapshots counted)."""
-    files = ", ".join(Path(v).name for k, v in outputs.items() if k != "snapshots")
-    snapshots = (f" and {len(outputs['snapshots'].split(', '))} snapshots"
-                 if "snapshots" in outputs else "")
-    return f"[dim]wrote {escape(str(out))}/: {escape(files)}{snapshots}[/dim]"
-
-
-def earlier_run(out: Path) -> str | None:
-    """What to say when ``out`` holds an earlier run that a new one will replace (``shary
-    run`` and ``shary serve`` both write to runs/SCENARIO by default, the latest run of
-    each scenario in one known place); None when there is none."""
-    log = out / "log.sqlite"
-    if not log.is_file():
-        return None
-    when = time.strftime("%Y-%m-%d %H:%M", time.localtime(log.stat().st_mtime))
-    return (f"{out}/ holds an earlier run (of {when}): this run replaces its files "
-            f"(--out DIR keeps runs apart)")
 
 
 def add_serve(sub: argparse._SubParsersAction) -> None:

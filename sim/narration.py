@@ -49,15 +49,21 @@ class Narrator:
 
     ``last_plan()`` gives the plan (a :class:`planner.Plan`) behind the latest
     ``plan`` event, whose agents' streams are shown; ``robot`` and ``people``
-    say whose attention is worth telling (a person's, towards the robot).
+    say whose attention is worth telling (a person's, towards the robot).  With
+    ``robot_actions``, the robot's atomic tasks, what it says and its failures are told
+    from the log too: a run whose executors are in another process (over ROS 2) has no
+    simulated world here to tell them as they start.
     """
 
     def __init__(self, report: Report, robot: str, people: set[str],
-                 last_plan: Callable[[], Any] = lambda: None):
+                 last_plan: Callable[[], Any] = lambda: None, *, robot_actions: bool = False):
         self.report = report
         self.robot = robot
         self.people = people
         self.last_plan = last_plan
+        self.robot_actions = robot_actions
+        self._atomic: dict[str, str] = {}
+        """The atomic task of each request told (a failure names it)."""
         self._replan: str | None = None
         self._attending: dict[str, bool] = {}
         self._looking_at: dict[str, str] = {}
@@ -82,6 +88,20 @@ class Narrator:
         elif kind in ("fact-added", "fact-removed") and data.get("p") == "looksAt" \
                 and data.get("perspective", "robot") == "robot":
             self._attention(t, kind == "fact-added", str(data.get("s")), str(data.get("o")))
+        elif self.robot_actions:
+            self._robot_action(t, kind, agent or self.robot, data)
+
+    def _robot_action(self, t: float, kind: str, agent: str, data: dict[str, Any]) -> None:
+        if kind == "exec-request":
+            atomic = str(data.get("atomic"))
+            self._atomic[str(data.get("request"))] = atomic
+            if atomic != "speak":  # what is said has its own row
+                self.report(t, agent, "action", action_text(atomic, dict(data.get("args") or {})))
+        elif kind == "speech" and data.get("text"):
+            self.report(t, agent, "speech", str(data["text"]))
+        elif kind == "exec-result" and data.get("status") == "failed":
+            atomic = self._atomic.get(str(data.get("request")), "the task")
+            self.report(t, agent, "failed", f"{atomic} failed: {data.get('reason') or '?'}")
 
     def _plan(self, t: float, steps: list[str]) -> None:
         reason, self._replan = self._replan, None

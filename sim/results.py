@@ -1,12 +1,17 @@
 """What a run gives back, for the living room and the site alike: its result, the
-in-memory log a run without an output folder keeps, and the step between two looks at
-whether it is over."""
+in-memory log a run without an output folder keeps, the step between two looks at
+whether it is over, and what the commands say of a run's folder (what it wrote, what it
+replaces)."""
 
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import asdict, dataclass, field
+from pathlib import Path
 from typing import Any
+
+from shary.log.terminal import escape
 
 CHUNK = 0.1
 """Simulated seconds advanced between two looks at whether the run is over (so the
@@ -26,9 +31,13 @@ class RunResult:
     setup_seconds: float
     """Wall time to build the world, the people and the supervisor."""
     seed: int
-    physics_steps: int
-    noise_misses: int = 0
-    """Facts the injected perception noise made the detector miss."""
+    physics_steps: int | None
+    """Physics steps of the world (None over ROS 2: the world steps in its own process)."""
+    noise_misses: int | None = 0
+    """Facts the injected perception noise made the detector miss (None over ROS 2)."""
+    over: str = "one process"
+    """Where the world ran: ``one process`` with the supervisor, or ``ros2`` (the
+    supervisor reached it only through ROS 2, on the wall clock)."""
     outputs: dict[str, str] = field(default_factory=dict)
     events: list[tuple[float, str, str | None, str | None, dict[str, Any]]] = field(
         default_factory=list, repr=False)
@@ -73,3 +82,23 @@ class MemoryLog:
 
     def __exit__(self, *exc: object) -> None:
         pass
+
+
+def wrote(out: Path, outputs: dict[str, str]) -> str:
+    """The line that says which files a run wrote in ``out`` (the snapshots counted)."""
+    files = ", ".join(Path(v).name for k, v in outputs.items() if k != "snapshots")
+    snapshots = (f" and {len(outputs['snapshots'].split(', '))} snapshots"
+                 if "snapshots" in outputs else "")
+    return f"[dim]wrote {escape(str(out))}/: {escape(files)}{snapshots}[/dim]"
+
+
+def earlier_run(out: Path) -> str | None:
+    """What to say when ``out`` holds an earlier run that a new one will replace (``shary
+    run`` and ``shary serve`` both write to runs/SCENARIO by default, the latest run of
+    each scenario in one known place); None when there is none."""
+    log = out / "log.sqlite"
+    if not log.is_file():
+        return None
+    when = time.strftime("%Y-%m-%d %H:%M", time.localtime(log.stat().st_mtime))
+    return (f"{out}/ holds an earlier run (of {when}): this run replaces its files "
+            f"(--out DIR keeps runs apart)")

@@ -23,11 +23,15 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from shary.log.terminal import emit_json, error
+from shary.log.terminal import emit_json, error, escape
 from shary.log.terminal import out as _out
+
+from .narration import Report
+from .results import RunResult, wrote
 
 WAIT_FOR_ROBOT = 30.0
 """Wall seconds ``shary run --ros`` waits for the robot's facts and action servers."""
@@ -99,9 +103,12 @@ def cmd_world_ros(args: argparse.Namespace, path: Path) -> int:
     return 0
 
 
-def cmd_run_ros(args: argparse.Namespace, path: Path, out: Path) -> int:
+def cmd_run_ros(args: argparse.Namespace, path: Path, out: Path, replacing: str | None) -> int:
     """``shary run SCENARIO --ros``: the supervisor of a scenario whose world is on ROS 2
-    (with ``--world``, both started here as processes of their own)."""
+    (with ``--world``, both started here as processes of their own).  It says what it
+    waits for and, as the run goes, what happens (as a run in one process does), and
+    writes the same folder: ``replacing`` says an earlier run's files are replaced."""
+    from .narration import ConsoleReport
     from .scenario import is_team_scenario
 
     if is_team_scenario(path):
@@ -113,20 +120,28 @@ def cmd_run_ros(args: argparse.Namespace, path: Path, out: Path) -> int:
         return error(problem, json_mode=args.json)
     from shary.ros.stop import sigterm_as_ctrl_c
 
+    talk = not (args.quiet or args.json)
+    if replacing and talk:
+        _out.print(f"[dim]{escape(replacing)}[/dim]")
     with sigterm_as_ctrl_c():  # the node's closing stops the supervisor safely
-        result = run_over_ros(path, out, wait=args.wait)
+        result = run_over_ros(path, out, wait=args.wait, seed=args.seed,
+                              report=ConsoleReport(_out) if talk else None,
+                              say=(lambda line: _out.print(f"[dim]{escape(line)}[/dim]"))
+                              if talk else None)
     if isinstance(result, str):
         return error(result, json_mode=args.json, status=1)
     if args.json:
-        emit_json({**result, "out": str(out)})
-    else:
-        verdict = "[bold green]PASSED[/bold green]" if result["passed"] else \
-            "[bold red]FAILED[/bold red]"
-        _out.print(f"{verdict} {result['scenario']} over ROS 2: {result['seconds']:.1f} s")
-        for difference in result["differences"]:
-            _out.print(f"  - {difference}", markup=False)
-        _out.print(f"[dim]wrote {out}/: log.sqlite, summary.json[/dim]")
-    return 0 if result["passed"] else 1
+        emit_json({**result.summary(), "out": str(out),
+                   "replaced_earlier_run": replacing is not None})
+        return 0 if result.passed else 1
+    verdict = "[bold green]PASSED[/bold green]" if result.passed else "[bold red]FAILED[/bold red]"
+    _out.print(f"{verdict} {result.scenario} over ROS 2: {result.simulated_seconds:.1f} s on "
+               f"the wall clock, seed {result.seed}")
+    for difference in result.differences:
+        _out.print(f"  - {escape(difference)}")
+    if not args.quiet:
+        _out.print(wrote(out, result.outputs))
+    return 0 if result.passed else 1
 
 
 def _with_world(args: argparse.Namespace, path: Path, out: Path) -> int:
@@ -151,7 +166,7 @@ def _with_world(args: argparse.Namespace, path: Path, out: Path) -> int:
                    f"in ROS domain {env['ROS_DOMAIN_ID']}[/dim]")
     try:
         run = subprocess.Popen([*shary, "run", str(path), "--ros", "--out", str(out),
-                                "--wait", str(args.wait),
+                                "--wait", str(args.wait), "--seed", str(args.seed),
                                 *(["--json"] if args.json else []),
                                 *(["--quiet"] if args.quiet else [])], env=env, **alone)
         wait_passing_interrupts(run)
@@ -170,9 +185,14 @@ def _with_world(args: argparse.Namespace, path: Path, out: Path) -> int:
     return run.returncode
 
 
-def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict[str, Any] | str:
+def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT, seed: int = 0,
+                 report: Report | None = None,
+                 say: Callable[[str], Any] | None = None) -> RunResult | str:
     """Run the scenario's supervisor against the robot on ROS 2 (see the module's
-    docstring): the summary written to ``out``, or why it could not start."""
+    docstring): the result, its files written to ``out`` as a run in one process writes
+    them, or why it could not start.  ``report`` is told the story as it happens (times
+    from the start of the run), ``say`` what the run waits for; ``seed`` is the world's,
+    for the summary."""
     from std_msgs.msg import Bool, String
 
     from shary.dialogue.sessions import Sessions
@@ -186,28 +206,39 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
     from shary.ros.binding import load_binding
     from shary.ros.bridge import RosSupervision
     from shary.ros.node import RosNode
-    from userfiles.outputs import output_folder, write_output
 
     from .judge import judge
+    from .narration import Narrator
     from .rosworld import JIDO_BINDING, QUIET, scenario_binding
-    from .run import happened, load
+    from .run import draw, fresh_folder, happened, load, write_summary
     from .stack.session import StackSession
 
     scenario, library, domain = load(path)
     binding = scenario_binding(load_binding(JIDO_BINDING), scenario)
     stack = StackSession(scenario.shared_plan, scenario.robot) if scenario.shared_plan else None
-    output_folder(out)
-    log_path = out / "log.sqlite"
-    if log_path.exists():
-        log_path.unlink()
-    log = ContextLog(log_path)
+    log_path = fresh_folder(out)
+    log = ContextLog(log_path, seed=seed)
     fanout = Told(log)
     loop = EventLoop(WallClock())
     from shary.facts.database import FactDatabase
 
+    setup = time.perf_counter()
+    start = loop.now()  # until the robot answers; then the run's start
+    hatp = HatpPlanner(domain, budget_ms=300)
+    if report is not None:
+        told = report  # the story's times count from the run's start, as in one process
+        narrator = Narrator(lambda t, who, kind, text: told(max(0.0, t - start), who, kind, text),
+                            binding.robot, {p.name for p in scenario.people},
+                            last_plan=lambda: hatp.last.plan if hatp.last else None,
+                            robot_actions=True)
+        fanout.listeners.append(lambda t, kind, task, agent, data:
+                                narrator.event(t, kind, agent, data))
     facts = FactDatabase()
     sup = Supervisor(library, facts, robot=binding.robot, loop=loop, log=fanout,
-                     planners={"living-room": HatpPlanner(domain, budget_ms=300)})
+                     planners={"living-room": hatp})
+    if report is not None:
+        sup.act_listeners.append(lambda run, state, agent: told(
+            max(0.0, loop.now() - start), agent, "act", f"[{state.act}] {run.type.name}"))
     facts.log_changes(sup.record)
     node = RosNode("shary")
     try:
@@ -220,6 +251,10 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
         def ready() -> bool:  # the robot's servers found, the world's people listening
             return ros.executors.ready() and all(p.get_subscription_count() for p in listeners)
 
+        if say is not None:
+            say(f"waiting for the robot on ROS 2 (domain {os.environ.get('ROS_DOMAIN_ID', '0')}):"
+                f" its facts on {binding.facts[0].topic} and its action servers, at most "
+                f"{wait:g} s")
         deadline = time.monotonic() + wait
         while not (ros.perception.messages and ready()):
             if time.monotonic() > deadline:
@@ -228,7 +263,12 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
                         f"'shary world --ros {scenario.name}' in the same ROS domain")
             loop.run_for(0.1)
         loop.settle()  # set up: a collection of the whole heap would stall perception
+        if say is not None:
+            say(f"the robot answered after {loop.now() - start:.1f} s: running "
+                f"{scenario.name}")
         start = loop.now()
+        setup = time.perf_counter() - setup
+        wall = time.perf_counter()
         for goal in scenario.goals:
             loop.call_later(goal.at, lambda g=goal: sup.agenda.add(g.task, g.args,
                                                                    priority=g.priority))
@@ -267,6 +307,7 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
             if quiet_since is not None and loop.now() - quiet_since >= SETTLE:
                 break
         elapsed = loop.now() - start
+        wall = time.perf_counter() - wall
         sup.record("run-end", scenario=scenario.name)
     finally:
         node.close()
@@ -279,8 +320,8 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
                         for reason in ros.liveliness.gone]
     elif elapsed >= scenario.timeout - 1e-9:
         differences.append(f"the run was still going at the timeout ({scenario.timeout:g}s)")
-    summary = {"scenario": scenario.name, "passed": not differences,
-               "outcome": "passed" if not differences else "failed",
-               "differences": differences, "seconds": round(elapsed, 2), "over": "ros2"}
-    write_output(out / "summary.json", json.dumps(summary, indent=2) + "\n")
-    return summary
+    result = RunResult(scenario.name, not differences, differences, elapsed, wall, setup, seed,
+                       physics_steps=None, noise_misses=None, over="ros2")
+    result.outputs = draw(sup.tree, log_path, out, scenario.name)
+    write_summary(result, out)
+    return result

@@ -95,14 +95,8 @@ def run_scenario(path: str | Path | Scenario | Any, *, seed: int = 0,
     else:
         scenario, library, domain = load(path)
     out_dir = Path(out) if out is not None else None
-    if out_dir is not None:
-        output_folder(out_dir)
-        for stale in out_dir.glob("snapshot-*.png"):
-            stale.unlink()
+    log_path = fresh_folder(out_dir) if out_dir is not None else None
     wall = time.perf_counter()
-    log_path = out_dir / "log.sqlite" if out_dir is not None else None
-    if log_path is not None and log_path.exists():
-        log_path.unlink()
     with LivingRoom(gui=gui, robot=None) as world, \
             _log(log_path, seed) as log:
         run = _Run(scenario, library, domain, world, log, seed,
@@ -119,12 +113,45 @@ def run_scenario(path: str | Path | Scenario | Any, *, seed: int = 0,
                            run.sim.physics_steps, run.perception.misses,
                            events=log.events if out_dir is None else [],
                            truth=run.truth)
-        if out_dir is not None:
+        if out_dir is not None and log_path is not None:
             log.flush()
-            result.outputs = run.write(out_dir, log_path)
-            write_output(out_dir / "summary.json", json.dumps(result.summary(), indent=2) + "\n")
-            result.outputs["summary"] = str(out_dir / "summary.json")
+            result.outputs = draw(run.sup.tree, log_path, out_dir, scenario.name)
+            if run.snapshots:
+                result.outputs["snapshots"] = ", ".join(str(out_dir / n) for n in run.snapshots)
+            write_summary(result, out_dir)
     return result
+
+
+def fresh_folder(out_dir: Path) -> Path:
+    """Check ``out_dir`` as a run's folder and take away what an earlier run left there
+    that this one may not write again (its log, its snapshots), so that the folder holds
+    one run; the path of the new log.  Every run of a living-room scenario, in one
+    process or over ROS 2, starts here."""
+    output_folder(out_dir)
+    for stale in out_dir.glob("snapshot-*.png"):
+        stale.unlink()
+    log_path = out_dir / "log.sqlite"
+    if log_path.exists():
+        log_path.unlink()
+    return log_path
+
+
+def draw(tree: Any, log_path: Path, out_dir: Path, name: str) -> dict[str, str]:
+    """The run's final task tree and its timeline, drawn beside its log: the files of every
+    run's folder (their paths, the log's included)."""
+    from shary.log.display import render_tree
+    from shary.log.timeline import write_timeline
+
+    render_tree(tree, out_dir / "tree.svg", title=f"{name}: task tree")
+    write_timeline(log_path, out_dir / "timeline.svg", title=name)
+    return {"log": str(log_path), "tree": str(out_dir / "tree.svg"),
+            "timeline": str(out_dir / "timeline.svg")}
+
+
+def write_summary(result: RunResult, out_dir: Path) -> None:
+    """``summary.json``, one shape for every run (docs/cli.md), added to its outputs."""
+    result.outputs["summary"] = str(out_dir / "summary.json")
+    write_output(out_dir / "summary.json", json.dumps(result.summary(), indent=2) + "\n")
 
 
 def _log(path: Path | None, seed: int) -> Any:
@@ -392,16 +419,3 @@ class _Run:
             events = self.log.events
         return happened(events, self.facts, self.scenario.robot, end)
 
-    def write(self, out_dir: Path, log_path: Path | None) -> dict[str, str]:
-        from shary.log.display import render_tree
-        from shary.log.timeline import write_timeline
-
-        outputs = {"log": str(log_path)}
-        render_tree(self.sup.tree, out_dir / "tree.svg", title=f"{self.scenario.name}: task tree")
-        outputs["tree"] = str(out_dir / "tree.svg")
-        if log_path is not None:
-            write_timeline(log_path, out_dir / "timeline.svg", title=self.scenario.name)
-            outputs["timeline"] = str(out_dir / "timeline.svg")
-        if self.snapshots:
-            outputs["snapshots"] = ", ".join(str(out_dir / n) for n in self.snapshots)
-        return outputs

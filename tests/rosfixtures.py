@@ -1,9 +1,9 @@
 """Fixtures for the tests against real ROS 2 nodes.
 
 Each test gets a ROS domain of its own (``ROS_DOMAIN_ID``, inherited by the
-processes it starts) and traffic kept on this host, so that tests never see
-each other, nor another engineer's run on the same machine.  Tests skip, with
-the reason, only when rclpy cannot be imported.
+processes it starts; each parallel worker has ids of its own) and traffic kept on this
+host, so that tests never see each other, nor another engineer's run on the same
+machine.  Tests skip, with the reason, only when rclpy cannot be imported.
 """
 
 from __future__ import annotations
@@ -25,9 +25,12 @@ HERE = Path(__file__).resolve().parent
 WHY_NOT = unavailable()
 needs_ros = pytest.mark.skipif(WHY_NOT is not None, reason=f"ROS 2 tests skipped: {WHY_NOT}")
 _first, _, _last = os.environ.get("SHARY_TEST_ROS_DOMAINS", "1-100").partition("-")
-_DOMAINS = range(int(_first), int(_last or _first) + 1)
-"""The domain ids the tests take theirs from (``SHARY_TEST_ROS_DOMAINS=150-230``: runs on
-one machine at once each keep to their own range; Fast DDS refuses ids above 232)."""
+_WORKERS = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))
+_WORKER = int(os.environ.get("PYTEST_XDIST_WORKER", "gw0").removeprefix("gw") or 0)
+_DOMAINS = range(int(_first), int(_last or _first) + 1)[_WORKER % _WORKERS::_WORKERS]
+"""The domain ids this process's tests take theirs from: ``SHARY_TEST_ROS_DOMAINS``
+(``150-230``: runs on one machine at once each keep to their own range; Fast DDS refuses
+ids above 232), shared out among pytest-xdist's workers, every worker's ids its own."""
 _domains = itertools.count((os.getpid() * 7) % len(_DOMAINS))
 
 

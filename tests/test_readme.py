@@ -115,7 +115,7 @@ def test_no_two_readme_commands_write_the_same_file():
 
 
 @pytest.mark.parametrize("command", COMMANDS, ids=[_shown(c) for c in COMMANDS])
-def test_readme_command_works_as_written(checkout, command, monkeypatch, capsys):
+def test_readme_command_works_as_written(checkout, command, monkeypatch, capsys, ros_domain):
     language, what = command
     if language == "python":
         done = subprocess.run([sys.executable, "-c", what], cwd=checkout, capture_output=True,

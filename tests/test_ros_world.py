@@ -2,8 +2,8 @@
 in one process (the PyBullet living room serving the Jido binding), ``shary run SCENARIO
 --ros`` in another (the supervisor), judged with the scenario's own expectations.  Each
 scenario takes its simulated duration in wall time (25-35 s each: give-bottle, the same
-with the goal cancelled and resumed, clean-up-unreachable, and stack-nominal, whose
-partner follows the supervisor's shared plan as ``/shary/plan`` tells it)."""
+with Alice's phone call, clean-up-unreachable, and stack-nominal, whose partner follows
+the supervisor's shared plan as ``/shary/plan`` tells it)."""
 
 from __future__ import annotations
 
@@ -17,10 +17,10 @@ from rosfixtures import needs_ros
 from shary.log.contextlog import read_events
 
 
-def over_ros(spawn, tmp_path, scenario: str) -> dict:
+def over_ros(spawn, tmp_path, scenario: str, *, quiet: bool = True):
     world = spawn("-m", "shary", "world", "--ros", scenario, "--quiet")
     run = spawn("-m", "shary", "run", scenario, "--ros", "--out", str(tmp_path / "run"),
-                "--quiet")
+                *(["--quiet"] if quiet else []))
     status = run.popen.wait(200)
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
     assert status == (0 if summary["passed"] else 1), run.lines
@@ -29,24 +29,59 @@ def over_ros(spawn, tmp_path, scenario: str) -> dict:
     assert world.lines[-2:] == [
         f"the supervisor left: this world served its run (for another, start 'shary world "
         f"--ros {scenario}' again)", "the world stopped"], world.lines
-    return summary
+    return summary, run.lines
 
 
 @needs_ros
-@pytest.mark.parametrize("scenario", ["give-bottle", "give-bottle-distracted",
-                                      "clean-up-unreachable", "stack-nominal"])
+@pytest.mark.parametrize("scenario", ["give-bottle-distracted", "clean-up-unreachable",
+                                      "stack-nominal"])
 def test_a_scenario_passes_with_its_world_in_another_process(spawn, tmp_path, scenario):
-    summary = over_ros(spawn, tmp_path, scenario)
+    summary, lines = over_ros(spawn, tmp_path, scenario)
     assert summary["differences"] == []
     assert summary["passed"] and summary["over"] == "ros2"
+    # --quiet: the verdict alone
+    assert [line for line in lines if line.strip()] == [
+        f"PASSED {scenario} over ROS 2: {summary['simulated_seconds']:.1f} s on the wall "
+        "clock, seed 0"], lines
     rows = [(e.kind, e.data) for e in read_events(tmp_path / "run" / "log.sqlite")]
     assert any(kind == "ros-goal" and data["interface"] == "/jido/give"
                and data["outcome"] == "succeeded" for kind, data in rows) \
-        or scenario in ("clean-up-unreachable", "stack-nominal")
+        or scenario != "give-bottle-distracted"
     cancels = [data["action"] for kind, data in rows
                if kind == "ros-cancel" and data["state"] == "confirmed"]
     # Alice's phone call stops the arm: its goal is cancelled at the world's server
     assert cancels == (["/jido/move_arm"] if scenario == "give-bottle-distracted" else [])
+
+
+@needs_ros
+def test_a_run_over_ros_tells_its_story_and_writes_its_folder_as_one_in_process(spawn, tmp_path):
+    """Over the folder of an earlier run in one process (with snapshots), a run over ROS 2
+    says it replaces it, says what it waits for, tells the run as it goes, and leaves the
+    folder as a run in one process does: the same files, none of the earlier run's, and
+    a summary of the same keys."""
+    from shary.cli import main
+
+    assert main(["run", "give-bottle", "--snapshots", "--quiet", "--out",
+                 str(tmp_path / "run")]) == 0
+    earlier = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert list((tmp_path / "run").glob("snapshot-*.png"))
+    summary, lines = over_ros(spawn, tmp_path, "give-bottle", quiet=False)
+    assert summary["passed"] and summary["differences"] == [], lines
+    said = "\n".join(lines)
+    assert f"{tmp_path / 'run'}/ holds an earlier run (of " in said
+    assert "waiting for the robot on ROS 2 (domain " in said
+    assert "its facts on /jido/facts and its action servers, at most 30 s" in said
+    assert "the robot answered after " in said and "running give-bottle" in said
+    for told in ("[ASK-TASK] give-object", "navigate coffee-area", "“Shall I give you the "
+                 "yellow bottle?”", "give yellow-bottle to alice", "[END-TASK] give-object"):
+        assert told in said, told
+    assert f"wrote {tmp_path / 'run'}/: log.sqlite, tree.svg, timeline.svg, summary.json" \
+        in said
+    assert sorted(p.name for p in (tmp_path / "run").iterdir()) == [
+        "log.sqlite", "summary.json", "timeline.svg", "tree.svg"]
+    assert summary.keys() == earlier.keys()
+    assert (summary["over"], earlier["over"]) == ("ros2", "one process")
+    assert summary["physics_steps"] is None and isinstance(earlier["physics_steps"], int)
 
 
 @needs_ros
