@@ -189,6 +189,21 @@ def test_no_endpoint_reads_outside_the_run(replay_server: str, path: str):
     assert status == 404 and b"not for the page" not in body
 
 
+def test_a_replay_is_titled_by_its_scenario_and_shows_its_runs_verdict(tmp_path: Path):
+    folder = tmp_path / "copied-folder"
+    folder.mkdir()
+    write_run(folder)
+    replay = Replay(folder / "log.sqlite", named_schemes())
+    assert replay.title == "test (replay)" and replay.status()["verdict"] is None
+    (folder / "summary.json").write_text(json.dumps(
+        {"scenario": "test", "passed": False, "differences": ["the bottle was not given"]}))
+    assert Replay(folder / "log.sqlite", named_schemes()).status()["verdict"] == {
+        "passed": False, "differences": ["the bottle was not given"]}
+    # another scenario's summary (a folder reused) is not this log's verdict
+    (folder / "summary.json").write_text(json.dumps({"scenario": "other", "passed": True}))
+    assert Replay(folder / "log.sqlite", named_schemes()).status()["verdict"] is None
+
+
 def messages(ws, until: str, limit: int = 50) -> list[dict]:
     got = []
     for _ in range(limit):
@@ -201,7 +216,8 @@ def messages(ws, until: str, limit: int = 50) -> list[dict]:
 def test_replay_seeks_and_refuses_steering(replay_server: str):
     with connect(replay_server.replace("http", "ws") + "/ws") as ws:
         first = messages(ws, "status")
-        assert first[0] == {"type": "hello", "title": "run0 (replay)", "mode": "replay"}
+        assert first[0] == {"type": "hello", "title": "test (replay)", "mode": "replay",
+                            "controls": []}
         ws.send(json.dumps({"kind": "seek", "by": "ann", "time": 1.0, "id": 1}))
         got = messages(ws, "reply")
         view = next(m for m in got if m["type"] == "changes")

@@ -46,6 +46,9 @@ function planPanel() {
   body.append(pl.tables, side);
   p.append(h, pl.robotEl, controls, body);
   p.hidden = false;
+  // the plan takes the first screen's middle; the facts and lines go below it
+  document.body.classList.add("has-plan");
+  $("below").append($("more"));
   planDiagram();
 }
 
@@ -198,6 +201,7 @@ function planDiagram() {
   const svg = st.svgs[PLAN_SCHEME];
   if (!svg || pl.marks || !pl.diagram) return;
   pl.diagram.innerHTML = svg;
+  fit(pl.diagram);
   pl.marks = new Map();
   for (const g of pl.diagram.querySelectorAll("g[data-state]")) pl.marks.set(g.dataset.state, g);
   if (pl.focus) planFocus(pl.focus);
@@ -219,6 +223,7 @@ function planFocus(task) {
     const g = pl.marks.get(schemeState(row.states.get(v) || "PLANNED"));
     if (g) g.classList.add(i ? "est" : "active");
   });
+  inView(pl.diagram, [pl.marks.get(schemeState(row.states.get(views[0]) || "PLANNED"))].filter(Boolean));
 }
 
 // -- hooks into console.js ------------------------------------------------------------
@@ -231,6 +236,8 @@ HOOKS.scheme.push((name) => { if (name === PLAN_SCHEME) planDiagram(); });
 HOOKS.reset.push(() => {
   $("plan-panel").textContent = "";
   $("plan-panel").hidden = true;
+  document.body.classList.remove("has-plan");
+  document.querySelector("main").append($("more"));
   Object.assign(pl, { built: false, focus: null, marks: null, viewSelect: null, chips: null });
   pl.plans.clear(); pl.rows.clear();
 });

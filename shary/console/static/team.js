@@ -267,12 +267,6 @@
     box.dataset.agent = q.holder;
     box.append(el("div", null, q.asker + " asks " + q.holder + " (" + qid +
       (q.task ? ", " + q.task : "") + ", priority " + q.priority + "): " + q.text));
-    if (q.image) {
-      const img = el("img");
-      img.src = "/run/" + encodeURIComponent(q.image);
-      img.alt = "the picture " + q.asker + " attached";
-      box.append(img);
-    }
     if (live() && own(q.holder)) {
       box.append(el("div", "elsewhere", q.holder + " answers from their own interface " +
         "(shary agent " + q.holder + ")"));
@@ -292,6 +286,12 @@
         }
       }
       box.append(row);
+    }
+    if (q.image) {  // below the answers, which stay in view whatever the picture's size
+      const img = el("img");
+      img.src = "/run/" + encodeURIComponent(q.image);
+      img.alt = "the picture " + q.asker + " attached";
+      box.append(img);
     }
     $("questions").append(box);
     entry.box = box;
