@@ -27,8 +27,8 @@ if not (Path(CHROMIUM).exists() and Path(DRIVER).exists()):
 from selenium.webdriver.chrome.service import Service  # noqa: E402
 from selenium.webdriver.common.by import By  # noqa: E402
 
-__all__ = ["By", "broken_words", "chromium", "in_view", "offered", "overlapping_labels",
-           "small_texts", "status", "wait"]
+__all__ = ["By", "broken_words", "chromium", "first_screen", "in_view", "offered",
+           "overlapping_labels", "small_texts", "status", "wait"]
 
 
 def chromium(width: int = 1600, height: int = 1000) -> Iterator[Any]:
@@ -156,3 +156,14 @@ def broken_words(driver: Any) -> list[str]:
           }
         }
         return found;""")
+
+
+def first_screen(driver: Any, *selectors: str) -> dict[str, Any]:
+    """Where the page's first screen falls short: each selector's element not seen whole
+    without scrolling, texts under 11 px, words broken over two lines, the page taller
+    than its window."""
+    return {"hidden": {s: why for s in selectors if (why := in_view(driver, s))},
+            "small": small_texts(driver), "broken": broken_words(driver),
+            "taller": driver.execute_script(
+                "return document.getElementById('screen').getBoundingClientRect().bottom"
+                " - innerHeight")}

@@ -18,12 +18,10 @@ from typing import Any
 import pytest
 from browser import (  # skips this module without a browser
     By,
-    broken_words,
     chromium,
-    in_view,
+    first_screen,
     offered,
     overlapping_labels,
-    small_texts,
     status,
     wait,
 )
@@ -42,17 +40,6 @@ ALICE_AGREES = '.question button[data-agent="alice"][data-act="H-AGREE"]'
 @pytest.fixture(scope="module")
 def browser() -> Iterator[Any]:
     yield from chromium(1600, 1000)
-
-
-def first_screen(driver: Any, *selectors: str) -> dict[str, Any]:
-    """Where the page's first screen falls short: each selector's element not seen whole
-    without scrolling, texts under 11 px, words broken over two lines, the page taller
-    than its window."""
-    return {"hidden": {s: why for s in selectors if (why := in_view(driver, s))},
-            "small": small_texts(driver), "broken": broken_words(driver),
-            "taller": driver.execute_script(
-                "return document.getElementById('screen').getBoundingClientRect().bottom"
-                " - innerHeight")}
 
 
 def act_lines(driver: Any) -> list[str]:
