@@ -28,7 +28,7 @@ from selenium.webdriver.chrome.service import Service  # noqa: E402
 from selenium.webdriver.common.by import By  # noqa: E402
 
 __all__ = ["By", "broken_words", "chromium", "first_screen", "in_view", "offered",
-           "overlapping_labels", "small_texts", "status", "wait"]
+           "overlapping_labels", "resize", "small_texts", "status", "wait"]
 
 
 def chromium(width: int = 1600, height: int = 1000) -> Iterator[Any]:
@@ -41,11 +41,16 @@ def chromium(width: int = 1600, height: int = 1000) -> Iterator[Any]:
     options.binary_location = CHROMIUM
     driver = webdriver.Chrome(options=options, service=Service(DRIVER))
     try:
-        inner = driver.execute_script("return [innerWidth, innerHeight]")
-        driver.set_window_size(2 * width - inner[0], 2 * height - inner[1])
+        resize(driver, width, height)
         yield driver
     finally:
         driver.quit()
+
+
+def resize(driver: Any, width: int, height: int) -> None:
+    """Make the page (the window's inside) ``width`` x ``height`` pixels."""
+    inner = driver.execute_script("return [outerWidth - innerWidth, outerHeight - innerHeight]")
+    driver.set_window_size(width + inner[0], height + inner[1])
 
 
 def wait(what: Callable[[], Any], seconds: float = 90, message: str = "") -> Any:

@@ -19,10 +19,12 @@ from typing import Any
 import pytest
 from browser import (  # skips this module without a browser
     By,
+    broken_words,
     chromium,
     first_screen,
     offered,
     overlapping_labels,
+    resize,
     status,
     wait,
 )
@@ -131,6 +133,9 @@ def steered(browser: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[
             "return [...document.querySelectorAll('#timeline rect.message')]"
             ".map(r => r.nextElementSibling.textContent)")
         seen["end screen"] = first_screen(browser)
+        resize(browser, 1000, 800)  # narrower columns: more lines wrap, none mid-name
+        seen["narrow"] = broken_words(browser)
+        resize(browser, 1600, 1000)
     yield seen
 
 
@@ -147,6 +152,7 @@ def test_the_first_screen_shows_the_question_its_answers_and_each_robot(steered:
     picture's caption too; no name broken ("Robonaut-B"), at the question and at the end."""
     assert steered["first screen"] == {"hidden": {}, "small": [], "broken": [], "taller": 0}
     assert steered["end screen"] == {"hidden": {}, "small": [], "broken": [], "taller": 0}
+    assert steered["narrow"] == []
     assert "K-10: [REALIZE-TASK] confirm-seam since" in steered["now"]
     assert "Robonaut-B: [REALIZE-TASK] weld-seam" in steered["now"]
 

@@ -64,7 +64,7 @@ function agent(name, kind) {
   }
   if (kind !== "agent" && a.kind !== kind) {
     a.kind = kind;
-    a.small.textContent = "(" + kind + ")";
+    setText(a.small, "(" + kind + ")");
     if (st.mode === "live") agentButtons(a, name, kind);
     nowShown();
   }
@@ -156,7 +156,7 @@ function config(node, states) {
   if (!t) return;
   highlight(t, states, t.active);
   t.active = states;
-  t.config.textContent = "active: " + (states.join(", ") || "—");
+  setText(t.config, "active: " + (states.join(", ") || "—"));
 }
 
 function taskEnd(node, outcome) {
@@ -169,8 +169,9 @@ function taskEnd(node, outcome) {
     return;
   }
   t.box.classList.add("ended");
-  t.config.textContent = "ended: " + outcome;
+  setText(t.config, "ended: " + outcome);
   t.box.parentNode.append(t.box);  // an ended task goes below the running ones
+  highlight(t, t.active, []);  // moved, its box scrolled back to the top: its end in view
 }
 
 // -- the task tree ---------------------------------------------------------------
@@ -233,8 +234,8 @@ function goal(id, name, args, priority, state) {
     st.goals.set(id, row);
   }
   const cells = row.children;
-  cells[0].textContent = typeof id === "number" ? "#" + id : id; cells[1].textContent = name + (args ? " (" + args + ")" : "");
-  cells[2].textContent = "priority " + priority; cells[3].textContent = state;
+  setText(cells[0], typeof id === "number" ? "#" + id : id); setText(cells[1], name + (args ? " (" + args + ")" : ""));
+  setText(cells[2], "priority " + priority); setText(cells[3], state);
 }
 
 function fact(perspective, s, p, o, added) {
@@ -347,7 +348,7 @@ function noneShown() {
 function status(s) {
   st.status = s;
   const pill = $("status");
-  pill.textContent = s.state + (s.why ? " (" + s.why + ")" : "");
+  setText(pill, s.state + (s.why ? " (" + s.why + ")" : ""));
   pill.className = "pill " + s.state;
   if (s.mode === "live") {
     $("run-controls").hidden = false;
@@ -367,7 +368,7 @@ function status(s) {
     $("replay-controls").hidden = false;
     const slider = $("slider");
     slider.max = s.end;
-    if (!slider.dataset.moved) { slider.value = s.end; $("slider-time").textContent = "at " + Number(s.end).toFixed(1) + " s"; }
+    if (!slider.dataset.moved) { slider.value = s.end; setText($("slider-time"), "at " + Number(s.end).toFixed(1) + " s"); }
   }
   const v = $("verdict");
   if (s.verdict) {
@@ -410,7 +411,7 @@ function receive(message) {
     case "hello":
       st.mode = message.mode;
       st.controls = message.controls || [];
-      $("title").textContent = message.title;
+      setText($("title"), message.title);
       document.title = message.title + " — shary console";
       break;
     case "scheme":
@@ -431,7 +432,7 @@ function receive(message) {
       const r = $("reply");
       r.hidden = message.ok;
       r.className = message.ok ? "" : "error";
-      r.textContent = message.ok ? "" : "refused: " + message.error;
+      setText(r, message.ok ? "" : "refused: " + message.error);
       break;
     }
   }
@@ -442,7 +443,7 @@ function connect() {
   const ws = new WebSocket((location.protocol === "https:" ? "wss://" : "ws://") + location.host + "/ws");
   st.ws = ws;
   ws.onmessage = (e) => receive(JSON.parse(e.data));
-  ws.onclose = () => { $("status").textContent = "disconnected"; $("status").className = "pill error"; };
+  ws.onclose = () => { setText($("status"), "disconnected"); $("status").className = "pill error"; };
 }
 
 $("pause").onclick = () => send({ kind: "pause" });
@@ -454,7 +455,7 @@ let seekDue = null;
 $("slider").oninput = () => {
   const slider = $("slider");
   slider.dataset.moved = "1";
-  $("slider-time").textContent = "at " + Number(slider.value).toFixed(1) + " s";
+  setText($("slider-time"), "at " + Number(slider.value).toFixed(1) + " s");
   if (seekDue === null) seekDue = setTimeout(() => { seekDue = null; send({ kind: "seek", time: Number(slider.value) }); }, 30);
 };
 document.addEventListener("DOMContentLoaded", connect);  // after the page's other scripts (plan.js) are in

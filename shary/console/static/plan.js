@@ -147,7 +147,7 @@ function planState(task, view, state) {
   const row = pl.rows.get(task);
   if (!row) return;
   const cell = row.cells.get(view);
-  if (cell) { cell.className = "ps " + state; cell.textContent = state; }
+  if (cell) { cell.className = "ps " + state; setText(cell, state); }
   row.states.set(view, state);
   if (view === row.plan.views[0]) {
     row.tr.dataset.state = state;
@@ -169,19 +169,19 @@ function planChose(prefix, decision, task) {
 function planStatus(prefix, state, text) {
   const p = pl.plans.get(prefix);
   if (!p) return;
-  p.state.textContent = state + (text ? " (" + text + ")" : "");
+  setText(p.state, state + (text ? " (" + text + ")" : ""));
   p.state.className = "plan-state " + state;
-  if (pl.statusEl && state !== "replaced") pl.statusEl.textContent = "(" + prefix + ": " + state + ")";
+  if (pl.statusEl && state !== "replaced") setText(pl.statusEl, "(" + prefix + ": " + state + ")");
 }
 
 function head(agent, target) {
   planPanel();
-  pl.headEl.textContent = agent + " looks at " + target;
+  setText(pl.headEl, agent + " looks at " + target);
 }
 
 function says(agent, text) {
   planPanel();
-  pl.saysEl.textContent = agent + " says “" + text + "”";
+  setText(pl.saysEl, agent + " says “" + text + "”");
 }
 
 function recognized(id, t, agent, action, params, state) {
@@ -190,6 +190,8 @@ function recognized(id, t, agent, action, params, state) {
   d.append(el("span", "t", t.toFixed(1) + " s"), el("span", "who", agent),
     el("span", "what", action + " " + params), el("span", "rstate", state));
   pl.recEl.prepend(d);
+  st.now.set(agent, { t, text: action + " " + params + " (" + state + ")" });  // the story line
+  nowShown();
   while (pl.recEl.childElementCount > MAX_RECOGNIZED) pl.recEl.lastChild.remove();
 }
 
@@ -215,8 +217,8 @@ function planFocus(task) {
   row.tr.classList.add("focus");
   pl.focus = task;
   const views = row.plan.views;
-  pl.focusEl.textContent = row.label + (pl.pinned ? " (followed; click again to release)" : "") + ": " +
-    views.map((v) => v + " " + (row.states.get(v) || "PLANNED")).join(", ");
+  setText(pl.focusEl, row.label + (pl.pinned ? " (followed; click again to release)" : "") + ": " +
+    views.map((v) => v + " " + (row.states.get(v) || "PLANNED")).join(", "));
   if (!pl.marks) return;
   for (const g of pl.marks.values()) g.classList.remove("active", "est");
   views.forEach((v, i) => {

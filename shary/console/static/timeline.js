@@ -47,7 +47,8 @@ function item(id, laneName, t0, label, cls) {
   const y = l.y + LANE_TOP + row * LANE_ROW;
   const rect = document.createElementNS(SVGNS, "rect");
   rect.setAttribute("x", x(t0)); rect.setAttribute("y", y);
-  rect.setAttribute("height", LANE_ROW - 3); rect.setAttribute("width", 2);
+  // as long as it has lasted by the page's clock (a replay's items come after its time)
+  rect.setAttribute("height", LANE_ROW - 3); rect.setAttribute("width", Math.max(2, (st.time - t0) * PX_PER_S));
   rect.setAttribute("class", cls);
   const title = document.createElementNS(SVGNS, "title");
   title.textContent = (label || cls) + " from " + t0.toFixed(1) + " s";
