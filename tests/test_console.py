@@ -11,6 +11,7 @@ from __future__ import annotations
 import base64
 import json
 import os
+import re
 import urllib.error
 import urllib.request
 from pathlib import Path
@@ -113,6 +114,47 @@ def test_the_view_closes_the_question_cuts_the_tree_and_ends_the_task(run_dir: P
     assert acts == ["[ASK-TASK] give-object", "[REALIZE-TASK] give-object",
                     "[END-TASK] give-object"]
     assert view.items["xr1"][4:] == ["done", 2.0]
+
+
+def test_a_task_a_person_declined_ends_declined_in_its_diagram_the_agenda_and_the_tree(
+        tmp_path: Path):
+    """H-DISAGREE to ASK-TASK: the engine ends the task "done" (its scheme ran to its end);
+    the view says, everywhere, that Alice declined it."""
+    path = tmp_path / "log.sqlite"
+    with ContextLog(path, seed=0) as log:
+        r = log.record
+        r(0.0, "goal-added", goal=1, name="give-object", args={}, priority=0, todo="default",
+          source="request")
+        r(0.0, "node", task="n1", parent=None, node_kind="task", name="give-object",
+          state="planned")
+        r(0.0, "task-start", task="n1", agent="jido", name="give-object", scheme="give-object",
+          roles={"robot": "jido", "partner": "alice"})
+        r(0.0, "enter", task="n1", state="ask")
+        r(5.2, "act-received", agent="alice", act="H-DISAGREE")
+        r(5.2, "exit", task="n1", state="ask", event="H-DISAGREE")
+        r(5.2, "enter", task="n1", state="end", event="H-DISAGREE")
+        r(8.7, "exit", task="n1", state="end", event="done")
+        r(8.7, "enter", task="n1", state="ended", event="done")
+        r(8.7, "task-state", task="n1", name="give-object", state="done")
+        r(8.7, "task-end", task="n1", name="give-object", outcome="done", state="ended")
+        r(8.7, "goal-over", task="n1", goal=1, name="give-object", outcome="done")
+    view, changes = fold(path)
+    said = "declined by alice (H-DISAGREE at 5.2 s)"
+    assert ["task-end", "n1", said] in changes and view.tasks["n1"]["outcome"] == said
+    assert view.goals[1][4] == said
+    assert ["state", "n1", "declined"] in changes and view.nodes["n1"][4] == "declined"
+    assert ["task-end", "n1", said] in view.snapshot()
+
+
+def test_the_diagrams_for_the_page_draw_every_label_at_one_size_at_least():
+    """``shary render`` draws act lines and edge labels smaller than a state's name; the
+    page's diagrams draw none under 12 points, so that scaled to 11 px all are legible."""
+    from shary.console.diagrams import TEXT_POINTS, scheme_svg
+    from shary.io.schemes import load_scheme
+
+    svg = scheme_svg(load_scheme("give-object-attentive"))
+    sizes = {float(size) for size in re.findall(r'font-size="([\d.]+)"', svg)}
+    assert sizes and min(sizes) == TEXT_POINTS == 12
 
 
 def test_a_snapshot_rebuilds_the_same_view(run_dir: Path):
