@@ -27,7 +27,7 @@ if not (Path(CHROMIUM).exists() and Path(DRIVER).exists()):
 from selenium.webdriver.chrome.service import Service  # noqa: E402
 from selenium.webdriver.common.by import By  # noqa: E402
 
-__all__ = ["By", "broken_words", "chromium", "first_screen", "in_view", "offered",
+__all__ = ["CLEAR", "By", "broken_words", "chromium", "first_screen", "in_view", "offered",
            "overlapping_labels", "resize", "small_texts", "status", "wait"]
 
 
@@ -166,9 +166,15 @@ def broken_words(driver: Any) -> list[str]:
 def first_screen(driver: Any, *selectors: str) -> dict[str, Any]:
     """Where the page's first screen falls short: each selector's element not seen whole
     without scrolling, texts under 11 px, words broken over two lines, the page taller
-    than its window."""
+    than its window, and the errors in the browser's console since the last look."""
     return {"hidden": {s: why for s in selectors if (why := in_view(driver, s))},
             "small": small_texts(driver), "broken": broken_words(driver),
             "taller": driver.execute_script(
                 "return document.getElementById('screen').getBoundingClientRect().bottom"
-                " - innerHeight")}
+                " - innerHeight"),
+            "errors": [e["message"] for e in driver.get_log("browser")
+                       if e["level"] == "SEVERE"]}
+
+
+CLEAR = {"hidden": {}, "small": [], "broken": [], "taller": 0, "errors": []}
+"""What :func:`first_screen` finds on a page that tells its story."""

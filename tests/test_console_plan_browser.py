@@ -19,6 +19,7 @@ from typing import Any
 
 import pytest
 from browser import (  # skips this module without a browser
+    CLEAR,
     By,
     chromium,
     first_screen,
@@ -139,6 +140,7 @@ def watched(browser: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[
         assert not browser.find_element(By.ID, "reply").text  # not refused
         browser.find_element(By.ID, "resume").click()
         wait(lambda: status(browser) == "ended", message="the end of the run")
+        SEEN["end"] = first_screen(browser, "#plan-panel", ".plan-table tr.focus", "#now")
         yield out
 
 
@@ -160,8 +162,10 @@ def test_the_first_screen_shows_the_task_in_both_views_and_the_robots_act(watche
     robot's view and NOT_SEEN in Alice's, its states in the task-state diagram, the
     timeline's NOT_SEEN bar, and the robot's act (WAIT-ATTENTION, in the inform diagram),
     every text 11 px or more (the diagrams' too), no word broken."""
-    assert SEEN["not-seen"] == {"hidden": {}, "small": [], "broken": [], "taller": 0}
+    assert SEEN["not-seen"] == CLEAR
     assert "pr2: [WAIT-ATTENTION] inform since" in SEEN["now"]
+    # and where it was at the end, the plan grown by every task's states
+    assert SEEN["end"] == CLEAR
 
 
 def test_the_operator_actions_are_logged_with_who_did_them(watched: Path):
