@@ -102,8 +102,6 @@ function task(node, who, name, scheme, roles) {
   }
   const diagram = el("div", "diagram"), config = el("div", "config");
   box.append(h, diagram, config);
-  const n = st.nodes.get(node);
-  if (n && n.parent) box.classList.add("sub");
   a.tasks.prepend(box);  // the newest task first: the act going on now is at the top
   const t = { box, diagram, config, scheme, agent: who, name, active: [], marks: null };
   st.tasks.set(node, t);
@@ -183,15 +181,9 @@ function node(id, parent, kind, name, state) {
   label.title = id + " (" + kind + ")";
   li.append(label);
   const p = parent && st.nodes.get(parent);
-  let ul = treeRoot(id);
-  if (p) {
-    if (!p.ul) { p.ul = el("ul"); p.li.append(p.ul); }
-    ul = p.ul;
-  }
-  ul.append(li);
+  if (p && !p.ul) { p.ul = el("ul"); p.li.append(p.ul); }
+  (p ? p.ul : treeRoot(id)).append(li);
   st.nodes.set(id, { li, ul: null, parent: p ? parent : null, kind });
-  const t = st.tasks.get(id);
-  if (t && p) t.box.classList.add("sub");
 }
 
 function treeRoot(id) {

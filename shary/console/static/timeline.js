@@ -7,7 +7,7 @@
 const PX_PER_S = 14, LANE_ROW = 16, LANE_TOP = 18;
 const AXIS = 20, TICK_S = 5;  // the time axis: its height, a label every 5 s (70 px)
 const MIN_LABEL_PX = 64;  // the room a label of an instant (an answer, a look) has beside it
-const LEGEND = {  // the timeline's classes, as its legend names them (in this order)
+const LEGEND = {  // the timeline's classes, as its legend names them
   act: "a robot's act", action: "action running", running: "action running", done: "done",
   failed: "failed", cancelled: "cancelled", received: "a person's act",
   recognized: "recognized action", "recognized-achieved": "achieved",
