@@ -167,6 +167,11 @@ def first_screen(driver: Any, *selectors: str) -> dict[str, Any]:
     """Where the page's first screen falls short: each selector's element not seen whole
     without scrolling, texts under 11 px, words broken over two lines, the page taller
     than its window, and the errors in the browser's console since the last look."""
+    # a diagram comes when the server has drawn it, a picture when it has loaded
+    wait(lambda: all(driver.execute_script(
+        "const e = document.querySelector(arguments[0]);"
+        "return e !== null && (e.tagName !== 'IMG' || (e.complete && e.naturalWidth > 0))", s)
+        for s in selectors), 30, f"the elements {selectors}")
     return {"hidden": {s: why for s in selectors if (why := in_view(driver, s))},
             "small": small_texts(driver), "broken": broken_words(driver),
             "taller": driver.execute_script(
