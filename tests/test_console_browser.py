@@ -75,7 +75,7 @@ def watched(browser: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[
             message="the diagram's highlight")
         browser.save_screenshot(str(out / "at-wait-attention.png"))
         SEEN["wait"] = first_screen(browser, '.task g.active[data-state="suspended"]',
-                                    "#timeline text.tick", "#legend")
+                                    "#axis text.tick", "#legend")
         SEEN["now"] = browser.find_element(By.ID, "now").text
         SEEN["first task"] = browser.execute_script(
             "return document.querySelector('#agents .task h3').textContent")
@@ -132,7 +132,7 @@ def test_the_first_screen_tells_what_the_robot_does_at_the_breakpoint(browser: A
 
 def test_the_timeline_has_a_time_axis_a_legend_and_named_lanes(browser: Any, watched: Path):
     ticks = browser.execute_script(
-        "return [...document.querySelectorAll('#timeline text.tick')]"
+        "return [...document.querySelectorAll('#axis text.tick')]"
         ".map(t => [t.textContent, t.getBoundingClientRect().left])")
     assert [t for t, _ in ticks[:3]] == ["0 s", "5 s", "10 s"]
     assert ticks[1][1] - ticks[0][1] == pytest.approx(70, abs=0.5)  # 14 px a second

@@ -23,6 +23,7 @@ from browser import (  # skips this module without a browser
     broken_words,
     chromium,
     first_screen,
+    in_view,
     offered,
     overlapping_labels,
     resize,
@@ -114,8 +115,13 @@ def steered(browser: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[
         seen["first screen"] = first_screen(
             browser, '.team-question[data-agent="IVA"] button[data-text="yes"]',
             '.team-question[data-agent="IVA"] button[data-text="no"]',
-            '#agents .task g.active[data-state="realize"]', "#now", "#timeline text.tick")
+            '#agents .task g.active[data-state="realize"]', "#now", "#axis text.tick")
         seen["now"] = text(browser, "now")
+        seen["lanes scrolled"] = browser.execute_script(  # the team's lanes fill the box
+            "const b = document.getElementById('timeline-scroll');"
+            "b.scrollTop = b.scrollHeight; return b.scrollTop")
+        seen["axis"] = in_view(browser, "#axis text.tick")  # stays on top of the lanes
+        browser.execute_script("document.getElementById('timeline-scroll').scrollTop = 0")
         yes[0].click()
         wait(lambda: "answer for_agent=IVA" in text(browser, "lines"), message="logged")
         browser.find_element(By.ID, "step").click()  # the answer goes out with the clock
@@ -156,6 +162,10 @@ def test_the_first_screen_shows_the_question_its_answers_and_each_robot(steered:
     assert steered["narrow"] == []
     assert "K-10: [REALIZE-TASK] confirm-seam since" in steered["now"]
     assert "Robonaut-B: [REALIZE-TASK] weld-seam" in steered["now"]
+
+
+def test_the_time_axis_stays_in_view_when_the_lanes_scroll(steered: dict):
+    assert steered["lanes scrolled"] > 0 and steered["axis"] == []
 
 
 def test_the_task_tree_groups_each_robots_tasks_under_its_name(steered: dict):

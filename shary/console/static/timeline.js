@@ -1,11 +1,12 @@
 // The timeline on the console page: one lane per agent, its items as bars (an act, an
 // action, a question …) labelled and cut to their room, under a time axis, with a legend
-// of the classes shown.  Loaded after console.js: its change kinds (item, item-end) go
+// of the classes shown; the axis is an SVG of its own that stays at the top of the
+// timeline's box when the lanes scroll under it.  Loaded after console.js: its change kinds (item, item-end) go
 // into console.js's APPLY; console.js's clock and reset call clock and axis here.
 "use strict";
 
 const PX_PER_S = 14, LANE_ROW = 16, LANE_TOP = 18;
-const AXIS = 20, TICK_S = 5;  // the time axis: its height, a label every 5 s (70 px)
+const TICK_S = 5;  // a label of the time axis every 5 s (70 px)
 const MIN_LABEL_PX = 64;  // the room a label of an instant (an answer, a look) has beside it
 const LEGEND = {  // the timeline's classes, as its legend names them
   act: "a robot's act", action: "action running", running: "action running", done: "done",
@@ -21,7 +22,7 @@ function lane(name) {
   let l = st.lanes.get(name);
   if (!l) {
     const svg = $("timeline");
-    const y = st.lanes.size ? [...st.lanes.values()].reduce((m, o) => Math.max(m, o.bottom), 0) : AXIS + 4;
+    const y = st.lanes.size ? [...st.lanes.values()].reduce((m, o) => Math.max(m, o.bottom), 0) : 4;
     const g = document.createElementNS(SVGNS, "g");
     const label = document.createElementNS(SVGNS, "text");
     label.setAttribute("class", "lane-name");
@@ -80,27 +81,35 @@ function legend(cls) {
 }
 
 function axis() {
-  // the time axis along the timeline's top: a tick, a faint line down the lanes and a
-  // label every TICK_S seconds, added as the timeline widens
-  const svg = $("timeline");
-  let g = svg.querySelector("g.axis");
-  if (!g) {
-    g = document.createElementNS(SVGNS, "g");
-    g.setAttribute("class", "axis");
-    g.dataset.upTo = -TICK_S;
-    svg.prepend(g);
-  }
+  // every TICK_S seconds a label and a tick on the axis, and a faint line down the lanes,
+  // added as the timeline widens (the lanes' lines go with a reset, the axis stays)
+  const svg = $("timeline"), top = $("axis");
   const width = Number(svg.getAttribute("width"));
-  for (let s = Number(g.dataset.upTo) + TICK_S; x(s) + 30 <= width; s += TICK_S) {
-    const tick = document.createElementNS(SVGNS, "line");
-    tick.setAttribute("x1", x(s)); tick.setAttribute("x2", x(s));
-    tick.setAttribute("y1", AXIS - 5); tick.setAttribute("y2", "100%");
-    const label = document.createElementNS(SVGNS, "text");
-    label.setAttribute("class", "tick"); label.setAttribute("x", x(s) + 2); label.setAttribute("y", 12);
-    label.textContent = s + " s";
-    g.append(tick, label);
-    g.dataset.upTo = s;
+  top.setAttribute("width", width);
+  let grid = svg.querySelector("g.grid");
+  if (!grid) {
+    grid = document.createElementNS(SVGNS, "g");
+    grid.setAttribute("class", "grid");
+    grid.dataset.upTo = -TICK_S;
+    svg.prepend(grid);
   }
+  for (let s = Number(grid.dataset.upTo) + TICK_S; x(s) + 30 <= width; s += TICK_S) {
+    grid.append(line(x(s), 0, "100%"));
+    grid.dataset.upTo = s;
+  }
+  for (let s = Number(top.dataset.upTo || -TICK_S) + TICK_S; x(s) + 30 <= width; s += TICK_S) {
+    const label = document.createElementNS(SVGNS, "text");
+    label.setAttribute("class", "tick"); label.setAttribute("x", x(s) + 2); label.setAttribute("y", 13);
+    label.textContent = s + " s";
+    top.append(line(x(s), 14, 20), label);
+    top.dataset.upTo = s;
+  }
+}
+
+function line(at, y1, y2) {
+  const l = document.createElementNS(SVGNS, "line");
+  l.setAttribute("x1", at); l.setAttribute("x2", at); l.setAttribute("y1", y1); l.setAttribute("y2", y2);
+  return l;
 }
 
 function growLane(l, by) {
