@@ -61,6 +61,7 @@ class Synthetic:
     mode = "live"
     title = "benchmark: 10 agents"
     folder: Path | None = None
+    controls: tuple[str, ...] = ()
 
     def __init__(self, rate: float, seconds: float, burst: int):
         self.rate, self.seconds, self.burst = rate, seconds, burst

@@ -54,11 +54,14 @@ CAPTION_DIM = (170, 180, 190)
 def caption_height(lines: int, height: int) -> int:
     """The height in pixels of a caption strip of ``lines`` lines under a picture
     ``height`` pixels tall in all (the text grows with the picture)."""
-    return lines * _font_size(height) * 3 // 2 + _font_size(height)
+    return lines * caption_font_size(height) * 3 // 2 + caption_font_size(height)
 
 
-def _font_size(height: int) -> int:
-    return max(10, height // 40)
+def caption_font_size(height: int) -> int:
+    """The caption's text height in pixels in a picture ``height`` pixels tall: big enough
+    to read at 11 px or more where the operator console shows the picture at about half
+    its width (800 pixels wide in a column of about 440)."""
+    return max(12, height // 27)
 
 
 def with_caption(pixels: bytes, width: int, height: int, lines: list[str],
@@ -70,7 +73,7 @@ def with_caption(pixels: bytes, width: int, height: int, lines: list[str],
     image = Image.new("RGB", (width, height + band), CAPTION_BACKGROUND)
     image.paste(Image.frombytes("RGB", (width, height), pixels), (0, 0))
     draw = ImageDraw.Draw(image)
-    size = _font_size(height + band)
+    size = caption_font_size(height + band)
     font = ImageFont.load_default(size=size)
     for number, line in enumerate(lines):
         draw.text((size, height + size // 2 + number * size * 3 // 2), line, font=font,

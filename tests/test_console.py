@@ -13,6 +13,7 @@ from __future__ import annotations
 import base64
 import json
 import os
+import re
 import time
 import urllib.error
 import urllib.request
@@ -119,6 +120,47 @@ def test_the_view_closes_the_question_cuts_the_tree_and_ends_the_task(run_dir: P
     assert view.items["xr1"][4:] == ["done", 2.0]
 
 
+def test_a_task_a_person_declined_ends_declined_in_its_diagram_the_agenda_and_the_tree(
+        tmp_path: Path):
+    """H-DISAGREE to ASK-TASK: the engine ends the task "done" (its scheme ran to its end);
+    the view says, everywhere, that Alice declined it."""
+    path = tmp_path / "log.sqlite"
+    with ContextLog(path, seed=0) as log:
+        r = log.record
+        r(0.0, "goal-added", goal=1, name="give-object", args={}, priority=0, todo="default",
+          source="request")
+        r(0.0, "node", task="n1", parent=None, node_kind="task", name="give-object",
+          state="planned")
+        r(0.0, "task-start", task="n1", agent="jido", name="give-object", scheme="give-object",
+          roles={"robot": "jido", "partner": "alice"})
+        r(0.0, "enter", task="n1", state="ask")
+        r(5.2, "act-received", agent="alice", act="H-DISAGREE")
+        r(5.2, "exit", task="n1", state="ask", event="H-DISAGREE")
+        r(5.2, "enter", task="n1", state="end", event="H-DISAGREE")
+        r(8.7, "exit", task="n1", state="end", event="done")
+        r(8.7, "enter", task="n1", state="ended", event="done")
+        r(8.7, "task-state", task="n1", name="give-object", state="done")
+        r(8.7, "task-end", task="n1", name="give-object", outcome="done", state="ended")
+        r(8.7, "goal-over", task="n1", goal=1, name="give-object", outcome="done")
+    view, changes = fold(path)
+    said = "declined by alice (H-DISAGREE at 5.2 s)"
+    assert ["task-end", "n1", said] in changes and view.tasks["n1"]["outcome"] == said
+    assert view.goals[1][4] == said
+    assert ["state", "n1", "declined"] in changes and view.nodes["n1"][4] == "declined"
+    assert ["task-end", "n1", said] in view.snapshot()
+
+
+def test_the_diagrams_for_the_page_draw_every_label_at_one_size_at_least():
+    """``shary render`` draws act lines and edge labels smaller than a state's name; the
+    page's diagrams draw none under 12 points, so that scaled to 11 px all are legible."""
+    from shary.console.diagrams import TEXT_POINTS, scheme_svg
+    from shary.io.schemes import load_scheme
+
+    svg = scheme_svg(load_scheme("give-object-attentive"))
+    sizes = {float(size) for size in re.findall(r'font-size="([\d.]+)"', svg)}
+    assert sizes and min(sizes) == TEXT_POINTS == 12
+
+
 def test_a_snapshot_rebuilds_the_same_view(run_dir: Path):
     view, _ = fold(run_dir / "log.sqlite", until=3.0)
     again = View(named_schemes())
@@ -193,6 +235,21 @@ def test_no_endpoint_reads_outside_the_run(replay_server: str, path: str):
     assert status == 404 and b"not for the page" not in body
 
 
+def test_a_replay_is_titled_by_its_scenario_and_shows_its_runs_verdict(tmp_path: Path):
+    folder = tmp_path / "copied-folder"
+    folder.mkdir()
+    write_run(folder)
+    replay = Replay(folder / "log.sqlite", named_schemes())
+    assert replay.title == "test (replay)" and replay.status()["verdict"] is None
+    (folder / "summary.json").write_text(json.dumps(
+        {"scenario": "test", "passed": False, "differences": ["the bottle was not given"]}))
+    assert Replay(folder / "log.sqlite", named_schemes()).status()["verdict"] == {
+        "passed": False, "differences": ["the bottle was not given"]}
+    # another scenario's summary (a folder reused) is not this log's verdict
+    (folder / "summary.json").write_text(json.dumps({"scenario": "other", "passed": True}))
+    assert Replay(folder / "log.sqlite", named_schemes()).status()["verdict"] is None
+
+
 def messages(ws, until: str, limit: int = 50) -> list[dict]:
     got = []
     for _ in range(limit):
@@ -205,7 +262,8 @@ def messages(ws, until: str, limit: int = 50) -> list[dict]:
 def test_replay_seeks_and_refuses_steering(replay_server: str):
     with connect(replay_server.replace("http", "ws") + "/ws") as ws:
         first = messages(ws, "status")
-        assert first[0] == {"type": "hello", "title": "run0 (replay)", "mode": "replay"}
+        assert first[0] == {"type": "hello", "title": "test (replay)", "mode": "replay",
+                            "controls": []}
         ws.send(json.dumps({"kind": "seek", "by": "ann", "time": 1.0, "id": 1}))
         got = messages(ws, "reply")
         view = next(m for m in got if m["type"] == "changes")

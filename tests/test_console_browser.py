@@ -1,7 +1,8 @@
 """The operator console in a real browser: headless Chromium driven by Selenium.
 
 One browser for the whole module (starting Chromium costs seconds on a
-shared machine).  The give-bottle-distracted scenario runs live behind the
+shared machine), its page 1600 x 1000 pixels: what it shows without scrolling
+is measured there.  The give-bottle-distracted scenario runs live behind the
 page, as fast as the machine allows, started paused so that the test sets a
 breakpoint first; a second run is answered from the page; its log is then
 replayed with the slider.  Skipped, with the reason, where Chromium, its
@@ -16,8 +17,10 @@ from typing import Any
 
 import pytest
 from browser import (  # skips this module without a browser
+    CLEAR,
     By,
     chromium,
+    first_screen,
     offered,
     overlapping_labels,
     status,
@@ -30,10 +33,14 @@ from shary.log.contextlog import read_events
 from sim.cli import live_run
 from sim.scenario import find_scenario
 
+SEEN: dict[str, Any] = {}
+"""What the page showed at the moments the ``watched`` run stopped (measured then)."""
+ALICE_AGREES = '.question button[data-agent="alice"][data-act="H-AGREE"]'
+
 
 @pytest.fixture(scope="module")
 def browser() -> Iterator[Any]:
-    yield from chromium(1400, 1000)
+    yield from chromium(1600, 1000)
 
 
 def act_lines(driver: Any) -> list[str]:
@@ -47,10 +54,16 @@ def watched(browser: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[
     """give-bottle-distracted watched live: paused at the start, a breakpoint on
     WAIT-ATTENTION, a screenshot there, then to the end.  Yields the run's folder."""
     out = tmp_path_factory.mktemp("distracted")
-    live = live_run(find_scenario("give-bottle-distracted"), out=out, speed=0, paused=True)
+    live = live_run(find_scenario("give-bottle-distracted"), out=out, speed=0, paused=True,
+                    snapshots=True)
     with serving(live) as url:
         browser.get(url)
         wait(lambda: status(browser).startswith("paused"), message="paused at the start")
+        wait(lambda: browser.execute_script(
+            "const i = document.querySelector('.question img'); return i && i.complete"),
+            message="the question's picture")
+        SEEN["start"] = first_screen(browser, ALICE_AGREES, ".question img",
+                                     '.task g.active[data-state="ask"]')
         browser.find_element(By.ID, "bp-act").send_keys("WAIT-ATTENTION")
         browser.find_element(By.ID, "bp-add").click()
         wait(lambda: browser.find_elements(By.CSS_SELECTOR, "#breakpoints .chip"),
@@ -61,6 +74,11 @@ def watched(browser: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[
             By.CSS_SELECTOR, '.task g.active[data-state="suspended"]'),
             message="the diagram's highlight")
         browser.save_screenshot(str(out / "at-wait-attention.png"))
+        SEEN["wait"] = first_screen(browser, '.task g.active[data-state="suspended"]',
+                                    "#axis text.tick", "#legend")
+        SEEN["now"] = browser.find_element(By.ID, "now").text
+        SEEN["first task"] = browser.execute_script(
+            "return document.querySelector('#agents .task h3').textContent")
         browser.execute_script("window.atBreakpoint = document.getElementById('lines')"
                                ".textContent;")
         browser.find_element(By.ID, "resume").click()
@@ -96,6 +114,43 @@ def test_a_screenshot_at_the_breakpoint_shows_the_key_elements(browser: Any, wat
         assert browser.find_elements(By.CSS_SELECTOR, selector), selector
 
 
+def test_the_first_screen_shows_the_question_with_its_answers(browser: Any, watched: Path):
+    """Paused at the start: Alice's answer buttons, the picture the robot took as it
+    asked, and the asking state in the diagram, all without scrolling, all legible."""
+    assert SEEN["start"] == CLEAR
+
+
+def test_the_first_screen_tells_what_the_robot_does_at_the_breakpoint(browser: Any,
+                                                                       watched: Path):
+    """At WAIT-ATTENTION: the story line says it, the newest task (give-object) comes
+    first with its WAIT-ATTENTION state in view, and the timeline's axis and legend show."""
+    assert SEEN["wait"] == CLEAR
+    assert "jido: [WAIT-ATTENTION] give-object since" in SEEN["now"]
+    assert "alice: H-AGREE at" in SEEN["now"]
+    assert SEEN["first task"].startswith("give-object")
+
+
+def test_the_timeline_has_a_time_axis_a_legend_and_named_lanes(browser: Any, watched: Path):
+    ticks = browser.execute_script(
+        "return [...document.querySelectorAll('#axis text.tick')]"
+        ".map(t => [t.textContent, t.getBoundingClientRect().left])")
+    assert [t for t, _ in ticks[:3]] == ["0 s", "5 s", "10 s"]
+    assert ticks[1][1] - ticks[0][1] == pytest.approx(70, abs=0.5)  # 14 px a second
+    # an act's bar starts where the axis puts its time
+    start = next(e.time for e in read_events(watched / "log.sqlite")
+                 if e.kind == "act" and e.data["act"] == "WAIT-ATTENTION")
+    bar = browser.execute_script(
+        "return [...document.querySelectorAll('#timeline rect.act')].find(r => "
+        "r.nextElementSibling.textContent.startsWith('WAIT')).getBoundingClientRect().left")
+    assert bar - (ticks[0][1] - 2) == pytest.approx(start * 14, abs=1)
+    legend = browser.find_element(By.ID, "legend").text
+    for name in ("a robot's act", "done", "a person's act"):
+        assert name in legend
+    assert browser.execute_script(
+        "return [...document.querySelectorAll('#timeline .lane-name')].map(t => t.textContent)"
+    ) == ["jido", "alice"]
+
+
 def test_a_run_that_has_ended_offers_nothing_to_steer(browser: Any, watched: Path):
     assert status(browser) == "ended"
     assert offered(browser) == []  # no cancel, H-AGREE, take-control … of a run that is over
@@ -124,15 +179,19 @@ def test_an_answer_from_the_page_changes_the_outcome(browser: Any, tmp_path: Pat
         no = wait(lambda: browser.find_elements(
             By.CSS_SELECTOR, '.question button[data-agent="alice"][data-act="H-DISAGREE"]'),
             message="the robot's question")
+        # a simulated SHARY robot has no control-authority port: no button for it, and the
+        # message, sent anyway, is refused with the reason
+        assert "take-control" not in offered(browser) and "hand-back" not in offered(browser)
+        assert {"H-AGREE", "H-DISAGREE"} <= set(offered(browser))
+        browser.execute_script("shary.ws.send(JSON.stringify({kind: 'take-control', "
+                               "by: 'tester', agent: 'jido', id: 98}))")
+        wait(lambda: "control-authority" in browser.find_element(By.ID, "reply").text,
+             message="take-control refused, and said so")
         browser.find_element(By.ID, "operator").clear()
         browser.find_element(By.ID, "operator").send_keys("tester")
         no[0].click()
         wait(lambda: "H-DISAGREE" in browser.find_element(By.ID, "lines").text,
              message="the answer logged")
-        browser.find_element(
-            By.CSS_SELECTOR, 'button.agent-act[data-agent="jido"]').click()  # take-control
-        wait(lambda: "control-authority" in browser.find_element(By.ID, "reply").text,
-             message="take-control refused, and said so")
         browser.find_element(By.ID, "resume").click()
         wait(lambda: status(browser) == "ended", message="the end of the run")
         lines = browser.find_element(By.ID, "lines").text
@@ -140,6 +199,16 @@ def test_an_answer_from_the_page_changes_the_outcome(browser: Any, tmp_path: Pat
         acts = [a for a in act_lines(browser) if a.endswith("give-object")]
         assert acts == ["[ASK-TASK] give-object", "[END-TASK] give-object"]
         assert browser.find_element(By.ID, "verdict").text.startswith("FAILED")
+        # the task, its goal and its node say it was declined, as the verdict does
+        declined = "declined by alice (H-DISAGREE at"
+        ended = browser.execute_script(
+            "return [...document.querySelectorAll('.task')].find(t => t.querySelector('h3')"
+            ".textContent.startsWith('give-object')).querySelector('.config').textContent")
+        assert ended.startswith("ended: " + declined)
+        assert declined in browser.find_element(By.ID, "agenda").text
+        assert browser.execute_script(
+            "return [...document.querySelectorAll('#tree li')].find(li => li.firstChild"
+            ".textContent === 'give-object').className") == "k-task s-declined"
         # a second answer to a question no longer asked is refused, and said so
         browser.execute_script("shary.ws.send(JSON.stringify({kind: 'answer', by: 'tester', "
                                "task: 'n1', agent: 'alice', act: 'H-AGREE', id: 99}))")
@@ -151,6 +220,9 @@ def test_replay_slider_shows_the_tree_at_a_chosen_time(browser: Any, watched: Pa
     with serving(Replay(watched / "log.sqlite", named_schemes())) as url:
         browser.get(url)
         wait(lambda: status(browser) == "replay", message="the replay")
+        # the scenario's name (not the folder's) and the run's verdict
+        assert browser.find_element(By.ID, "title").text == "give-bottle-distracted (replay)"
+        assert browser.find_element(By.ID, "verdict").text == "PASSED"
         tree = lambda: browser.find_element(By.ID, "tree").text  # noqa: E731
         assert "pick" in tree()  # at the end
         # two moments read from the log: while asking, and while fetching the bottle

@@ -18,7 +18,14 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from browser import By, chromium, status, wait  # skips this module without a browser
+from browser import (  # skips this module without a browser
+    CLEAR,
+    By,
+    chromium,
+    first_screen,
+    status,
+    wait,
+)
 from selenium.webdriver.support.ui import Select
 
 from shary.console.replay import Replay, named_schemes
@@ -46,9 +53,13 @@ KEY_ELEMENTS = [
 """What the page shows at the NOT_SEEN breakpoint (the screenshot's moment)."""
 
 
+SEEN: dict[str, Any] = {}
+"""What the page showed at the breakpoint (measured then)."""
+
+
 @pytest.fixture(scope="module")
 def browser() -> Iterator[Any]:
-    yield from chromium(1400, 1000)
+    yield from chromium(1600, 1000)
 
 
 def views(driver: Any) -> dict[str, dict[str, str]]:
@@ -98,8 +109,12 @@ def watched(browser: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[
         wait(lambda: browser.find_elements(By.CSS_SELECTOR,
                                            '.plan-diagram g.est[data-state="not-seen"]'),
              message="the diagram, recoloured for the task followed")
-        browser.execute_script("document.getElementById('plan-panel').scrollIntoView()")
         browser.save_screenshot(str(out / "at-not-seen.png"))
+        SEEN["not-seen"] = first_screen(
+            browser, ".plan-table tr.focus td.ps.NOT_SEEN", ".plan-table tr.focus td.ps.EXECUTED",
+            '.plan-diagram g.est[data-state="not-seen"]', "#timeline rect.not-seen",
+            '#agents .task g.active[data-state="attend"]', "#now")
+        SEEN["now"] = browser.find_element(By.ID, "now").text
         browser.execute_script("window.atBreakpoint = arguments[0]", views(browser))
         browser.execute_script("window.present = arguments[0].filter("
                                "s => document.querySelector(s))", KEY_ELEMENTS)
@@ -125,6 +140,7 @@ def watched(browser: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[
         assert not browser.find_element(By.ID, "reply").text  # not refused
         browser.find_element(By.ID, "resume").click()
         wait(lambda: status(browser) == "ended", message="the end of the run")
+        SEEN["end"] = first_screen(browser, "#plan-panel", ".plan-table tr.focus", "#now")
         yield out
 
 
@@ -139,6 +155,17 @@ def test_not_seen_in_her_view_then_executed_once_told(browser: Any, watched: Pat
     assert said == "pr2 says “I placed the green cube on the blue cube on the stick.”"
     assert "d2: alice chose Pick(alice, blue_cube_2)" in browser.find_element(By.ID,
                                                                             "lines").text
+
+
+def test_the_first_screen_shows_the_task_in_both_views_and_the_robots_act(watched: Path):
+    """At the NOT_SEEN breakpoint, without scrolling: the task followed, EXECUTED in the
+    robot's view and NOT_SEEN in Alice's, its states in the task-state diagram, the
+    timeline's NOT_SEEN bar, and the robot's act (WAIT-ATTENTION, in the inform diagram),
+    every text 11 px or more (the diagrams' too), no word broken."""
+    assert SEEN["not-seen"] == CLEAR
+    assert "pr2: [WAIT-ATTENTION] inform since" in SEEN["now"]
+    # and where it was at the end, the plan grown by every task's states
+    assert SEEN["end"] == CLEAR
 
 
 def test_the_operator_actions_are_logged_with_who_did_them(watched: Path):

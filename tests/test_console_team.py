@@ -113,6 +113,17 @@ def test_the_fold_has_every_member_the_task_table_and_the_delegations(tmp_path: 
     assert again.team.tasks == view.team.tasks
 
 
+def test_a_message_is_a_timeline_mark_labelled_with_what_it_says_and_to_whom():
+    view = View(named_schemes())
+    rows = [({"type": "assignment", "skill": "drive", "to": "world"}, "drive → world"),
+            ({"type": "progress", "status": "done", "to": "K-10"}, "done → K-10"),
+            ({"type": "act", "act": "INFORM", "to": "K-10"}, "INFORM → K-10"),
+            ({"type": "question", "to": "interaction"}, "question → interaction")]
+    for i, (data, label) in enumerate(rows, 1):
+        changes = view.apply(LogEvent(i, 1.0, "message", "t", "world", data))
+        assert ["item", f"m{i}", "world", 1.0, label, "message"] in changes
+
+
 def test_questions_answers_control_and_associations_fold_into_changes():
     view = View(named_schemes())
     rows = [

@@ -18,10 +18,15 @@ from typing import Any
 
 import pytest
 from browser import (  # skips this module without a browser
+    CLEAR,
     By,
+    broken_words,
     chromium,
+    first_screen,
+    in_view,
     offered,
     overlapping_labels,
+    resize,
     status,
     wait,
 )
@@ -37,7 +42,7 @@ MEMBERS = ["K-10", "Robonaut-B", "IVA", "SRA", "CM"]
 
 @pytest.fixture(scope="module")
 def browser() -> Iterator[Any]:
-    yield from chromium(1400, 1100)
+    yield from chromium(1600, 1000)
 
 
 def text(driver: Any, element: str) -> str:
@@ -107,6 +112,16 @@ def steered(browser: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[
         qid = browser.execute_script(  # its id (the order of the run's messages makes it)
             "return document.querySelector('.team-question').dataset.question")
         browser.save_screenshot(str(out / "at-the-question.png"))
+        seen["first screen"] = first_screen(
+            browser, '.team-question[data-agent="IVA"] button[data-text="yes"]',
+            '.team-question[data-agent="IVA"] button[data-text="no"]',
+            '#agents .task g.active[data-state="realize"]', "#now", "#axis text.tick")
+        seen["now"] = text(browser, "now")
+        seen["lanes scrolled"] = browser.execute_script(  # the team's lanes fill the box
+            "const b = document.getElementById('timeline-scroll');"
+            "b.scrollTop = b.scrollHeight; return b.scrollTop")
+        seen["axis"] = in_view(browser, "#axis text.tick")  # stays on top of the lanes
+        browser.execute_script("document.getElementById('timeline-scroll').scrollTop = 0")
         yes[0].click()
         wait(lambda: "answer for_agent=IVA" in text(browser, "lines"), message="logged")
         browser.find_element(By.ID, "step").click()  # the answer goes out with the clock
@@ -117,6 +132,17 @@ def steered(browser: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[
         seen["verdict"] = text(browser, "verdict")
         seen["final tasks"] = text(browser, "team-tasks")
         seen["events"] = list(read_events(out / "log.sqlite"))
+        seen["tree"] = browser.execute_script(
+            "return [...document.querySelectorAll('#tree > li.robot-group')].map(g => "
+            "[g.dataset.agent, [...g.querySelectorAll('li.k-task > span')]"
+            ".map(s => s.textContent)])")
+        seen["marks"] = browser.execute_script(
+            "return [...document.querySelectorAll('#timeline rect.message')]"
+            ".map(r => r.nextElementSibling.textContent)")
+        seen["end screen"] = first_screen(browser)
+        resize(browser, 1000, 800)  # narrower columns: more lines wrap, none mid-name
+        seen["narrow"] = broken_words(browser)
+        resize(browser, 1600, 1000)
     yield seen
 
 
@@ -125,6 +151,33 @@ def test_the_page_has_a_block_per_agent_and_the_task_table(steered: dict):
     assert [kind.split()[-1] for _, kind in steered["blocks"]] == [
         "robot", "robot", "human", "software", "software"]
     assert "weld-P2-P3" in steered["tasks"] and "inspect-P2-P3" in steered["tasks"]
+
+
+def test_the_first_screen_shows_the_question_its_answers_and_each_robot(steered: dict):
+    """At the question, without scrolling: IVA's answers, K-10's diagram with its active
+    state, what each robot does, the timeline's axis; every text 11 px or more, the
+    picture's caption too; no name broken ("Robonaut-B"), at the question and at the end."""
+    assert steered["first screen"] == CLEAR
+    assert steered["end screen"] == CLEAR
+    assert steered["narrow"] == []
+    assert "K-10: [REALIZE-TASK] confirm-seam since" in steered["now"]
+    assert "Robonaut-B: [REALIZE-TASK] weld-seam" in steered["now"]
+
+
+def test_the_time_axis_stays_in_view_when_the_lanes_scroll(steered: dict):
+    assert steered["lanes scrolled"] > 0 and steered["axis"] == []
+
+
+def test_the_task_tree_groups_each_robots_tasks_under_its_name(steered: dict):
+    """Each robot's tasks (with their subtasks) under its name, in the order they came."""
+    assert steered["tree"] == [["Robonaut-B", ["weld-seam"]],
+                               ["K-10", ["inspect-seam", "confirm-seam"]]]
+
+
+def test_the_messages_on_the_timeline_say_what_and_to_whom(steered: dict):
+    marks = steered["marks"]
+    assert marks and all(marks)  # no bare tick mark
+    assert "accepted → tasks" in marks or any(m.startswith("accept") for m in marks)
 
 
 def test_the_question_shows_with_its_picture_priority_and_expiry(steered: dict):

@@ -5,6 +5,11 @@ The page gets each scheme's SVG once (laid out by the same ``dot`` as
 the configuration changes it only toggles a CSS class on those groups.
 Re-rendering a diagram costs a ``dot`` run (tens of milliseconds and more);
 toggling a class costs microseconds, which is what keeps updates fast.
+
+On the page every label is drawn at one size (:data:`TEXT_POINTS` at the least):
+``shary render`` writes an act line or an edge label smaller than a state's name,
+which, scaled down to fit a column, would be too small to read; at one size the
+page scales the whole diagram so that its text is legible (console.js, ``fit``).
 """
 
 from __future__ import annotations
@@ -17,6 +22,9 @@ from pathlib import Path
 from shary.log.display import _is_cluster, _safe_ids, render_dot, scheme_dot
 from shary.statechart.model import Scheme
 
+TEXT_POINTS = 12
+"""The smallest text of a diagram drawn for the page, in points (a state's name)."""
+_SIZE = re.compile(r'(fontsize=|POINT-SIZE=)"?(\d+(?:\.\d+)?)"?')
 _GROUP = re.compile(r'<g id="(?:node|clust)\d+" class="(node|cluster)">\s*<title>([^<]*)</title>')
 
 
@@ -24,7 +32,7 @@ def scheme_svg(scheme: Scheme) -> str:
     """The scheme drawn as SVG text, each state's group carrying ``data-state``."""
     with tempfile.TemporaryDirectory(prefix="shary-console-") as folder:
         out = Path(folder) / "scheme.svg"
-        render_dot(scheme_dot(scheme), out)
+        render_dot(_SIZE.sub(_at_least, scheme_dot(scheme)), out)
         svg = out.read_text(encoding="utf-8")
     names: dict[str, str] = {}
     ids = _safe_ids(scheme)
@@ -40,3 +48,8 @@ def scheme_svg(scheme: Scheme) -> str:
 
     svg = _GROUP.sub(mark, svg)
     return svg[svg.index("<svg"):]  # the XML prologue and DOCTYPE cannot go inside a page
+
+
+def _at_least(match: re.Match[str]) -> str:
+    """A font size of the DOT source raised to :data:`TEXT_POINTS`."""
+    return f'{match.group(1)}"{max(float(match.group(2)), TEXT_POINTS):g}"'

@@ -107,6 +107,9 @@ class LiveRun:
         """(state, view) of a shared plan's tasks to pause at (view None: any)."""
         self.steering = steering
         """A team run's operator actions (None: a single SHARY robot's run)."""
+        self.controls: tuple[str, ...] = () if steering is None else ("take-control",
+                                                                       "hand-back")
+        """A team's robots answer to control authority; a single SHARY robot does not."""
         self.state = "waiting"
         self.verdict: dict[str, Any] | None = None
         self.summary: dict[str, Any] | None = None

@@ -31,6 +31,10 @@ class RunPort(Protocol):
     title: str
     folder: Path | None
     """The run's folder: the only place the console serves files from (snapshots)."""
+    controls: tuple[str, ...]
+    """The control-authority messages the run has a port for (``take-control``,
+    ``hand-back``): the page offers a robot's buttons only for those, rather than buttons
+    that are always refused."""
 
     def scheme(self, name: str) -> Scheme | None:
         """A scheme by name, to draw; None when the run cannot say."""

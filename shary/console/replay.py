@@ -7,10 +7,16 @@ at that time is folded again from the first event, by the same
 :class:`~shary.console.view.View` a live run uses.  Nothing is written: the
 log is a record, so every steering message is refused (and said on the
 server's terminal, as the log cannot take it).
+
+The page's title is the scenario's name, as the log's last event (``run-end``)
+gives it, and its verdict the one ``summary.json`` beside the log holds, written
+by the same run; a log without them (a run stopped early, a copied log) shows its
+folder's name and no verdict.
 """
 
 from __future__ import annotations
 
+import json
 import sys
 from collections.abc import Callable
 from functools import cache
@@ -43,16 +49,20 @@ class Replay:
     """The :class:`~shary.console.ports.RunPort` of a logged run."""
 
     mode = "replay"
+    controls: tuple[str, ...] = ()
 
     def __init__(self, log: str | Path, schemes: Callable[[str], Scheme | None]):
         self.log = Path(log)
-        self.title = f"{self.log.parent.name or self.log.name} (replay)"
         self.folder = self.log.resolve().parent
         with stream_events(self.log) as events:
             self.events: list[LogEvent] = list(events)
         replay_log(self.log)  # a tree the log cannot have grown is refused at its row
         self.end = self.events[-1].time if self.events else 0.0
         self._schemes = schemes
+        ended = [e.data.get("scenario") for e in self.events[-1:] if e.kind == "run-end"]
+        self.scenario = str(ended[0]) if ended and ended[0] else None
+        self.title = f"{self.scenario or self.log.parent.name or self.log.name} (replay)"
+        self.verdict = _verdict(self.folder / "summary.json", self.scenario)
 
     def scheme(self, name: str) -> Scheme | None:
         return self._schemes(name)
@@ -61,7 +71,8 @@ class Replay:
         status(self.status())
 
     def status(self) -> dict[str, Any]:
-        return {"mode": self.mode, "state": "replay", "end": self.end}
+        return {"mode": self.mode, "state": "replay", "end": self.end,
+                "verdict": self.verdict}
 
     def view_at(self, t: float) -> View:
         """The view as it stood at time ``t`` (every event up to ``t`` included)."""
@@ -84,3 +95,19 @@ class Replay:
 
     def close(self) -> None:
         pass
+
+
+def _verdict(summary: Path, scenario: str | None) -> dict[str, Any] | None:
+    """The verdict of the run that wrote ``summary`` when it is this log's (the same
+    scenario's), as the page shows it; None when there is none to trust."""
+    try:
+        found = json.loads(summary.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if not isinstance(found, dict) or scenario is None or found.get("scenario") != scenario \
+            or not isinstance(found.get("passed"), bool):
+        return None
+    differences = found.get("differences")
+    return {"passed": found["passed"],
+            "differences": [str(d) for d in differences] if isinstance(differences, list)
+            else []}

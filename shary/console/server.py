@@ -140,7 +140,8 @@ class Hub:
             return
         await ws.accept()
         out: asyncio.Queue[str] = asyncio.Queue()
-        hello = {"type": "hello", "title": self.port.title, "mode": self.port.mode}
+        hello = {"type": "hello", "title": self.port.title, "mode": self.port.mode,
+                 "controls": list(self.port.controls)}
         out.put_nowait(_encode(hello))
         for name, svg in self.svgs.items():
             out.put_nowait(_encode({"type": "scheme", "name": name, "svg": svg}))

@@ -275,8 +275,12 @@ class TeamView:
     # -- the site's own events ----------------------------------------------------------
 
     def _message(self, e: LogEvent, out: list[Change]) -> None:
-        # a mark without a label: messages come in bursts, and their words would overlap
-        self._mark(f"m{e.seq}", e.agent or "?", e.time, "", "message", out)
+        # labelled with what it says in a word and whom it goes to: the timeline cuts a
+        # label to the room it has and puts a burst's marks on rows of their own
+        said = next((str(e.data[k]) for k in ("status", "act", "skill", "type") if e.data.get(k)),
+                    "message")
+        self._mark(f"m{e.seq}", e.agent or "?", e.time, f"{said} → {e.data.get('to', '?')}",
+                   "message", out)
 
     def _site(self, e: LogEvent, out: list[Change]) -> None:
         self.view.line(e, "site", f"{e.data.get('what', '')}: {e.data.get('text', '')}", out)

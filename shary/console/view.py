@@ -61,6 +61,12 @@ class View(ViewBase):
         self._open_acts: dict[tuple[str, str], str] = {}
         self._entered: dict[str, str] = {}
         self._requests: dict[str, str] = {}
+        self._heard: tuple[str, str, float] | None = None
+        """The latest act a person sent (who, act, time): a transition it fires names it."""
+        self.declined: dict[str, str] = {}
+        """Tasks a person declined (a transition on their DISAGREE act), and how it is said:
+        the engine ends such a task "done" (its scheme ran to its end), and the page says
+        that it ended declined, as the verdict does, rather than plainly done."""
         self.team = TeamView(self)
         """A team's managers and members (:mod:`shary.console.teamview`)."""
         self.plans = PlanView(self)
@@ -142,6 +148,7 @@ class View(ViewBase):
         state = str(e.data.get("state"))
         task["config"].pop(state, None)
         out.append(["config", e.task, list(task["config"])])
+        self._answered(e.task or "", str(e.data.get("event")))
         item = self._open_acts.pop((e.task or "", state), None)
         if item is not None:
             self.end_item(item, e.time, "act", out)
@@ -152,11 +159,26 @@ class View(ViewBase):
         if task is None:
             return
         task["outcome"] = e.data.get("outcome", "done")
+        if task["outcome"] == "done" and e.task in self.declined:
+            task["outcome"] = self.declined[e.task or ""]
         out.append(["task-end", e.task, task["outcome"]])
         for key in [k for k in self._open_acts if k[0] == e.task]:
             self.end_item(self._open_acts.pop(key), e.time, "act", out)
         if self.questions.pop(e.task or "", None) is not None:
             out.append(["question-end", e.task])
+
+    def _answered(self, node: str, event: str) -> None:
+        """A transition fired by a person's act: a DISAGREE declines the task, an AGREE
+        after it takes that back."""
+        kind = ACT_TYPES.get(event)
+        if self._heard is None or self._heard[1] != event or kind is None \
+                or kind.performer != "human":
+            return
+        who, act, t = self._heard
+        if kind.kind == "DISAGREE":
+            self.declined[node] = f"declined by {who} ({act} at {t:.1f} s)"
+        elif kind.kind == "AGREE":
+            self.declined.pop(node, None)
 
     def _ask(self, node: str, task: dict[str, Any], out: list[Change]) -> None:
         """Open, change or close the task's question: the answers its active states
@@ -199,6 +221,7 @@ class View(ViewBase):
 
     def _received(self, e: LogEvent, out: list[Change]) -> None:
         act = str(e.data.get("act"))
+        self._heard = (e.agent or "?", act, e.time)
         self.agent(e.agent, "agent", out)
         self.line(e, "received", act, out)
         item = f"r{e.seq}"
@@ -238,6 +261,8 @@ class View(ViewBase):
         node = self.nodes.get(e.task or "")
         if node is not None:
             node[4] = e.data.get("state")
+            if node[4] == "done" and e.task in self.declined:
+                node[4] = "declined"
             out.append(["state", e.task, node[4]])
 
     def _cut(self, e: LogEvent, out: list[Change]) -> None:
@@ -261,6 +286,8 @@ class View(ViewBase):
                                           e.data.get("priority", 0), "pending"]
         if e.kind == "goal-over":
             goal[4] = str(e.data.get("outcome", "done"))
+            if goal[4] == "done" and e.task in self.declined:
+                goal[4] = self.declined[e.task or ""]
         else:
             goal[4] = GOAL_STATES.get(e.kind, goal[4])
         out.append(["goal", *goal])

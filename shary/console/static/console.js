@@ -6,16 +6,15 @@
 
 const $ = (id) => document.getElementById(id);
 const SVGNS = "http://www.w3.org/2000/svg";
-const MAX_LINES = 300, MAX_FACT_ROWS = 40, PX_PER_S = 14, LANE_ROW = 16, LANE_TOP = 18;
-const MIN_LABEL_PX = 64;  // the room a label of an instant (an answer, a look) has beside it
+const MAX_LINES = 300, MAX_FACT_ROWS = 40;
 const bench = location.search.includes("bench");
-const SCALE = 0.6, SUB_SCALE = 0.45;  // of a scheme as dot draws it (14 pt state names)
+const MIN_TEXT_PX = 11;  // the smallest text of a diagram, on screen at the default zoom
 
 const st = {
   ws: null, mode: null, status: {}, svgs: {}, time: 0, nextId: 1,
   agents: new Map(), tasks: new Map(), nodes: new Map(), items: new Map(), open: new Set(),
-  lanes: new Map(), goals: new Map(), facts: new Map(), questions: new Map(),
-  latencies: [], applied: 0,
+  lanes: new Map(), goals: new Map(), groups: new Map(), facts: new Map(), questions: new Map(),
+  latencies: [], applied: 0, controls: [], now: new Map(), legend: new Set(),
 };
 window.shary = st;  // read by the browser tests and the benchmark
 // what the page's other scripts (plan.js, team.js) hook into: a reset, a scheme drawn, a status
@@ -24,7 +23,21 @@ const HOOKS = { reset: [], scheme: [], status: [] };
 function el(tag, cls, text) {
   const e = document.createElement(tag);
   if (cls) e.className = cls;
-  if (text !== undefined) e.textContent = text;
+  if (text !== undefined) setText(e, text);
+  return e;
+}
+
+const HYPHENATED = /(\S+-\S+)/;
+function setText(e, text) {
+  // a word with a hyphen ("Robonaut-B", "give-object") is kept whole in a nowrap span:
+  // the browser would otherwise break the line after its hyphen, mid-name
+  const parts = String(text).split(HYPHENATED);
+  if (parts.length === 1 || e.tagName === "OPTION") { e.textContent = text; return e; }
+  e.textContent = "";
+  parts.forEach((part, i) => {
+    if (i % 2) { const w = document.createElement("span"); w.className = "nb"; w.textContent = part; e.append(w); }
+    else if (part) e.append(part);
+  });
   return e;
 }
 
@@ -51,16 +64,18 @@ function agent(name, kind) {
   }
   if (kind !== "agent" && a.kind !== kind) {
     a.kind = kind;
-    a.small.textContent = "(" + kind + ")";
+    setText(a.small, "(" + kind + ")");
     if (st.mode === "live") agentButtons(a, name, kind);
+    nowShown();
   }
   return a;
 }
 
 function agentButtons(a, name, kind) {
-  // a person's acts sent on their behalf; a robot's control authority (refused by a
-  // simulated SHARY robot: the page says why)
-  const acts = kind === "human" ? ["H-AGREE", "H-DISAGREE"] : ["take-control", "hand-back"];
+  // a person's acts sent on their behalf; a robot's control authority only where the run
+  // has a port for it (the hello's controls): a simulated SHARY robot has none
+  const acts = kind === "human" ? ["H-AGREE", "H-DISAGREE"]
+    : ["take-control", "hand-back"].filter((act) => st.controls.includes(act));
   for (const act of acts) {
     const b = el("button", "agent-act", act);
     b.dataset.agent = name;
@@ -87,9 +102,7 @@ function task(node, who, name, scheme, roles) {
   }
   const diagram = el("div", "diagram"), config = el("div", "config");
   box.append(h, diagram, config);
-  const n = st.nodes.get(node);
-  if (n && n.parent) box.classList.add("sub");
-  a.tasks.append(box);
+  a.tasks.prepend(box);  // the newest task first: the act going on now is at the top
   const t = { box, diagram, config, scheme, agent: who, name, active: [], marks: null };
   st.tasks.set(node, t);
   drawInto(t);
@@ -99,27 +112,41 @@ function drawInto(t) {
   const svg = st.svgs[t.scheme];
   if (!svg || t.marks) return;
   t.diagram.innerHTML = svg;
-  fit(t);
+  fit(t.diagram);
   t.marks = new Map();
   for (const g of t.diagram.querySelectorAll("g[data-state]")) t.marks.set(g.dataset.state, g);
   highlight(t, t.active, []);
 }
 
-function fit(t) {
-  // every scheme at one scale, whatever its size: its text stays legible (state names
-  // 11 px, a subtask's 8.5 px) and two agents' schemes compare at a glance; what does not
-  // fit the column scrolls in its box
-  const svg = t.diagram.querySelector("svg");
+function fit(box) {
+  // a diagram at the scale where its smallest text is MIN_TEXT_PX on screen (the server
+  // draws all its labels at one size): every scheme at one scale, so that two agents'
+  // schemes compare at a glance; what does not fit its box scrolls there
+  const svg = box.querySelector("svg");
   if (!svg) return;
-  const scale = t.box.classList.contains("sub") ? SUB_SCALE : SCALE;
-  svg.style.width = (svg.width.baseVal.value * scale) + "px";
+  const sizes = [...svg.querySelectorAll("text")].map((x) => Number(x.getAttribute("font-size")) || 14);
+  const units = svg.viewBox.baseVal && svg.viewBox.baseVal.width ? svg.viewBox.baseVal.width
+    : svg.width.baseVal.value;
+  svg.style.width = (units * MIN_TEXT_PX / Math.min(...sizes, 14)) + "px";
   svg.style.height = "auto";
+  svg.style.maxWidth = "none";
 }
 
 function highlight(t, now, before) {
   if (!t.marks) return;
   for (const s of before) { const g = t.marks.get(s); if (g) g.classList.remove("active"); }
   for (const s of now) { const g = t.marks.get(s); if (g) g.classList.add("active"); }
+  inView(t.diagram, now.map((s) => t.marks.get(s)).filter(Boolean));
+}
+
+function inView(box, marks) {
+  // the innermost active state (the last entered) in the middle of a diagram too big for
+  // its box: what the task does now shows without scrolling by hand
+  const g = marks[marks.length - 1];
+  if (!g || box.scrollHeight <= box.clientHeight && box.scrollWidth <= box.clientWidth) return;
+  const r = g.getBoundingClientRect(), b = box.getBoundingClientRect();
+  box.scrollTop += r.top + r.height / 2 - (b.top + b.height / 2);
+  box.scrollLeft += r.left + r.width / 2 - (b.left + b.width / 2);
 }
 
 function config(node, states) {
@@ -127,7 +154,7 @@ function config(node, states) {
   if (!t) return;
   highlight(t, states, t.active);
   t.active = states;
-  t.config.textContent = "active: " + (states.join(", ") || "—");
+  setText(t.config, "active: " + (states.join(", ") || "—"));
 }
 
 function taskEnd(node, outcome) {
@@ -140,7 +167,9 @@ function taskEnd(node, outcome) {
     return;
   }
   t.box.classList.add("ended");
-  t.config.textContent = "ended: " + outcome;
+  setText(t.config, "ended: " + outcome);
+  t.box.parentNode.append(t.box);  // an ended task goes below the running ones
+  highlight(t, t.active, []);  // moved, its box scrolled back to the top: its end in view
 }
 
 // -- the task tree ---------------------------------------------------------------
@@ -152,15 +181,26 @@ function node(id, parent, kind, name, state) {
   label.title = id + " (" + kind + ")";
   li.append(label);
   const p = parent && st.nodes.get(parent);
-  let ul = $("tree");
-  if (p) {
-    if (!p.ul) { p.ul = el("ul"); p.li.append(p.ul); }
-    ul = p.ul;
-  }
-  ul.append(li);
+  if (p && !p.ul) { p.ul = el("ul"); p.li.append(p.ul); }
+  (p ? p.ul : treeRoot(id)).append(li);
   st.nodes.set(id, { li, ul: null, parent: p ? parent : null, kind });
-  const t = st.tasks.get(id);
-  if (t && p && !t.box.classList.contains("sub")) { t.box.classList.add("sub"); fit(t); }
+}
+
+function treeRoot(id) {
+  // a team's robots name their nodes "ROBOT/n1": each robot's tasks go under its name
+  const slash = id.indexOf("/");
+  if (slash < 0) return $("tree");
+  const robot = id.slice(0, slash);
+  let ul = st.groups.get(robot);
+  if (!ul) {
+    const li = el("li", "robot-group");
+    li.dataset.agent = robot;
+    ul = el("ul");
+    li.append(el("b", null, robot), ul);
+    $("tree").append(li);
+    st.groups.set(robot, ul);
+  }
+  return ul;
 }
 
 function nodeState(id, state) {
@@ -175,111 +215,6 @@ function cut(ids) {
   }
 }
 
-// -- the timeline -----------------------------------------------------------------
-
-function lane(name) {
-  let l = st.lanes.get(name);
-  if (!l) {
-    const svg = $("timeline");
-    const y = st.lanes.size ? [...st.lanes.values()].reduce((m, o) => Math.max(m, o.bottom), 0) : 4;
-    const g = document.createElementNS(SVGNS, "g");
-    const label = document.createElementNS(SVGNS, "text");
-    label.setAttribute("class", "lane-name");
-    label.setAttribute("x", 2); label.setAttribute("y", y + 12);
-    label.textContent = name;
-    g.append(label);
-    svg.append(g);
-    l = { g, y, shift: 0, rows: [], bottom: y + LANE_TOP + LANE_ROW };
-    st.lanes.set(name, l);
-    svg.setAttribute("height", l.bottom + 4);
-  }
-  return l;
-}
-
-function x(t) { return 70 + t * PX_PER_S; }
-
-function item(id, laneName, t0, label, cls) {
-  const l = lane(laneName || "?");
-  let row = l.rows.findIndex((end) => end !== null && end <= t0);
-  if (row < 0) { row = l.rows.length; l.rows.push(null); } else l.rows[row] = null;
-  const bottom = l.y + l.shift + LANE_TOP + (row + 1) * LANE_ROW;
-  if (bottom > l.bottom) growLane(l, bottom - l.bottom);
-  const y = l.y + LANE_TOP + row * LANE_ROW;
-  const rect = document.createElementNS(SVGNS, "rect");
-  rect.setAttribute("x", x(t0)); rect.setAttribute("y", y);
-  rect.setAttribute("height", LANE_ROW - 3); rect.setAttribute("width", 2);
-  rect.setAttribute("class", cls);
-  const title = document.createElementNS(SVGNS, "title");
-  title.textContent = (label || cls) + " from " + t0.toFixed(1) + " s";
-  rect.append(title);
-  const text = document.createElementNS(SVGNS, "text");
-  text.setAttribute("x", x(t0) + 3); text.setAttribute("y", y + 10);
-  text.textContent = label;
-  l.g.append(rect, text);
-  st.items.set(id, { rect, text, label: label || "", t0, l, row });
-  st.open.add(id);
-  widen(t0);
-}
-
-function growLane(l, by) {
-  let below = false;
-  for (const other of st.lanes.values()) {  // lanes are stacked in the order they came
-    if (below) {
-      other.shift += by; other.bottom += by;
-      other.g.setAttribute("transform", "translate(0," + other.shift + ")");
-    }
-    if (other === l) below = true;
-  }
-  l.bottom += by;
-  const total = [...st.lanes.values()].reduce((m, o) => Math.max(m, o.bottom), 0);
-  $("timeline").setAttribute("height", total + 4);
-}
-
-function itemEnd(id, t1, cls) {
-  const it = st.items.get(id);
-  if (!it) return;
-  const bar = Math.max(2, (t1 - it.t0) * PX_PER_S);
-  it.rect.setAttribute("width", bar);
-  it.rect.setAttribute("class", cls);
-  it.rect.firstChild.textContent += " to " + t1.toFixed(1) + " s (" + cls + ")";
-  // the label, cut to its bar (or to a short word beside an instant), holds its row as
-  // long as the bar: the next item of the row starts after both, never on top of them
-  const used = shorten(it.text, it.label, Math.max(bar, MIN_LABEL_PX) - 4);
-  it.l.rows[it.row] = used ? it.t0 + Math.max(bar, used + 6) / PX_PER_S : t1;
-  st.open.delete(id);
-}
-
-function shorten(text, label, room) {
-  // the text's width once it fits in room pixels, cut with an ellipsis (the whole label
-  // stays in the bar's tooltip)
-  let width = text.getComputedTextLength();
-  if (width <= room) return width;
-  let keep = Math.max(0, Math.floor(label.length * room / width));
-  do {
-    text.textContent = keep ? label.slice(0, keep) + "…" : "";
-    width = keep ? text.getComputedTextLength() : 0;
-    keep--;
-  } while (width > room && keep >= 0);
-  return width;
-}
-
-function widen(t) {
-  // in steps of 600 px: a width changed at every update would lay the page out again each time
-  const svg = $("timeline");
-  const w = x(t) + 120;
-  if (w > Number(svg.getAttribute("width"))) svg.setAttribute("width", Math.ceil(w / 600) * 600);
-}
-
-function clock(t) {
-  st.time = t;
-  $("clock").textContent = t.toFixed(1) + " s";
-  for (const id of st.open) {
-    const it = st.items.get(id);
-    it.rect.setAttribute("width", Math.max(2, (t - it.t0) * PX_PER_S));
-  }
-  widen(t);
-}
-
 // -- agenda, facts, lines, questions ------------------------------------------------
 
 function goal(id, name, args, priority, state) {
@@ -291,8 +226,8 @@ function goal(id, name, args, priority, state) {
     st.goals.set(id, row);
   }
   const cells = row.children;
-  cells[0].textContent = typeof id === "number" ? "#" + id : id; cells[1].textContent = name + (args ? " (" + args + ")" : "");
-  cells[2].textContent = "priority " + priority; cells[3].textContent = state;
+  setText(cells[0], typeof id === "number" ? "#" + id : id); setText(cells[1], name + (args ? " (" + args + ")" : ""));
+  setText(cells[2], "priority " + priority); setText(cells[3], state);
 }
 
 function fact(perspective, s, p, o, added) {
@@ -330,6 +265,34 @@ function line(t, who, kind, text) {
   box.append(d);
   if (box.childElementCount > MAX_LINES) box.firstChild.remove();
   if (atEnd) box.scrollTop = box.scrollHeight;
+  if (kind === "act" || kind === "received") { st.now.set(who, { t, text }); nowShown(); }
+}
+
+function nowShown() {
+  // the story's first line: each robot's latest act and its actions under way, each
+  // person's latest act (the lines and the timeline's open items say it)
+  const box = $("now");
+  box.textContent = "";
+  const over = st.status.state === "ended" || st.status.state === "error";
+  box.append(el("b", null, over ? "At the end " : "Now "));
+  for (const [who, a] of st.agents) {
+    if (a.kind !== "robot" && a.kind !== "human") continue;
+    const n = st.now.get(who);
+    const part = el("span", a.kind);
+    part.dataset.agent = who;
+    part.append(el("b", null, who + ": "));
+    if (a.kind === "robot") {
+      const doing = [...st.open].map((id) => st.items.get(id))
+        .filter((it) => it.lane === who && it.cls === "action").map((it) => it.label);
+      part.append(el("span", "what", n ? n.text : "no act yet"));
+      if (n) part.append(el("span", "since", " since " + n.t.toFixed(1) + " s"));
+      if (doing.length && !over) part.append(el("span", "doing", " · " + doing.join(", ")));
+    } else {
+      part.append(el("span", "what", n ? n.text : "no act yet"));
+      if (n) part.append(el("span", "since", " at " + n.t.toFixed(1) + " s"));
+    }
+    box.append(part);
+  }
 }
 
 function question(node, act, people, answers, image) {
@@ -339,12 +302,6 @@ function question(node, act, people, answers, image) {
   const t = st.tasks.get(node);
   box.append(el("div", null, (t ? t.agent : "The robot") + " asks (" + act + ", task " +
     (t ? t.name : "?") + ", " + node + "). Answer for:"));
-  if (image) {
-    const img = el("img");
-    img.src = "/run/" + encodeURIComponent(image);
-    img.alt = "what the robot saw when it asked";
-    box.append(img);
-  }
   for (const who of people) {
     const row = el("div", null, who + ": ");
     for (const a of answers) {
@@ -355,6 +312,12 @@ function question(node, act, people, answers, image) {
       row.append(b);
     }
     box.append(row);
+  }
+  if (image) {  // below the answers, which stay in view whatever the picture's size
+    const img = el("img");
+    img.src = "/run/" + encodeURIComponent(image);
+    img.alt = "what the robot saw when it asked";
+    box.append(img);
   }
   $("questions").append(box);
   st.questions.set(node, box);
@@ -377,7 +340,7 @@ function noneShown() {
 function status(s) {
   st.status = s;
   const pill = $("status");
-  pill.textContent = s.state + (s.why ? " (" + s.why + ")" : "");
+  setText(pill, s.state + (s.why ? " (" + s.why + ")" : ""));
   pill.className = "pill " + s.state;
   if (s.mode === "live") {
     $("run-controls").hidden = false;
@@ -397,7 +360,7 @@ function status(s) {
     $("replay-controls").hidden = false;
     const slider = $("slider");
     slider.max = s.end;
-    if (!slider.dataset.moved) { slider.value = s.end; $("slider-time").textContent = "at " + Number(s.end).toFixed(1) + " s"; }
+    if (!slider.dataset.moved) { slider.value = s.end; setText($("slider-time"), "at " + Number(s.end).toFixed(1) + " s"); }
   }
   const v = $("verdict");
   if (s.verdict) {
@@ -405,7 +368,9 @@ function status(s) {
     v.className = s.verdict.passed ? "passed" : "failed";
     v.textContent = (s.verdict.passed ? "PASSED" : "FAILED") +
       (s.verdict.differences.length ? ": " + s.verdict.differences.join("; ") : "");
+    v.title = v.textContent;
   }
+  nowShown();
 }
 
 // -- applying changes --------------------------------------------------------------------
@@ -413,7 +378,7 @@ function status(s) {
 const APPLY = {
   "time": (t) => clock(t),
   "agent": agent, "task": task, "config": config, "task-end": taskEnd,
-  "node": node, "state": nodeState, "cut": cut, "item": item, "item-end": itemEnd,
+  "node": node, "state": nodeState, "cut": cut,
   "goal": goal, "fact": fact, "line": line, "question": question, "question-end": questionEnd,
 };
 
@@ -423,9 +388,13 @@ function reset() {
   $("timeline").textContent = "";
   $("timeline").setAttribute("height", 40);
   for (const q of st.questions.values()) q.remove();
-  for (const m of ["agents", "tasks", "nodes", "items", "lanes", "goals", "facts", "questions"]) st[m].clear();
+  for (const m of ["agents", "tasks", "nodes", "items", "lanes", "goals", "facts", "questions",
+    "groups", "now", "legend"]) st[m].clear();
   st.open.clear();
+  $("legend").textContent = "";
+  axis();
   noneShown();
+  nowShown();
   for (const f of HOOKS.reset) f();
 }
 
@@ -433,7 +402,8 @@ function receive(message) {
   switch (message.type) {
     case "hello":
       st.mode = message.mode;
-      $("title").textContent = message.title;
+      st.controls = message.controls || [];
+      setText($("title"), message.title);
       document.title = message.title + " — shary console";
       break;
     case "scheme":
@@ -454,7 +424,7 @@ function receive(message) {
       const r = $("reply");
       r.hidden = message.ok;
       r.className = message.ok ? "" : "error";
-      r.textContent = message.ok ? "" : "refused: " + message.error;
+      setText(r, message.ok ? "" : "refused: " + message.error);
       break;
     }
   }
@@ -465,7 +435,7 @@ function connect() {
   const ws = new WebSocket((location.protocol === "https:" ? "wss://" : "ws://") + location.host + "/ws");
   st.ws = ws;
   ws.onmessage = (e) => receive(JSON.parse(e.data));
-  ws.onclose = () => { $("status").textContent = "disconnected"; $("status").className = "pill error"; };
+  ws.onclose = () => { setText($("status"), "disconnected"); $("status").className = "pill error"; };
 }
 
 $("pause").onclick = () => send({ kind: "pause" });
@@ -477,7 +447,7 @@ let seekDue = null;
 $("slider").oninput = () => {
   const slider = $("slider");
   slider.dataset.moved = "1";
-  $("slider-time").textContent = "at " + Number(slider.value).toFixed(1) + " s";
+  setText($("slider-time"), "at " + Number(slider.value).toFixed(1) + " s");
   if (seekDue === null) seekDue = setTimeout(() => { seekDue = null; send({ kind: "seek", time: Number(slider.value) }); }, 30);
 };
 document.addEventListener("DOMContentLoaded", connect);  // after the page's other scripts (plan.js) are in

@@ -46,6 +46,9 @@ function planPanel() {
   body.append(pl.tables, side);
   p.append(h, pl.robotEl, controls, body);
   p.hidden = false;
+  // the plan takes the first screen's middle; the facts and lines go below it
+  document.body.classList.add("has-plan");
+  $("below").append($("more"));
   planDiagram();
 }
 
@@ -144,7 +147,7 @@ function planState(task, view, state) {
   const row = pl.rows.get(task);
   if (!row) return;
   const cell = row.cells.get(view);
-  if (cell) { cell.className = "ps " + state; cell.textContent = state; }
+  if (cell) { cell.className = "ps " + state; setText(cell, state); }
   row.states.set(view, state);
   if (view === row.plan.views[0]) {
     row.tr.dataset.state = state;
@@ -166,19 +169,19 @@ function planChose(prefix, decision, task) {
 function planStatus(prefix, state, text) {
   const p = pl.plans.get(prefix);
   if (!p) return;
-  p.state.textContent = state + (text ? " (" + text + ")" : "");
+  setText(p.state, state + (text ? " (" + text + ")" : ""));
   p.state.className = "plan-state " + state;
-  if (pl.statusEl && state !== "replaced") pl.statusEl.textContent = "(" + prefix + ": " + state + ")";
+  if (pl.statusEl && state !== "replaced") setText(pl.statusEl, "(" + prefix + ": " + state + ")");
 }
 
 function head(agent, target) {
   planPanel();
-  pl.headEl.textContent = agent + " looks at " + target;
+  setText(pl.headEl, agent + " looks at " + target);
 }
 
 function says(agent, text) {
   planPanel();
-  pl.saysEl.textContent = agent + " says “" + text + "”";
+  setText(pl.saysEl, agent + " says “" + text + "”");
 }
 
 function recognized(id, t, agent, action, params, state) {
@@ -187,6 +190,8 @@ function recognized(id, t, agent, action, params, state) {
   d.append(el("span", "t", t.toFixed(1) + " s"), el("span", "who", agent),
     el("span", "what", action + " " + params), el("span", "rstate", state));
   pl.recEl.prepend(d);
+  st.now.set(agent, { t, text: action + " " + params + " (" + state + ")" });  // the story line
+  nowShown();
   while (pl.recEl.childElementCount > MAX_RECOGNIZED) pl.recEl.lastChild.remove();
 }
 
@@ -198,6 +203,7 @@ function planDiagram() {
   const svg = st.svgs[PLAN_SCHEME];
   if (!svg || pl.marks || !pl.diagram) return;
   pl.diagram.innerHTML = svg;
+  fit(pl.diagram);
   pl.marks = new Map();
   for (const g of pl.diagram.querySelectorAll("g[data-state]")) pl.marks.set(g.dataset.state, g);
   if (pl.focus) planFocus(pl.focus);
@@ -211,14 +217,15 @@ function planFocus(task) {
   row.tr.classList.add("focus");
   pl.focus = task;
   const views = row.plan.views;
-  pl.focusEl.textContent = row.label + (pl.pinned ? " (followed; click again to release)" : "") + ": " +
-    views.map((v) => v + " " + (row.states.get(v) || "PLANNED")).join(", ");
+  setText(pl.focusEl, row.label + (pl.pinned ? " (followed; click again to release)" : "") + ": " +
+    views.map((v) => v + " " + (row.states.get(v) || "PLANNED")).join(", "));
   if (!pl.marks) return;
   for (const g of pl.marks.values()) g.classList.remove("active", "est");
   views.forEach((v, i) => {
     const g = pl.marks.get(schemeState(row.states.get(v) || "PLANNED"));
     if (g) g.classList.add(i ? "est" : "active");
   });
+  inView(pl.diagram, [pl.marks.get(schemeState(row.states.get(views[0]) || "PLANNED"))].filter(Boolean));
 }
 
 // -- hooks into console.js ------------------------------------------------------------
@@ -231,6 +238,8 @@ HOOKS.scheme.push((name) => { if (name === PLAN_SCHEME) planDiagram(); });
 HOOKS.reset.push(() => {
   $("plan-panel").textContent = "";
   $("plan-panel").hidden = true;
+  document.body.classList.remove("has-plan");
+  document.querySelector("main").append($("more"));
   Object.assign(pl, { built: false, focus: null, marks: null, viewSelect: null, chips: null });
   pl.plans.clear(); pl.rows.clear();
 });

@@ -77,7 +77,7 @@
       if (m.assoc) parts.push("associated with " + m.assoc);
       if (m.brk && m.brk !== "cleared") parts.push("breakpoint: " + m.brk + (m.before ? " before " + m.before : ""));
     }
-    m.facts.textContent = parts.join(" · ");
+    setText(m.facts, parts.join(" · "));
   }
 
   function robotBlock(name, m) {
@@ -147,7 +147,7 @@
     r.atomic.disabled = !driven;
     if (driven && m.by) r.person.value = m.by;
     const on = m.brk && m.brk !== "cleared";
-    r.brk.textContent = on ? "clear breakpoint" : "breakpoint";
+    setText(r.brk, on ? "clear breakpoint" : "breakpoint");
     if (on) r.brk.dataset.on = "1"; else delete r.brk.dataset.on;
   }
 
@@ -191,9 +191,9 @@
       tm.tasks.set(name, row);
     }
     const c = row.children;
-    c[0].textContent = name; c[1].textContent = t.skill || "";
-    c[2].textContent = t.state; c[2].className = "tstate " + t.state;
-    c[3].textContent = t.agent || "";
+    setText(c[0], name); setText(c[1], t.skill || "");
+    setText(c[2], t.state); c[2].className = "tstate " + t.state;
+    setText(c[3], t.agent || "");
     c[4].textContent = "#" + t.attempt + (t.respawns ? " · respawned ×" + t.respawns : "") +
       (t.reason ? " · " + t.reason : "");
     c[5].textContent = "";
@@ -239,8 +239,8 @@
     }
     entry.q = q;
     const c = entry.row.children;
-    c[0].textContent = qid; c[1].textContent = q.asker + ": “" + q.text + "”";
-    c[2].textContent = "priority " + q.priority; c[3].textContent = "→ " + (q.holder || "nobody yet");
+    setText(c[0], qid); setText(c[1], q.asker + ": “" + q.text + "”");
+    setText(c[2], "priority " + q.priority); setText(c[3], "→ " + (q.holder || "nobody yet"));
     countdown(entry);
     personQuestion(qid, entry);
   }
@@ -248,9 +248,9 @@
   function countdown(entry) {
     const cell = entry.row.children[4];
     if (entry.answer) return;
-    if (entry.q.expires === null || entry.q.expires === undefined) { cell.textContent = "no expiry"; return; }
+    if (entry.q.expires === null || entry.q.expires === undefined) { setText(cell, "no expiry"); return; }
     const left = entry.q.expires - window.shary.time;
-    cell.textContent = left > 0 ? "expires in " + left.toFixed(1) + " s" : "expiring";
+    setText(cell, left > 0 ? "expires in " + left.toFixed(1) + " s" : "expiring");
     cell.className = left < 5 ? "urgent" : "";
   }
 
@@ -267,12 +267,6 @@
     box.dataset.agent = q.holder;
     box.append(el("div", null, q.asker + " asks " + q.holder + " (" + qid +
       (q.task ? ", " + q.task : "") + ", priority " + q.priority + "): " + q.text));
-    if (q.image) {
-      const img = el("img");
-      img.src = "/run/" + encodeURIComponent(q.image);
-      img.alt = "the picture " + q.asker + " attached";
-      box.append(img);
-    }
     if (live() && own(q.holder)) {
       box.append(el("div", "elsewhere", q.holder + " answers from their own interface " +
         "(shary agent " + q.holder + ")"));
@@ -293,6 +287,12 @@
       }
       box.append(row);
     }
+    if (q.image) {  // below the answers, which stay in view whatever the picture's size
+      const img = el("img");
+      img.src = "/run/" + encodeURIComponent(q.image);
+      img.alt = "the picture " + q.asker + " attached";
+      box.append(img);
+    }
     $("questions").append(box);
     entry.box = box;
     noneOpen();
@@ -311,9 +311,14 @@
     entry.box = entry.mine = null;
     noneOpen();
     entry.row.classList.add("answered");
-    entry.row.children[4].textContent = (answer.expired ? "expired → " : "answered ") +
-      JSON.stringify(answer.value) + (answer.by ? " by " + answer.by : "");
+    setText(entry.row.children[4], (answer.expired ? "expired → " : "answered ") +
+      JSON.stringify(answer.value) + (answer.by ? " by " + answer.by : ""));
     entry.row.children[4].className = "";
+    if (answer.by && !answer.expired) {  // the story line: what the person did last
+      const said = "answered " + JSON.stringify(answer.value) + " (" + qid + ")";
+      window.shary.now.set(answer.by, { t: answer.t, text: said });
+      nowShown();
+    }
     const m = tm.people.get(answer.by) || tm.people.get(entry.q.holder);
     if (m) {
       m.answers.append(el("li", null, answer.t.toFixed(1) + " s  " + entry.q.text + " → " +
