@@ -5,15 +5,15 @@ after HATP/EHDA's public domain; ``planner/problems/stack-icra.yaml``, the
 ICRA-style stack with reachability and asking for help), CPU time, median of
 N runs, of:
 
-* the exploration (:func:`planner.conditional.explore`: the AND/OR graph, a
+* the exploration (:func:`planner.conditional.exploration.explore`: the AND/OR graph, a
   turn reached again explored once) -- and, as the peer in the same run, the
   same exploration as a tree (``merge=False``: every turn re-explored, as
   HATP/EHDA does);
-* the policy selection (:func:`planner.policy.select`).
+* the policy selection (:func:`planner.conditional.policy.select`).
 
 The leaves (root-to-leaf paths of the graph, HATP/EHDA's count of branches)
 and the best policy's expected cost are printed beside HATP/EHDA's published
-figures; the ratio to HATP/EHDA's own times (quoted in issue 12, measured on
+figures; the ratio to HATP/EHDA's own times (as reported, measured on
 these machines: 1.5-2.4 s and 150-170 s) is given for the record, HATP/EHDA
 itself not being installable here (a ROS package).
 
@@ -35,8 +35,8 @@ HERE = Path(__file__).resolve().parent
 sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != HERE]
 
 from planner import load_domain, load_problem  # noqa: E402
-from planner.conditional import explore  # noqa: E402
-from planner.policy import select  # noqa: E402
+from planner.conditional.exploration import explore  # noqa: E402
+from planner.conditional.policy import select  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 PROBLEMS = {

@@ -17,7 +17,7 @@ Three measures, in one run (the machine is shared: compare within the run):
   way in the same browser; and the **burst**: updates per second the page
   absorbs when the server sends as fast as it can.
 
-The goal (issue 16): p99 <= 50 ms at 50 updates/s.  Needs Chromium and its
+The goal: p99 <= 50 ms at 50 updates/s.  Needs Chromium and its
 driver (``apt-get install chromium chromium-driver``) and Selenium.
 """
 
@@ -48,7 +48,7 @@ from starlette.websockets import WebSocketDisconnect  # noqa: E402
 from shary.console.server import Hub, serving  # noqa: E402
 from shary.console.view import View  # noqa: E402
 from shary.io.schemes import load_scheme  # noqa: E402
-from shary.log import LogEvent  # noqa: E402
+from shary.log.contextlog import LogEvent  # noqa: E402
 
 AGENTS = 10
 OBJECTS = 50

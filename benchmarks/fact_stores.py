@@ -6,12 +6,12 @@ recipe-time questions.  Measured here, on 10,000 people looking at the robot
 and away (20,000 changes on a perspective of 20,000 triples):
 
 * rdflib ``Dataset``, a named graph per perspective, ``len`` before and after
-  (the fact database's store until issue 17);
+  (the fact database's store before Oxigraph);
 * raw rdflib ``Graph.add``/``remove`` (the kernel benchmark's peer);
 * oxrdflib: rdflib's API on Oxigraph, ``Dataset(store="Oxigraph")``, with a
   membership test (its ``len`` is a scan), if installed (``pip install oxrdflib``);
 * raw ``pyoxigraph.Store`` quads (rdflib terms converted once, cached);
-* ``shary.facts.FactDatabase`` as it is: its own index in front of rdflib,
+* ``shary.facts.database.FactDatabase`` as it is: its own index in front of rdflib,
   the graph brought up to date when read (no subscribers here).
 
 and then the price of the first SPARQL query after those changes (the index's
@@ -30,7 +30,7 @@ import time
 
 from rdflib import Dataset, Graph, URIRef
 
-from shary.facts import FactDatabase
+from shary.facts.database import FactDatabase
 
 NS = "http://shary.dev/world#"
 PEOPLE = 10_000

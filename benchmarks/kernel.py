@@ -46,11 +46,11 @@ import tracemalloc
 
 from rdflib import Graph, URIRef
 
-from shary.executors import ExecutorRegistry, Reporter, Request
-from shary.facts import FactDatabase
+from shary.facts.database import FactDatabase
 from shary.io.recipes import load_library
-from shary.loop import EventLoop
-from shary.supervisor import Supervisor
+from shary.kernel.executors import ExecutorRegistry, Reporter, Request
+from shary.kernel.loop import EventLoop
+from shary.kernel.supervisor import Supervisor
 
 DEFAULT_GC = gc.get_threshold()
 
@@ -96,7 +96,7 @@ def setup(tasks: int):
     registry = ExecutorRegistry({name: quick for name in library.atomic})
     registry.register("move-arm", arm)
     sup = Supervisor(library, facts, robot="jido", loop=loop, executors=registry)
-    # One robot has one arm: its arbiter (shary/arbiter.py) runs one motion and queues the
+    # One robot has one arm: its arbiter (shary/kernel/arbiter.py) runs one motion and queues the
     # others, so most cancels end a queued motion and never reach the executor.  A cancel
     # is counted (and timed) where the engine hands it to the body's owner.
     arbiter = sup.executors.arbiter

@@ -6,9 +6,9 @@ Then, in the same run:
 
 * **peer**: a bare reader, ``sqlite3`` cursor + ``json.loads`` per row, no checks
   (the least any reader of the file does);
-* **shary**: :func:`shary.log.stream_events`, every row checked (types, bounds,
+* **shary**: :func:`shary.log.contextlog.stream_events`, every row checked (types, bounds,
   depth measured before parsing, the shape of its kind);
-* the replay of the task tree (:func:`shary.tasktree.replay_log`), the JSONL
+* the replay of the task tree (:func:`shary.kernel.tasktree.replay_log`), the JSONL
   export, and the table ``shary log`` prints into a pipe.
 
 Both readers must see the same events, or the run fails.
@@ -29,8 +29,8 @@ from contextlib import closing, redirect_stdout
 from pathlib import Path
 
 from shary.cli import main as shary_main
-from shary.log import ContextLog, export_jsonl, stream_events
-from shary.tasktree import replay_log
+from shary.kernel.tasktree import replay_log
+from shary.log.contextlog import ContextLog, export_jsonl, stream_events
 
 
 def make_log(path: Path, events: int, nodes: int) -> None:

@@ -46,9 +46,12 @@ from typing import Any
 import _first  # noqa: F401  (this folder after the packages: see _first.py)
 from livingroom import clean_up  # noqa: E402
 
-from planner import plan, validate  # noqa: E402
-from planner.search import Search  # noqa: E402
-from planner.state import State  # noqa: E402
+from planner import (
+    plan,  # noqa: E402
+    validate,
+)
+from planner.model.state import State  # noqa: E402
+from planner.search.branchbound import Search  # noqa: E402
 
 HEADLINE = (6, 2)
 """The size of ``first_plan_ms`` (a 26-action plan) and ``proven_best_ms``: six bottles,

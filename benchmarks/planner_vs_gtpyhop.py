@@ -3,7 +3,7 @@
 Ours plans the HDDL instances of the suite (``../shared/suites/ipc2020``):
 Blocksworld-GTOHP p01-p30 and Childsnack p01-p30, translated once (not
 timed), then searched to the first plan (``plan(problem, first=True)``: for
-HDDL the depth-first search of :mod:`planner.depthfirst`, which returns an
+HDDL the depth-first search of :mod:`planner.search.depthfirst`, which returns an
 evaluated plan: tree, streams, causal links); each plan is checked by our
 validator (not timed) and counts only if valid.
 

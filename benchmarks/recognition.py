@@ -1,4 +1,4 @@
-"""Human action recognition under a flickering perception stream (issue 11, Deliver item 6).
+"""Human action recognition under a flickering perception stream.
 
 Fifty action models (25 object kinds, each with its own pick and place, all
 over the same predicates, as a home's models would be: the type of the
@@ -43,7 +43,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from shary.facts import FactDatabase  # noqa: E402
+from shary.facts.database import FactDatabase  # noqa: E402
 from shary.recognition.models import load_action_models  # noqa: E402
 from shary.recognition.recognizer import Recognizer  # noqa: E402
 

@@ -44,7 +44,7 @@ import time
 from shary.dialogue.reg import Description, PerspectiveIndex, Referrer
 from shary.dialogue.requests import Query
 from shary.dialogue.speech import Speech, core_ontology
-from shary.facts import FactDatabase
+from shary.facts.database import FactDatabase
 
 TYPES = ("Cube", "Ball", "Bottle", "Cup", "Box")
 COLOURS = ("red", "green", "blue", "yellow", "white", "black", "orange", "purple")

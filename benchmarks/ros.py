@@ -1,4 +1,4 @@
-"""shary's ROS 2 bridge against a bare rclpy client and its goals (issue 23), in one run.
+"""shary's ROS 2 bridge against a bare rclpy client and its goals, in one run.
 
 A child process (this script with ``--serve``) serves
 ``test_msgs/action/NestedMessage`` actions, ``/bench/instant`` (succeeds at
@@ -351,15 +351,15 @@ def measure(args: argparse.Namespace) -> dict[str, Any]:
     from std_msgs.msg import String
     from test_msgs.action import NestedMessage
 
-    from shary.executors import ExecutorRegistry, Reporter, Request
-    from shary.facts import FactDatabase
+    from shary.facts.database import FactDatabase
     from shary.io.recipes import load_library
-    from shary.loop import EventLoop, WallClock
+    from shary.kernel.executors import ExecutorRegistry, Reporter, Request
+    from shary.kernel.loop import EventLoop, WallClock
+    from shary.kernel.supervisor import Supervisor
+    from shary.log.told import Told
     from shary.ros.binding import load_binding
     from shary.ros.bridge import RosSupervision
     from shary.ros.node import RosNode
-    from shary.supervisor import Supervisor
-    from shary.told import Told
 
     os.environ.setdefault("ROS_DOMAIN_ID", str(50 + os.getpid() % 40))
     child = Child()

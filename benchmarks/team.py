@@ -37,8 +37,8 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from shary.executors import Reporter, Request
-from shary.log import ContextLog
+from shary.kernel.executors import Reporter, Request
+from shary.log.contextlog import ContextLog
 from shary.team import Team, load_team
 from shary.team.resources import ResourceManager
 

@@ -21,7 +21,7 @@ schema, delivery on the child's loop.
   alternated; the median wall time of the run itself (joins excluded; for a
   scenario, the whole command's) and the ratio.
 
-Goals (issue 15): >= 40,000 acts/s and p99 RTT <= 1 ms over Zenoh on loopback.
+Goals: >= 40,000 acts/s and p99 RTT <= 1 ms over Zenoh on loopback.
 
     python benchmarks/transport.py [--json] [--acts 100000] [--pings 2000] [--team-runs 5]
 """
@@ -37,7 +37,7 @@ import sys
 import time
 from typing import Any
 
-from shary.loop import EventLoop
+from shary.kernel.loop import EventLoop
 from shary.transport.messages import Act, Message
 from shary.transport.port import MessagePort
 

@@ -15,16 +15,23 @@ causal links between the streams, and scores them with action costs plus
 
 HDDL (the IPC's HTN language, total-order subset) is translated into the same
 model: ``problem = load_hddl("domain.hddl", "p01.hddl")``, then
-``plan(problem, first=True)``; :mod:`planner.ipc` writes the plan in the IPC
+``plan(problem, first=True)``; :mod:`planner.io.ipc` writes the plan in the IPC
 format.
 """
 
-from planner.domain import Domain, Problem
-from planner.io import builtin_domains, builtin_problems, find_domain, load_domain, load_problem
-from planner.plan import CausalLink, Plan, PlanAction, TreeNode
-from planner.search import Result, plan
-from planner.translate import load_hddl
-from planner.validate import validate
+from planner.evaluation.validate import validate
+from planner.io.domainfiles import (
+    builtin_domains,
+    builtin_problems,
+    find_domain,
+    load_domain,
+    load_problem,
+)
+from planner.io.translate import load_hddl
+from planner.model.domain import Domain, Problem
+from planner.model.plan import CausalLink, Plan, PlanAction, TreeNode
+from planner.search.branchbound import Result
+from planner.search.portfolio import plan
 
 __all__ = [
     "CausalLink",

@@ -5,12 +5,12 @@ load a scheme (:func:`load_scheme`), compile it once (:func:`compile_scheme`)
 and start as many instances of it as there are tasks (:meth:`CompiledScheme.start`).
 """
 
-from shary.acts import ActRegistry, builtin_acts
-from shary.clock import SimulatedClock
-from shary.compiler import CompiledScheme, compile_scheme
-from shary.conditions import ConditionRegistry
-from shary.instance import SchemeInstance
 from shary.io.schemes import load_scheme
+from shary.statechart.acts import ActRegistry, builtin_acts
+from shary.statechart.clock import SimulatedClock
+from shary.statechart.compiler import CompiledScheme, compile_scheme
+from shary.statechart.conditions import ConditionRegistry
+from shary.statechart.instance import SchemeInstance
 from userfiles.errors import FileError, Problem
 
 __all__ = [

@@ -26,7 +26,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import NoReturn
 
-from shary.terminal import emit_json, error, output_refused, refused
+from shary.log.terminal import emit_json, error, output_refused, refused
 from userfiles.errors import FileError
 from userfiles.outputs import OutputError
 from userfiles.reader import allow_paths

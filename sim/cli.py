@@ -9,12 +9,13 @@ from __future__ import annotations
 
 import argparse
 import re
+import shlex
 import time
 from pathlib import Path
 from typing import Any
 
-from shary.terminal import add_json_flag, emit_json, error, escape, listing
-from shary.terminal import out as _out
+from shary.log.terminal import add_json_flag, emit_json, error, escape, listing
+from shary.log.terminal import out as _out
 from userfiles import yamlsafe
 from userfiles.errors import FileError
 from userfiles.schema import did_you_mean
@@ -38,13 +39,15 @@ def add_run(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("run", help="run a scenario on the simulated Jido (headless), judge it")
     p.add_argument("scenario", metavar="NAME|FILE",
                    help="a built-in scenario (see 'shary scenarios') or a scenario file")
-    p.add_argument("--seed", type=int, default=0, help="seed of the people's random choices")
+    p.add_argument("--seed", type=int, default=0,
+                   help="seed of the people's random choices (default 0)")
     p.add_argument("--gui", action="store_true", help="open PyBullet's window")
     p.add_argument("--out", type=Path, metavar="DIR",
                    help="where to write log.sqlite, tree.svg, timeline.svg, summary.json "
                    "(default: runs/SCENARIO, after the scenario's name)")
     p.add_argument("--snapshots", action="store_true", help="also write PNG views at each act")
-    p.add_argument("--quiet", action="store_true", help="print only the verdict")
+    p.add_argument("--quiet", action="store_true",
+                   help="print only the verdict (and, when it failed, why)")
     p.add_argument("--ros", action="store_true",
                    help="run only the supervisor, reaching the robot through ROS 2: the world "
                    "runs in another process ('shary world --ros SCENARIO')")
@@ -108,12 +111,17 @@ def cmd_run(args: argparse.Namespace) -> int:
                f"seed {result.seed}")
     for difference in result.differences:
         _out.print(f"  - {escape(difference)}")
-    _out.print(f"[dim]wrote {escape(str(out))}/: "
-               f"{', '.join(Path(v).name for k, v in result.outputs.items() if k != 'snapshots')}"
-               + (f" and {len(result.outputs['snapshots'].split(', '))} snapshots"
-                  if "snapshots" in result.outputs else "") + "[/dim]")
+    if not args.quiet:
+        _out.print(wrote(out, result.outputs))
     return 0 if result.passed else 1
 
+
+def wrote(out: Path, outputs: dict[str, str]) -> str:
+    """The line that says which files a run wrote in ``out`` (the snapshots counted)."""
+    files = ", ".join(Path(v).name for k, v in outputs.items() if k != "snapshots")
+    snapshots = (f" and {len(outputs['snapshots'].split(', '))} snapshots"
+                 if "snapshots" in outputs else "")
+    return f"[dim]wrote {escape(str(out))}/: {escape(files)}{snapshots}[/dim]"
 
 
 def earlier_run(out: Path) -> str | None:
@@ -146,7 +154,8 @@ def add_serve(sub: argparse._SubParsersAction) -> None:
                    help="simulated seconds per wall second (default 1; 0: as fast as possible)")
     p.add_argument("--paused", action="store_true",
                    help="pause the run after its first step (set breakpoints, then Resume)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the people's random choices")
+    p.add_argument("--seed", type=int, default=0,
+                   help="seed of the people's random choices (default 0)")
     p.add_argument("--out", type=Path, metavar="DIR",
                    help="where the live run writes its files (default: runs/SCENARIO)")
     p.add_argument("--snapshots", action="store_true",
@@ -183,13 +192,30 @@ def cmd_serve(args: argparse.Namespace) -> int:
 
 
 def _serve_live(live: Any, host: str, port: int) -> int:
-    """Serve a live run, first saying whether it will replace an earlier run's files."""
+    """Serve a live run, first saying whether it will replace an earlier run's files; say
+    its verdict and the files it wrote when it ends (the server goes on, for the page),
+    or, when the server stops first, that it did not end."""
     from shary.console.server import serve
 
     replacing = earlier_run(live.folder) if live.folder is not None else None
     if replacing:
         _out.print(escape(replacing))
-    return serve(live, host, port)
+
+    def ended(summary: dict[str, Any]) -> None:
+        verdict = "[bold green]PASSED[/bold green]" if summary.get("passed") else \
+            "[bold red]FAILED[/bold red]"
+        _out.print(f"{verdict} {escape(live.title)}: "
+                   f"{summary['simulated_seconds']:.1f} s simulated")
+        for difference in summary["differences"]:
+            _out.print(f"  - {escape(difference)}")
+        _out.print(wrote(live.folder, summary["outputs"]))
+
+    live.ended = ended
+    status = serve(live, host, port)
+    if live.state == "ended" and live.summary is None:
+        _out.print(f"[dim]the run was stopped before its end: {escape(str(live.folder))}/ "
+                   "holds its log so far[/dim]")
+    return status
 
 
 def live_run(path: Path, *, out: Path | None = None, seed: int = 0, snapshots: bool = False,
@@ -338,8 +364,10 @@ def cmd_world(args: argparse.Namespace) -> int:
 
         return cmd_world_ros(args, path)
     if _weld_scenario(path) is None:
-        return error(f"{args.scenario}: not a seam-welding scenario (site: seam-welding); "
-                     "only those have a world that runs as its own agent")
+        return error(f"{args.scenario}: not a seam-welding scenario, whose world joins a "
+                     "Zenoh team as its own agent; a living-room scenario's world runs on "
+                     "ROS 2 as the simulated Jido: 'shary world --ros "
+                     f"{shlex.quote(args.scenario)}' (docs/ros2.md)")
     from sim.weld.agent import cmd_world as run_world
 
     return run_world(args, path)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from shary.filekinds import Context, FileKind
+from shary.io.filekinds import Context, FileKind
 from userfiles.errors import FileError, Problem
 
 

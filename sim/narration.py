@@ -63,7 +63,7 @@ class Narrator:
         self._looking_at: dict[str, str] = {}
 
     def event(self, t: float, kind: str, agent: str | None, data: dict[str, Any]) -> None:
-        """One event of the context log (see :mod:`shary.log`); most are not told."""
+        """One event of the context log (see :mod:`shary.log.contextlog`); most are not told."""
         if kind == "replan":
             self._replan = str(data.get("reason", ""))
         elif kind == "plan":

@@ -26,8 +26,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from shary.terminal import emit_json, error
-from shary.terminal import out as _out
+from shary.log.terminal import emit_json, error
+from shary.log.terminal import out as _out
 
 WAIT_FOR_ROBOT = 30.0
 """Wall seconds ``shary run --ros`` waits for the robot's facts and action servers."""
@@ -175,17 +175,17 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
     docstring): the summary written to ``out``, or why it could not start."""
     from std_msgs.msg import Bool, String
 
-    from shary.agenda import OVER, ChronicleRecognizer
     from shary.dialogue.sessions import Sessions
-    from shary.log import ContextLog, read_events
-    from shary.loop import EventLoop, WallClock
-    from shary.planning import HatpPlanner
+    from shary.kernel.agenda import OVER, ChronicleRecognizer
+    from shary.kernel.loop import EventLoop, WallClock
+    from shary.kernel.planning import HatpPlanner
+    from shary.kernel.supervisor import Supervisor
+    from shary.log.contextlog import ContextLog, read_events
+    from shary.log.told import Told
     from shary.recognition.models import load_action_models
     from shary.ros.binding import load_binding
     from shary.ros.bridge import RosSupervision
     from shary.ros.node import RosNode
-    from shary.supervisor import Supervisor
-    from shary.told import Told
     from userfiles.outputs import output_folder, write_output
 
     from .judge import judge
@@ -203,7 +203,7 @@ def run_over_ros(path: Path, out: Path, *, wait: float = WAIT_FOR_ROBOT) -> dict
     log = ContextLog(log_path)
     fanout = Told(log)
     loop = EventLoop(WallClock())
-    from shary.facts import FactDatabase
+    from shary.facts.database import FactDatabase
 
     facts = FactDatabase()
     sup = Supervisor(library, facts, robot=binding.robot, loop=loop, log=fanout,

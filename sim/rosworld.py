@@ -45,8 +45,8 @@ from typing import Any
 
 from rdflib import Literal
 
-from shary.facts import FactDatabase
-from shary.loop import EventLoop
+from shary.facts.database import FactDatabase
+from shary.kernel.loop import EventLoop
 
 from .executors import RobotExecutors
 from .run import furnish

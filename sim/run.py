@@ -19,24 +19,22 @@ agent), ``summary.json``, and with ``snapshots`` PNG views at each act.
 from __future__ import annotations
 
 import json
-import math
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
 import planner
-from shary.agenda import OVER, ChronicleRecognizer
 from shary.dialogue.sessions import Sessions
-from shary.executors import ExecutorRegistry
-from shary.facts import FactDatabase
-from shary.log import ContextLog, read_events
-from shary.loop import EventLoop
-from shary.planning import HatpPlanner
+from shary.facts.database import FactDatabase
+from shary.kernel.agenda import OVER, ChronicleRecognizer
+from shary.kernel.executors import ExecutorRegistry
+from shary.kernel.loop import EventLoop
+from shary.kernel.planning import HatpPlanner
+from shary.kernel.supervisor import Supervisor
+from shary.log.contextlog import ContextLog, read_events
+from shary.log.told import Told
 from shary.recognition.models import load_action_models
-from shary.supervisor import Supervisor
-from shary.told import Told
 from userfiles.outputs import output_folder, write_output
 
 from .executors import RobotExecutors
@@ -45,6 +43,7 @@ from .narration import Narrator, Report
 from .objects import is_new, new_object
 from .people import Person
 from .perception import Noise, Perception
+from .results import CHUNK, MemoryLog, RunResult
 from .scenario import Scenario, is_team_scenario, load_scenario
 from .simulation import Simulation, standing_height
 from .stack.session import StackSession
@@ -59,56 +58,12 @@ from .world import (
     pb,
 )
 
-CHUNK = 0.1
-"""Simulated seconds advanced between two looks at whether the run is over (so the
-reported end is at most this much after the last thing that happened)."""
 ROBOT_ATTRIBUTES = {"kind": "robot", "move_cost": 2, "pick_cost": 1, "speed": 1}
 SNAPSHOT_SIZE = (800, 600)
 """Snapshots' size in pixels, caption included: large enough to see a head turn
 away.  The software renderer takes about 0.75 s for one, 3.3 times the former
 480 x 360 (1.16 s at 960 x 720), measured in one run."""
 PERSON_ATTRIBUTES = {"kind": "human", "move_cost": 4, "pick_cost": 2, "speed": 1}
-
-
-@dataclass
-class RunResult:
-    """What :func:`run_scenario` found and wrote."""
-
-    scenario: str
-    passed: bool
-    differences: list[str]
-    simulated_seconds: float
-    wall_seconds: float
-    """Wall time of the simulation itself (the world built, the files read)."""
-    setup_seconds: float
-    """Wall time to build the world, the people and the supervisor."""
-    seed: int
-    physics_steps: int
-    noise_misses: int = 0
-    """Facts the injected perception noise made the detector miss."""
-    outputs: dict[str, str] = field(default_factory=dict)
-    events: list[tuple[float, str, str | None, str | None, dict[str, Any]]] = field(
-        default_factory=list, repr=False)
-    """The context log's rows ``(time, kind, task, agent, data)``, kept when the run wrote
-    no output folder (otherwise they are in its ``log.sqlite``)."""
-    truth: frozenset[tuple[str, str, str]] = field(default_factory=frozenset, repr=False)
-    """What the world makes true at the end, whatever the robot perceived: where each
-    object is (``isOn``, ``isIn``), who holds what; a site's panels ``mounted`` and seams
-    ``welded``.  What a campaign checks a verdict against (:mod:`sim.fuzz`)."""
-
-    @property
-    def real_time_factor(self) -> float:
-        return self.simulated_seconds / self.wall_seconds if self.wall_seconds > 0 else math.inf
-
-    def summary(self) -> dict[str, Any]:
-        out = asdict(self)
-        del out["events"], out["truth"]
-        out["outcome"] = "passed" if self.passed else "failed"
-        out["real_time_factor"] = round(self.real_time_factor, 1)
-        out["simulated_seconds"] = round(self.simulated_seconds, 2)
-        out["wall_seconds"] = round(self.wall_seconds, 3)
-        out["setup_seconds"] = round(self.setup_seconds, 3)
-        return out
 
 
 def load(path: str | Path) -> tuple[Scenario, Any, Any]:
@@ -170,27 +125,6 @@ def run_scenario(path: str | Path | Scenario | Any, *, seed: int = 0,
             write_output(out_dir / "summary.json", json.dumps(result.summary(), indent=2) + "\n")
             result.outputs["summary"] = str(out_dir / "summary.json")
     return result
-
-
-class MemoryLog:
-    """The context log's interface, kept in memory when no output folder is asked for."""
-
-    def __init__(self) -> None:
-        self.events: list[tuple[float, str, str | None, str | None, dict[str, Any]]] = []
-
-    def record(self, t: float, kind: str, *, task: str | None = None,
-               agent: str | None = None, **data: Any) -> int:
-        self.events.append((t, kind, task, agent, data))
-        return len(self.events)
-
-    def flush(self) -> None:
-        pass
-
-    def __enter__(self) -> MemoryLog:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        pass
 
 
 def _log(path: Path | None, seed: int) -> Any:
@@ -459,8 +393,8 @@ class _Run:
         return happened(events, self.facts, self.scenario.robot, end)
 
     def write(self, out_dir: Path, log_path: Path | None) -> dict[str, str]:
-        from shary.display import render_tree
-        from shary.timeline import write_timeline
+        from shary.log.display import render_tree
+        from shary.log.timeline import write_timeline
 
         outputs = {"log": str(log_path)}
         render_tree(self.sup.tree, out_dir / "tree.svg", title=f"{self.scenario.name}: task tree")

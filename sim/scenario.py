@@ -17,26 +17,24 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
-from jsonschema import Draft202012Validator
-
-from shary.acts import ActRegistry, builtin_acts
 from shary.io.recipes import load_library
-from shary.recipes import RecipeLibrary
+from shary.kernel.recipes import RecipeLibrary
 from shary.recognition.models import builtin_models, load_action_models
+from shary.statechart.acts import ActRegistry, builtin_acts
 from userfiles import yamlsafe
 from userfiles.errors import FileError
 from userfiles.reader import Reader, read, spelled
-from userfiles.schema import did_you_mean, validator
+from userfiles.schema import did_you_mean
 
 from .humans import HUMAN_PLACES, Profile, profile_from
 from .judge import Expect
 from .objects import check_new_objects, is_new
 from .room import BOTTLES, FOOTPRINTS, FURNITURE, PLACES
+from .schemafiles import schema
 
 HERE = Path(__file__).resolve().parent
 SCENARIOS_DIR = HERE / "scenarios"
 PROFILES_DIR = HERE / "profiles"
-SCHEMAS_DIR = HERE / "schemas"
 DEFAULT_TIMEOUT = 180.0
 PLANNING_DOMAIN = "living-room"
 """The domain a run's planner-backed recipes plan in."""
@@ -109,11 +107,6 @@ def find_scenario(name_or_file: str) -> Path:
     return found
 
 
-@cache
-def _schema(name: str) -> Draft202012Validator:
-    return validator(SCHEMAS_DIR, name)
-
-
 _TEXT_PARAMS = frozenset({"text"})
 """Task parameters whose value is words to say (the inform task's), not a thing."""
 _WORD_VALUED = frozenset({"type", "color"})
@@ -148,7 +141,7 @@ def load_profile(name: str | Path, things: set[str] = frozenset(),
         _check_profile(reader, (), reader.data, things, acts, atomic)
         return profile_from(path.stem, reader.data)
 
-    return read(path, _schema("profile"), meaning)
+    return read(path, schema("profile"), meaning)
 
 
 def load_scenario(path: str | Path, *, acts: ActRegistry | None = None,
@@ -167,7 +160,7 @@ def load_scenario(path: str | Path, *, acts: ActRegistry | None = None,
         from .weld.scenario import load_weld_scenario
 
         return load_weld_scenario(path)  # type: ignore[return-value]
-    return read(path, _schema("scenario"), lambda reader: _Reading(reader, acts).scenario(),
+    return read(path, schema("scenario"), lambda reader: _Reading(reader, acts).scenario(),
                 text=text)
 
 

@@ -1,6 +1,6 @@
 """The simulation's clockwork: activities ticked on the supervisor's clock, carried objects.
 
-A :class:`Simulation` shares the supervisor's :class:`~shary.loop.EventLoop`
+A :class:`Simulation` shares the supervisor's :class:`~shary.kernel.loop.EventLoop`
 (one clock, one thread, deterministic).  While some activity runs, a tick is
 scheduled every :data:`TICK` simulated seconds: each activity advances, what
 people and robots hold follows their hands, and the observers (perception)

@@ -5,8 +5,9 @@ that does not refuse a hopeless decomposition where it is chosen runs out of nod
 
 from __future__ import annotations
 
-from planner import depthfirst, load_hddl, validate
-from planner.depthfirst import first_plan
+from planner import load_hddl, validate
+from planner.search import depthfirst
+from planner.search.depthfirst import first_plan
 
 CHORES = """\
   (:method work :parameters (?b ?n - bit) :task (chores ?b) :precondition (next ?b ?n)

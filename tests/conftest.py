@@ -11,6 +11,9 @@ from rosfixtures import ros_domain, spawn  # noqa: F401 -- the ROS tests' fixtur
 
 from shary.cli import main
 
+pytest_plugins = ["suites"]
+"""Whether an external suite is there is asked as each test starts (tests/suites.py)."""
+
 REPO = Path(__file__).resolve().parents[1]
 PROBLEM_LINE = re.compile(r"^(?P<file>.+):(?P<line>\d+):(?P<col>\d+): error: (?P<message>.+)$")
 

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from shary.executors import ExecutorRegistry, Reporter, Request
-from shary.facts import FactDatabase
+from shary.facts.database import FactDatabase
 from shary.io.recipes import load_library
-from shary.loop import EventLoop
-from shary.supervisor import Supervisor
+from shary.kernel.executors import ExecutorRegistry, Reporter, Request
+from shary.kernel.loop import EventLoop
+from shary.kernel.supervisor import Supervisor
 
 
 @dataclass

@@ -7,6 +7,10 @@ README's "External suites" section makes them: ``scion/`` is the ``test/`` folde
 github.com/jbeard4/scxml-test-framework, ``ipc2020/`` a clone of
 github.com/panda-planner-dev/ipc2020-domains.  A test that needs one and does not find
 it skips with :func:`absent`'s message, which says how to get it.
+
+Whether a suite is there is asked when each test runs, not when its module is imported
+(:func:`pytest_runtest_setup`, this module being a pytest plugin that ``conftest.py``
+loads): a suite put in place while pytest collects is found by every test.
 """
 
 from __future__ import annotations
@@ -43,5 +47,18 @@ def absent(name: str) -> str:
 
 
 def needs(name: str) -> pytest.MarkDecorator:
-    """Skip the test, saying how to get the suite, when the suite ``name`` is absent."""
-    return pytest.mark.skipif(not suite(name).is_dir(), reason=absent(name))
+    """Mark a test that reads the suite ``name``: it skips, saying how to get the suite,
+    when the suite is absent as the test starts."""
+    return pytest.mark.suite(name)
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line("markers", "suite(name): reads the external suite NAME "
+                            "(tests/suites.py); skipped when it is absent")
+
+
+def pytest_runtest_setup(item: pytest.Item) -> None:
+    """Skip a test marked :func:`needs` whose suite is not there now."""
+    for mark in item.iter_markers("suite"):
+        if not suite(mark.args[0]).is_dir():
+            pytest.skip(absent(mark.args[0]))

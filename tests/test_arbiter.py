@@ -5,11 +5,11 @@ from __future__ import annotations
 
 from scripted import ScriptedExecutor
 
-from shary.arbiter import ACT, TASK, WATCH, BodyArbiter
-from shary.executors import ExecutorRegistry, Reporter, Request
-from shary.loop import EventLoop
-from shary.tasktree import ACT as ACT_NODE
-from shary.tasktree import ATOMIC, TaskTree
+from shary.kernel.arbiter import ACT, TASK, WATCH, BodyArbiter
+from shary.kernel.executors import ExecutorRegistry, Reporter, Request
+from shary.kernel.loop import EventLoop
+from shary.kernel.tasktree import ACT as ACT_NODE
+from shary.kernel.tasktree import ATOMIC, TaskTree
 
 
 class Body:

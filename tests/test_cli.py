@@ -300,3 +300,109 @@ def test_json_simulate_an_event_no_state_takes(shary):
     doc = _json(shary, "simulate", "give-object", "H-AGRE", "--json", status=2)
     assert doc == {"error": "no state of give-object takes the event 'H-AGRE' "
                             "(did you mean 'H-AGREE'?)"}
+
+
+# -- slips a newcomer met ----------------------------------------------------------
+
+
+def test_validate_a_folder_checks_the_files_in_it(shary, tmp_path):
+    """Before: "FOLDER:1:1: error: cannot read file: Is a directory"."""
+    folder = tmp_path / "mine"
+    (folder / "below").mkdir(parents=True)
+    good = REPO / "docs" / "tutorial" / "ask-then-do.yaml"
+    (folder / "ask.yaml").write_text(good.read_text(encoding="utf-8"), encoding="utf-8")
+    (folder / "bad.yml").write_text("scheme: bad\ninitial: nowhere\n"
+                                    "states:\n  a: {act: ASK-TASK}\n")
+    (folder / "notes.txt").write_text("not a file of shary's")
+    (folder / "below" / "deep.yaml").write_text("scheme: [unclosed\n")
+    status, out, err = shary("validate", folder)
+    assert status == 2
+    assert out.split() == ["ok", str(folder / "ask.yaml")]
+    assert {m["file"] for m in problems(err)} == {str(folder / "bad.yml")}
+    assert "Is a directory" not in err
+
+
+def test_validate_a_folder_without_files_says_what_to_give(shary, tmp_path):
+    (tmp_path / "below").mkdir()
+    (tmp_path / "below" / "deep.yaml").write_text("acts: {}\n")
+    status, _, err = shary("validate", tmp_path)
+    assert status == 2
+    (problem,) = problems(err)
+    assert problem["file"] == str(tmp_path) and problem["message"] == (
+        "a folder with no .yaml, .yml or .ttl file in it (shary validate reads the files "
+        "directly in a folder, not those in folders below): name the files or folders to check")
+
+
+def test_world_without_ros_on_a_living_room_scenario_says_to_add_ros(shary):
+    status, _, err = shary("world", "give-bottle")
+    assert status == 2
+    assert "not a seam-welding scenario" in err
+    assert "'shary world --ros give-bottle' (docs/ros2.md)" in err
+
+
+LOG = REPO / "tests" / "hostile" / "log" / "node-of-an-unknown-kind.sqlite"
+
+
+SCHEME = ["render", "scheme", "give-object"]
+TREE = ["render", "tree", str(LOG)]
+PLAN = ["plan", "fig6", str(REPO / "planner" / "problems" / "fig6.yaml"), "--render", "tree"]
+DOT = ".svg, .png, .dot, .gv"
+
+
+@pytest.mark.parametrize("argv, name, what, allowed", [
+    (SCHEME, "out.gif", "a .gif file", f"{DOT}, .mmd, .mermaid, .md"),
+    (TREE, "out.gif", "a .gif file", DOT), (TREE, "out.mmd", "a .mmd file", DOT),
+    (TREE, "tree", "a file without a suffix", DOT), (PLAN, "out.gif", "a .gif file", DOT),
+    (PLAN, "out.mmd", "a .mmd file", DOT)],
+    ids=["scheme-gif", "tree-gif", "tree-mermaid", "tree-no-suffix", "plan-gif",
+         "plan-mermaid"])
+def test_a_drawing_to_a_suffix_it_cannot_take_is_refused_before_the_work(
+        argv, name, what, allowed, shary, tmp_path):
+    """Before: exit 1 (the status of a run whose expectation failed), after the work."""
+    out = tmp_path / name
+    status, stdout, err = shary(*argv, "-o", out)
+    assert status == 2 and stdout == ""
+    assert err == f"{out}: error: cannot draw to {what} (use one of {allowed})\n"
+    assert not out.exists()
+
+
+def test_render_scheme_says_what_its_output_may_be(capsys):
+    with pytest.raises(SystemExit):
+        main(["render", "scheme", "--help"])
+    helped = " ".join(capsys.readouterr().out.split())
+    assert "-o OUT, --output OUT the file to draw; its suffix says how: .svg or .png" in helped
+
+
+def test_conformance_on_a_missing_folder_points_to_the_external_suites(shary, tmp_path):
+    status, out, err = shary("conformance", tmp_path / "suites" / "scion")
+    assert status == 2 and out == ""
+    assert f"{tmp_path / 'suites' / 'scion'}: no such folder" in err
+    assert "the README's section 'External suites' says how to clone it" in err
+
+
+@pytest.mark.parametrize("command", ["run", "serve"])
+def test_the_seed_says_its_default(command, capsys):
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    helped = " ".join(capsys.readouterr().out.split())
+    assert "--seed SEED seed of the people's random choices (default 0)" in helped
+
+
+def test_run_quiet_prints_the_verdict_alone(shary, tmp_path):
+    """Before: the verdict, then "wrote DIR/: log.sqlite, …"."""
+    status, out, err = shary("run", "give-bottle", "--quiet", "--out", tmp_path)
+    assert status == 0 and err == ""
+    (line,) = out.splitlines()
+    assert line.startswith("PASSED give-bottle: ") and line.endswith(", seed 0")
+    assert (tmp_path / "summary.json").is_file()
+
+
+def test_run_quiet_says_why_a_run_failed(shary, tmp_path):
+    scenario = (REPO / "sim" / "scenarios" / "give-bottle.yaml").read_text(encoding="utf-8")
+    bad = tmp_path / "unmet.yaml"
+    bad.write_text(scenario.replace("tasks: {give-object: done}",
+                                    "tasks: {give-object: failed}"), encoding="utf-8")
+    status, out, _ = shary("run", bad, "--quiet", "--out", tmp_path / "out")
+    assert status == 1
+    verdict, *why = out.splitlines()
+    assert verdict.startswith("FAILED give-bottle: ") and why and "wrote" not in out

@@ -12,10 +12,10 @@ import yaml
 from hostile import run_inprocess
 
 from planner import load_domain, load_problem
-from planner.conditional import explore
-from planner.policy import select, walk
-from planner.sharedplan import to_dict
-from planner.validate import validate_conditional
+from planner.conditional.exploration import explore
+from planner.conditional.policy import select, walk
+from planner.conditional.sharedplan import to_dict
+from planner.evaluation.validate import validate_conditional
 
 ROOT = Path(__file__).resolve().parent.parent
 STACK = ROOT / "planner" / "domains" / "stack.yaml"

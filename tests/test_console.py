@@ -2,8 +2,10 @@
 the endpoints' files, replay over a WebSocket, and the MCAP export read back.
 
 A small log is written here with :class:`ContextLog` (the events a give-object
-run logs, plus a snapshot), so these tests need no simulation; the live run
-and the page itself are tested in a real browser (test_console_browser.py).
+run logs, plus a snapshot), so most of these tests need no simulation; the
+live run and the page itself are tested in a real browser
+(test_console_browser.py), and what ``shary serve`` says on its terminal with
+a live run of give-bottle here.
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ from __future__ import annotations
 import base64
 import json
 import os
+import time
 import urllib.error
 import urllib.request
 from pathlib import Path
@@ -21,12 +24,13 @@ from hostile import HOSTILE, assert_refused, run_inprocess
 from PIL import Image
 from websockets.sync.client import connect
 
+from shary.cli import main
 from shary.console.export import SCHEMAS
 from shary.console.operator import Refused, parse
 from shary.console.replay import Replay, named_schemes
 from shary.console.server import serving
 from shary.console.view import View
-from shary.log import ContextLog, read_events
+from shary.log.contextlog import ContextLog, read_events
 
 MESSAGES = HOSTILE / "console"
 LOGS = HOSTILE / "log"
@@ -326,3 +330,39 @@ def test_pages_of_other_sites_and_other_host_names_are_refused(replay_server: st
     with pytest.raises(InvalidStatus, match="400"):
         connect(replay_server.replace("http", "ws") + "/ws",
                 additional_headers={"Host": "evil.example"})
+
+
+# -- shary serve on its terminal ------------------------------------------------------
+
+
+def _serve_until(monkeypatch, ended: bool) -> None:
+    """Stand in for the blocking server of ``shary serve``: serve the run on a free port,
+    connect a page (which starts the run), then stop the server once the run has ended
+    (``ended``) or as soon as it runs, as Ctrl-C does."""
+    def serve(live, host: str, port: int) -> int:
+        with serving(live) as url, connect(url.replace("http", "ws") + "/ws") as ws:
+            deadline = time.monotonic() + 120
+            while live.state != ("ended" if ended else "running"):
+                assert time.monotonic() < deadline, live.state
+                ws.recv(timeout=30)
+        return 0
+
+    monkeypatch.setattr("shary.console.server.serve", serve)
+
+
+def test_serve_says_the_verdict_and_the_files_when_the_run_ends(tmp_path, monkeypatch,
+                                                                 capsys):
+    """Before: nothing on the terminal after the address, whatever the run did."""
+    _serve_until(monkeypatch, ended=True)
+    assert main(["serve", "give-bottle", "--speed", "0", "--out", str(tmp_path)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].startswith("PASSED give-bottle: ") and lines[0].endswith(" s simulated")
+    assert lines[1:] == [f"wrote {tmp_path}/: log.sqlite, tree.svg, timeline.svg, summary.json"]
+
+
+def test_serve_stopped_before_the_run_ends_says_so(tmp_path, monkeypatch, capsys):
+    _serve_until(monkeypatch, ended=False)
+    assert main(["serve", "give-bottle", "--paused", "--out", str(tmp_path)]) == 0
+    assert capsys.readouterr().out.splitlines() == [
+        f"the run was stopped before its end: {tmp_path}/ holds its log so far"]
+    assert (tmp_path / "log.sqlite").is_file()

@@ -26,7 +26,7 @@ from browser import (  # skips this module without a browser
 
 from shary.console.replay import Replay, named_schemes
 from shary.console.server import serving
-from shary.log import read_events
+from shary.log.contextlog import read_events
 from sim.cli import live_run
 from sim.scenario import find_scenario
 

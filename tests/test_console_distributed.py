@@ -24,7 +24,7 @@ from urllib.request import urlopen
 
 from websockets.sync.client import connect
 
-from shary.log import ContextLog, read_events
+from shary.log.contextlog import ContextLog, read_events
 from shary.team import Team, load_team
 
 TEAM = Path(__file__).parent / "data" / "transport" / "panels.team.yaml"

@@ -22,7 +22,7 @@ from shary.console.live import LiveRun, _check_report
 from shary.console.planview import plan_rows
 from shary.console.replay import Replay, named_schemes
 from shary.console.view import View
-from shary.log import ContextLog, LogEvent
+from shary.log.contextlog import ContextLog, LogEvent
 from shary.recognition.models import builtin_models, load_action_models
 from shary.recognition.recognizer import Recognizer
 
@@ -217,7 +217,7 @@ def test_a_breakpoint_on_a_task_state_pauses_the_run():
 
 def test_the_recognizer_takes_a_reported_action_like_a_recognized_one():
     facts_rows: list[dict] = []
-    from shary.facts import FactDatabase
+    from shary.facts.database import FactDatabase
 
     facts = FactDatabase()
     models = load_action_models([builtin_models("stack")], facts)

@@ -14,7 +14,7 @@ from scripted import ScriptedExecutor
 from shary.console.replay import named_schemes
 from shary.console.teamlive import TeamSteering, roster, run_team
 from shary.console.view import View
-from shary.log import ContextLog, LogEvent, read_events
+from shary.log.contextlog import ContextLog, LogEvent, read_events
 from shary.team import Team, load_team
 
 DATA = Path(__file__).parent / "data"

@@ -28,7 +28,7 @@ from browser import (  # skips this module without a browser
 from selenium.webdriver.support.ui import Select
 
 from shary.console.server import serving
-from shary.log import read_events
+from shary.log.contextlog import read_events
 from sim.cli import live_run
 from sim.scenario import find_scenario
 

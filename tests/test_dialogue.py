@@ -7,7 +7,7 @@ import pytest
 from scripted import World
 
 import planner
-from planner.domain import Assignment
+from planner.model.domain import Assignment
 from shary.dialogue.attention import tell
 from shary.dialogue.negotiation import Taken
 
@@ -200,7 +200,7 @@ def test_taken_steps_reach_the_planner(world):
 
 
 def test_a_step_taken_on_while_the_task_runs_replans_it(world):
-    from shary.recipes import Step, Term
+    from shary.kernel.recipes import Step, Term
 
     seen = []
 

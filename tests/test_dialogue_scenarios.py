@@ -6,7 +6,7 @@ from __future__ import annotations
 import subprocess
 import sys
 
-from shary.log import read_events
+from shary.log.contextlog import read_events
 from sim.run import run_scenario
 from sim.scenario import builtin_scenarios
 

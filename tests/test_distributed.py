@@ -21,7 +21,7 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
-from shary.log import read_events
+from shary.log.contextlog import read_events
 from shary.team import Team, load_team
 
 TEAM = Path(__file__).parent / "data" / "transport" / "panels.team.yaml"
@@ -93,7 +93,7 @@ def test_team_up_runs_the_goal_as_in_process(tmp_path: Path, shary) -> None:
     logs = tmp_path / "logs"
     assert sorted(p.name for p in logs.glob("*.sqlite")) == [
         "EVA1.sqlite", "EVA2.sqlite", "IVA.sqlite", "managers.sqlite"]
-    from shary.log import ContextLog
+    from shary.log.contextlog import ContextLog
 
     inproc = ContextLog(tmp_path / "inproc.sqlite")
     again = Team(spec, log=inproc)

@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 from test_transport import free_port
 
-from shary.log import read_events
+from shary.log.contextlog import read_events
 from shary.team import load_team
 from shary.transport.distributed import Conductor
 

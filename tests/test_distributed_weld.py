@@ -19,16 +19,16 @@ from typing import Any
 
 import pytest
 
-from shary.facts import FactDatabase
-from shary.log import merged_events
-from shary.loop import EventLoop
+from shary.facts.database import FactDatabase
+from shary.kernel.loop import EventLoop
+from shary.log.contextlog import merged_events
 from shary.team.agents import INFORM, QUERY
 from shary.team.world import ATTACH, CANCEL, WORLD
 from shary.transport.facts import SUBSCRIBE, apply_change
 from shary.transport.messages import PICTURE, Act, Assignment, FactChange, Message, Progress
 from shary.transport.port import MessagePort
 from shary.transport.wire import MAX_BYTES, decode, encode
-from sim.run import CHUNK
+from sim.results import CHUNK
 from sim.scenario import builtin_scenarios
 from sim.weld.run import run_weld
 from sim.weld.scenario import load_weld_scenario

@@ -7,8 +7,8 @@ import textwrap
 import pytest
 
 from shary import ConditionRegistry, SimulatedClock, compile_scheme, load_scheme
-from shary.instance import LivelockError, SchemeListener
 from shary.io.schemes import parse_scheme
+from shary.statechart.instance import LivelockError, SchemeListener
 from userfiles.yamlsafe import load_text
 
 

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 from rdflib import Literal, URIRef
 
-from shary.facts import FactDatabase, FactEvent
+from shary.facts.database import FactDatabase, FactEvent
 from userfiles.errors import FileError
 
 LIVING_ROOM = Path(__file__).parent / "data" / "living-room.ttl"

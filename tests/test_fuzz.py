@@ -366,3 +366,35 @@ def test_a_helper_killed_while_carrying_puts_the_panel_down_and_helps_no_more():
     assert failed == ["EVA2 left: P4 was put down",
                       "EVA2 has left the site: nobody to carry P4 with"]
     assert violations == {} and state == "failed" and "mount-P4" in reason
+
+
+def test_the_report_says_the_task_verdict_and_the_invariants_apart():
+    """Before: "✓ seed 1 failed", the tick for the invariants beside the task's verdict,
+    read as a contradiction."""
+    from rich.console import Console
+
+    from sim.fuzz.campaign import Campaign, Outcome
+    from sim.fuzz.report import print_campaign, progress_line
+
+    checked = ("verdict", "no-ongoing", "facts", "told-unseen")
+    failed = Outcome(1, "clean-up", "Bob refuses", "failed", "declined", 44.1, 0.4,
+                     checked=checked)
+    lied = Outcome(2, "give-bottle", "Alice leaves", "achieved", "", 16.7, 0.2,
+                   {"facts": "the bottle is on the shelf"}, checked)
+    console = Console(record=True, width=200, color_system=None)
+    told = progress_line(console)
+    told(failed)
+    told(lied)
+    print_campaign(console, Campaign("living-room", 1, [failed, lied], 0.6))
+    lines = console.export_text().splitlines()
+    assert [line.split() for line in lines[:3]] == [
+        ["seed", "task", "verdict", "invariants", "held", "simulated", "wall", "scenario"],
+        ["1", "failed", "✓", "all", "4", "44.1", "s", "0.4", "s", "clean-up"],
+        ["2", "achieved", "✗", "3", "of", "4", "16.7", "s", "0.2", "s", "give-bottle",
+         "(violated:", "facts)"]]
+    header = lines[0]
+    assert lines[1].index("failed") == lines[2].index("achieved") == header.index("task")
+    assert lines[1].index("✓") == lines[2].index("✗") == header.index("invariants held")
+    assert lines[3] == ("shary fuzz living-room: 2 runs (seed 1 to 2): task verdicts 1 "
+                        "achieved, 1 failed, 0 none; invariants held in 1 of 2; 60.8 s "
+                        "simulated in 0.6 s")

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 from hostile import HOSTILE, MAX_MB, MAX_SECONDS, assert_refused, run_inprocess, run_subprocess
 
-from planner import hddl
+from planner.io import hddl
 
 CORPUS = HOSTILE / "hddl"
 DOMAIN = CORPUS / "good-domain.hddl"

@@ -24,7 +24,7 @@ sys.path.insert(0, str(HOSTILE / "log"))
 from make_corpus import CORPUS, TREE_ONLY, good_log  # noqa: E402
 
 from shary.commands import log as shary_log  # noqa: E402
-from shary.tasktree import MAX_DRAWN_NODES  # noqa: E402
+from shary.kernel.tasktree import MAX_DRAWN_NODES  # noqa: E402
 
 LOGS = HOSTILE / "log"
 TREE_KINDS = {"node", "task-state", "node-removed"}
@@ -82,6 +82,43 @@ def test_a_data_key_named_like_a_node_attribute_does_not_break_the_replay(tmp_pa
     outcome = run_inprocess("render", "tree", path, "-o", tmp_path / "tree.dot")
     assert outcome.status == 0, outcome.err
     assert "odd" in (tmp_path / "tree.dot").read_text()
+
+
+def _with_time(path: Path, time: str) -> Path:
+    """A good log whose second event (node n2, at 1 s) has the time ``time`` (SQL), in a
+    table that allows a null time as a table made by another tool may."""
+    good_log(path)
+    with closing(sqlite3.connect(path)) as conn:
+        conn.executescript(f"""
+            CREATE TABLE loose (seq INTEGER PRIMARY KEY, time REAL, kind TEXT NOT NULL,
+                                task TEXT, agent TEXT, data TEXT NOT NULL);
+            INSERT INTO loose SELECT * FROM events;
+            DROP TABLE events;
+            ALTER TABLE loose RENAME TO events;
+            UPDATE events SET time = {time} WHERE seq = 2;""")
+    return path
+
+
+@pytest.mark.parametrize("time, shown", [("'soon'", '"soon"'), ("X'00'", "bytes"),
+                                         ("9e999", "inf"), ("NULL", "null")])
+def test_a_tree_at_a_time_refuses_a_row_whose_time_is_not_a_number(time: str, shown: str,
+                                                                    tmp_path: Path):
+    """Before, the time bound left such a row out unseen: the tree at 2.5 s was drawn
+    without it (``shary render tree LOG --at 2.5``: "0 nodes" when every time was text)."""
+    path, out = _with_time(tmp_path / "log.sqlite", time), tmp_path / "tree.svg"
+    outcome = run_inprocess("render", "tree", path, "--at", "2.5", "-o", out)
+    assert_refused(outcome, path, message=rf"^event #2 \(kind node\): time is {shown}, "
+                   r"not a finite number of seconds")
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("time, shown", [("-9e999", "-inf"), ("NULL", "null")])
+def test_events_since_a_time_refuse_a_row_whose_time_is_not_a_number(time: str, shown: str,
+                                                                      tmp_path: Path):
+    path = _with_time(tmp_path / "log.sqlite", time)
+    outcome = run_inprocess("log", path, "--since", "0.5")
+    assert_refused(outcome, path, message=rf"^event #2 \(kind node\): time is {shown}, "
+                   r"not a finite number of seconds")
 
 
 HUGE = """

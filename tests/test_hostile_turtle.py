@@ -18,8 +18,8 @@ import urllib.request
 import pytest
 from hostile import HOSTILE, MAX_MB, MAX_SECONDS, assert_refused, run_inprocess, run_subprocess
 
-from shary.facts import FactDatabase
-from shary.turtle import MAX_TURTLE_BYTES, MAX_TURTLE_TRIPLES
+from shary.facts.database import FactDatabase
+from shary.facts.turtle import MAX_TURTLE_BYTES, MAX_TURTLE_TRIPLES
 
 TURTLE = HOSTILE / "turtle"
 W = "@prefix w: <http://shary.dev/world#> .\n"

@@ -6,11 +6,11 @@ import textwrap
 
 import pytest
 
-from shary.clock import SimulatedClock
-from shary.compiler import compile_scheme
-from shary.conformance import run_test
 from shary.io.schemes import parse_scheme
 from shary.io.scxml import import_scxml
+from shary.statechart.clock import SimulatedClock
+from shary.statechart.compiler import compile_scheme
+from shary.statechart.conformance import run_test
 from userfiles.errors import FileError
 from userfiles.yamlsafe import load_text
 

@@ -13,12 +13,12 @@ import textwrap
 import pytest
 from conftest import problems
 
-from shary.clock import SimulatedClock
-from shary.compiler import compile_scheme
-from shary.conformance import run_test
-from shary.instance import LivelockError
 from shary.io.schemes import parse_scheme
 from shary.io.scxml import import_scxml
+from shary.statechart.clock import SimulatedClock
+from shary.statechart.compiler import compile_scheme
+from shary.statechart.conformance import run_test
+from shary.statechart.instance import LivelockError
 from userfiles.errors import FileError
 from userfiles.yamlsafe import load_text
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from scripted import World
 
-from shary.tasktree import ACT, CANCELLED, DONE, SUSPENDED
+from shary.kernel.tasktree import ACT, CANCELLED, DONE, SUSPENDED
 
 
 @pytest.fixture
@@ -186,7 +186,7 @@ chronicles:
 
 def test_chronicle_creates_a_goal_once_not_twice(write):
     world = World(extra_library=[write("chronicle.yaml", CHRONICLE)])
-    from shary.agenda import ChronicleRecognizer
+    from shary.kernel.agenda import ChronicleRecognizer
 
     ChronicleRecognizer(world.sup)
     world.executor.durations["navigate"] = 100.0  # the goal stays open meanwhile

@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 
 from shary.commands.log import add_log
-from shary.log import ContextLog, LogEvent, end_time, export_jsonl, read_events
+from shary.log.contextlog import ContextLog, LogEvent, end_time, export_jsonl, read_events
 from userfiles.errors import FileError
 
 # (time, kind, task, agent, data): a short run of give-object.
@@ -142,7 +142,7 @@ def test_flushed_events_are_readable_while_the_run_writes(tmp_path: Path):
 
 WRITER = """
 import os, signal, sys
-from shary.log import ContextLog
+from shary.log.contextlog import ContextLog
 log = ContextLog(sys.argv[1])
 for i in range(1000):
     log.record(i / 100, "tick", task="t%d" % (i % 7), agent="robot", n=i)
@@ -310,7 +310,7 @@ def test_a_truncated_log_is_damaged_not_foreign(tmp_path: Path):
 
 
 def test_reading_a_finished_log_leaves_nothing_beside_it(run_log: Path, shary_log):
-    """Issue 17: no -wal/-shm files after `shary log` (the log is opened immutable)."""
+    """No -wal/-shm files after `shary log` (the log is opened immutable)."""
     assert sorted(p.name for p in run_log.parent.iterdir()) == ["run.sqlite"]
     before = run_log.read_bytes()
     assert shary_log(run_log)[0] == 0 and len(read_events(run_log, kind="act")) == 1
@@ -355,7 +355,7 @@ def test_the_writer_refuses_what_it_could_not_read_back(tmp_path: Path):
 
 
 def test_nesting_is_measured_without_recursion():
-    from shary.logrows import nesting
+    from shary.log.rows import nesting
 
     assert nesting("[" * 100 + "]" * 100) == 100
     assert nesting("[" * 200_000) == 200_000  # unclosed: as deep as it goes
@@ -365,7 +365,7 @@ def test_nesting_is_measured_without_recursion():
 
 INTERRUPTED = """
 import sys
-from shary.log import ContextLog
+from shary.log.contextlog import ContextLog
 with ContextLog(sys.argv[1]) as log:
     i = 0
     while True:

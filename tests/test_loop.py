@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from shary.clock import SimulatedClock
-from shary.loop import STEADY_GC_THRESHOLDS, EventLoop, WallClock
+from shary.kernel.loop import STEADY_GC_THRESHOLDS, EventLoop, WallClock
+from shary.statechart.clock import SimulatedClock
 
 
 def test_ready_work_runs_in_fifo_order_after_the_current_callback():

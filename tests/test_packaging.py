@@ -1,7 +1,7 @@
 """The installed project is the checkout: every package folder is listed for the wheel.
 
 A package missing from ``[tool.setuptools] packages`` works in an editable
-install and is absent after a plain ``pip install .`` (as ``planner.hddl``
+install and is absent after a plain ``pip install .`` (as ``planner.io.hddl``
 once was), so CI, which installs that way, fails where a developer's checkout
 passes.
 """

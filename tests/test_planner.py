@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 
 from planner import PlanAction, load_domain, load_problem, plan, validate
-from planner.domain import SelectedRule
-from planner.search import Search
+from planner.model.domain import SelectedRule
+from planner.search.branchbound import Search
 from userfiles.errors import FileError
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "planner" / "problems"

@@ -8,7 +8,7 @@ from fractions import Fraction
 import numpy
 import pytest
 
-from planner.ahp import RANDOM_INDEX, AHPError, AHPResult, priority_vector
+from planner.evaluation.ahp import RANDOM_INDEX, AHPError, AHPResult, priority_vector
 
 
 def test_consistent_3x3_gives_the_exact_ratios():

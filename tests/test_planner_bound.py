@@ -9,9 +9,9 @@ from pathlib import Path
 import pytest
 
 from planner import load_domain, load_problem, validate
-from planner.bound import RemainingCost, conjuncts
-from planner.search import Search
-from planner.state import State
+from planner.model.state import State
+from planner.search.bound import RemainingCost, conjuncts
+from planner.search.branchbound import Search
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.append(str(ROOT / "benchmarks"))

@@ -1,12 +1,13 @@
-"""The depth-first first-plan search (planner/depthfirst.py): what it prunes, its budgets."""
+"""The depth-first first-plan search (planner/search/depthfirst.py): what it prunes, its budgets."""
 
 from __future__ import annotations
 
 import pytest
 from chores import CHORES, chores_problem, plans_with_checks
 
-from planner import depthfirst, load_hddl, plan, validate
-from planner.depthfirst import BUDGET_EXHAUSTED, first_plan
+from planner import load_hddl, plan, validate
+from planner.search import depthfirst
+from planner.search.depthfirst import BUDGET_EXHAUSTED, first_plan
 
 WALK = """\
 (define (domain walk) (:requirements :typing :hierarchy :negative-preconditions :equality)

@@ -8,8 +8,8 @@ import subprocess
 
 import pytest
 
-from planner.display import PALETTE, agent_colours, streams_dot, tree_dot
-from planner.plan import CausalLink, Plan, PlanAction, TreeNode
+from planner.display.plans import PALETTE, agent_colours, streams_dot, tree_dot
+from planner.model.plan import CausalLink, Plan, PlanAction, TreeNode
 
 
 def clean_up_plan() -> Plan:
@@ -238,7 +238,7 @@ def _svg_nodes(svg: str) -> dict[str, tuple[float, float, list[tuple[str, float,
 
 
 def test_streams_boxes_hold_their_labels_and_the_ruler_marks_their_left_edges(tmp_path):
-    from planner.display import text_width
+    from planner.display.plans import text_width
 
     svg = subprocess.run([_graphviz_pure(), "-Tsvg"], capture_output=True, check=True,
                          input=streams_dot(clean_up_plan()).encode()).stdout.decode()

@@ -1,4 +1,4 @@
-"""The expression language of planning domains (planner/expr.py)."""
+"""The expression language of planning domains (planner/model/expr.py)."""
 
 from __future__ import annotations
 
@@ -12,9 +12,9 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from planner import closures as closures_module
-from planner import expr as expr_module
-from planner.expr import EvalError, ExprError, compile_effect, compile_expr
+from planner.model import closures as closures_module
+from planner.model import expr as expr_module
+from planner.model.expr import EvalError, ExprError, compile_effect, compile_expr
 
 ATTRIBUTES = {
     "Place": {},

@@ -1,4 +1,4 @@
-"""The HDDL reader (planner/hddl/): tokens, S-expressions, the checked tree, the IPC 2020 suite.
+"""The HDDL reader (planner/io/hddl/): tokens, S-expressions, the checked tree, the IPC 2020 suite.
 
 The suite is read where it lies (``ipc2020`` in the external suites' folder, see
 ``tests/suites.py``; never copied here); the tests that need it are skipped, saying how
@@ -21,8 +21,8 @@ from pathlib import Path
 import pytest
 from suites import absent, needs, suite
 
-from planner import hddl
-from planner.hddl import (
+from planner.io import hddl
+from planner.io.hddl import (
     Formula,
     HDDLDomain,
     Subtask,
@@ -684,7 +684,7 @@ def test_the_reader_imports_neither_shary_nor_sim():
     assert tops <= {"__future__", "difflib", "heapq", "os", "re", "collections", "dataclasses",
                     "typing", "userfiles", "planner"}
     assert {name for name in imported if name.startswith("planner")} <= {
-        f"planner.hddl.{m.stem}" for m in Path(hddl.__file__).parent.glob("*.py")}
+        f"planner.io.hddl.{m.stem}" for m in Path(hddl.__file__).parent.glob("*.py")}
 
 
 def test_each_module_of_the_reader_stays_small():

@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import pytest
 
-from planner import depthfirst, load_hddl, plan, validate
-from planner.ipc import write_ipc
-from planner.state import FactState
+from planner import load_hddl, plan, validate
+from planner.io.ipc import write_ipc
+from planner.model.state import FactState
+from planner.search import depthfirst
 
 MIXED = """\
 (define (domain Shop)

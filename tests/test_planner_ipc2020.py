@@ -15,7 +15,7 @@ from conftest import problems
 from suites import needs, suite
 
 from planner import load_hddl, plan, validate
-from planner.ipc import read_ipc, shape, write_ipc
+from planner.io.ipc import read_ipc, shape, write_ipc
 
 SUITE = suite("ipc2020")
 FEATURES = SUITE / "tests" / "ipc2020-feature-tests"

@@ -1,5 +1,5 @@
-"""Chains of facts a goal needs in order (planner/landmarks.py), as the depth-first search
-uses them: a stack that cannot add them in turn is refused, and the decompositions that
+"""Chains of facts a goal needs in order (planner/heuristics/landmarks.py), as the depth-first
+search uses them: a stack that cannot add them in turn is refused, and the decompositions that
 may add the next one are tried first.
 
 Monroe's plan recognition in small: ``seen2`` (the goal) is added by ``observe2`` only,
@@ -9,9 +9,9 @@ from __future__ import annotations
 
 from chores import CHORES, chores_problem, plans_with_checks
 
-from planner import depthfirst
-from planner.depthfirst import first_plan
-from planner.landmarks import chains_of
+from planner.heuristics.landmarks import chains_of
+from planner.search import depthfirst
+from planner.search.depthfirst import first_plan
 
 WATCH = """\
 (define (domain watch) (:requirements :typing :hierarchy :negative-preconditions)

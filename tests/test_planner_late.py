@@ -1,14 +1,15 @@
-"""Late binding of method variables (planner/late.py) and the goal facts a task stack may
-still add (planner/reach.py), in the goal-guided search (planner/progression.py)."""
+"""Late binding of method variables (planner/search/late.py) and the goal facts a task stack
+may still add (planner/heuristics/reach.py), in the goal-guided search
+(planner/search/progression.py)."""
 
 from __future__ import annotations
 
 from planner import load_hddl, validate
-from planner.depthfirst import DepthFirst
-from planner.ipc import read_ipc, write_ipc
-from planner.late import Unbound, search_patterns
-from planner.progression import BestFirst, best_first
-from planner.state import FactState
+from planner.io.ipc import read_ipc, write_ipc
+from planner.model.state import FactState
+from planner.search.depthfirst import DepthFirst
+from planner.search.late import Unbound, search_patterns
+from planner.search.progression import BestFirst, best_first
 
 # A workshop in Woodworking's shape: ``finish`` names a machine its method never looks at
 # (it only passes it on), and ``paint`` sprays with a machine of its own choosing.

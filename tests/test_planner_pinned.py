@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from planner import load_domain, load_problem
-from planner.search import Result, Search
+from planner.search.branchbound import Result, Search
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.append(str(ROOT / "benchmarks"))

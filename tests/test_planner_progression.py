@@ -1,13 +1,14 @@
-"""The goal-guided best-first search (planner/progression.py) and the IPC mode's portfolio
-(planner/portfolio.py): what the depth-first search cannot do within a node budget."""
+"""The goal-guided best-first search (planner/search/progression.py) and the IPC mode's portfolio
+(planner/search/portfolio.py): what the depth-first search cannot do within a node budget."""
 
 from __future__ import annotations
 
 import math
 
-from planner import depthfirst, load_hddl, plan, portfolio, validate
-from planner.ipc import read_ipc, write_ipc
-from planner.progression import best_first, least_work
+from planner import load_hddl, plan, validate
+from planner.io.ipc import read_ipc, write_ipc
+from planner.search import depthfirst, portfolio
+from planner.search.progression import best_first, least_work
 
 LIGHTS = """\
 (define (domain lights) (:requirements :typing :hierarchy :negative-preconditions)

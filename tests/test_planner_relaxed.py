@@ -1,14 +1,15 @@
-"""The ground model (planner/grounding.py) and the relaxed-composition heuristic
-(planner/relaxed.py) that guides the best-first search where the hierarchy alone does not:
-a miniature of AssemblyHierarchical, where any two ports may be connected before the
+"""The ground model (planner/heuristics/grounding.py) and the relaxed-composition heuristic
+(planner/heuristics/relaxed.py) that guides the best-first search where the hierarchy alone
+does not: a miniature of AssemblyHierarchical, where any two ports may be connected before the
 chain is checked."""
 
 from __future__ import annotations
 
 import math
 
-from planner import grounding, load_hddl, plan, validate
-from planner.progression import BestFirst, best_first, relaxed_model
+from planner import load_hddl, plan, validate
+from planner.heuristics import grounding
+from planner.search.progression import BestFirst, best_first, relaxed_model
 
 CABLING = """\
 (define (domain cabling) (:requirements :typing :hierarchy :negative-preconditions)

@@ -1,12 +1,13 @@
-"""Restarts of the best-first search with shuffled ties (planner/restarts.py): where the
+"""Restarts of the best-first search with shuffled ties (planner/search/restarts.py): where the
 estimate is flat, the file order is the whole search, and another order finds the plan."""
 
 from __future__ import annotations
 
 import pytest
 
-from planner import load_hddl, plan, restarts, validate
-from planner.progression import best_first
+from planner import load_hddl, plan, validate
+from planner.search import restarts
+from planner.search.progression import best_first
 
 # Twenty items to pick from; wandering ends only for a good item, and only once the bit
 # b0 is set: a bad item's walk goes through every set of bits before it fails, and all

@@ -1,4 +1,4 @@
-"""What a task may add, judged by the problem's types and static facts (planner/statics.py).
+"""What a task may add, judged by the problem's types and static facts (planner/model/statics.py).
 
 Monroe's plan recognition in small: the goal ``seen`` is added only when ``ann``
 acts (``observed``); ``busy`` (tried first) does 2^18 chores and then has a

@@ -1,13 +1,16 @@
-"""The facts a task stack needs and their relaxed cost from the state (planner/subgoals.py):
-the estimate that tells a reachable target from one the search would walk to in vain."""
+"""The facts a task stack needs and their relaxed cost from the state
+(planner/heuristics/subgoals.py): the estimate that tells a reachable target from one the
+search would walk to in vain."""
 
 from __future__ import annotations
 
 import pytest
 
-from planner import depthfirst, grounding, load_hddl, plan, portfolio, restarts, subgoals, validate
-from planner.progression import best_first
-from planner.subgoals import UNREACHED, Subgoals, task_needs
+from planner import load_hddl, plan, validate
+from planner.heuristics import grounding, subgoals
+from planner.heuristics.subgoals import UNREACHED, Subgoals, task_needs
+from planner.search import depthfirst, portfolio, restarts
+from planner.search.progression import best_first
 
 # Items go to free levels, each at the level it names (``place-at`` binds ``?n`` to every
 # level, as Freecell's methods bind a number to every successor pair).  The level only

@@ -1,12 +1,12 @@
-"""The goal facts' relaxed support through the task stack's actions (planner/support.py), in
-the goal-guided search (planner/progression.py)."""
+"""The goal facts' relaxed support through the task stack's actions
+(planner/heuristics/support.py), in the goal-guided search (planner/search/progression.py)."""
 
 from __future__ import annotations
 
 from planner import load_hddl, validate
-from planner.progression import BestFirst
-from planner.state import FactState
-from planner.support import Support
+from planner.heuristics.support import Support
+from planner.model.state import FactState
+from planner.search.progression import BestFirst
 
 # Finishing in Woodworking's shape: a part is glazed (one action) or sanded and varnished
 # (two), and ``m-help`` sands its part and varnishes *any* part (Woodworking's
@@ -98,7 +98,7 @@ def test_the_search_leaves_a_part_glazed_at_once_and_plans(write):
 def test_the_check_gives_itself_up_when_it_drops_no_node(write):
     # Where the lifted "may add" already tells the dead ends, the check drops nothing and
     # only costs: after TRIAL nodes without a drop it is not asked again.
-    from planner.support import TRIAL
+    from planner.heuristics.support import TRIAL
 
     problem = load_hddl(write("d.hddl", FINISHING), write("p.hddl", _finishing(3)))
     goals = [key for key, value in problem.goals.items() if value is True]

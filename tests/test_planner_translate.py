@@ -7,7 +7,7 @@ import dataclasses
 import pytest
 
 from planner import load_hddl, plan, validate
-from planner.ipc import read_ipc, shape, write_ipc
+from planner.io.ipc import read_ipc, shape, write_ipc
 from userfiles.errors import FileError
 
 DEPOT = """\

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from scripted import World
 
-from shary.planning import HatpPlanner
-from shary.recipes import parse_refinement
+from shary.kernel.planning import HatpPlanner
+from shary.kernel.recipes import parse_refinement
 
 LIVING_ROOM = {
     "base": {"type": "Place"}, "coffee-area": {"type": "Place"},

@@ -6,17 +6,17 @@ from __future__ import annotations
 from typing import Any
 
 import planner
-from planner.conditional import explore
-from planner.policy import select
-from shary.executors import ExecutorRegistry
-from shary.facts import FactDatabase
+from planner.conditional.exploration import explore
+from planner.conditional.policy import select
+from shary.facts.database import FactDatabase
 from shary.io.recipes import load_library
-from shary.loop import EventLoop
+from shary.kernel.executors import ExecutorRegistry
+from shary.kernel.loop import EventLoop
+from shary.kernel.supervisor import Supervisor
 from shary.plans.execution import PlanFollower
 from shary.plans.states import STATES, compiled_scheme
 from shary.plans.tasks import SharedPlan
 from shary.recognition.models import builtin_models, load_action_models
-from shary.supervisor import Supervisor
 
 CUBES = ["red_cube_1", "red_cube_2", "stick", "blue_cube_1", "blue_cube_2", "green_cube"]
 

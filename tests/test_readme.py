@@ -15,11 +15,14 @@ read ``../shared/suites`` are skipped, saying how to get the suites, when it is 
 
 from __future__ import annotations
 
+import os
 import re
 import shlex
 import shutil
 import subprocess
 import sys
+from collections import Counter
+from itertools import pairwise
 from pathlib import Path
 
 import pytest
@@ -87,6 +90,28 @@ def test_the_readme_says_where_to_get_the_suites_its_commands_read():
     assert read and read <= {path.split("/")[3] for path in fetched | linked}
     assert "https://github.com/jbeard4/scxml-test-framework" in " ".join(
         " ".join(what) for language, what in COMMANDS if language == "sh")
+
+
+RUN_FILES = ("log.sqlite", "tree.svg", "timeline.svg", "summary.json")
+"""What ``shary run --out DIR`` writes in DIR."""
+
+
+def _written(argv: list[str]) -> list[str]:
+    """The files a shary command of the README writes where its command line says."""
+    files = []
+    for flag, value in pairwise(argv):
+        if flag in ("-o", "--output", "--mcap"):
+            files.append(os.path.normpath(value))
+        elif flag == "--out" and argv[1] == "run":
+            files += [os.path.normpath(os.path.join(value, name)) for name in RUN_FILES]
+    return files
+
+
+def test_no_two_readme_commands_write_the_same_file():
+    """Each command's file is still there to look at after the whole block has run."""
+    written = Counter(file for language, what in COMMANDS if language == "sh"
+                      and what[0] == "shary" for file in _written(what))
+    assert written and not [file for file, times in written.items() if times > 1]
 
 
 @pytest.mark.parametrize("command", COMMANDS, ids=[_shown(c) for c in COMMANDS])

@@ -5,7 +5,7 @@ from __future__ import annotations
 from conftest import problems
 from scripted import World
 
-from shary.recipes import Step, Term
+from shary.kernel.recipes import Step, Term
 
 BASE = """\
 predicates:
@@ -213,7 +213,7 @@ def test_planner_backed_and_function_recipes(write):
 
 
 def test_same_inputs_same_log(tmp_path):
-    from shary.log import ContextLog, read_events
+    from shary.log.contextlog import ContextLog, read_events
 
     def scenario(path):
         with ContextLog(path, seed=3) as log:
@@ -246,7 +246,7 @@ recipes:
 
 def test_custom_act_of_a_scheme_runs_end_to_end(tmp_path):
     """OFFER-AGAIN, declared in the user's scheme, is usable by their recipes and by their
-    scenario's expectations (issue 17): validated together, then run."""
+    scenario's expectations: validated together, then run."""
     from conftest import REPO
 
     from shary.cli import main

@@ -4,14 +4,14 @@ from __future__ import annotations
 
 import pytest
 
-from shary.executors import ExecutorRegistry
-from shary.facts import FactDatabase
+from shary.facts.database import FactDatabase
 from shary.io.recipes import load_library
-from shary.log import ContextLog
-from shary.loop import EventLoop
+from shary.kernel.executors import ExecutorRegistry
+from shary.kernel.loop import EventLoop
+from shary.kernel.supervisor import Supervisor
+from shary.log.contextlog import ContextLog
 from shary.recognition.models import builtin_models, load_action_models
 from shary.recognition.recognizer import Recognizer
-from shary.supervisor import Supervisor
 
 
 class World:
@@ -249,8 +249,8 @@ def test_a_move_after_an_effect_joins_the_candidate_the_effect_made(world):
 def test_the_timeline_shows_each_recognized_action_in_its_humans_lane(world):
     import xml.etree.ElementTree as ET
 
-    from shary.log import LogEvent
-    from shary.timeline import render_timeline
+    from shary.log.contextlog import LogEvent
+    from shary.log.timeline import render_timeline
 
     world.at(1, "add", "alice", "handMovingToward", "base-1")   # no hold: no candidate
     world.at(2, "add", "alice", "isHolding", "cube-1")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 import planner
-from shary.facts import FactDatabase
+from shary.facts.database import FactDatabase
 from shary.io.recipes import load_library
 from shary.recognition.ontology import LabelPart, label_parts, load_action_ontology
 from userfiles.errors import FileError

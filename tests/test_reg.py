@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 from rdflib import Literal
 
 from shary.dialogue.reg import Description, PerspectiveIndex, Referrer
-from shary.facts import FactDatabase
+from shary.facts.database import FactDatabase
 
 TABLETOP = [
     ("g1", "type", "Cube"), ("g1", "color", "green"), ("g1", "isOn", "table"),

@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 
 from shary.dialogue.reg import PerspectiveIndex
 from shary.dialogue.requests import Grammar, Query, interpret_answer, resolve
-from shary.facts import FactDatabase
+from shary.facts.database import FactDatabase
 from shary.recognition.ontology import load_action_ontology
 
 WORLD = [

@@ -35,7 +35,7 @@ def test_the_node_plans_the_recipes_that_need_the_planner(spawn, tmp_path):
     """``shary ros`` carries the planner of every domain its recipes name: a planned
     recipe (fetch) is planned from what the robot knows (here nothing, so no plan),
     instead of failing for want of a planner once the person has said yes."""
-    from shary.log import read_events
+    from shary.log.contextlog import read_events
 
     log = tmp_path / "log.sqlite"
     process = spawn("-m", "shary", "ros", BINDING, "--task", "fetch",

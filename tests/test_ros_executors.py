@@ -15,8 +15,8 @@ import time
 import pytest
 from rosfixtures import needs_ros, run_until
 
-from shary.executors import Reporter, Request
-from shary.loop import EventLoop, WallClock
+from shary.kernel.executors import Reporter, Request
+from shary.kernel.loop import EventLoop, WallClock
 from shary.ros.binding import load_binding
 
 pytestmark = needs_ros
@@ -187,12 +187,12 @@ def test_an_act_suspended_by_its_scheme_cancels_its_goal_at_the_server(write, ro
     she looks back, and the act resumes with a new goal."""
     from scripted import ScriptedExecutor
 
-    from shary.executors import ExecutorRegistry
-    from shary.facts import FactDatabase
+    from shary.facts.database import FactDatabase
     from shary.io.recipes import load_library
+    from shary.kernel.executors import ExecutorRegistry
+    from shary.kernel.supervisor import Supervisor
     from shary.ros.executors import RosExecutors
     from shary.ros.node import RosNode
-    from shary.supervisor import Supervisor
 
     binding = load_binding(write("arm.yaml", """\
         binding: arm

@@ -6,9 +6,9 @@ from __future__ import annotations
 
 from rosfixtures import needs_ros, run_until
 
-from shary.executors import Reporter, Request
-from shary.facts import FactDatabase
-from shary.loop import EventLoop, WallClock
+from shary.facts.database import FactDatabase
+from shary.kernel.executors import Reporter, Request
+from shary.kernel.loop import EventLoop, WallClock
 from shary.ros.binding import FactSource, load_binding
 from shary.ros.perception import RosPerception
 

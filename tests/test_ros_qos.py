@@ -8,8 +8,8 @@ from __future__ import annotations
 from conftest import problems
 from rosfixtures import needs_ros, run_until
 
-from shary.facts import FactDatabase
-from shary.loop import EventLoop, WallClock
+from shary.facts.database import FactDatabase
+from shary.kernel.loop import EventLoop, WallClock
 from shary.ros.binding import load_binding
 
 BINDING = """\

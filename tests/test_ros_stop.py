@@ -12,7 +12,7 @@ import time
 import pytest
 from rosfixtures import needs_ros, run_until
 
-from shary.log import read_events
+from shary.log.contextlog import read_events
 
 pytestmark = needs_ros
 
@@ -138,14 +138,14 @@ def test_a_cancelled_run_task_goal_cancels_its_robot_goal(spawn, write, tmp_path
 def test_closing_the_node_stops_the_supervisor_safely(write, ros_domain, spawn):
     """Node shutdown in-process (what ``shary run --ros`` does as it ends): the goal in
     flight is cancelled at the server before the node goes."""
-    from shary.facts import FactDatabase
+    from shary.facts.database import FactDatabase
     from shary.io.recipes import load_library
-    from shary.loop import EventLoop, WallClock
+    from shary.kernel.loop import EventLoop, WallClock
+    from shary.kernel.supervisor import Supervisor
+    from shary.log.told import Told
     from shary.ros.binding import load_binding
     from shary.ros.bridge import RosSupervision
     from shary.ros.node import RosNode
-    from shary.supervisor import Supervisor
-    from shary.told import Told
 
     server = spawn("tests/ros_servers.py", "long")
     binding = load_binding(write("binding.yaml", BINDING.replace("ACTION", "long")

@@ -7,8 +7,8 @@ from __future__ import annotations
 
 from rosfixtures import needs_ros, run_until
 
-from shary.facts import FactDatabase
-from shary.loop import EventLoop, WallClock
+from shary.facts.database import FactDatabase
+from shary.kernel.loop import EventLoop, WallClock
 from shary.ros.binding import load_binding
 
 pytestmark = needs_ros
@@ -19,12 +19,12 @@ def supervised(write, ros_domain, durations: float):
     seconds), its ROS supervision, and the loop."""
     from scripted import ScriptedExecutor
 
-    from shary.executors import ExecutorRegistry
     from shary.io.recipes import load_library
+    from shary.kernel.executors import ExecutorRegistry
+    from shary.kernel.supervisor import Supervisor
+    from shary.log.told import Told
     from shary.ros.bridge import RosSupervision
     from shary.ros.node import RosNode
-    from shary.supervisor import Supervisor
-    from shary.told import Told
 
     binding = load_binding(write("jido.yaml", """\
         binding: jido

@@ -14,7 +14,7 @@ import time
 import pytest
 from rosfixtures import needs_ros
 
-from shary.log import read_events
+from shary.log.contextlog import read_events
 
 
 def over_ros(spawn, tmp_path, scenario: str) -> dict:

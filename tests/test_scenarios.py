@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from shary.cli import main
-from shary.log import read_events
+from shary.log.contextlog import read_events
 from sim.run import run_scenario
 from sim.scenario import builtin_scenarios, load_scenario
 from userfiles.errors import FileError

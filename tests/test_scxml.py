@@ -8,9 +8,9 @@ import pytest
 from conftest import REPO, problems
 from suites import absent, needs, suite
 
-from shary.conformance import run_test
 from shary.io.schemes import parse_scheme
 from shary.io.scxml import import_scxml
+from shary.statechart.conformance import run_test
 from userfiles.yamlsafe import load_text
 
 SCION = suite("scion")

@@ -1,4 +1,4 @@
-"""What the robots say is English about what a person can see (issue 24, item 6).
+"""What the robots say is English about what a person can see.
 
 ``tests/data/sentences.txt`` holds every sentence robots said in a campaign of
 runs (``tests/sentences.py``: the stack, living-room and weld families with
@@ -20,7 +20,7 @@ from sentences import FAMILIES, generate, read
 
 from shary.dialogue.reg import PerspectiveIndex, Referrer
 from shary.dialogue.speech import Speech
-from shary.facts import FactDatabase
+from shary.facts.database import FactDatabase
 
 BAD = {
     "a report of waiting": re.compile(r"\b(?:I|you|we)\s+waited\b|\bI did (?!not\b)\w",

@@ -6,9 +6,9 @@ from __future__ import annotations
 import pytest
 from scripted import World
 
-from shary.compiler import compile_scheme
 from shary.dialogue.sessions import Sessions
 from shary.io.schemes import load_scheme
+from shary.statechart.compiler import compile_scheme
 
 
 def said(world: World) -> list[str]:

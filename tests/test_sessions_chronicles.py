@@ -9,8 +9,8 @@ import textwrap
 import pytest
 from scripted import World
 
-from shary.agenda import ChronicleRecognizer
 from shary.io.recipes import load_library
+from shary.kernel.agenda import ChronicleRecognizer
 from userfiles.errors import FileError
 
 LIBRARY = """\

@@ -8,8 +8,8 @@ import math
 
 import pytest
 
-from shary.facts import FactDatabase
-from shary.loop import EventLoop
+from shary.facts.database import FactDatabase
+from shary.kernel.loop import EventLoop
 from sim.objects import new_object
 from sim.settling import held_still
 from sim.simulation import SETTLE_SECONDS, Simulation

@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from shary.facts import FactDatabase
+from shary.facts.database import FactDatabase
 from shary.team.spatial import Question, Resolved, SpatialError, SpatialReasoner, parse
 
 FACING_SOUTH = -math.pi / 2

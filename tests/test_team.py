@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from scripted import ScriptedExecutor
 
-from shary.log import ContextLog, read_events
+from shary.log.contextlog import ContextLog, read_events
 from shary.team import Team, load_team
 from shary.team.agents import SYSTEM, USER
 
@@ -402,7 +402,7 @@ def test_messages_survive_a_round_trip_through_json() -> None:
 def test_the_timeline_has_a_lane_per_agent_with_the_team(tmp_path: Path) -> None:
     import re
 
-    from shary.timeline import render_timeline
+    from shary.log.timeline import render_timeline
 
     team, log, _ = build(tmp_path, edit=_answers_no)
     eva1 = team.human("EVA1")

@@ -10,8 +10,8 @@ import pytest
 from scripted import World
 from test_planning import fig10_world
 
-from shary.log import ContextLog, LogEvent, read_events
-from shary.timeline import render_timeline, write_timeline
+from shary.log.contextlog import ContextLog, LogEvent, read_events
+from shary.log.timeline import render_timeline, write_timeline
 
 SVG = "{http://www.w3.org/2000/svg}"
 

@@ -14,8 +14,8 @@ import jsonschema
 import pytest
 from scripted import ScriptedExecutor
 
-from shary.log import ContextLog, read_events
-from shary.loop import EventLoop
+from shary.kernel.loop import EventLoop
+from shary.log.contextlog import ContextLog, read_events
 from shary.team import Team, load_team
 from shary.team.spec import Reply
 from shary.transport.messages import (

@@ -49,7 +49,7 @@ def test_a_builtin_recipe_file_given_by_its_relative_path(shary, monkeypatch):
 def test_builtin_files_come_from_the_file_kinds():
     """``shary validate`` alone checks what each registered kind lists as shipped: the
     engine's kinds and those sim registers by entry point (scenarios, profiles)."""
-    from shary.filekinds import kinds, shipped_files
+    from shary.io.filekinds import kinds, shipped_files
 
     with_files = {kind.name for kind in kinds() if kind.shipped is not None and kind.shipped()}
     assert {"scheme", "recipes", "domain", "problem", "scenario", "profile"} <= with_files

@@ -6,7 +6,7 @@ import pytest
 from hostile import assert_refused, run_inprocess
 
 from shary.dialogue.speech import Speech, parse_about
-from shary.facts import FactDatabase
+from shary.facts.database import FactDatabase
 
 
 @pytest.fixture

@@ -1,4 +1,4 @@
-"""The W3C SCXML IRP's tests on the null data model (:mod:`shary.w3c`).
+"""The W3C SCXML IRP's tests on the null data model (:mod:`shary.statechart.w3c`).
 
 The translation and the runner are tested on small ``.txml`` files of our
 own; the W3C's own tests run when a copy is at hand: set ``SHARY_W3C_IRP``
@@ -16,8 +16,8 @@ from pathlib import Path
 import pytest
 from suites import SUITES
 
-from shary.conformance import REFUSED
-from shary.w3c import irp_tests, run_irp, translate
+from shary.statechart.conformance import REFUSED
+from shary.statechart.w3c import irp_tests, run_irp, translate
 
 NS = 'xmlns="http://www.w3.org/2005/07/scxml" xmlns:conf="http://www.w3.org/2005/scxml-conformance"'
 

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from shary.loop import EventLoop
-from shary.timeline import collect
+from shary.kernel.loop import EventLoop
+from shary.log.timeline import collect
 from sim.png import read_png
 from sim.run import run_scenario
 from sim.scenario import builtin_scenarios
@@ -65,7 +65,7 @@ def test_astronauts_carry_a_panel_and_tack_it_where_physics_holds_it(site) -> No
 
 def test_the_welder_reaches_the_seam_and_lays_a_bead(site) -> None:
     world, loop, actions = site
-    from shary.executors import Reporter, Request
+    from shary.kernel.executors import Reporter, Request
 
     outcomes = []
     reporter = Reporter(outcomes.append, loop.call_soon)
@@ -80,7 +80,7 @@ def test_the_welder_reaches_the_seam_and_lays_a_bead(site) -> None:
 
 def test_k10_points_its_light_at_a_point_and_its_beam_lights_it(site) -> None:
     world, loop, actions = site
-    from shary.executors import Reporter, Request
+    from shary.kernel.executors import Reporter, Request
 
     outcomes = []
     corner = (2.97, PANEL_Y - 0.02, 0.58)
@@ -106,7 +106,7 @@ def _run(name: str, tmp_path: Path):
 
 
 def _events(path: Path):
-    from shary.log import read_events
+    from shary.log.contextlog import read_events
 
     return read_events(path)
 

@@ -12,8 +12,10 @@ from __future__ import annotations
 import difflib
 import json
 import re
+from functools import cache
 from pathlib import Path
 from typing import Any
+from urllib.parse import urldefrag, urljoin
 
 from jsonschema import Draft202012Validator, FormatChecker
 from jsonschema.exceptions import ValidationError, best_match
@@ -37,15 +39,75 @@ def _duration(value: Any) -> bool:
     return not amount > MAX_DURATION  # NaN was reported by yamlsafe, once
 
 
+_REGISTRIES: dict[str, Registry] = {}
+"""The registry each schema read by :func:`_folder` resolves its ``$ref`` in, by the
+schema's ``$id``: where :func:`_document_of` finds the file a sub-schema is written in."""
+
+
+@cache
+def _folder(folder: Path) -> tuple[Registry, dict[str, Any]]:
+    """The schemas of ``folder``, read once: a registry of them by ``$id``, and each by
+    name.  Every validator of the folder shares these documents, which
+    :func:`_follow` recognizes by identity."""
+    documents = {f.name.removesuffix(".schema.json"): json.loads(f.read_text("utf-8"))
+                 for f in sorted(folder.iterdir()) if f.name.endswith(".schema.json")}
+    registry = Registry().with_resources(
+        (doc["$id"], Resource.from_contents(doc)) for doc in documents.values())
+    _REGISTRIES.update((doc["$id"], registry) for doc in documents.values())
+    return registry, documents
+
+
 def validator(folder: Path, name: str) -> Draft202012Validator:
     """A validator for ``folder/NAME.schema.json``, resolving ``$ref`` to its siblings,
     with the limits of :data:`FORMATS` checked."""
-    documents = [json.loads(f.read_text("utf-8")) for f in sorted(folder.iterdir())
-                 if f.name.endswith(".schema.json")]
-    registry = Registry().with_resources(
-        (doc["$id"], Resource.from_contents(doc)) for doc in documents)
-    main = json.loads((folder / f"{name}.schema.json").read_text("utf-8"))
-    return Draft202012Validator(main, registry=registry, format_checker=FORMATS)
+    registry, documents = _folder(folder)
+    return Draft202012Validator(documents[name], registry=registry, format_checker=FORMATS)
+
+
+def _document_of(checker: Draft202012Validator,
+                 error: ValidationError) -> Draft202012Validator:
+    """A validator rooted at the schema file that ``error.schema`` is written in.
+
+    The advice on an unknown key checks values against sub-schemas of the error
+    (``checker.evolve(schema=sub)``), and an evolved validator resolves a local
+    ``$ref`` (``#/$defs/description``) against its root.  When the error lies
+    behind a ``$ref`` to another file (a scenario's inline profile is checked by
+    ``profile.schema.json``), that root must be the other file: following the
+    error's schema path through the registry says which file it is."""
+    uri = checker.schema.get("$id") if isinstance(checker.schema, dict) else None
+    registry = _REGISTRIES.get(uri) if isinstance(uri, str) else None
+    if registry is None:
+        return checker
+    found = _follow(checker.schema, list(error.absolute_schema_path)[:-1], error.schema,
+                    uri, registry)
+    if found is None or found == uri:
+        return checker
+    return Draft202012Validator(registry.contents(found), registry=registry,
+                                format_checker=FORMATS)
+
+
+def _follow(node: Any, steps: list[str | int], target: Any, uri: str,
+            registry: Registry) -> str | None:
+    """The file (its ``$id``) in which ``steps`` from ``node`` lead to ``target``.
+
+    A schema path leaves out the ``$ref`` it went through (``oneOf/1`` then
+    ``additionalProperties`` of the file referred to), and a schema may hold both a
+    ``$ref`` and keywords of its own: each step is tried in ``node`` first, then in
+    what its ``$ref`` refers to, and the way that ends at ``target`` is the one the
+    validator took."""
+    if node is target and not steps:
+        return uri
+    step = steps[0] if steps else None
+    if isinstance(node, dict) and isinstance(step, str) and step in node \
+            or isinstance(node, list) and isinstance(step, int) and 0 <= step < len(node):
+        found = _follow(node[step], steps[1:], target, uri, registry)
+        if found is not None:
+            return found
+    ref = node.get("$ref") if isinstance(node, dict) else None
+    if not isinstance(ref, str):
+        return None
+    contents = registry.resolver(base_uri=uri).lookup(ref).contents
+    return _follow(contents, steps, target, urldefrag(urljoin(uri, ref))[0], registry)
 
 
 def did_you_mean(word: str, choices: Any) -> str:
@@ -185,6 +247,7 @@ def _explain(located: Located, error: ValidationError,
         inside = [e for e in meant if e.relative_path]
         return _explain(located, best_match(inside or meant or error.context), checker)
     if error.validator == "additionalProperties" and isinstance(error.instance, dict):
+        checker = _document_of(checker, error) if checker is not None else None
         known = list(error.schema.get("properties", {}))
         allowed = set(known)
         patterns = list(error.schema.get("patternProperties", {}))

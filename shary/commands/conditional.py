@@ -1,11 +1,11 @@
 """``shary plan`` on a conditional problem (one with ``agendas``): explore, choose, check.
 
-The planner explores the humans' choices as branches (:mod:`planner.conditional`),
-chooses the robot's best answer to each (:mod:`planner.policy`) and the
+The planner explores the humans' choices as branches (:mod:`planner.conditional.exploration`),
+chooses the robot's best answer to each (:mod:`planner.conditional.policy`) and the
 validator replays every branch with every AgentX and query candidate
-(:func:`planner.validate.validate_conditional`); this module prints or draws
+(:func:`planner.evaluation.validate.validate_conditional`); this module prints or draws
 the result.  ``--json`` and ``--yaml`` give the plan as the supervisor reads it
-(:mod:`planner.sharedplan`, JSON Schema
+(:mod:`planner.conditional.sharedplan`, JSON Schema
 ``planner/schemas/conditional-plan.schema.json``).
 """
 
@@ -14,18 +14,18 @@ from __future__ import annotations
 import argparse
 import time
 
-from planner.conditional import MAX_STEPS
+from planner.conditional.exploration import MAX_STEPS
 from shary.commands.schemes import draw
-from shary.terminal import emit_json, error, escape
-from shary.terminal import out as _out
+from shary.log.terminal import emit_json, error, escape
+from shary.log.terminal import out as _out
 from userfiles import yamlsafe
 
 
 def plan_conditional(args: argparse.Namespace, problem) -> int:  # type: ignore[no-untyped-def]
-    from planner.conditional import explore
-    from planner.policy import select
-    from planner.sharedplan import to_dict
-    from planner.validate import validate_conditional
+    from planner.conditional.exploration import explore
+    from planner.conditional.policy import select
+    from planner.conditional.sharedplan import to_dict
+    from planner.evaluation.validate import validate_conditional
 
     if args.max_depth is not None and not 1 <= args.max_depth <= MAX_STEPS:
         return error(f"--max-depth is the turns per branch of a conditional plan: 1 to "
@@ -49,8 +49,8 @@ def plan_conditional(args: argparse.Namespace, problem) -> int:  # type: ignore[
     else:
         _print(problem, policy, exploration, errors, elapsed)
     if policy.root is not None and args.render:
-        from planner.policy_display import policy_dot, streams_dot, tree_dot
-        from shary.display import render_dot
+        from planner.display.policies import policy_dot, streams_dot, tree_dot
+        from shary.log.display import render_dot
 
         title = f"{problem.name} ({problem.domain.name})"
         drawer = {"policy": policy_dot, "tree": tree_dot, "streams": streams_dot}[args.render]
@@ -62,7 +62,7 @@ def plan_conditional(args: argparse.Namespace, problem) -> int:  # type: ignore[
 
 
 def _print(problem, policy, exploration, errors, elapsed) -> None:  # type: ignore[no-untyped-def]
-    from planner.policy_display import policy_lines
+    from planner.display.policies import policy_lines
 
     _out.print(f"[bold]{problem.name}[/bold] ({problem.domain.name}): conditional plan, "
                f"{policy.leaves} branch(es) explored in {elapsed:.1f} ms of CPU "

@@ -14,8 +14,8 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
-from shary.terminal import add_json_flag, emit_json, error, escape
-from shary.terminal import out as _out
+from shary.log.terminal import add_json_flag, emit_json, error, escape
+from shary.log.terminal import out as _out
 from userfiles.limits import MAX_DURATION, seconds
 
 

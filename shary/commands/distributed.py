@@ -22,8 +22,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from shary.terminal import add_json_flag, emit_json, error, escape
-from shary.terminal import out as _out
+from shary.log.terminal import add_json_flag, emit_json, error, escape
+from shary.log.terminal import out as _out
 from shary.transport.zconfig import zenoh_reason
 from userfiles.limits import seconds
 

@@ -1,6 +1,6 @@
 """``shary log FILE…``: a context log's events listed for a person, a pipe or a file.
 
-The log itself (:mod:`shary.log`) is the run's archive: how rows are written,
+The log itself (:mod:`shary.log.contextlog`) is the run's archive: how rows are written,
 committed, checked and streamed back.  This is the command that shows them,
 and it changes for other reasons: how a table reads on a terminal, how long a
 page is, what a pipe gets, how filters are spelled on the command line.
@@ -21,9 +21,9 @@ from typing import Any
 from rich.markup import escape
 from rich.text import Span, Text
 
-from shary.log import LogEvent, merged_events, printable, write_jsonl
-from shary.terminal import err as _err
-from shary.terminal import out as _out
+from shary.log.contextlog import LogEvent, merged_events, printable, write_jsonl
+from shary.log.terminal import err as _err
+from shary.log.terminal import out as _out
 from userfiles.outputs import open_output, output_file
 
 TERMINAL_PAGE = 1000

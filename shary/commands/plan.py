@@ -3,7 +3,7 @@
 The command lives in the engine, not in :mod:`planner`: the planner imports
 nothing from ``shary`` (it is a library anyone can use), while the command
 needs the engine's terminal conventions and its renderer (Graphviz with the
-``graphviz-pure`` fallback, :mod:`shary.display`).
+``graphviz-pure`` fallback, :mod:`shary.log.display`).
 """
 
 from __future__ import annotations
@@ -12,10 +12,10 @@ import argparse
 import sys
 from pathlib import Path
 
-from shary.commands.schemes import draw
-from shary.terminal import add_json_flag, emit_json, error, escape
-from shary.terminal import err as _err
-from shary.terminal import out as _out
+from shary.commands.schemes import draw, drawing_output
+from shary.log.terminal import add_json_flag, emit_json, error, escape
+from shary.log.terminal import err as _err
+from shary.log.terminal import out as _out
 from userfiles.outputs import output_file
 
 
@@ -44,7 +44,7 @@ def add_plan(sub: argparse._SubParsersAction) -> None:
                    help="conditional problems: print the plan (abstract and primitive tasks, "
                    "decisions, branches) as YAML")
     p.add_argument("-o", "--output", type=Path, metavar="OUT",
-                   help="where --render draws (.svg, .png, .dot)")
+                   help="where --render draws (.svg, .png, .dot, .gv)")
     p.add_argument("--hddl", action="store_true",
                    help="DOMAIN and PROBLEM are HDDL files (total order, as in the IPC 2020 "
                    "HTN track); the search stops at the first plan (see --improve)")
@@ -62,6 +62,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
         return error("--render needs -o OUT", json_mode=args.json)
     if args.output is not None:
         output_file(args.output)
+        drawing_output(args.output)
     if args.hddl:
         problem = planner.load_hddl(args.domain, args.problem)
         domain = problem.domain
@@ -86,7 +87,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
     best = result.plan
     errors = planner.validate(problem, best) if best is not None else []
     if args.ipc:
-        from planner.ipc import write_ipc
+        from planner.io.ipc import write_ipc
 
         if best is None:
             _err.print("[bold red]no plan[/bold red]: " + escape(result.explain()))
@@ -97,8 +98,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
     else:
         _print_plan(problem, result, errors)
     if best is not None and args.render:
-        from planner.display import streams_dot, tree_dot
-        from shary.display import render_dot
+        from planner.display.plans import streams_dot, tree_dot
+        from shary.log.display import render_dot
 
         title = f"{problem.name} ({domain.name})"
         source = tree_dot(best, title) if args.render == "tree" else streams_dot(best, title)

@@ -8,11 +8,11 @@ from pathlib import Path
 from typing import Any
 
 from shary import builtin
-from shary.terminal import EXIT_BAD_INPUT, add_json_flag, emit_json, error, escape, listing
-from shary.terminal import out as _out
+from shary.log.terminal import EXIT_BAD_INPUT, add_json_flag, emit_json, error, escape, listing
+from shary.log.terminal import out as _out
 from userfiles import yamlsafe
 from userfiles.errors import FileError, Problem
-from userfiles.outputs import output_file, write_output
+from userfiles.outputs import OutputError, output_file, write_output
 
 # -- schemes, simulate ---------------------------------------------------
 
@@ -45,10 +45,10 @@ _WAIT = re.compile(r"^[0-9]+(\.[0-9]+)?(ms|s|min|h)$")
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
-    from shary.clock import SimulatedClock
-    from shary.compiler import compile_scheme
-    from shary.instance import LivelockError, SchemeListener
     from shary.io.schemes import load_scheme
+    from shary.statechart.clock import SimulatedClock
+    from shary.statechart.compiler import compile_scheme
+    from shary.statechart.instance import LivelockError, SchemeListener
     from userfiles.limits import seconds
     from userfiles.schema import did_you_mean
 
@@ -129,7 +129,10 @@ def add_render(sub: argparse._SubParsersAction) -> None:
     what = p.add_subparsers(dest="what", required=True, metavar="WHAT")
     r = what.add_parser("scheme", help="draw a scheme to .svg, .png, .dot or .mmd (Mermaid)")
     r.add_argument("scheme", help="a built-in scheme name or a scheme file")
-    r.add_argument("-o", "--output", type=Path, required=True, metavar="OUT")
+    r.add_argument("-o", "--output", type=Path, required=True,
+                   metavar="OUT", help="the file to draw; its suffix says how: .svg or .png "
+                   "(laid out by Graphviz), .dot or .gv (DOT text), .mmd or .mermaid "
+                   "(Mermaid), .md (a Markdown page holding a Mermaid block)")
     r.add_argument("--active", default="", metavar="STATE,…",
                    help="highlight these states (an active configuration)")
     r.set_defaults(func=cmd_render_scheme)
@@ -138,15 +141,31 @@ def add_render(sub: argparse._SubParsersAction) -> None:
     r.add_argument("log", type=Path, metavar="LOG", help="a context log (.sqlite)")
     r.add_argument("--at", type=float, default=None, metavar="T",
                    help="seconds of the run's clock (default: the end)")
-    r.add_argument("-o", "--output", type=Path, required=True, metavar="OUT")
+    r.add_argument("-o", "--output", type=Path, required=True, metavar="OUT",
+                   help="the file to draw: .svg or .png (laid out by Graphviz), .dot or .gv "
+                   "(DOT text, for a tree too big to lay out)")
     r.set_defaults(func=cmd_render_tree)
 
 
+def drawing_output(out: Path, *, mermaid: bool = False) -> None:
+    """Refuse, before any work, a drawing command's ``-o`` whose suffix names no drawing
+    it makes (a DOT graph's, or also Mermaid's for a scheme): ``-o out.gif`` is an output
+    that cannot be written (exit 2), not a drawing that failed once a log was replayed or
+    a plan searched."""
+    from shary.log.display import DOT_SUFFIXES, SUFFIXES
+
+    allowed = SUFFIXES if mermaid else DOT_SUFFIXES
+    if out.suffix.lower() not in allowed:
+        what = f"a {out.suffix} file" if out.suffix else "a file without a suffix"
+        raise OutputError(out, f"cannot draw to {what}", f"use one of {', '.join(allowed)}")
+
+
 def cmd_render_scheme(args: argparse.Namespace) -> int:
-    from shary.display import render_scheme
     from shary.io.schemes import load_scheme
+    from shary.log.display import render_scheme
 
     output_file(args.output)
+    drawing_output(args.output, mermaid=True)
     scheme = load_scheme(args.scheme)
     active = [s for s in args.active.split(",") if s]
     unknown = [s for s in active if s not in scheme.states]
@@ -167,11 +186,12 @@ def draw(drawing: Any, out: Path, detail: str = "", quiet: bool = False) -> int:
 
 
 def cmd_render_tree(args: argparse.Namespace) -> int:
-    from shary.display import TEXT_SUFFIXES, render_tree
-    from shary.log import end_time
-    from shary.tasktree import MAX_DRAWN_NODES, replay_log
+    from shary.kernel.tasktree import MAX_DRAWN_NODES, replay_log
+    from shary.log.contextlog import end_time
+    from shary.log.display import TEXT_SUFFIXES, render_tree
 
     output_file(args.output)
+    drawing_output(args.output)
     tree = replay_log(args.log, args.at)
     when = f"t = {args.at:g} s" if args.at is not None else f"end (t = {end_time(args.log):g} s)"
     if len(tree) > MAX_DRAWN_NODES and args.output.suffix.lower() not in TEXT_SUFFIXES:
@@ -215,12 +235,15 @@ def add_conformance(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_conformance(args: argparse.Namespace) -> int:
-    from shary import w3c
-    from shary.conformance import find_tests, run_test
+    from shary.statechart import w3c
+    from shary.statechart.conformance import find_tests, run_test
 
     folder: Path = args.folder
     if not folder.is_dir():
-        return error(f"{folder} is not a folder", json_mode=args.json)
+        return error(f"{folder} is not a folder" if folder.exists() else
+                     f"{folder}: no such folder (SCION's statechart suite is not part of the "
+                     "repository: the README's section 'External suites' says how to clone "
+                     "it)", json_mode=args.json)
     irp = w3c.is_irp(folder)
     charts = w3c.irp_tests(folder) if irp else find_tests(folder)
     if args.only is not None:

@@ -14,8 +14,8 @@ import re
 import tempfile
 from pathlib import Path
 
-from shary.display import _is_cluster, _safe_ids, render_dot, scheme_dot
-from shary.model import Scheme
+from shary.log.display import _is_cluster, _safe_ids, render_dot, scheme_dot
+from shary.statechart.model import Scheme
 
 _GROUP = re.compile(r'<g id="(?:node|clust)\d+" class="(node|cluster)">\s*<title>([^<]*)</title>')
 

@@ -31,8 +31,8 @@ from typing import TYPE_CHECKING, Any
 
 from shary.console.live import POLL, LiveRun, StopRun
 from shary.console.teamlive import TeamSteering
-from shary.log import LogEvent
-from shary.model import Scheme
+from shary.log.contextlog import LogEvent
+from shary.statechart.model import Scheme
 
 if TYPE_CHECKING:
     from shary.console.view import View

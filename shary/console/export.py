@@ -33,12 +33,12 @@ from typing import Any
 from shary.console.ports import run_file
 from shary.console.replay import named_schemes
 from shary.console.view import View
-from shary.log import LogEvent, stream_events
+from shary.kernel.tasktree import replay_log
+from shary.log.contextlog import LogEvent, stream_events
+from shary.log.terminal import add_json_flag, emit_json
+from shary.log.terminal import out as _out
 from shary.plans.states import STATES as TASK_STATES
 from shary.recognition.recognizer import STATES as RECOGNITION_STATES
-from shary.tasktree import replay_log
-from shary.terminal import add_json_flag, emit_json
-from shary.terminal import out as _out
 from userfiles.outputs import open_output, output_file
 
 _STRING = {"type": "string"}

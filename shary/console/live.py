@@ -31,13 +31,13 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from shary.acts import ACT_TYPES, builtin_acts
 from shary.console.operator import RUN_CONTROLS
 from shary.console.ports import Feed, StatusFeed
 from shary.console.teamlive import BREAK_EVENTS, TEAM_KINDS, TeamSteering
 from shary.console.view import View
-from shary.log import LogEvent
-from shary.model import Scheme
+from shary.log.contextlog import LogEvent
+from shary.statechart.acts import ACT_TYPES, builtin_acts
+from shary.statechart.model import Scheme
 
 Runner = Callable[["Attachment"], Any]
 """Runs the scenario with the attachment (``run_scenario(path, console=attachment)``)
@@ -109,6 +109,11 @@ class LiveRun:
         """A team run's operator actions (None: a single SHARY robot's run)."""
         self.state = "waiting"
         self.verdict: dict[str, Any] | None = None
+        self.summary: dict[str, Any] | None = None
+        """The run's own summary (``result.summary()``) once it has ended by itself."""
+        self.ended: Callable[[dict[str, Any]], None] | None = None
+        """Called on the run's thread with :attr:`summary` when the run has ended: the
+        command that serves it says the verdict and the files written on its terminal."""
         self._commands: queue.SimpleQueue[Callable[[], None]] = queue.SimpleQueue()
         self._step = False
         self._closing = threading.Event()
@@ -281,9 +286,11 @@ class LiveRun:
             print(f"console: the run failed: {type(err).__name__}: {err}", file=sys.stderr)
         else:
             self.state = "ended"
-            summary = result.summary()
+            self.summary = summary = result.summary()
             self.verdict = {"passed": summary.get("passed"),
                             "differences": summary.get("differences", [])}
+            if self.ended is not None:
+                self.ended(summary)
         self.tell()
 
     def between(self, now: float) -> None:

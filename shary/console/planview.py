@@ -33,12 +33,10 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from shary.log import LogEvent
-
-if TYPE_CHECKING:
-    from shary.console.view import Change, View
+from shary.console.viewbase import Change, ViewBase
+from shary.log.contextlog import LogEvent
 
 SCHEME = "shared-plan-task"
 """The scheme that runs each task's states (``schemes/shared-plan-task.yaml``)."""
@@ -59,7 +57,7 @@ def _list(value: Any) -> list[Any]:
 class PlanView:
     """The shared plans of one run as the page shows them (see the module)."""
 
-    def __init__(self, view: View):
+    def __init__(self, view: ViewBase):
         self.view = view
         self.plans: dict[str, Change] = {}
         """prefix -> its ``plan`` change, in the order they were loaded."""
@@ -120,7 +118,7 @@ class PlanView:
             if decision is not None and row[5]:
                 row[7] = f"{row[7]}: {_text(decision.get('agent'))} decides"
         for i, name in enumerate(views):
-            self.view._agent(name, "robot" if i == 0 else "human", out)
+            self.view.agent(name, "robot" if i == 0 else "human", out)
         root = _text(e.task)
         replaced = self._root_plan.get(root)
         if replaced is not None:
@@ -142,15 +140,15 @@ class PlanView:
         estimate = bool(self.views(task)) and who != self.views(task)[0]
         item = f"ns:{task}:{who}"
         if state == "NOT_SEEN":
-            self.view._add_item(item, who, e.time, f"NOT_SEEN {label}", "not-seen", out)
-            self.view._line(e, "plan", f"{who} did not see {label} (the robot's estimate)", out)
+            self.view.add_item(item, who, e.time, f"NOT_SEEN {label}", "not-seen", out)
+            self.view.line(e, "plan", f"{who} did not see {label} (the robot's estimate)", out)
         elif before == "NOT_SEEN":
-            self.view._end_item(item, e.time, "not-seen", out)
+            self.view.end_item(item, e.time, "not-seen", out)
             how = e.data.get("reason") or e.data.get("event") or ""
-            self.view._line(e, "plan", f"{who} now knows {label} is {state}"
+            self.view.line(e, "plan", f"{who} now knows {label} is {state}"
                             + (f" ({how})" if how else ""), out)
         elif not estimate and state in ("EXECUTED", "NOT_STARTING", "NOT_FINISHED"):
-            self.view._line(e, "plan", f"{label}: {state}", out)
+            self.view.line(e, "plan", f"{label}: {state}", out)
 
     def _decision(self, e: LogEvent, out: list[Change]) -> None:
         task = _text(e.task)
@@ -161,7 +159,7 @@ class PlanView:
         change = ["plan-chose", prefix, decision, task]
         self.chosen[(prefix, decision)] = change
         out.append(change)
-        self.view._line(e, "plan", f"{decision}: {e.agent or '?'} chose "
+        self.view.line(e, "plan", f"{decision}: {e.agent or '?'} chose "
                         f"{self.labels.get(task, task)}", out)
 
     def _shared(self, e: LogEvent, out: list[Change]) -> None:
@@ -171,7 +169,7 @@ class PlanView:
         if prefix is not None:
             self._set_status(prefix, state, reason, out)
         problem = e.data.get("problem")
-        self.view._line(e, "plan", f"shared plan{' ' + str(problem) if problem else ''}: "
+        self.view.line(e, "plan", f"shared plan{' ' + str(problem) if problem else ''}: "
                         f"{state}" + (f" ({reason})" if reason else ""), out)
 
     def _set_status(self, prefix: str, state: str, text: str, out: list[Change]) -> None:
@@ -191,7 +189,7 @@ class PlanView:
         match = _text(e.data.get("match"))
         if match in ("useful", "harmful", "reported"):
             what = self.labels.get(_text(e.task)) or _text(e.data.get("action"))
-            self.view._line(e, "plan", f"{match}: {what}: {_text(e.data.get('why'))}", out)
+            self.view.line(e, "plan", f"{match}: {what}: {_text(e.data.get('why'))}", out)
 
     # -- the robot's head and voice, the people's recognized actions ----------------------
 
@@ -225,15 +223,15 @@ class PlanView:
         item = self._candidates.get(candidate)
         if state in ("started", "progressing") and item is None:
             item = self._candidates[candidate] = f"rc:{candidate}:{e.seq}"
-            self.view._add_item(item, who, e.time, label, "recognized", out)
+            self.view.add_item(item, who, e.time, label, "recognized", out)
         elif state in ("achieved", "abandoned"):
             self._candidates.pop(candidate, None)
             if item is None:  # the effect alone was seen: a mark
                 item = f"rc:{candidate}:{e.seq}"
-                self.view._add_item(item, who, e.time, label, "recognized", out)
-            self.view._end_item(item, e.time, f"recognized-{state}", out)
+                self.view.add_item(item, who, e.time, label, "recognized", out)
+            self.view.end_item(item, e.time, f"recognized-{state}", out)
             if state == "achieved":
-                self.view._line(e, "recognized", f"recognized: {who} {label}", out)
+                self.view.line(e, "recognized", f"recognized: {who} {label}", out)
 
 
 def plan_rows(tasks: list[dict[str, Any]]) -> list[list[Any]]:

@@ -14,8 +14,8 @@ from pathlib import Path
 from typing import Any, Protocol
 
 from shary.console.view import View
-from shary.log import LogEvent
-from shary.model import Scheme
+from shary.log.contextlog import LogEvent
+from shary.statechart.model import Scheme
 
 Feed = Callable[[LogEvent], None]
 """Where a run sends its events (called on the server's event loop)."""

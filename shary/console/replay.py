@@ -19,9 +19,9 @@ from typing import Any
 
 from shary.console.ports import Feed, StatusFeed
 from shary.console.view import Change, View
-from shary.log import LogEvent, stream_events
-from shary.model import Scheme
-from shary.tasktree import replay_log
+from shary.kernel.tasktree import replay_log
+from shary.log.contextlog import LogEvent, stream_events
+from shary.statechart.model import Scheme
 from userfiles.errors import FileError
 
 

@@ -42,7 +42,7 @@ from shary.console.diagrams import scheme_svg
 from shary.console.operator import MAX_MESSAGE_BYTES, Refused, parse
 from shary.console.ports import RunPort, run_file
 from shary.console.view import Change, View
-from shary.log import LogEvent
+from shary.log.contextlog import LogEvent
 
 QUEUE_LIMIT = 10_000
 """Messages waiting for one page; a page that falls this far behind is dropped
@@ -278,7 +278,7 @@ def serve(port: RunPort, host: str = "127.0.0.1", port_number: int = 8765, *,
 
     import uvicorn
 
-    from shary.terminal import error
+    from shary.log.terminal import error
 
     try:
         family = socket.AF_INET6 if ":" in host else socket.AF_INET

@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from shary.executors import Executor, Reporter, Request
+from shary.kernel.executors import Executor, Reporter, Request
 from shary.team.agents import USER
 
 if TYPE_CHECKING:
@@ -324,10 +324,10 @@ def run_team(spec: TeamSpec, console: Any, *, out: Path, seed: int = 0,
     """Run a team of people and software agents on a simulated clock under the console,
     until the goal is over and nothing is due, or ``limit``; write ``log.sqlite``,
     ``timeline.svg`` and ``summary.json`` to ``out``."""
-    from shary.log import ContextLog
-    from shary.loop import EventLoop
+    from shary.kernel.loop import EventLoop
+    from shary.log.contextlog import ContextLog
+    from shary.log.timeline import write_timeline
     from shary.team import Team
-    from shary.timeline import write_timeline
     from userfiles.outputs import output_folder, write_output
 
     output_folder(out)

@@ -28,12 +28,10 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from shary.log import LogEvent
-
-if TYPE_CHECKING:
-    from shary.console.view import Change, View
+from shary.console.viewbase import Change, ViewBase
+from shary.log.contextlog import LogEvent
 
 MAX_DELEGATIONS = 40
 """Delegations a page is sent on joining (the newest); the log keeps them all."""
@@ -49,7 +47,7 @@ MEMBER_KINDS = ("robot", "human", "software")
 class TeamView:
     """The team's part of the console's picture (see the module's docstring)."""
 
-    def __init__(self, view: View):
+    def __init__(self, view: ViewBase):
         self.view = view
         self.members: dict[str, Change] = {}
         self.tasks: dict[str, dict[str, Any]] = {}
@@ -103,7 +101,7 @@ class TeamView:
         change = ["member", name, kind, about]
         if change != known:
             self.members[name] = change
-            self.view._agent(name, kind, out)
+            self.view.agent(name, kind, out)
             out.append(change)
 
     def _team(self, e: LogEvent, out: list[Change]) -> None:
@@ -159,7 +157,7 @@ class TeamView:
             self._close(f"task:{name}", e.time, "done" if e.kind == "task-done" else "failed",
                         out)
         if e.kind == "task-done":
-            self.view._line(e, "team", f"{name} done", out)
+            self.view.line(e, "team", f"{name} done", out)
         self._set_task(name, out, **fields)
 
     def _failed(self, e: LogEvent, out: list[Change]) -> None:
@@ -168,7 +166,7 @@ class TeamView:
         self._hold(e.agent, None, out)
         self._close(f"task:{name}", e.time, "failed", out)
         self._set_task(name, out, state="failed", reason=reason)
-        self.view._line(e, "failed", f"{name} failed" + (f": {reason}" if reason else ""), out)
+        self.view.line(e, "failed", f"{name} failed" + (f": {reason}" if reason else ""), out)
 
     def _respawn(self, e: LogEvent, out: list[Change]) -> None:
         for name in e.data.get("tasks") or ():
@@ -176,7 +174,7 @@ class TeamView:
             self._set_task(str(name), out, state="respawned", agent=None,
                            respawns=task.get("respawns", 0) + (name == e.task),
                            attempt=e.data.get("attempt", task.get("attempt", 1)))
-        self.view._line(e, "team", f"respawns {e.task} (after {e.data.get('by')}: "
+        self.view.line(e, "team", f"respawns {e.task} (after {e.data.get('by')}: "
                                    f"{e.data.get('reason', '')})", out)
         self._mark(f"respawn{e.seq}", "tasks", e.time, f"respawn {e.task}", "respawn", out)
 
@@ -210,7 +208,7 @@ class TeamView:
                     "image": Path(image).name if isinstance(image, str) else None}
         self.questions[qid] = question
         out.append(["tq", qid, question])
-        self.view._line(e, "question", f"asks {qid}: “{question['text']}”"
+        self.view.line(e, "question", f"asks {qid}: “{question['text']}”"
                         + (f" [{question['image']}]" if question["image"] else ""), out)
         self._open(f"q:{qid}", e.agent or "", e.time, f"? {qid}", "question", out)
 
@@ -224,7 +222,7 @@ class TeamView:
         self.answered.append((qid, question, answer))
         out.append(["tq-end", qid, answer])
         said = "expired, taken as" if answer["expired"] else "answers"
-        self.view._line(e, "answer", f"{said} {qid}: {answer['value']!r}", out)
+        self.view.line(e, "answer", f"{said} {qid}: {answer['value']!r}", out)
         self._close(f"q:{qid}", e.time, "expired" if answer["expired"] else "answered", out)
         if e.agent:
             self._mark(f"an{e.seq}", e.agent, e.time, f"{answer['value']}", "answer", out)
@@ -245,7 +243,7 @@ class TeamView:
         out.append(["control", e.agent, mode, by])
         said = f"user mode, driven by {by}" if mode == "user" else \
             f"system mode (handed back by {by})"
-        self.view._line(e, "control", said, out)
+        self.view.line(e, "control", said, out)
         if mode == "user":
             self._open(f"user:{e.agent}", e.agent, e.time, f"driven by {by}", "usermode", out)
         else:
@@ -258,10 +256,10 @@ class TeamView:
         self.assoc[e.agent] = who
         out.append(["assoc", e.agent, who])
         if who:
-            self.view._line(e, "team", f"associated with {who}", out)
+            self.view.line(e, "team", f"associated with {who}", out)
             self._open(f"assoc:{e.agent}", e.agent, e.time, f"with {who}", "assoc", out)
         else:
-            self.view._line(e, "team", f"released by {e.data.get('by')}", out)
+            self.view.line(e, "team", f"released by {e.data.get('by')}", out)
             self._close(f"assoc:{e.agent}", e.time, "assoc", out)
 
     def _robot_break(self, e: LogEvent, out: list[Change]) -> None:
@@ -271,7 +269,7 @@ class TeamView:
         self.breaks[e.agent] = [state, before]
         out.append(["robot-break", e.agent, state, before])
         if state == "stopped":
-            self.view._line(e, "operator", f"stopped at the operator's breakpoint, before "
+            self.view.line(e, "operator", f"stopped at the operator's breakpoint, before "
                                            f"{before}", out)
 
     # -- the site's own events ----------------------------------------------------------
@@ -281,12 +279,12 @@ class TeamView:
         self._mark(f"m{e.seq}", e.agent or "?", e.time, "", "message", out)
 
     def _site(self, e: LogEvent, out: list[Change]) -> None:
-        self.view._line(e, "site", f"{e.data.get('what', '')}: {e.data.get('text', '')}", out)
+        self.view.line(e, "site", f"{e.data.get('what', '')}: {e.data.get('text', '')}", out)
 
     def _help(self, e: LogEvent, out: list[Change]) -> None:
         args = e.data.get("args") or {}
         shown = " ".join(f"{k}={v}" for k, v in args.items()) if isinstance(args, dict) else ""
-        self.view._line(e, "team", f"asks for help: {e.data.get('skill')} {shown}".strip(), out)
+        self.view.line(e, "team", f"asks for help: {e.data.get('skill')} {shown}".strip(), out)
 
     # -- timeline items ---------------------------------------------------------------
 
@@ -295,17 +293,17 @@ class TeamView:
         self._close(key, t, cls, out)
         item = f"{key}@{t:.3f}"
         self._items[key] = item
-        self.view._add_item(item, lane, t, label, cls, out)
+        self.view.add_item(item, lane, t, label, cls, out)
 
     def _close(self, key: str, t: float, cls: str, out: list[Change]) -> None:
         item = self._items.pop(key, None)
         if item is not None:
-            self.view._end_item(item, t, cls, out)
+            self.view.end_item(item, t, cls, out)
 
     def _mark(self, item: str, lane: str, t: float, label: str, cls: str,
               out: list[Change]) -> None:
-        self.view._add_item(item, lane, t, label, cls, out)
-        self.view._end_item(item, t, cls, out)
+        self.view.add_item(item, lane, t, label, cls, out)
+        self.view.end_item(item, t, cls, out)
 
 
 _HANDLERS: dict[str, Callable[[TeamView, LogEvent, list[Any]], None]] = {

@@ -27,39 +27,34 @@ and a team's (:mod:`shary.console.teamview`).  A shared plan's kinds (``plan``,
 
 from __future__ import annotations
 
-from collections import deque
 from collections.abc import Callable
 from typing import Any
 
-from shary.acts import ACT_TYPES
 from shary.console.planview import PlanView
 from shary.console.teamview import TeamView
-from shary.log import LogEvent
-from shary.model import Scheme
+from shary.console.viewbase import Change, ViewBase
+from shary.log.contextlog import LogEvent
+from shary.statechart.acts import ACT_TYPES
+from shary.statechart.model import Scheme
 
-Change = list[Any]
 SchemeLookup = Callable[[str], "Scheme | None"]
 
-MAX_LINES = 300
-"""Act/action lines a page is sent on joining (the newest); the log keeps them all."""
 GOAL_STATES = {"goal-added": "pending", "goal-started": "active", "goal-suspended": "suspended",
                "goal-resumed": "active"}
 AGENT_KINDS = ("robot", "human")
 
 
-class View:
+class View(ViewBase):
     """The console's picture of one run, kept up to date by :meth:`apply`."""
 
     def __init__(self, schemes: SchemeLookup):
+        super().__init__()
         self.schemes = schemes
         self.time = 0.0
-        self.agents: dict[str, str] = {}
         self.tasks: dict[str, dict[str, Any]] = {}
         self.nodes: dict[str, list[Any]] = {}
-        self.items: dict[str, list[Any]] = {}
         self.goals: dict[int | str, list[Any]] = {}
         self.facts: dict[str, dict[tuple[str, str, str], None]] = {}
-        self.lines: deque[Change] = deque(maxlen=MAX_LINES)
         self.questions: dict[str, Change] = {}
         self.image: str | None = None
         """The latest snapshot (a file name in the run's folder), attached to questions."""
@@ -115,31 +110,16 @@ class View:
         out += self.plans.snapshot()
         return out
 
-    # -- the agents -----------------------------------------------------------------
-
-    def _agent(self, name: str | None, kind: str, out: list[Change]) -> None:
-        if not name:
-            return
-        known = self.agents.get(name)
-        if known is None or (known == "agent" and kind != "agent"):
-            self.agents[name] = kind
-            out.append(["agent", name, kind])
-
-    def _line(self, e: LogEvent, kind: str, text: str, out: list[Change]) -> None:
-        line = ["line", e.time, e.agent or "", kind, text]
-        self.lines.append(line)
-        out.append(line)
-
     # -- tasks, schemes and questions -----------------------------------------------
 
     def _task_start(self, e: LogEvent, out: list[Change]) -> None:
         roles = {str(k): str(v) for k, v in (e.data.get("roles") or {}).items()}
         scheme = self.schemes(str(e.data.get("scheme", "")))
         agent = e.agent or ""
-        self._agent(agent, "robot", out)
+        self.agent(agent, "robot", out)
         for role, who in roles.items():
             kind = scheme.roles.get(role, "agent") if scheme is not None else "agent"
-            self._agent(who, kind if kind in AGENT_KINDS else "agent", out)
+            self.agent(who, kind if kind in AGENT_KINDS else "agent", out)
         self.tasks[e.task or ""] = {"agent": agent, "name": e.data.get("name", "?"),
                                     "scheme": e.data.get("scheme", "?"), "roles": roles,
                                     "config": {}, "outcome": None}
@@ -164,7 +144,7 @@ class View:
         out.append(["config", e.task, list(task["config"])])
         item = self._open_acts.pop((e.task or "", state), None)
         if item is not None:
-            self._end_item(item, e.time, "act", out)
+            self.end_item(item, e.time, "act", out)
         self._ask(e.task or "", task, out)
 
     def _task_end(self, e: LogEvent, out: list[Change]) -> None:
@@ -174,7 +154,7 @@ class View:
         task["outcome"] = e.data.get("outcome", "done")
         out.append(["task-end", e.task, task["outcome"]])
         for key in [k for k in self._open_acts if k[0] == e.task]:
-            self._end_item(self._open_acts.pop(key), e.time, "act", out)
+            self.end_item(self._open_acts.pop(key), e.time, "act", out)
         if self.questions.pop(e.task or "", None) is not None:
             out.append(["question-end", e.task])
 
@@ -211,19 +191,19 @@ class View:
         act = str(e.data.get("act"))
         node = e.task or ""
         task = self.tasks.get(node, {})
-        self._agent(e.agent, "agent", out)
-        self._line(e, "act", f"[{act}] {task.get('name', node)}", out)
+        self.agent(e.agent, "agent", out)
+        self.line(e, "act", f"[{act}] {task.get('name', node)}", out)
         item = f"a{e.seq}"
         self._open_acts[(node, self._entered.get(node, ""))] = item
-        self._add_item(item, e.agent or "", e.time, act, "act", out)
+        self.add_item(item, e.agent or "", e.time, act, "act", out)
 
     def _received(self, e: LogEvent, out: list[Change]) -> None:
         act = str(e.data.get("act"))
-        self._agent(e.agent, "agent", out)
-        self._line(e, "received", act, out)
+        self.agent(e.agent, "agent", out)
+        self.line(e, "received", act, out)
         item = f"r{e.seq}"
-        self._add_item(item, e.agent or "", e.time, act, "received", out)
-        self._end_item(item, e.time, "received", out)
+        self.add_item(item, e.agent or "", e.time, act, "received", out)
+        self.end_item(item, e.time, "received", out)
 
     # -- actions --------------------------------------------------------------------
 
@@ -231,32 +211,20 @@ class View:
         atomic = str(e.data.get("atomic"))
         args = e.data.get("args") or {}
         shown = " ".join(str(v) for v in args.values()) if isinstance(args, dict) else ""
-        self._line(e, "action", f"{atomic} {shown}".strip(), out)
+        self.line(e, "action", f"{atomic} {shown}".strip(), out)
         item = f"x{e.data.get('request')}"
         self._requests[str(e.data.get("request"))] = item
-        self._add_item(item, e.agent or "", e.time, atomic, "action", out)
+        self.add_item(item, e.agent or "", e.time, atomic, "action", out)
 
     def _result(self, e: LogEvent, out: list[Change]) -> None:
         status = str(e.data.get("status"))
         item = self._requests.pop(str(e.data.get("request")), None)
         if item is not None:
-            self._end_item(item, e.time, status, out)
+            self.end_item(item, e.time, status, out)
             if status != "done":
                 reason = e.data.get("reason")
-                self._line(e, "failed", f"{self.items[item][3]} {status}"
+                self.line(e, "failed", f"{self.items[item][3]} {status}"
                            + (f": {reason}" if reason else ""), out)
-
-    def _add_item(self, item: str, lane: str, t0: float, label: str, cls: str,
-                  out: list[Change]) -> None:
-        self.items[item] = [item, lane, t0, label, cls, None]
-        out.append(["item", item, lane, t0, label, cls])
-
-    def _end_item(self, item: str, t1: float, cls: str, out: list[Change]) -> None:
-        found = self.items.get(item)
-        if found is not None and found[5] is None:
-            found[5] = t1
-            found[4] = cls
-            out.append(["item-end", item, t1, cls])
 
     # -- the task tree ----------------------------------------------------------------
 
@@ -309,15 +277,15 @@ class View:
             out.append(["fact", perspective, *key, False])
 
     def _speech(self, e: LogEvent, out: list[Change]) -> None:
-        self._line(e, "speech", f"“{e.data.get('text', '')}”", out)
+        self.line(e, "speech", f"“{e.data.get('text', '')}”", out)
 
     def _plan(self, e: LogEvent, out: list[Change]) -> None:
         steps = e.data.get("steps") or []
-        self._line(e, "plan", "plan: " + " → ".join(map(str, steps)), out)
+        self.line(e, "plan", "plan: " + " → ".join(map(str, steps)), out)
 
     def _operator(self, e: LogEvent, out: list[Change]) -> None:
         what = ", ".join(f"{k}={v}" for k, v in sorted(e.data.items()) if k != "action")
-        self._line(e, "operator", f"{e.data.get('action', '?')} {what}".strip(), out)
+        self.line(e, "operator", f"{e.data.get('action', '?')} {what}".strip(), out)
 
     def _snapshot(self, e: LogEvent, out: list[Change]) -> None:
         name = e.data.get("file")
@@ -328,7 +296,7 @@ class View:
                 out.append(question)
 
     def _run_end(self, e: LogEvent, out: list[Change]) -> None:
-        self._line(e, "end", "the run is over", out)
+        self.line(e, "end", "the run is over", out)
 
 
 def _is_answer(scheme: Scheme, event: str, own_act: str | None) -> bool:

@@ -16,9 +16,10 @@ a conversation needs on top of that, with schemes and recipes like any task:
 - :mod:`~shary.dialogue.disambiguation`: a request whose description fits
   several things is asked about (the ``disambiguate`` scheme);
 - :mod:`~shary.dialogue.sessions`: interaction sessions (greeting, tasks,
-  farewell) and the agenda's rule that tasks with a person run inside one.
+  farewell) and the agenda's rule that tasks with a person run inside one;
+- :mod:`~shary.dialogue.steps`: the steps their recipes are made of (say, look).
 
-:func:`install` wires them into a :class:`~shary.supervisor.Supervisor`: the
+:func:`install` wires them into a :class:`~shary.kernel.supervisor.Supervisor`: the
 recipe functions the built-in dialogue recipes name, and the initiative
 handler for acts no task expects.
 """
@@ -27,20 +28,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from shary.recipes import Step, Term
-
 if TYPE_CHECKING:
-    from shary.supervisor import Supervisor
-
-
-def say(name: str, text: str, emit: str | None = None, after: tuple[str, ...] = ()) -> Step:
-    """A step that says ``text`` aloud (the ``speak`` atomic task)."""
-    return Step(name, "speak", None, {"text": Term("const", text)}, None, after, emit)
-
-
-def look(name: str, target: str, after: tuple[str, ...] = ()) -> Step:
-    """A step that turns the robot's head to ``target``."""
-    return Step(name, "look-at", None, {"target": Term("const", target)}, None, after)
+    from shary.kernel.supervisor import Supervisor
 
 
 def install(sup: Supervisor) -> Any:

@@ -19,11 +19,12 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from shary.dialogue import look, say
-from shary.recipes import Recipe, Step
+from shary.dialogue.steps import look, say
+from shary.dialogue.verbalize import proper
+from shary.kernel.recipes import Recipe, Step
 
 if TYPE_CHECKING:
-    from shary.supervisor import Supervisor, TaskRun
+    from shary.kernel.supervisor import Supervisor, TaskRun
 
 INFORM_TASK = "inform"
 ATTENDS = "looksAt"
@@ -37,8 +38,6 @@ def attending(facts: Any, person: str, robot: str, perspective: str = "robot") -
 def call_attention(run: TaskRun, recipe: Recipe) -> list[Step]:
     """CALL-ATTENTION: another modality than waiting for a glance: look at the partner
     and call them by name ("Excuse me, Alice.")."""
-    from shary.dialogue.sessions import proper
-
     partner = str(run.env["partner"])
     return [look("look", partner), say("call", f"Excuse me, {proper(partner)}.",
                                        after=("look",))]

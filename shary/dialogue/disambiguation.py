@@ -27,13 +27,13 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from shary.dialogue import say
 from shary.dialogue.reg import RELATIONS, PerspectiveIndex
 from shary.dialogue.requests import Query, Resolution, interpret_answer
-from shary.recipes import Recipe, Step
+from shary.dialogue.steps import say
+from shary.kernel.recipes import Recipe, Step
 
 if TYPE_CHECKING:
-    from shary.supervisor import TaskRun
+    from shary.kernel.supervisor import TaskRun
 
 
 def query_of(value: Any) -> Query:

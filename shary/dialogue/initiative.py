@@ -1,7 +1,7 @@
 """Person-initiated acts: a person asks for a task, cancels one, or changes a plan.
 
 The supervisor gives an act that no task expects to its ``initiative``
-handlers (:attr:`shary.supervisor.Supervisor.initiative`); :class:`Initiative`
+handlers (:attr:`shary.kernel.supervisor.Supervisor.initiative`); :class:`Initiative`
 is the dialogue's.  The act's data says what it is about:
 
 ``ASK-TASK``  ``{task: NAME, with: {PARAM: VALUE}}``; a value is a thing's
@@ -28,16 +28,17 @@ import itertools
 from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
-from shary.dialogue import attention, disambiguation, negotiation, say, sessions
+from shary.dialogue import attention, disambiguation, negotiation, sessions
 from shary.dialogue.disambiguation import Question
 from shary.dialogue.reg import PerspectiveIndex, Referrer
 from shary.dialogue.requests import Grammar, Query, Request, Resolution, resolve
-from shary.recipes import ROBOT_PARAM, Recipe, Step, Term
+from shary.dialogue.steps import say
+from shary.kernel.recipes import ROBOT_PARAM, Recipe, Step, Term
 
 if TYPE_CHECKING:
-    from shary.agenda import Goal
-    from shary.model import Scheme
-    from shary.supervisor import Supervisor, TaskRun
+    from shary.kernel.agenda import Goal
+    from shary.kernel.supervisor import Supervisor, TaskRun
+    from shary.statechart.model import Scheme
 
 REQUESTED_SCHEME = "task-requested"
 """The H-initiated variant a task runs with when a person asked for it."""

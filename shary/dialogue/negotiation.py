@@ -8,7 +8,7 @@ coffee area, pick the orange bottle and drop it into the trash").  The
 person may change a step by saying they do it ("I'll take the orange bottle
 myself": a *constraint* read by :mod:`shary.dialogue.requests`); the robot
 keeps it as a :class:`Taken` step on the task
-(:attr:`shary.supervisor.TaskRun.assigned`: every action of that kind on
+(:attr:`shary.kernel.supervisor.TaskRun.assigned`: every action of that kind on
 those things is done by that person), says so, and plans again: the planner
 honours every assignment.
 
@@ -21,11 +21,11 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any, NamedTuple
 
-from shary.dialogue import say
-from shary.recipes import Recipe, Step
+from shary.dialogue.steps import say
+from shary.kernel.recipes import Recipe, Step
 
 if TYPE_CHECKING:
-    from shary.supervisor import TaskRun
+    from shary.kernel.supervisor import TaskRun
 
 REALIZE = "REALIZE-TASK"
 

@@ -22,7 +22,7 @@ says so (:attr:`Description.pointing`) and the speaker points at the object
 Nothing here runs SPARQL: a :class:`PerspectiveIndex` is built once from the
 perspective's triples (each attribute value's set of things, each relation's
 things per landmark) and then kept current by the fact database as facts
-change (:meth:`shary.facts.FactDatabase.derived`), so that a sentence costs
+change (:meth:`shary.facts.database.FactDatabase.derived`), so that a sentence costs
 what it says, not the size of the world; describing an object is a few set
 intersections.
 """
@@ -171,7 +171,7 @@ class PerspectiveIndex:
     def from_facts(cls, facts: Any, perspective: str,
                    attributes: Sequence[str] = ATTRIBUTES,
                    relations: Mapping[str, str] = RELATIONS) -> PerspectiveIndex:
-        """The index of one perspective of a :class:`shary.facts.FactDatabase`, kept
+        """The index of one perspective of a :class:`shary.facts.database.FactDatabase`, kept
         current by the database as facts change (built on the first call only: a
         sentence costs what it says, not the size of the world)."""
         attributes, relations = tuple(attributes), dict(relations)

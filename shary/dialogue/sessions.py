@@ -1,7 +1,7 @@
 """Interaction sessions: greeting, tasks, idle, farewell; no task with a stranger.
 
 A session with a person is a ``session`` task (``schemes/session.yaml``) run
-in the background (:attr:`shary.supervisor.Supervisor.background`: it lasts
+in the background (:attr:`shary.kernel.supervisor.Supervisor.background`: it lasts
 as long as the interaction, and is not work left to do).  :class:`Sessions`
 opens and closes them from the robot's perception:
 
@@ -9,7 +9,7 @@ opens and closes them from the robot's perception:
   (``PERSON isNear ROBOT``) and looks at it (``PERSON looksAt ROBOT``), the
   two added in either order within :attr:`Sessions.within` seconds (the
   chronicle :func:`will_to_interact`, a partially ordered conjunction,
-  recognized by a :class:`~shary.agenda.ChronicleRecognizer` of its own);
+  recognized by a :class:`~shary.kernel.agenda.ChronicleRecognizer` of its own);
   the robot greets them;
 - **leaving** closes it: the robot perceives the person no more (no fact of
   where they are, ``isAt``, nor of where they look, ``looksAt``) for
@@ -34,15 +34,23 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from shary.agenda import ChronicleRecognizer
-from shary.dialogue import say
 from shary.dialogue.attention import ATTENDS, attending
-from shary.dialogue.verbalize import humanize
-from shary.recipes import Chronicle, ChronicleAll, ChronicleEvent, Pattern, Recipe, Step, Term
+from shary.dialogue.steps import say
+from shary.dialogue.verbalize import proper
+from shary.kernel.agenda import ChronicleRecognizer
+from shary.kernel.recipes import (
+    Chronicle,
+    ChronicleAll,
+    ChronicleEvent,
+    Pattern,
+    Recipe,
+    Step,
+    Term,
+)
 
 if TYPE_CHECKING:
-    from shary.agenda import Goal
-    from shary.supervisor import Supervisor, TaskRun
+    from shary.kernel.agenda import Goal
+    from shary.kernel.supervisor import Supervisor, TaskRun
 
 SESSION_TASK = "session"
 NEAR = "isNear"
@@ -61,11 +69,6 @@ def will_to_interact(robot: str, within: float) -> Chronicle:
                                                       within),),
                      SESSION_TASK, {"partner": Term("param", "person")},
                      doc="a person comes near the robot and looks at it, in either order")
-
-
-def proper(name: str) -> str:
-    """A person's name as said: ``alice`` -> "Alice"."""
-    return humanize(name).title()
 
 
 class Sessions:
@@ -214,7 +217,7 @@ class Sessions:
         return False
 
     def _not_come(self, goal: Goal) -> None:
-        from shary.agenda import PENDING
+        from shary.kernel.agenda import PENDING
 
         self._held.pop(goal.id, None)
         absent = sorted(p for p in self.involved(goal) if not self.is_open(p))

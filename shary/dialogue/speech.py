@@ -94,7 +94,7 @@ def _action(ontology: Any, name: str, values: list[str]) -> tuple[str, list[str]
 def core_ontology() -> Any:
     """The core action ontology, loaded once into a fact base of its own (it is a-priori
     knowledge shared by every run; a run's facts are not filled with it)."""
-    from shary.facts import FactDatabase
+    from shary.facts.database import FactDatabase
     from shary.recognition.ontology import load_action_ontology
 
     return load_action_ontology(FactDatabase())

@@ -149,6 +149,11 @@ def humanize(name: str) -> str:
     return " ".join(text.split()).lower()
 
 
+def proper(name: str) -> str:
+    """A person's name as said: ``alice`` -> "Alice"."""
+    return humanize(name).title()
+
+
 def _default_refer(thing: str) -> str:
     return "the " + humanize(thing)
 

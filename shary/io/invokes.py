@@ -7,7 +7,8 @@ SCXML ``<invoke>`` with ``<content>`` becomes).  A path never leaves that
 folder (or an ``--allow-path`` folder: :func:`userfiles.reader.confine`), so
 a scheme handed to a robot cannot make it read other files.
 
-Children are loaded with every check a scheme gets, and their own problems are
+Children are loaded by the invoking scheme's builder (:mod:`shary.io.schemes`, which
+calls this module, not the reverse), with every check a scheme gets, and their own problems are
 reported in their own files.  A scheme that invokes itself, directly or
 through others, is refused with the whole cycle named: starting it would start
 copies of itself without end.
@@ -20,7 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from shary import builtin
-from shary.model import Scheme
+from shary.statechart.model import Scheme
 from userfiles.errors import FileError
 from userfiles.reader import confine, spelled
 from userfiles.schema import did_you_mean
@@ -31,7 +32,7 @@ MAX_DEPTH = 16
 file is loaded once per top-level load)."""
 
 if TYPE_CHECKING:
-    from shary.io.schemes import _Builder
+    from shary.io.schemes import SchemeBuilder
 
 
 def identity(file: str) -> str:
@@ -39,14 +40,10 @@ def identity(file: str) -> str:
     return os.path.realpath(file) if os.path.isfile(file) else file
 
 
-def child_scheme(builder: _Builder, value: Any, path: tuple) -> Scheme | None:
+def child_scheme(builder: SchemeBuilder, value: Any, path: tuple) -> Scheme | None:
     """The checked child scheme an invoke names, or None (with the problems recorded)."""
-    from shary.io.schemes import load_scheme, parse_scheme
-
     if isinstance(value, dict):
-        found = _parse(builder, path, lambda: parse_scheme(
-            rooted(builder.located, path), acts=builder.base_acts,
-            conditions=builder.conditions, chain=builder.chain, loaded=builder.loaded))
+        found = _parse(builder, path, lambda: builder.parse_child(rooted(builder.located, path)))
         if isinstance(found, FileError):
             _refused(builder, path, found)
             return None
@@ -76,9 +73,7 @@ def child_scheme(builder: _Builder, value: Any, path: tuple) -> Scheme | None:
                         "scheme that invokes itself would start copies of itself without end")
         return None
     if key not in builder.loaded:
-        builder.loaded[key] = _parse(builder, path, lambda: load_scheme(
-            file, acts=builder.base_acts, conditions=builder.conditions, chain=builder.chain,
-            loaded=builder.loaded))
+        builder.loaded[key] = _parse(builder, path, lambda: builder.load_child(file))
     found = builder.loaded[key]
     if isinstance(found, FileError):
         _refused(builder, path, found)
@@ -86,14 +81,14 @@ def child_scheme(builder: _Builder, value: Any, path: tuple) -> Scheme | None:
     return found
 
 
-def _parse(builder: _Builder, path: tuple, load: Any) -> Scheme | FileError:
+def _parse(builder: SchemeBuilder, path: tuple, load: Any) -> Scheme | FileError:
     try:
         return load()
     except FileError as err:
         return err
 
 
-def _refused(builder: _Builder, path: tuple, err: FileError) -> None:
+def _refused(builder: SchemeBuilder, path: tuple, err: FileError) -> None:
     builder.problems.extend(err.problems)
     if any(p.file != builder.located.file for p in err.problems):
         builder.problem(path, "the invoked scheme is refused (its errors are listed with "
@@ -105,7 +100,7 @@ def _is_path(value: str) -> bool:
         or value.startswith(".")
 
 
-def _below(builder: _Builder, value: str, path: tuple) -> str | None:
+def _below(builder: SchemeBuilder, value: str, path: tuple) -> str | None:
     """The file a relative invoke path names, if it stays below the scheme's folder."""
     file = builder.located.file
     if not os.path.isfile(file):

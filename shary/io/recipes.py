@@ -17,12 +17,10 @@ from typing import Any
 import networkx as nx
 
 from shary import builtin
-from shary.acts import ACT_TYPES, ActRegistry, acts_from_data, builtin_acts
 from shary.dialogue.speech import check_say
 from shary.io import schema
 from shary.io.schemes import load_scheme
-from shary.model import Scheme
-from shary.recipes import (
+from shary.kernel.recipes import (
     ANY_TASK,
     ROBOT_PARAM,
     AtomicTask,
@@ -42,6 +40,8 @@ from shary.recipes import (
     Term,
     parse_refinement,
 )
+from shary.statechart.acts import ACT_TYPES, ActRegistry, acts_from_data, builtin_acts
+from shary.statechart.model import Scheme
 from userfiles.errors import FileError, Problem
 from userfiles.limits import seconds
 from userfiles.reader import Reader, checked, confine, spelled

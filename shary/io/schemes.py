@@ -1,6 +1,6 @@
 """Loading communication schemes from YAML: schema first, then meaning.
 
-:func:`parse_scheme` turns a located document into a :class:`~shary.model.Scheme`
+:func:`parse_scheme` turns a located document into a :class:`~shary.statechart.model.Scheme`
 and collects every problem of the file before refusing it: schema violations,
 unknown acts, roles and guards, dangling targets, missing initial states,
 transitions that can never be taken because an earlier unguarded one of the
@@ -16,10 +16,10 @@ from typing import Any
 import networkx as nx
 
 from shary import builtin
-from shary.acts import ACT_TYPES, ActRegistry, act_type, acts_from_data, builtin_acts
-from shary.conditions import ConditionRegistry
 from shary.io import invokes, schema
-from shary.model import (
+from shary.statechart.acts import ACT_TYPES, ActRegistry, act_type, acts_from_data, builtin_acts
+from shary.statechart.conditions import ConditionRegistry
+from shary.statechart.model import (
     ATOMIC,
     COMPOUND,
     FINAL,
@@ -93,7 +93,7 @@ def parse_scheme(located: yamlsafe.Located, *, acts: ActRegistry | None = None,
     if not isinstance(located.data, dict):
         raise FileError([located.problem((), "expected a mapping with 'scheme' and 'states' "
                                          "at the top of a scheme file")])
-    builder = _Builder(located, acts or builtin_acts(), conditions, check_reachable,
+    builder = SchemeBuilder(located, acts or builtin_acts(), conditions, check_reachable,
                        chain + (invokes.identity(located.file),),
                        {} if loaded is None else loaded)
     if not builder.reader.shape_ok:  # meaning is only checked on the schema's shape
@@ -104,7 +104,9 @@ def parse_scheme(located: yamlsafe.Located, *, acts: ActRegistry | None = None,
     return scheme
 
 
-class _Builder:
+class SchemeBuilder:
+    """One scheme file being read into the model, with the problems found so far."""
+
     def __init__(self, located: yamlsafe.Located, acts: ActRegistry,
                  conditions: ConditionRegistry | None, check_reachable: bool,
                  chain: tuple[str, ...], loaded: dict):
@@ -126,6 +128,17 @@ class _Builder:
         self.paths: dict[str, tuple] = {}
         self.order = 0
         self.transition_order = 0
+
+    def parse_child(self, located: yamlsafe.Located) -> Scheme:
+        """A child scheme written inline in this one, checked with this scheme's acts,
+        conditions and chain of invokes."""
+        return parse_scheme(located, acts=self.base_acts, conditions=self.conditions,
+                            chain=self.chain, loaded=self.loaded)
+
+    def load_child(self, file: str) -> Scheme:
+        """A child scheme read from ``file``, checked as :meth:`parse_child` does."""
+        return load_scheme(file, acts=self.base_acts, conditions=self.conditions,
+                           chain=self.chain, loaded=self.loaded)
 
     # -- building --------------------------------------------------------
 

@@ -35,7 +35,7 @@ from typing import Any
 from urllib.parse import unquote, urlsplit
 
 from shary.io.schemes import parse_scheme, unreachable
-from shary.model import PARENT, Coverage
+from shary.statechart.model import PARENT, Coverage
 from userfiles.errors import FileError, Problem
 from userfiles.reader import confine, spelled
 from userfiles.yamlsafe import Located, dump, read_text

@@ -25,6 +25,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from shary.kernel.tasktree import ATOMIC, TASK
 from shary.plans.beliefs import HumanBeliefs
 from shary.plans.human import HumanPlanManager
 from shary.plans.recovery import Recovery, Watchdog
@@ -32,7 +33,6 @@ from shary.plans.replan import remaining_agendas
 from shary.plans.robot import RobotPlanManager
 from shary.plans.states import TaskStates
 from shary.plans.tasks import ACTION, DONE, SharedPlan, is_open
-from shary.tasktree import ATOMIC, TASK
 
 __all__ = ["PlanFollower"]
 

@@ -1,6 +1,6 @@
 """The shared plan in the run's timeline: each task's states as bars (``plan-task`` rows).
 
-:mod:`shary.lanes` calls :func:`plan_task` for each ``plan-task`` row that
+:mod:`shary.log.lanes` calls :func:`plan_task` for each ``plan-task`` row that
 :mod:`shary.plans.states` logs: a bar per state, in the lane of the agent who
 does the task, as the robot believes it; a human's estimated view adds only
 what differs from the robot's (NOT_SEEN), in that human's lane.

@@ -10,7 +10,7 @@ the task has not moved for ``patience`` seconds after the last:
    task waits for (``isOn(cube, stick)``) is perceived through the head
    camera only; if the task's objects are not in view (no ``sees`` fact of
    the robot for them: perception's explicit *unknown*), the head turns to
-   them (a ``look-at`` node of the task, held by :mod:`shary.arbiter` for
+   them (a ``look-at`` node of the task, held by :mod:`shary.kernel.arbiter` for
    ``patience`` seconds).  When everything is in view, this rung is passed;
 2. **ask** the partner: a task not started is requested ("Please pick the
    stick."), a task not finished is asked about ("Are you going to place the
@@ -38,8 +38,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from shary.kernel.tasktree import ATOMIC
 from shary.plans.tasks import ACTION
-from shary.tasktree import ATOMIC
 
 __all__ = ["RUNGS", "Recovery", "Watchdog"]
 
@@ -130,7 +130,7 @@ class Recovery:
 
     def look(self, task: int, target: str, seconds: float) -> None:
         """Turn the head to ``target`` for ``seconds`` (a node of the task, held meanwhile)."""
-        from shary.arbiter import TASK
+        from shary.kernel.arbiter import TASK
 
         f = self.follower
         node = self.sup.tree.add(ATOMIC, f"look at {target}", f.node(task), state="ongoing",

@@ -18,8 +18,8 @@ import re
 from collections.abc import Callable
 from typing import Any
 
-from shary.arbiter import WATCH
-from shary.executors import Outcome, Reporter, Request, record_outcome
+from shary.kernel.arbiter import WATCH
+from shary.kernel.executors import Outcome, Reporter, Request, record_outcome
 from shary.plans.tasks import PrimitiveTask, is_open
 
 __all__ = ["RobotPlanManager"]
@@ -137,7 +137,7 @@ class RobotPlanManager:
 
     def watch(self, target: Any, node: str, priority: int = WATCH) -> None:
         """Turn the head to what the human's next expected action is about (held, at
-        the plan's priority, as long as ``node`` is not over: :mod:`shary.arbiter`)."""
+        the plan's priority, as long as ``node`` is not over: :mod:`shary.kernel.arbiter`)."""
         if target is not None:
             self.request("look-at", {"target": str(target)}, node, priority=priority)
 

@@ -20,9 +20,9 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from shary.compiler import CompiledScheme, compile_scheme
-from shary.instance import SchemeInstance, SchemeListener
 from shary.io.schemes import load_scheme
+from shary.statechart.compiler import CompiledScheme, compile_scheme
+from shary.statechart.instance import SchemeInstance, SchemeListener
 
 __all__ = ["SCHEME", "STATES", "TaskStates", "table_name"]
 

@@ -3,7 +3,7 @@
 λ = ⟨id, state, name, Δ⟩ and Π = ⟨id, state, name, agent, params, preds, Δ⟩
 (Section VI-A.2).  The planner writes them in one format for the three kinds
 of plans of Section VI-C (``planner/schemas/conditional-plan.schema.json``,
-:mod:`planner.sharedplan`): a *usual* plan is one with no human decision and
+:mod:`planner.conditional.sharedplan`): a *usual* plan is one with no human decision and
 no open value; an *AgentX* plan has agents written ``{"any-of": [...]}`` and
 parameters written ``{"query", "var", "candidates"}``; a *conditional* plan has
 decisions whose options start branches.  :class:`SharedPlan` reads that
@@ -122,8 +122,8 @@ class SharedPlan:
 
     @classmethod
     def from_policy(cls, policy: Any) -> SharedPlan:
-        """The shared plan of a policy chosen by :func:`planner.policy.select`."""
-        from planner.sharedplan import to_dict
+        """The shared plan of a policy chosen by :func:`planner.conditional.policy.select`."""
+        from planner.conditional.sharedplan import to_dict
 
         return cls.from_dict(to_dict(policy))
 

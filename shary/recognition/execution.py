@@ -21,8 +21,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from shary.arbiter import ACT
-from shary.executors import Outcome, Reporter, Request, record_outcome
+from shary.kernel.arbiter import ACT
+from shary.kernel.executors import Outcome, Reporter, Request, record_outcome
 from shary.recognition.models import ActionModels, RobotActionModel
 
 __all__ = ["ActionResult", "RobotActions"]

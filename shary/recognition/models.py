@@ -38,7 +38,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
-from shary.facts import FactDatabase
+from shary.facts.database import FactDatabase
 from shary.io import schema
 from shary.recognition.ontology import ActionOntology, load_action_ontology
 from userfiles.errors import FileError, Problem

@@ -4,7 +4,7 @@ JAHRVIS keeps its action classes in Ontologenius so that *human_place_cube*
 and *robot_place_cube* both inherit what *PlaceAction* says, above all the
 label used to talk about them (Section VI-A.1.a).  Here the classes are RDF in
 the fact base's a-priori graph, written in Turtle (``actions.ttl`` beside this
-module, read with :mod:`shary.turtle`, so a mistake is refused at its line),
+module, read with :mod:`shary.facts.turtle`, so a mistake is refused at its line),
 and :class:`ActionOntology` answers the few questions the engine asks of them,
 from an index built once when the ontology is loaded (the ontology is a-priori
 knowledge: it does not change during a run, and questions are asked per
@@ -40,7 +40,7 @@ from typing import NamedTuple
 
 from rdflib import RDFS, Literal, URIRef
 
-from shary.facts import FactDatabase
+from shary.facts.database import FactDatabase
 from userfiles.errors import FileError, Problem
 
 __all__ = ["ACTIONS_TTL", "ActionOntology", "LabelPart", "Parameter", "label_parts",

@@ -43,7 +43,7 @@ from dataclasses import dataclass
 from itertools import count
 from typing import Any, NamedTuple
 
-from shary.facts import FactDatabase, FactEvent, Subscription
+from shary.facts.database import FactDatabase, FactEvent, Subscription
 from shary.recognition.memory import FactMemory
 from shary.recognition.models import ActionModels, Fact, HumanActionModel
 

@@ -59,6 +59,10 @@ DEFAULT_RESOURCES = {"navigate": ("base",), "look-at": ("head",), "speak": ("voi
 """The parts of the robot the core library's atomic tasks use when a binding does not say
 (``resources:``): one goal at a time per part (:mod:`shary.ros.resources`)."""
 
+INTEGER_TYPES = {"int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64",
+                 "octet", "char"}
+FLOAT_TYPES = {"float", "double"}
+
 TEMPLATE = re.compile(r"\{([^{}]*)\}")
 _PARAM = re.compile(r"^(?:(code):([A-Za-z_][\w-]*)|(fact):([A-Za-z_][\w-]*):([A-Za-z_][\w-]*)"
                     r"(?::(\d+))?|([A-Za-z_][\w-]*))$")
@@ -339,8 +343,6 @@ def _check_goal_field(reader: Reader, where: tuple, cls: Any, type_name: str, pa
                       value: Any) -> None:
     """A goal's field path exists in the type, names a value (not a nested message), and
     a constant fits it."""
-    from shary.ros.messages import convert
-
     kind = field_type(cls, path)
     if kind is None:
         from userfiles.schema import did_you_mean
@@ -357,6 +359,19 @@ def _check_goal_field(reader: Reader, where: tuple, cls: Any, type_name: str, pa
             convert(value, kind)
         except (TypeError, ValueError):
             reader.problem(where, f"{value!r} is not a {kind} (the type of {path})")
+
+
+def convert(value: Any, kind: str) -> Any:
+    """``value`` as a field of rosidl type ``kind`` wants it."""
+    if kind in INTEGER_TYPES:
+        return int(value)
+    if kind in FLOAT_TYPES:
+        return float(value)
+    if kind == "boolean":
+        return value if isinstance(value, bool) else str(value).lower() in ("true", "1", "yes")
+    if kind.startswith("string"):
+        return str(value)
+    return value
 
 
 def _fields(cls: Any, parents: list[str]) -> list[str]:
@@ -417,7 +432,7 @@ def _check_bindings(files: list[Path], context: Any) -> list[Problem]:
 
 
 def _kinds() -> tuple[Any, ...]:
-    from shary.filekinds import FileKind
+    from shary.io.filekinds import FileKind
 
     return (FileKind("robot-binding", _check_bindings, 5, detect=lambda d: "binding" in d,
                      keys="binding:", shipped=shipped_bindings),)

@@ -1,13 +1,13 @@
 """A supervisor on a ROS 2 robot: every port filled from one binding, on one node.
 
 :class:`RosSupervision` puts together what the other modules of
-:mod:`shary.ros` do, for a :class:`~shary.supervisor.Supervisor` whose loop
+:mod:`shary.ros` do, for a :class:`~shary.kernel.supervisor.Supervisor` whose loop
 runs on a wall clock: the binding's executors in its executor registry, the
 binding's fact and speech topics into its facts and dialogue, the liveliness of
 the robot's nodes (a goal of a node that is gone fails at once), its state for
 ROS tools (:mod:`~shary.ros.views`), and ``~/run_task`` and ``~/person_act``
 (:mod:`~shary.ros.server`).  The views and the task server hear the
-supervisor's events through :class:`~shary.told.Told`, the log the supervisor is given.
+supervisor's events through :class:`~shary.log.told.Told`, the log the supervisor is given.
 Closing the node stops the supervisor safely first (:mod:`~shary.ros.stop`): no robot goal
 is left running and every ``~/run_task`` goal is answered.
 """
@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from shary.log.told import Told
 from shary.ros.binding import Binding
 from shary.ros.executors import RosExecutors
 from shary.ros.liveliness import Liveliness
@@ -25,7 +26,6 @@ from shary.ros.qos import QosWatch
 from shary.ros.server import RosTaskServer
 from shary.ros.stop import StopReport, safe_stop
 from shary.ros.views import RosViews
-from shary.told import Told
 
 
 class RosSupervision:

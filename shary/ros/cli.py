@@ -21,8 +21,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from shary.terminal import EXIT_BAD_INPUT, error, print_problems
-from shary.terminal import out as _out
+from shary.log.terminal import EXIT_BAD_INPUT, error, print_problems
+from shary.log.terminal import out as _out
 
 
 def add_ros(sub: argparse._SubParsersAction) -> None:
@@ -81,18 +81,18 @@ def cmd_interfaces(sources: list[Path]) -> int:
 
 
 def cmd_ros(args: argparse.Namespace) -> int:
-    from shary.facts import FactDatabase
+    from shary.facts.database import FactDatabase
     from shary.io.recipes import load_library
-    from shary.log import ContextLog
-    from shary.loop import EventLoop, WallClock
-    from shary.planning import planners_for
+    from shary.kernel.loop import EventLoop, WallClock
+    from shary.kernel.planning import planners_for
+    from shary.kernel.supervisor import Supervisor
+    from shary.log.contextlog import ContextLog
+    from shary.log.told import Told
     from shary.ros.binding import load_binding
     from shary.ros.bridge import RosSupervision
     from shary.ros.clock import RosClock
     from shary.ros.node import RosNode
     from shary.ros.stop import StopSignals
-    from shary.supervisor import Supervisor
-    from shary.told import Told
     from userfiles.errors import FileError
 
     if str(args.binding) == "interfaces" and not args.binding.is_file():

@@ -6,7 +6,7 @@ simulation slower than real time, or paused, slows or stops them.  shary's deadl
 (a scheme's ``after 10s``, a goal's ``exec`` deadline) must then be in that time too,
 or a slow simulation would see every goal time out.
 
-:class:`RosClock` is a :class:`~shary.loop.WallClock` whose time is the node's clock
+:class:`RosClock` is a :class:`~shary.kernel.loop.WallClock` whose time is the node's clock
 (ROS time, which is ``/clock``'s when the node uses sim time), counted from the first
 time it read (0 until ``/clock`` has said anything), and never going back (a simulation
 restarted).  Stopping must not wait for a simulation that may be paused:
@@ -19,7 +19,7 @@ from __future__ import annotations
 import time
 from typing import Any
 
-from shary.loop import WallClock
+from shary.kernel.loop import WallClock
 
 
 class RosClock(WallClock):

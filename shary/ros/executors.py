@@ -118,7 +118,7 @@ class RosExecutors:
             self._entities[atomic] = shared[key]
 
     def register(self, registry: Any) -> None:
-        """Fill ``registry`` (an :class:`~shary.executors.ExecutorRegistry`) with these."""
+        """Fill ``registry`` (an :class:`~shary.kernel.executors.ExecutorRegistry`) with these."""
         for atomic in self.binding.tasks:
             registry.register(atomic, self)
 

@@ -13,11 +13,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from shary.ros.binding import _PARAM, TEMPLATE, field_type
-
-INTEGER_TYPES = {"int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64",
-                 "octet", "char"}
-FLOAT_TYPES = {"float", "double"}
+from shary.ros.binding import _PARAM, TEMPLATE, convert, field_type
 
 
 class TemplateError(Exception):
@@ -73,19 +69,6 @@ def build(cls: Any, fields: Mapping[str, Any], args: Mapping[str, Any], *,
             target = getattr(target, part)
         setattr(target, last, convert(resolved, kind))
     return message
-
-
-def convert(value: Any, kind: str) -> Any:
-    """``value`` as a field of rosidl type ``kind`` wants it."""
-    if kind in INTEGER_TYPES:
-        return int(value)
-    if kind in FLOAT_TYPES:
-        return float(value)
-    if kind == "boolean":
-        return value if isinstance(value, bool) else str(value).lower() in ("true", "1", "yes")
-    if kind.startswith("string"):
-        return str(value)
-    return value
 
 
 def read_field(message: Any, path: str) -> Any:

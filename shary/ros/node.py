@@ -1,7 +1,7 @@
 """The one ROS 2 node of a shary process, spun by the engine's own loop.
 
 There is no ROS thread.  The node's ``SingleThreadedExecutor`` is the waiter of
-the engine's :class:`~shary.loop.EventLoop` (:meth:`RosNode.attach`): between
+the engine's :class:`~shary.kernel.loop.EventLoop` (:meth:`RosNode.attach`): between
 two timers the loop waits in rcl's wait set (:meth:`RosNode.wait`, one
 ``spin_once`` with the time to the next timer as its timeout), so every ROS
 callback (a drained subscription, an action client's answers, a served goal,
@@ -14,7 +14,7 @@ thread-safe entry), which ends the wait.
 
 Why no thread.  The node first spun in an executor thread of its own, the
 engine's loop sleeping on a ``threading.Event`` that each ROS callback set.
-Topic messages into facts met 6,000 a second but missed item 8's p99 <= 5 ms
+Topic messages into facts met 6,000 a second but missed the goal of p99 <= 5 ms
 to the fact in most runs (6-86 ms) while a bare rclpy subscriber draining in
 its own callback kept 0.6-1.0 ms: measured stage by stage, the tail was the
 hand-over between the two threads (the kernel's run queue and the GIL), not
@@ -42,7 +42,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from shary.loop import EventWaiter
+from shary.kernel.loop import EventWaiter
 from shary.ros.env import keep_on_host
 
 BATCH = 500
@@ -98,7 +98,7 @@ class RosNode:
     # -- the engine's loop waits here -------------------------------------------------
 
     def attach(self, loop: Any) -> None:
-        """Make this node the waiter of ``loop`` (an :class:`~shary.loop.EventLoop`):
+        """Make this node the waiter of ``loop`` (an :class:`~shary.kernel.loop.EventLoop`):
         its ROS callbacks run when the loop waits, and put their events on it."""
         self._loop = loop
         loop.waiter = self

@@ -8,9 +8,9 @@ asks it before a goal is sent): each goal *uses* the parts of the robot its task
 binding names (``resources:``, by default ``base`` for navigate, ``arm`` for the arm's
 tasks, ``head`` for look-at, ``voice`` for speak) and, for an action, its server.
 A goal whose parts are free is sent at once; otherwise, with the rules of the body's
-arbiter of a simulated robot (:mod:`shary.arbiter`):
+arbiter of a simulated robot (:mod:`shary.kernel.arbiter`):
 
-* a goal of higher priority (:attr:`~shary.executors.Request.priority`) than every goal
+* a goal of higher priority (:attr:`~shary.kernel.executors.Request.priority`) than every goal
   holding the parts it needs *preempts* them: each is told ``cancelled`` (reason
   ``preempted``) and cancelled at its server, and the new goal is sent once the
   server has answered (its result came, or the ``cancel`` deadline passed): never two
@@ -33,7 +33,7 @@ from typing import Any
 class Resources:
     """Who holds each part of the robot, and which goals wait (see the module's docstring).
 
-    A goal is anything with a ``request`` (:class:`~shary.executors.Request`) and a
+    A goal is anything with a ``request`` (:class:`~shary.kernel.executors.Request`) and a
     ``needs`` tuple of parts; ``start(goal)`` sends it, ``preempt(goal, reason)``
     cancels one that holds a part a goal of higher priority needs."""
 

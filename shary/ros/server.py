@@ -42,7 +42,7 @@ import json
 from collections.abc import Callable
 from typing import Any
 
-from shary.recipes import ROBOT_PARAM
+from shary.kernel.recipes import ROBOT_PARAM
 from shary.ros.node import RosNode
 
 ACTION = "~/run_task"

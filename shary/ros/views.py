@@ -36,7 +36,7 @@ import json
 from collections import deque
 from typing import Any
 
-from shary.log import LogEvent
+from shary.log.contextlog import LogEvent
 from shary.ros.node import RosNode
 
 DONE_OUTCOMES = {"done", "success", "succeeded", "achieved", "ended"}
@@ -85,7 +85,7 @@ class RosViews:
 
     def listener(self, time: float, kind: str, task: str | None, agent: str | None,
                  data: dict[str, Any]) -> None:
-        """Told every logged event (see :class:`shary.told.Told`'s listeners)."""
+        """Told every logged event (see :class:`shary.log.told.Told`'s listeners)."""
         from std_msgs.msg import String
 
         self._seq += 1

@@ -2,7 +2,7 @@
 
 HRI/OS (Section 3.5): "the CM keeps track of everything that occurs while the
 system is running ... agents can query the CM to find out what has happened
-and summaries".  The context log (:mod:`shary.log`) already archives every
+and summaries".  The context log (:mod:`shary.log.contextlog`) already archives every
 event with its time, task and agent; :class:`ContextManager` reads it back as
 summaries: per agent ("what did K-10 do in the last 10 minutes?") and per
 team task, over a period.  The same summary is a Python object
@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from shary.log import LogEvent, end_time, stream_events
+from shary.log.contextlog import LogEvent, end_time, stream_events
 
 TASK_KINDS = ("task-ready", "task-running", "task-done", "task-failed", "task-retry",
               "task-given-up", "task-unassigned", "respawn", "assignment-expired")

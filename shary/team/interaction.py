@@ -20,8 +20,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
-from shary.clock import Timer
-from shary.executors import Reporter, Request
+from shary.kernel.executors import Reporter, Request
+from shary.statechart.clock import Timer
 from shary.team.agents import REQUEST_HELP
 from shary.team.proxy import HumanProxy
 from shary.team.resources import HELP, QUESTION, Need

@@ -7,7 +7,7 @@ criterion is a :class:`Scorer` (a meta-agent): it scores one agent for one
 :class:`Need` between 0 and 1, or says the agent cannot serve it at all
 (``None``).  :meth:`ResourceManager.rank` combines the scores with the team
 file's weights (given directly, or as AHP pairwise comparisons computed by
-``planner/ahp.py``) and logs its choice with every criterion's part, so a
+``planner/evaluation/ahp.py``) and logs its choice with every criterion's part, so a
 delegation can always be explained from the context log.
 
 Adding a criterion is adding a scorer (:meth:`ResourceManager.add`), not

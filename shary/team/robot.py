@@ -1,6 +1,6 @@
 """Robot agents: a shary supervisor each, with breakpoints, association, control authority.
 
-A :class:`RobotAgent` wraps one :class:`~shary.supervisor.Supervisor` (its own
+A :class:`RobotAgent` wraps one :class:`~shary.kernel.supervisor.Supervisor` (its own
 schemes, agenda and task tree, on the team's loop and log).  A team task
 becomes a goal on its agenda.  Help requests are served only at a
 **breakpoint** of its current task: the moment one atomic task is over and
@@ -16,7 +16,14 @@ import itertools
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from shary.executors import Executor, ExecutorRegistry, Outcome, Reporter, Request, record_outcome
+from shary.kernel.executors import (
+    Executor,
+    ExecutorRegistry,
+    Outcome,
+    Reporter,
+    Request,
+    record_outcome,
+)
 from shary.team.agents import (
     ASSOCIATED,
     ASSOCIATED_PRIORITY,
@@ -39,8 +46,8 @@ from shary.team.tasks import WITHDRAWN
 from shary.transport.messages import Act, Answer, Assignment, Message, Progress
 
 if TYPE_CHECKING:
-    from shary.agenda import Goal
-    from shary.supervisor import Supervisor
+    from shary.kernel.agenda import Goal
+    from shary.kernel.supervisor import Supervisor
     from shary.team.team import Team
 
 

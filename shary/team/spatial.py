@@ -22,7 +22,7 @@ word); it is then resolved **from the speaker's perspective**, as people
 expect.  What the rover sees as "right" when it faces the panel from the other
 side is the speaker's left: the corner is the same, the words differ.
 
-The agent reasons on the poses in a :class:`~shary.facts.FactDatabase`
+The agent reasons on the poses in a :class:`~shary.facts.database.FactDatabase`
 perspective (the facts perception writes: ``x``, ``y``, ``z``, ``yaw``;
 ``width``, ``height``, ``thickness`` and ``type``), never on the simulator, so
 the same code runs on a real robot's perception.  When a reference cannot be

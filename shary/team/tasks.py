@@ -33,7 +33,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from shary.clock import Timer
+from shary.statechart.clock import Timer
 from shary.team.resources import TASK, Need
 from shary.team.spec import TaskSpec
 from shary.transport.messages import Assignment, Message, Progress

@@ -2,8 +2,8 @@
 
 :class:`Team` builds what a :class:`~shary.team.spec.TeamSpec` declares:
 
-- one :class:`~shary.supervisor.Supervisor` per robot (its own schemes,
-  agenda and task tree) on the team's :class:`~shary.loop.EventLoop` and
+- one :class:`~shary.kernel.supervisor.Supervisor` per robot (its own schemes,
+  agenda and task tree) on the team's :class:`~shary.kernel.loop.EventLoop` and
   context log, with the world's executors (``executors[robot]``: the
   simulation's, a real robot's, or a test's fakes);
 - a :class:`~shary.team.agents.HumanProxy` per person, a
@@ -22,9 +22,9 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from shary.executors import Executor, ExecutorRegistry, Request
-from shary.loop import EventLoop
-from shary.recipes import RecipeLibrary
+from shary.kernel.executors import Executor, ExecutorRegistry, Request
+from shary.kernel.loop import EventLoop
+from shary.kernel.recipes import RecipeLibrary
 from shary.team.agents import HAND_BACK, TAKE_CONTROL, Agent, SoftwareAgent
 from shary.team.interaction import AskExecutor, InteractionManager
 from shary.team.proxy import HumanProxy
@@ -81,8 +81,8 @@ class Team:
         self._asking: dict[str, AskExecutor] = {}
         robots = spec.of_kind(ROBOT)
         if robots:
-            from shary.facts import FactDatabase
-            from shary.supervisor import Supervisor
+            from shary.facts.database import FactDatabase
+            from shary.kernel.supervisor import Supervisor
             from shary.team.teamfile import robot_library
 
             library = library or robot_library(spec)

@@ -8,7 +8,7 @@ task of the recipe files; each task's skill is some agent's (among those of
 a task respawns one it depends on; questions are consistent (choices only for
 a choice question, a fallback and accepted answers a question can have);
 behaviours belong to humans, services to software agents; the scoring names
-known criteria, and AHP comparisons are consistent (planner/ahp.py).
+known criteria, and AHP comparisons are consistent (planner/evaluation/ahp.py).
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from shary.io.schema import validator
-from shary.recipes import RecipeLibrary
+from shary.kernel.recipes import RecipeLibrary
 from shary.team.resources import CRITERIA, DEFAULT_WEIGHTS
 from shary.team.spec import (
     ANSWER,
@@ -336,7 +336,7 @@ class _Meaning:
         return {k: v / total for k, v in weights.items()}
 
     def compared(self, raw: dict[str, dict[str, float]]) -> dict[str, float]:
-        from planner.ahp import AHPError, priority_vector
+        from planner.evaluation.ahp import AHPError, priority_vector
 
         names = list(dict.fromkeys([*raw, *(o for row in raw.values() for o in row)]))
         for name in names:

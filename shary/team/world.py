@@ -11,7 +11,7 @@ each of the team's agents a :class:`WorldLink`:
   request's, ``task``: its node, ``skill``: the atomic task), its outcome a
   :class:`~shary.transport.messages.Progress` back (``done`` with the result in
   ``data``, ``failed`` with the reason); cancelling is a ``CANCEL`` act.  The
-  supervisor's :meth:`~shary.executors.ExecutorRegistry.dispatch` path does
+  supervisor's :meth:`~shary.kernel.executors.ExecutorRegistry.dispatch` path does
   not change;
 - a person's work on site (``mount-panel``): the accepted task, as an
   ``Assignment`` to the world, which moves the person's avatar; its
@@ -28,7 +28,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from shary.executors import Reporter, Request
+from shary.kernel.executors import Reporter, Request
 from shary.team.agents import INFORM, QUERY
 from shary.team.spec import HUMAN, ROBOT
 from shary.transport.messages import Act, Assignment, Message, Progress

@@ -41,7 +41,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from shary.loop import EventLoop
+from shary.kernel.loop import EventLoop
 from shary.team.world import WORLD
 from shary.transport.facts import SUBSCRIBE
 from shary.transport.logshare import LOGS, Forwarder, SharedLog, TeamRecords
@@ -69,7 +69,7 @@ def agent_log(logdir: Path | None, name: str, seed: int) -> Any:
     restarted process writes a new file beside its first life's."""
     if logdir is None:
         return None
-    from shary.log import ContextLog
+    from shary.log.contextlog import ContextLog
 
     logdir.mkdir(parents=True, exist_ok=True)
     path, n = logdir / f"{name}.sqlite", 1

@@ -1,7 +1,7 @@
 """Fact changes an agent shares: how one process's facts reach the fact bases of others.
 
 An agent that perceives (the world: poses, panels mounted, the verdict an
-inspection read) keeps its own :class:`~shary.facts.FactDatabase`; agents in
+inspection read) keeps its own :class:`~shary.facts.database.FactDatabase`; agents in
 other processes that reason on those facts (a robot's recipes, the spatial
 reasoner, the Resource Manager's distances) keep theirs.  The sharer holds a
 :class:`FactSharing`: an agent asks for the facts with a ``SUBSCRIBE`` act,

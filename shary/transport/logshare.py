@@ -23,7 +23,7 @@ import itertools
 from collections.abc import Callable
 from typing import Any
 
-from shary.log import LogEvent
+from shary.log.contextlog import LogEvent
 from shary.transport.messages import LogRecord, Message
 
 LOGS = "logs"
@@ -39,7 +39,7 @@ Tap = Callable[[float, str, "str | None", "str | None", dict[str, Any]], Any]
 class SharedLog:
     """A process's context log (or none) whose rows also go to ``tap``.
 
-    The same ``record``/``flush``/``close`` as :class:`~shary.log.ContextLog`;
+    The same ``record``/``flush``/``close`` as :class:`~shary.log.contextlog.ContextLog`;
     ``path`` and the rest come from the log it wraps (absent without one, so a
     team without a log file builds no context manager).
     """
@@ -98,7 +98,7 @@ class Forwarder:
 class TeamRecords:
     """The live merged view of a team's logs, in the managers' process.
 
-    ``events`` are :class:`~shary.log.LogEvent` s ordered by time (rows of one
+    ``events`` are :class:`~shary.log.contextlog.LogEvent` s ordered by time (rows of one
     time keep their arrival order; ``seq`` numbers them as they arrive), the
     newest ``keep`` of them (``dropped`` counts the older ones let go: the log
     files hold them); ``listeners`` hear each row as it comes (a console's

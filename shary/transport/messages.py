@@ -122,7 +122,7 @@ class Progress(Message):
 class FactChange(Message):
     """Facts an agent shares: ``removed`` then ``added`` triples (subject, predicate, object)
     of one ``perspective``.  Subjects and predicates are names; an object is a name, a
-    number or a boolean (what :class:`shary.facts.FactDatabase` reads back as itself)."""
+    number or a boolean (what :class:`shary.facts.database.FactDatabase` reads back as itself)."""
 
     kind: ClassVar[str] = "fact"
     added: tuple[tuple[str, str, Any], ...] = ()

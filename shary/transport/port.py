@@ -22,7 +22,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from shary.loop import EventLoop
+from shary.kernel.loop import EventLoop
 from shary.transport.messages import Message, summary
 
 Handler = Callable[[Message], Any]

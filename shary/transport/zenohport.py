@@ -29,7 +29,7 @@ from typing import Any
 
 import zenoh
 
-from shary.loop import EventLoop
+from shary.kernel.loop import EventLoop
 from shary.transport.messages import Clock, LogRecord, Message
 from shary.transport.port import Faults, MessagePort
 from shary.transport.wire import MAX_BYTES, PREFIX, WireError, decode_timed, encode, key

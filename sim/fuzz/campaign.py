@@ -98,7 +98,7 @@ def run_one(family: str, seed: int, *, out: Path | None = None, report: Any = No
     """Draw run ``seed``'s behaviour, run it, judge it (see the module's docstring);
     ``out`` writes the run's files there (as ``shary run --out``), ``report`` is told
     its story."""
-    from shary.log import read_events
+    from shary.log.contextlog import read_events
 
     from ..run import run_scenario
 

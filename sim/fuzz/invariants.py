@@ -7,7 +7,7 @@ reached: the shared plan's last ``shared-plan`` row (``achieved``, ``failed``)
 for the stack family, every goal's ``goal-over`` for the living room (all
 ``done``: achieved), the team goal's ``goal-over`` for the seam-welding site.
 
-The invariants (issue 24, "Behaviour campaigns"):
+The invariants:
 
 ``verdict``
     The run ends before its timeout with a verdict; a failure states its

@@ -7,7 +7,7 @@ from typing import Any
 
 from rich.table import Table
 
-from shary.terminal import escape
+from shary.log.terminal import escape
 
 from .campaign import Campaign, Outcome, command
 from .invariants import INVARIANTS
@@ -15,13 +15,29 @@ from .invariants import INVARIANTS
 __all__ = ["print_campaign", "progress_line"]
 
 
+_COLUMNS = "seed    task verdict  invariants held  simulated     wall  scenario"
+"""The header of the lines :func:`progress_line` prints: whether the run's task ended
+well (achieved, failed) and whether the supervisor behaved (its invariants held) are two
+columns, since a task that fails by design is no fault of the supervisor's."""
+
+
 def progress_line(out: Any) -> Any:
-    """A ``progress`` callback printing one dim line per run (seed, verdict, time)."""
+    """A ``progress`` callback printing one dim line per run (seed, task verdict,
+    invariants held, times, scenario), under :data:`_COLUMNS`, printed with the first."""
+    started: list[bool] = []
+
     def told(outcome: Outcome) -> None:
-        mark = "[red]✗[/red]" if outcome.violations else "[green]✓[/green]"
-        out.print(f"[dim]{mark} seed {outcome.seed:<6} {outcome.verdict or 'no verdict':<10} "
-                  f"{outcome.simulated_seconds:6.1f} s in {outcome.wall_seconds:5.1f} s  "
-                  f"{escape(outcome.base)}[/dim]")
+        if not started:
+            started.append(True)
+            out.print(f"[dim]{_COLUMNS}[/dim]")
+        checked = len(outcome.checked)
+        held, colour = ((f"✗ {checked - len(outcome.violations)} of {checked}", "red")
+                        if outcome.violations else (f"✓ all {checked}", "green"))
+        violated = (f" [red](violated: {escape(', '.join(outcome.violations))})[/red]"
+                    if outcome.violations else "")
+        out.print(f"[dim]{outcome.seed:<7} {outcome.verdict or 'no verdict':<13} "
+                  f"[{colour}]{held:<15}[/{colour}]  {outcome.simulated_seconds:7.1f} s  "
+                  f"{outcome.wall_seconds:5.1f} s  {escape(outcome.base)}{violated}[/dim]")
     return told
 
 
@@ -31,9 +47,11 @@ def print_campaign(out: Any, result: Campaign) -> None:
     runs, family = document["runs"], result.family
     verdicts = document["verdicts"]
     last = result.seed + runs - 1
+    held = sum(not outcome.violations for outcome in result.outcomes)
     out.print(f"[bold]shary fuzz {family}[/bold]: {runs} run{'s' * (runs != 1)} (seed "
-              f"{result.seed}{f' to {last}' if runs > 1 else ''}): {verdicts['achieved']} "
-              f"achieved, {verdicts['failed']} failed, {verdicts['none']} without a verdict; "
+              f"{result.seed}{f' to {last}' if runs > 1 else ''}): task verdicts "
+              f"{verdicts['achieved']} achieved, {verdicts['failed']} failed, "
+              f"{verdicts['none']} none; invariants held in {held} of {runs}; "
               f"{document['simulated_seconds']:g} s simulated in "
               f"{document['wall_seconds']:.1f} s")
     summary = Table(title="invariants", title_justify="left")

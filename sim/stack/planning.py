@@ -18,10 +18,10 @@ from pathlib import Path
 from typing import Any
 
 import planner
-from planner.conditional import explore
-from planner.domain import Domain, Problem
-from planner.policy import select
-from planner.sharedplan import to_dict
+from planner.conditional.exploration import explore
+from planner.conditional.policy import select
+from planner.conditional.sharedplan import to_dict
+from planner.model.domain import Domain, Problem
 from shary.plans.tasks import SharedPlan
 from userfiles import yamlsafe
 from userfiles.errors import FileError

@@ -76,6 +76,6 @@ class StackSession:
         """Called when the run is otherwise quiet: once the plan is over and no inform is
         under way, the partner's own later behaviour (a look back after the robot gave up
         telling her what she missed, or after the timeout) is dropped, so the run ends
-        with its verdict instead of waiting for it (issue 24)."""
+        with its verdict instead of waiting for it."""
         if not self.busy and self.partner is not None:
             self.partner.stop()

@@ -21,13 +21,13 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from shary.facts import FactDatabase
-from shary.log import merged_events
-from shary.loop import EventLoop
+from shary.facts.database import FactDatabase
+from shary.kernel.loop import EventLoop
+from shary.log.contextlog import merged_events
+from shary.log.terminal import emit_json, escape
+from shary.log.terminal import out as _out
+from shary.log.timeline import render_timeline
 from shary.team.world import WORLD, connect_world
-from shary.terminal import emit_json, escape
-from shary.terminal import out as _out
-from shary.timeline import render_timeline
 from shary.transport.distributed import CONDUCTOR, Participant, agent_log
 from shary.transport.logshare import Forwarder, SharedLog
 from shary.transport.zenohport import LOOPBACK, Settings, ZenohPort, session_config

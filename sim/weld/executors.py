@@ -1,7 +1,7 @@
 """What the site's robots and astronauts do, over simulated time.
 
 The robots' atomic tasks reach the site through the engine's executor port
-(:class:`shary.executors.Executor`): ``drive`` (to a site place), ``weld`` (a
+(:class:`shary.kernel.executors.Executor`): ``drive`` (to a site place), ``weld`` (a
 seam: Robonaut-B's left arm follows it, the bead grows as the torch goes),
 ``inspect`` (a seam: K-10 aims its camera and light at it and reads the weld),
 ``point-light`` (K-10's spotlight at a point) and ``snapshot`` (a picture from
@@ -22,7 +22,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from shary.executors import Reporter, Request
+from shary.kernel.executors import Reporter, Request
 from userfiles.outputs import write_output
 
 from ..avatar import Avatar

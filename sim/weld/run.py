@@ -34,17 +34,17 @@ from collections.abc import Collection
 from pathlib import Path
 from typing import Any
 
-from shary.facts import FactDatabase
-from shary.log import ContextLog, read_events
-from shary.loop import EventLoop
+from shary.facts.database import FactDatabase
+from shary.kernel.loop import EventLoop
+from shary.log.contextlog import ContextLog, read_events
+from shary.log.told import Told
 from shary.team import Team
 from shary.team.spatial import SpatialReasoner
 from shary.team.world import connect_world
-from shary.told import Told
 from userfiles.outputs import output_folder, write_output
 
 from ..narration import Report
-from ..run import CHUNK, MemoryLog, RunResult
+from ..results import CHUNK, MemoryLog, RunResult
 from .scenario import WeldScenario, judge, load_weld_scenario
 from .site import WeldSite
 from .story import TeamStory
@@ -152,7 +152,7 @@ def schedule_script(team: Team, scenario: WeldScenario) -> None:
 
 def site_truth(site: WeldSite) -> frozenset[tuple[str, str, str]]:
     """What the site makes true now: the panels ``mounted`` on the frame, the seams
-    ``welded`` and the ``quality`` of each bead (:attr:`sim.run.RunResult.truth`)."""
+    ``welded`` and the ``quality`` of each bead (:attr:`sim.results.RunResult.truth`)."""
     return frozenset({*((panel, "mounted", "true") for panel in site.panels
                         if site.mounted(panel)),
                       *((seam, "welded", "true") for seam in site.beads),
@@ -246,7 +246,7 @@ class _WeldRun:
                            [f"{now:.1f} s   {self.scenario.name}: {label}"])
 
     def write(self, out_dir: Path, log: Any) -> dict[str, str]:
-        from shary.timeline import write_timeline
+        from shary.log.timeline import write_timeline
 
         outputs = {"log": str(out_dir / "log.sqlite")}
         log.flush()

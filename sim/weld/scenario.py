@@ -18,18 +18,15 @@ difference in words.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import cache
 from pathlib import Path
 from typing import Any
-
-from jsonschema import Draft202012Validator
 
 from shary.team import TeamSpec, load_team, robot_library
 from userfiles.errors import FileError
 from userfiles.reader import Reader, read, spelled
-from userfiles.schema import did_you_mean, validator
+from userfiles.schema import did_you_mean
 
-from ..scenario import SCHEMAS_DIR
+from ..schemafiles import schema
 from .layout import PANELS, seam_panels
 
 SITE = "seam-welding"
@@ -77,11 +74,6 @@ class WeldScenario:
     expect: WeldExpect
 
 
-@cache
-def _schema() -> Draft202012Validator:
-    return validator(SCHEMAS_DIR, "weld-scenario")
-
-
 def is_weld_scenario(data: Any) -> bool:
     """Whether a loaded YAML document is a seam-welding scenario (its ``site``)."""
     return isinstance(data, dict) and data.get("site") == SITE
@@ -93,7 +85,8 @@ def load_weld_scenario(path: str | Path, *, text: str | None = None,
     every problem of both.  ``text`` and ``team_text`` are read in place of the
     scenario's and its team file's own texts, as if they were those files (``shary
     fuzz`` varies a built-in scenario and its team in memory this way)."""
-    return read(path, _schema(), lambda reader: _meaning(reader, team_text), text=text)
+    return read(path, schema("weld-scenario"), lambda reader: _meaning(reader, team_text),
+                text=text)
 
 
 def _meaning(reader: Reader, team_text: str | None = None) -> WeldScenario:

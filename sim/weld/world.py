@@ -34,7 +34,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from shary.executors import Outcome, Reporter, Request
+from shary.kernel.executors import Outcome, Reporter, Request
 from shary.team.agents import INFORM, QUERY
 from shary.team.world import ATTACH, CANCEL, WORLD
 from shary.transport.facts import SUBSCRIBE, FactSharing

@@ -1,6 +1,6 @@
 """Build the hostile context logs of this folder: ``python tests/hostile/log/make_corpus.py``.
 
-Each file is a good little log, written by :class:`shary.log.ContextLog` (a task
+Each file is a good little log, written by :class:`shary.log.contextlog.ContextLog` (a task
 with an act and an atomic task, one state change), plus one row a reader
 cannot use, inserted behind the writer's back as another tool, a crash or a
 hand edit could.  ``CORPUS`` says what each file holds and what a reader must
@@ -72,8 +72,8 @@ TREE_ONLY = {"node-of-an-unknown-kind", "node-its-own-parent", "task-state-of-no
 
 def good_log(path: Path) -> None:
     """A small log as shary writes it: a task, its act, an atomic task, a state change."""
-    from shary.log import ContextLog
-    from shary.tasktree import ACT, ATOMIC, TASK, TaskTree
+    from shary.kernel.tasktree import ACT, ATOMIC, TASK, TaskTree
+    from shary.log.contextlog import ContextLog
 
     path.unlink(missing_ok=True)
     with ContextLog(path, seed=0) as log:
