@@ -25,9 +25,18 @@ messages on request.  Against it, in this process:
   it, in the same run and at the same rate, the ceiling: a bare rclpy subscription on
   a node of its own with one callback per message (what rclpy's tutorials show), and
   one that drains the messages waiting with ``take_message`` (shary's way), each
-  message's delay taken in its callback.
+  message's delay taken in its callback;
+- a safe stop: ``shary ros`` started ``--stops`` times, each with a task whose navigate
+  goal runs on ``/bench/stoppable``, then sent SIGTERM: the time from the signal to the
+  cancel request reaching the server (the last robot goal cancelled), p50 and p99 (goal:
+  p99 <= the binding's cancel deadline + 100 ms), and to the process's exit;
+- one goal per resource: 20 concurrent ``~/run_task`` goals (explore-place and
+  move-for-manipulate, each a navigate then a look-at) to a ``shary ros`` whose servers
+  ``/bench/base`` and ``/bench/head`` would run several goals at once and count each goal
+  that began while another ran (goal: 0), with the verdicts and the time all took.
 
     python benchmarks/ros.py [--json] [--goals 400] [--cancels 30] [--messages 20000]
+                             [--stops 10]
 """
 
 from __future__ import annotations
@@ -97,15 +106,52 @@ def serve() -> None:
         print("cancel", time.time(), flush=True)
         return CancelResponse.ACCEPT
 
+    def stoppable(handle: Any) -> Any:
+        print("stop-goal", flush=True)
+        while rclpy.ok() and not handle.is_cancel_requested:
+            time.sleep(0.002)
+        if handle.is_cancel_requested:
+            handle.canceled()
+        else:  # shutting down
+            handle.abort()
+        return NestedMessage.Result()
+
+    def stop_cancel(handle: Any) -> Any:
+        print("stop-cancel", time.time(), flush=True)
+        return CancelResponse.ACCEPT
+
+    running = {"base": 0, "head": 0}
+    overlaps = {"base": 0, "head": 0}
+    lock = threading.Lock()
+
+    def busy(part: str) -> Any:
+        def execute(handle: Any) -> Any:  # several goals may run at once: counted
+            with lock:
+                running[part] += 1
+                overlaps[part] += running[part] > 1
+            time.sleep(0.05)
+            with lock:
+                running[part] -= 1
+            handle.succeed()
+            return NestedMessage.Result()
+        return execute
+
     servers = [*(ActionServer(node, NestedMessage, f"/bench/instant{peer}", instant,
                               callback_group=group) for peer in INSTANT_PEERS),
                ActionServer(node, NestedMessage, "/bench/long", long, cancel_callback=cancel,
-                            callback_group=group)]
+                            callback_group=group),
+               ActionServer(node, NestedMessage, "/bench/stoppable", stoppable,
+                            cancel_callback=stop_cancel, callback_group=group),
+               *(ActionServer(node, NestedMessage, f"/bench/{part}", busy(part),
+                              callback_group=group) for part in running)]
     publishers = {topic: node.create_publisher(String, topic, DEPTH) for topic in TOPICS}
 
     def commands() -> None:
         for line in sys.stdin:
             words = line.split()
+            if words and words[0] == "overlaps":
+                with lock:
+                    print("overlaps", overlaps["base"], overlaps["head"], flush=True)
             if words and words[0] == "publish":
                 publisher, count, rate = publishers[words[1]], int(words[2]), float(words[3])
                 while not publisher.get_subscription_count():
@@ -121,7 +167,7 @@ def serve() -> None:
         rclpy.try_shutdown()
 
     threading.Thread(target=commands, daemon=True).start()
-    executor = MultiThreadedExecutor(num_threads=4)
+    executor = MultiThreadedExecutor(num_threads=8)
     executor.add_node(node)
     print("ready", flush=True)
     try:
@@ -186,6 +232,117 @@ facts:
 """
 INSTANT = "  {name}: {{action: /bench/instant, type: test_msgs/action/NestedMessage, " \
           "deadlines: {{server: 20s, ack: 10s}}}}\n"
+
+
+STOP_BINDING = """\
+binding: stop
+robot: jido
+codes: {kitchen: 5}
+tasks:
+  navigate: {action: /bench/stoppable, type: test_msgs/action/NestedMessage,
+             deadlines: {server: 20s, cancel: 2s}}
+"""
+STOP_DEADLINE = 2.0
+"""The cancel deadline of the stop measure's binding (seconds)."""
+SHARED_BINDING = """\
+binding: shared
+robot: jido
+tasks:
+  speak: {topic: /bench/say, type: std_msgs/msg/String, goal: {data: "{text}"}}
+  navigate: {action: /bench/base, type: test_msgs/action/NestedMessage,
+             deadlines: {server: 20s, ack: 10s}}
+  look-at: {action: /bench/head, type: test_msgs/action/NestedMessage,
+            deadlines: {server: 20s, ack: 10s}}
+"""
+
+
+def shary_ros(folder: str, binding: str, *more: str) -> subprocess.Popen:
+    """``shary ros`` on ``binding`` (its text) as a process of its own."""
+    from shary.ros.env import ros_environment
+
+    path = Path(folder) / f"binding-{time.monotonic_ns()}.yaml"
+    path.write_text(binding)
+    return subprocess.Popen([sys.executable, "-m", "shary", "ros", str(path), *more],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            env=ros_environment())
+
+
+def stops(child: Child, count: int) -> dict[str, Any]:
+    """SIGTERM to ``shary ros`` while its navigate goal runs: seconds to the cancel at the
+    server, and to the process's exit."""
+    import signal
+
+    cancelled, exited = [], []
+    with tempfile.TemporaryDirectory() as folder:
+        for trial in range(count):
+            process = shary_ros(folder, STOP_BINDING, "--task", "move-for-manipulate",
+                                "--with", "place=kitchen")
+            child.wait(lambda t=trial: child.lines.count("stop-goal") > t, timeout=60)
+            signalled = time.time()
+            process.send_signal(signal.SIGTERM)
+            child.wait(lambda t=trial: sum(x.startswith("stop-cancel ") for x in child.lines)
+                       > t, timeout=30)
+            process.wait(30)
+            exited.append(time.time() - signalled)
+            said = [x for x in child.lines if x.startswith("stop-cancel ")][trial]
+            cancelled.append(float(said.split()[1]) - signalled)
+    return {"stops": count, "stop_cancel_p50_ms": statistics.median(cancelled) * 1000,
+            "stop_cancel_p99_ms": _pct(cancelled, 0.99) * 1000,
+            "stop_exit_p50_ms": statistics.median(exited) * 1000,
+            "stop_deadline_ms": STOP_DEADLINE * 1000}
+
+
+def shared(child: Child, goals: int = 20) -> dict[str, Any]:
+    """``goals`` concurrent ~/run_task goals whose tasks use the base and the head: the
+    goals that overlapped at a server, the verdicts, the time all took."""
+    import rclpy
+    from rclpy.action import ActionClient
+    from shary_interfaces.action import RunTask
+    from shary_interfaces.msg import Parameter
+
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    node = rclpy.create_node("bench_asker", context=context)
+    deep = rclpy.qos.QoSProfile(depth=1000)  # the answers of goals sent at once: none lost
+    client = ActionClient(node, RunTask, "/shary/run_task", goal_service_qos_profile=deep,
+                          result_service_qos_profile=deep, cancel_service_qos_profile=deep)
+    executor = rclpy.executors.SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    threading.Thread(target=executor.spin, daemon=True).start()
+    verdicts: list[str] = []
+    done = threading.Event()
+
+    async def ask(i: int) -> None:
+        task = ("explore-place", "move-for-manipulate")[i % 2]
+        goal = RunTask.Goal(task=task, parameters=[Parameter(name="place", value=f"p{i}")])
+        handle = await client.send_goal_async(goal)
+        answer = await handle.get_result_async()
+        verdicts.append(answer.result.verdict)
+        if len(verdicts) == goals:
+            done.set()
+
+    with tempfile.TemporaryDirectory() as folder:
+        process = shary_ros(folder, SHARED_BINDING)
+        try:
+            client.wait_for_server(timeout_sec=60)
+            time.sleep(1.0)  # the servers discovered by shary too
+            start = time.perf_counter()
+            for i in range(goals):
+                executor.create_task(ask, i)
+            done.wait(120)
+            took = time.perf_counter() - start
+        finally:
+            process.terminate()
+            process.wait(30)
+    child.send("overlaps")
+    child.wait(lambda: any(x.startswith("overlaps ") for x in child.lines))
+    base, head = map(int, [x for x in child.lines if x.startswith("overlaps ")][0].split()[1:])
+    client.destroy()
+    executor.shutdown()
+    rclpy.try_shutdown(context=context)
+    return {"shared_goals": goals, "shared_done": verdicts.count("done"),
+            "shared_answered": len(verdicts), "shared_overlaps": base + head,
+            "shared_seconds": took}
 
 
 def measure(args: argparse.Namespace) -> dict[str, Any]:
@@ -333,6 +490,8 @@ def measure(args: argparse.Namespace) -> dict[str, Any]:
         loop.run_for(0.5)
     topic_exec.shutdown()
     node.close()
+    stopped = stops(child, args.stops)
+    sharing = shared(child)
     for client in (bare_client, crowded_client, *extra):
         client.destroy()
     bare_exec.shutdown()
@@ -362,7 +521,7 @@ def measure(args: argparse.Namespace) -> dict[str, Any]:
         "cancel_p99_ms": _pct(cancels, 0.99) * ms,
         "messages_sent": args.messages, "topic_rate": args.rate,
         **topic("/bench/facts", "topic"), **topic("/bench/bare", "bare_topic"),
-        **topic("/bench/drained", "drained_topic"),
+        **topic("/bench/drained", "drained_topic"), **stopped, **sharing,
     }
 
 
@@ -373,6 +532,7 @@ def main() -> None:
     parser.add_argument("--cancels", type=int, default=30)
     parser.add_argument("--messages", type=int, default=20000)
     parser.add_argument("--rate", type=float, default=6000.0, help="messages per second")
+    parser.add_argument("--stops", type=int, default=10, help="SIGTERMs of shary ros")
     parser.add_argument("--serve", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.serve:
@@ -404,6 +564,14 @@ def main() -> None:
               f"{figures[f'{name}_msgs_per_s']:.0f} msg/s (published at "
               f"{figures[f'{name}_published_per_s']:.0f}/s), p50 "
               f"{figures[f'{name}_p50_ms']:.2f} ms, p99 {figures[f'{name}_p99_ms']:.2f} ms")
+    print(f"SIGTERM -> the robot's goal cancelled at the server, {figures['stops']} stops: "
+          f"p50 {figures['stop_cancel_p50_ms']:.1f} ms, p99 {figures['stop_cancel_p99_ms']:.1f} "
+          f"ms (goal p99 <= {figures['stop_deadline_ms'] + 100:.0f} ms, the cancel deadline + "
+          f"100 ms); the process gone after p50 {figures['stop_exit_p50_ms']:.0f} ms")
+    print(f"{figures['shared_goals']} concurrent ~/run_task goals over a base and a head: "
+          f"{figures['shared_overlaps']} goals overlapping on a server (goal 0), "
+          f"{figures['shared_done']} done of {figures['shared_answered']} answered, in "
+          f"{figures['shared_seconds']:.1f} s")
 
 
 if __name__ == "__main__":

@@ -20,6 +20,7 @@ import rclpy
 from action_msgs.msg import GoalStatus
 from rclpy.action import ActionClient
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.qos import QoSProfile
 from shary_interfaces.action import RunTask
 from shary_interfaces.msg import Parameter
 
@@ -34,7 +35,9 @@ def say(*words: object) -> None:
 def main() -> None:
     rclpy.init()
     node = rclpy.create_node("test_client")
-    client = ActionClient(node, RunTask, "/shary/run_task")
+    deep = QoSProfile(depth=1000)  # the answers of many goals sent at once: none lost
+    client = ActionClient(node, RunTask, "/shary/run_task", goal_service_qos_profile=deep,
+                          result_service_qos_profile=deep, cancel_service_qos_profile=deep)
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     handles: dict[str, object] = {}

@@ -7,6 +7,7 @@ what it left."""
 from __future__ import annotations
 
 import signal
+import time
 
 import pytest
 from rosfixtures import needs_ros, run_until
@@ -167,3 +168,31 @@ def test_closing_the_node_stops_the_supervisor_safely(write, ros_domain, spawn):
     assert "canceled long" in server.lines
     assert ("task-end", "n1", {"name": "move-for-manipulate", "outcome": "cancelled",
                                "reason": "the node is shutting down"}) in events
+
+
+def test_concurrent_run_task_goals_never_share_a_server(spawn, write, tmp_path):
+    """Fifteen ~/run_task goals at once, each a navigate then a look-at on one server: all
+    are answered (rclpy's services would keep 10), and the server never ran two goals at
+    once."""
+    server = spawn("tests/ros_servers.py", "succeed")
+    client = spawn("tests/ros_client.py")
+    server.wait_for("ready")
+    client.wait_for("ready")
+    path = write("binding.yaml", "binding: one\nrobot: jido\ntasks:\n"
+                 "  navigate: {action: /test/succeed, type: test_msgs/action/NestedMessage}\n"
+                 "  look-at: {action: /test/succeed, type: test_msgs/action/NestedMessage}\n"
+                 "  speak: {topic: /jido/say, type: std_msgs/msg/String, "
+                 "goal: {data: \"{text}\"}}\n")
+    shary = spawn("-m", "shary", "ros", str(path))
+    shary.wait_for("shary is node /shary on robot jido (one); Ctrl-C stops it")
+    for i in range(15):
+        client.send(f"goal g{i} move-for-manipulate place=p{i}")
+    end = time.monotonic() + 120
+    while not all(any(line.startswith(f"result g{i} ") for line in client.lines)
+                  for i in range(15)):
+        assert time.monotonic() < end and shary.popen.poll() is None, client.lines
+        time.sleep(0.05)
+    executing = 0
+    for line in server.lines:
+        executing += {"running succeed": 1, "over succeed": -1}.get(line, 0)
+        assert executing <= 1

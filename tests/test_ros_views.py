@@ -48,11 +48,11 @@ def supervised(write, ros_domain, durations: float):
 
 
 def test_views_stay_bounded_however_many_tasks_ended(write, ros_domain):
-    from shary.ros.views import KEEP_ENDED
+    from shary.ros.views import KEEP_ENDED, KEEP_ITEMS
 
     loop, sup, ros, node = supervised(write, ros_domain, 0.01)
     with node:
-        for i in range(KEEP_ENDED + 5):
+        for i in range(KEEP_ITEMS):  # each task: 4 or more acts and actions
             sup.start_task("explore-place", {"place": f"p{i}"})
         run_until(loop, lambda: not sup.runs)
         snapshot = ros.views.snapshot()
@@ -63,6 +63,7 @@ def test_views_stay_bounded_however_many_tasks_ended(write, ros_domain):
         assert "n1" not in {n["id"] for n in snapshot["tree"]}  # the oldest forgotten
         statuses = ros.views.diagnostics().status
         assert len(statuses) == KEEP_ENDED + 1 and statuses[0].name == "shary"
+        assert len(ros.views.view.items) <= 2 * KEEP_ITEMS
         assert statuses[0].message == "0 task(s) running; doing: nothing"
 
 

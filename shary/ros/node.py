@@ -51,6 +51,9 @@ timers and the node's other entities (a goal's answer) at least this often."""
 LONGEST_WAIT = 0.1
 """Seconds one wait in rcl's wait set lasts at most: a signal (Ctrl-C) does not end it,
 so the loop comes round this often to let Python raise it."""
+SERVED_GOALS = 1000
+"""Goal, result and cancel requests a served action keeps while the loop works (rclpy's
+default, 10, loses the eleventh of goals sent at once)."""
 NEARER = 0.001
 """Seconds by which a wait must end sooner than the one before for the executor to be
 woken and begin again (:meth:`RosNode.wait`): less is the clocks' jitter."""
@@ -197,8 +200,16 @@ class RosNode:
                 self.put(cancel, key)
             return CancelResponse.ACCEPT
 
+        from rclpy.qos import QoSProfile
+
+        # rclpy's services keep 10 requests: more goals sent at once than that, while the
+        # loop works, would be lost without an answer
+        deep = QoSProfile(depth=SERVED_GOALS)
         return self.action_server(cls, name, execute_callback=execute,
-                                  goal_callback=on_goal, cancel_callback=on_cancel)
+                                  goal_callback=on_goal, cancel_callback=on_cancel,
+                                  goal_service_qos_profile=deep,
+                                  result_service_qos_profile=deep,
+                                  cancel_service_qos_profile=deep)
 
     def open_goals(self, name: str) -> int:
         """Goals of action ``name`` (served with :meth:`serve_goals`) accepted and not yet

@@ -240,6 +240,8 @@ class RosTaskServer:
                               else "")
         elif kind == "exec-result" and data.get("status") == "failed" and data.get("reason"):
             entry.failure = str(data["reason"])
+        elif kind == "exec-result" and data.get("status") == "cancelled" and data.get("reason"):
+            entry.failure = entry.failure or str(data["reason"])  # preempted, superseded
         elif kind == "enter" and str(data.get("event") or "").startswith("after "):
             entry.timeout = (f"nothing came within {str(data['event'])[6:].split('@')[0]} "
                              f"(the scheme's timeout, to {data.get('state')})")

@@ -25,7 +25,8 @@ publishes:
 
 Everything is bounded however long shary runs: the snapshot and the diagnostics carry
 the tasks running and the last :data:`KEEP_ENDED` ended (the view forgets older ones,
-with their nodes and goals).  Stamps come from the node's clock, which follows
+with their nodes and goals, and all but the last :data:`KEEP_ITEMS` ended acts and
+actions).  Stamps come from the node's clock, which follows
 ``/clock`` when the node's ``use_sim_time`` is set.
 """
 
@@ -42,6 +43,9 @@ DONE_OUTCOMES = {"done", "success", "succeeded", "achieved", "ended"}
 """Task outcomes that are not a failure, for the diagnostics' level."""
 KEEP_ENDED = 10
 """Ended tasks (and agenda goals) the views keep showing, the newest."""
+KEEP_ITEMS = 200
+"""Ended timeline items (acts, actions) the folded view keeps, the newest: the view is
+the console's, which keeps a whole run's; a node may run for months."""
 BEAT = 1.0
 """Seconds between two publications of the diagnostics and the markers."""
 MARKER_LIFETIME = 3.0
@@ -94,6 +98,10 @@ class RosViews:
             self._ended.append(task)
             while len(self._ended) > KEEP_ENDED:
                 self._forget(self._ended.popleft())
+        if len(self.view.items) > 2 * KEEP_ITEMS:  # now and then: amortized
+            ended = [key for key, item in self.view.items.items() if item[5] is not None]
+            for key in ended[:-KEEP_ITEMS]:
+                del self.view.items[key]
         for change in changes:
             if change[0] == "config":
                 run = self.view.tasks.get(change[1], {})
