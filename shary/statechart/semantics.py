@@ -23,9 +23,11 @@ from shary.statechart.model import COMPOUND, FINAL, HISTORY, PARALLEL, Scheme, S
 EVENTLESS = "<eventless>"
 """Name of the event under which a compiled scheme looks for eventless transitions."""
 
-ENTER, ACTIONS, INVOKE, RAISE, FINISH = "enter", "actions", "invoke", "raise", "finish"
+ENTER, ACTIONS, INVOKE, RAISE, DONE, FINISH = "enter", "actions", "invoke", "raise", "done", \
+    "finish"
 """Kinds of a step's entries: a state entered, default-entry content to run, a state
-whose invokes start at the end of the macrostep, an internal event, the end of the run."""
+whose invokes start at the end of the macrostep, an internal event, a ``done.state`` event
+whose data the final state computes, the end of the run."""
 
 
 @dataclass(frozen=True)
@@ -191,8 +193,8 @@ class Semantics:
             parent = state.parent
             assert parent is not None
             found = history.get(state)
-            if found is None and state.initial_actions:
-                content[parent] = state.initial_actions
+            if found is None and state.initial_actions:  # after the initial transition's
+                content[parent] = content.get(parent, ()) + state.initial_actions
             restored = sorted(found, key=_order) if found is not None \
                 else self.history_default(state)
             for s in restored:
@@ -262,7 +264,8 @@ class Semantics:
             if parent is self.root:
                 entries.append((FINISH, s))
                 continue
-            entries.append((RAISE, f"done.state.{parent.name}"))
+            done = f"done.state.{parent.name}"
+            entries.append((DONE, (done, s)) if s.donedata is not None else (RAISE, done))
             grand = parent.parent
             if grand is not None and grand.kind == PARALLEL and all(
                     _in_final(c, active) for c in grand.proper_children()):
