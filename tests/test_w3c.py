@@ -121,6 +121,7 @@ def test_the_manifests_mandatory_automated_tests_run(irp, shary):
     assert "not translated to shary's data model: conf:srcExpr" in outcomes[1].reason
     status, out, _ = shary("conformance", irp)
     assert status == 1 and "1 passed, 1 failed" in out
+    assert "optional tests: 1 passed, 0 failed" in out
 
 
 def test_a_broken_manifest_is_refused_at_its_line(irp, shary):

@@ -179,8 +179,9 @@ def is_irp(folder: Path) -> bool:
     return (folder / MANIFEST).is_file()
 
 
-def irp_tests(folder: Path) -> list[Path]:
-    """The mandatory, automated tests the manifest lists, as ``.txml`` files under ``folder``.
+def irp_tests(folder: Path, conformance: str = "mandatory") -> list[Path]:
+    """The automated tests the manifest lists as ``conformance`` (``mandatory`` or
+    ``optional``), as ``.txml`` files under ``folder``.
 
     The manifest names them ``355/test355.txml`` (the W3C's layout); copies
     that keep them elsewhere under the folder (``txml/test355.txml``) are
@@ -192,7 +193,7 @@ def irp_tests(folder: Path) -> list[Path]:
     by_name = {p.name: p for p in sorted(folder.rglob("*.txml"))}
     tests: list[Path] = []
     for test in _walk(root, "test"):
-        if test.attrs.get("conformance") != "mandatory" or test.attrs.get("manual") != "false":
+        if test.attrs.get("conformance") != conformance or test.attrs.get("manual") != "false":
             continue
         for start in (c for c in test.children if c.tag == "start"):
             uri = start.attrs.get("uri", "")
