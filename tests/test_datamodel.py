@@ -6,6 +6,9 @@ what the data model adds, through schemes written as users write them.
 
 from __future__ import annotations
 
+import re
+from pathlib import Path
+
 import pytest
 
 from shary.io.schemes import parse_scheme
@@ -133,3 +136,17 @@ def test_an_expression_error_is_found_at_load_time_with_its_position():
                                "  a: {on: {go: {target: a, cond: m > 1}}}\n", "s.yaml"))
     (problem,) = err.value.problems
     assert (problem.line, problem.col) == (5, 34) and "unknown variable 'm'" in problem.message
+
+
+def test_the_example_of_docs_schemes_md_runs_as_shown(tmp_path, shary):
+    doc = (Path(__file__).resolve().parent.parent / "docs" / "schemes.md").read_text()
+    chart = re.search(r"```yaml\n(scheme: ask-for-object\n.*?)```", doc, re.S)
+    shown = re.search(r"\$ shary simulate ask-for-object.yaml (.*?)\n(.*?)```", doc, re.S)
+    assert chart and shown
+    (tmp_path / "ask-for-object.yaml").write_text(chart.group(1))
+    words = re.findall(r"'([^']*)'|(\S+)", shown.group(1))
+    status, out, err = shary("simulate", tmp_path / "ask-for-object.yaml",
+                             *[quoted or plain for quoted, plain in words])
+    assert status == 0, err
+    assert [line.strip() for line in out.splitlines()[1:]] == \
+        [line.strip() for line in shown.group(2).splitlines()]

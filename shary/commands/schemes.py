@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import re
 from pathlib import Path
 from typing import Any
@@ -36,7 +37,8 @@ def add_simulate(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("simulate", help="run a scheme against a script of events and waits")
     p.add_argument("scheme", help="a built-in scheme name or a scheme file")
     p.add_argument("script", nargs="*", metavar="EVENT|WAIT",
-                   help="events to send (H-AGREE, done …) and waits on the clock (5s, 250ms)")
+                   help="events to send (H-AGREE, done …), with data as JSON after '=' "
+                   "(H-AGREE='{\"object\": \"cup\"}'), and waits on the clock (5s, 250ms)")
     add_json_flag(p, "the trace")
     p.set_defaults(func=cmd_simulate)
 
@@ -54,7 +56,14 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
     scheme = load_scheme(args.scheme)
     compiled = compile_scheme(scheme)
-    unknown = [w for w in args.script if not _WAIT.match(w) and not compiled.can_take(w)]
+    script: list[tuple[str, Any]] = []
+    for word in args.script:
+        name, given, data = word.partition("=")
+        try:
+            script.append((name, json.loads(data) if given else None))
+        except ValueError as err:
+            return error(f"the data of {name!r} is not JSON: {err}", json_mode=args.json)
+    unknown = [w for w, _ in script if not _WAIT.match(w) and not compiled.can_take(w)]
     if unknown:
         messages = [f"no state of {scheme.name} takes the event {word!r}"
                     f"{did_you_mean(word, compiled.descriptors())}" for word in unknown]
@@ -102,13 +111,15 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         _out.print(f"[bold]{scheme.name}[/bold]: {escape(scheme.doc.strip())}")
     try:
         instance = compiled.start(clock=clock, listener=Trace())
-        for word in args.script:
+        for word, data in script:
             if _WAIT.match(word):
                 note("wait", f"[dim]wait {word}[/dim]", wait=word)
                 clock.advance(seconds(word))
             else:
-                note("event", f"[yellow]<- {escape(word)}[/yellow]", event=word)
-                instance.send(word)
+                shown = word if data is None else f"{word} {json.dumps(data)}"
+                note("event", f"[yellow]<- {escape(shown)}[/yellow]", event=word,
+                     **({} if data is None else {"data": data}))
+                instance.send(word, data)
             if instance.finished:
                 break
     except LivelockError as err:
