@@ -7,10 +7,12 @@ The data-model-free part of W3C SCXML maps one to one onto schemes:
 ``<cancel>``, ``<log label>``, in ``<onentry>``/``<onexit>`` and on
 ``<initial>`` and history default transitions, and ``<invoke>`` of another
 SCXML chart (inline ``<content>`` or a ``src`` file below the chart's folder),
-written inline in the scheme.  Anything that needs a data model or an outside
-processor (``cond``, ``<script>``, ``<assign>``, ``<if>``, ``<param>``,
-``expr`` attributes …) is refused by name with its position, never
-half-translated.
+written inline in the scheme.  A chart with ``datamodel="shary"`` (or
+``python``, ``ecmascript``) has its data model imported too
+(:mod:`shary.io.scxml_data`); in one without, anything that needs a data
+model (``cond``, ``<assign>``, ``<if>``, ``<param>``, ``expr`` attributes …)
+is refused by name with its position, never half-translated, and so are, in
+every chart, ``<script>`` and what an outside processor would do.
 
 The XML is read with the standard library's expat, without DOCTYPE (so no
 entity is ever declared, expanded or fetched: no entity bombs, no external
@@ -198,7 +200,7 @@ class _Translator:
             elif child.tag == "donedata" and self.datamodel and element.tag == "final":
                 continue
             elif child.tag in _NEEDS_DATAMODEL:
-                self.refuse(child, f"<{child.tag}> needs a data model, which schemes do not have")
+                self.refuse(child, f"<{child.tag}> {_needs(child.tag)}")
             elif child.tag not in ("initial", "transition", "onentry", "onexit", "invoke"):
                 self.refuse(child, f"<{child.tag}> is not supported")
         return states
@@ -365,8 +367,9 @@ class _Translator:
                     if cond is None:
                         continue
                 elif guard is None:
-                    self.refuse(t, "cond= needs a data model (only In('STATE') does not); "
-                                "use a scheme guard naming a registered condition instead")
+                    self.refuse(t, "cond= needs a data model (only In('STATE') does not): "
+                                "datamodel=\"shary\" on <scxml>, or a scheme guard naming a "
+                                "registered condition")
                     continue
             for attr in t.attrs:
                 if attr not in ("event", "target", "type", "cond"):
@@ -416,7 +419,7 @@ class _Translator:
                 if found is not None:
                     out.append(found)
             elif a.tag in _NEEDS_DATAMODEL:
-                self.refuse(a, f"<{a.tag}> needs a data model, which schemes do not have")
+                self.refuse(a, f"<{a.tag}> {_needs(a.tag)}")
             elif a.tag not in _ACTIONS:
                 self.refuse(a, f"<{a.tag}> is not supported in executable content")
             elif a.tag == "raise":
@@ -538,6 +541,13 @@ def _in_state(cond: str) -> str | None:
     """The guard of a ``cond`` the null data model has: ``In('S')`` is ``in S``; else None."""
     match = _IN.match(cond)
     return None if match is None else f"in {match.group(2)}"
+
+
+def _needs(tag: str) -> str:
+    """Why an element of the data model is refused in a chart without one."""
+    if tag == "script":
+        return "needs a data model with scripts; shary's has expressions only, no scripts"
+    return "needs a data model: datamodel=\"shary\" on <scxml> (see docs/conformance.md)"
 
 
 def _one_or_list(items: list[str]) -> Any:

@@ -1,20 +1,19 @@
-"""The W3C SCXML implementation report's tests, run on the null data model.
+"""The W3C SCXML implementation report's tests, translated to shary's data model.
 
 The W3C's IRP (https://www.w3.org/Voice/2013/scxml-irp/) writes its tests
 once, data-model-agnostic, in ``.txml`` files whose ``conf:`` attributes and
 elements each implementation's stylesheet turns into its own data model
 (``conf:targetpass`` into ``target="pass"``, ``conf:expr`` into an
 ECMAScript expression …).  ``manifest.xml`` says which tests are mandatory
-and which need a person to judge them.
+or optional, and which need a person to judge them.
 
-Here the translation is the null data model's: the constructs that need no
-data model (``conf:targetpass``/``targetfail``, ``conf:pass``/``fail``,
-``conf:datamodel``, ``conf:delay``, a fixed number of seconds, and
-``conf:inState``, the null data model's ``In()``) are rewritten, and a test
-using any other ``conf:`` construct is refused with those constructs named,
-as a chart with ``cond`` or ``<script>`` is.  The
-translated charts then run as every plain chart does
-(:func:`shary.statechart.conformance.run_test`: they pass by reaching ``pass``).
+Here the translation is shary's own, as ``confEcma.xsl`` is ECMAScript's:
+:data:`_ATTRIBUTES` and :data:`_ELEMENTS` give each ``conf:`` construct its
+SCXML attribute or element with an expression in shary's language
+(:mod:`shary.statechart.expressions`), and a test using a construct they do
+not know is refused with it named.  The translated charts then run as every
+plain chart does (:func:`shary.statechart.conformance.run_test`: they pass by
+reaching ``pass``).
 """
 
 from __future__ import annotations
