@@ -6,6 +6,7 @@ what the data model adds, through schemes written as users write them.
 
 from __future__ import annotations
 
+import json
 import re
 from pathlib import Path
 
@@ -150,3 +151,28 @@ def test_the_example_of_docs_schemes_md_runs_as_shown(tmp_path, shary):
     assert status == 0, err
     assert [line.strip() for line in out.splitlines()[1:]] == \
         [line.strip() for line in shown.group(2).splitlines()]
+
+
+@pytest.mark.parametrize(("script", "acts", "end"), [
+    ("disambiguate done SAY-WHICH unclear SAY-WHICH unclear done",
+     ["WAIT-ATTENTION", "ASK-WHICH", "SAY-WHICH", "ASK-WHICH", "SAY-WHICH", "GIVE-UP"],
+     "unresolved"),
+    ("disambiguate done SAY-WHICH unclear SAY-WHICH chosen",
+     ["WAIT-ATTENTION", "ASK-WHICH", "SAY-WHICH", "ASK-WHICH", "SAY-WHICH"], "chosen"),
+    ("inform 10s done 10s done",
+     ["WAIT-ATTENTION", "CALL-ATTENTION", "WAIT-ATTENTION", "GIVE-UP"], "untold"),
+    ("inform done attention-lost 10s done 10s done",
+     ["WAIT-ATTENTION", "INFORM", "WAIT-ATTENTION", "CALL-ATTENTION", "WAIT-ATTENTION",
+      "GIVE-UP"], "untold"),
+    ("inform 10s done done", ["WAIT-ATTENTION", "CALL-ATTENTION", "WAIT-ATTENTION", "INFORM"],
+     "tell"),
+])
+def test_the_built_in_schemes_that_count_carry_out_the_acts_their_copies_of_states_did(
+        script, acts, end, shary):
+    """The act sequences are those of the schemes before they counted (ask-again,
+    attend-again), taken from runs of those versions."""
+    status, out, err = shary("simulate", *script.split(), "--json")
+    assert status == 0, err
+    run = json.loads(out)
+    assert [e["act"] for e in run["trace"] if e["kind"] == "enter" and e["act"]] == acts
+    assert run["configuration"] == [end]
