@@ -14,6 +14,7 @@ import pytest
 
 from shary.io.schemes import parse_scheme
 from shary.statechart.compiler import compile_scheme
+from shary.statechart.datamodel import MAX_ITERATIONS
 from shary.statechart.instance import SchemeListener
 from userfiles.errors import FileError
 from userfiles.yamlsafe import load_text
@@ -176,3 +177,21 @@ def test_the_built_in_schemes_that_count_carry_out_the_acts_their_copies_of_stat
     run = json.loads(out)
     assert [e["act"] for e in run["trace"] if e["kind"] == "enter" and e["act"]] == acts
     assert run["configuration"] == [end]
+
+
+def test_nested_foreach_rounds_are_bounded_and_end_in_error_execution():
+    instance = start("""
+scheme: rounds
+data: {big: "list(str(0) * 1000)", x: null, y: null, z: null, n: 0}
+initial: a
+states:
+  a:
+    on_entry:
+      - foreach: big
+        item: x
+        do: [{foreach: big, item: y, do: [{assign: n, expr: n + 1}]}]
+    on: {error.execution: b}
+  b: {}
+""")
+    assert instance.configuration == ("b",)
+    assert MAX_ITERATIONS - 1_000 < instance.data["n"] < MAX_ITERATIONS  # not 1000 * 1000

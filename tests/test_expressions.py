@@ -50,7 +50,8 @@ def test_names_and_states_are_known_before_running():
 @pytest.mark.parametrize("text", [
     "9 ** 9 ** 9", f"2 ** {MAX_INT_BITS + 1}", f"'x' * {MAX_LENGTH + 1}",
     f"[0] * {MAX_LENGTH + 1}", f"1 << {MAX_INT_BITS + 1}", "s * 1000 * 1000",
-    "n / 0", "items[7]", "n.key", "missing_key.x", "int('x')",
+    "n / 0", "items[7]", "n.key", "missing_key.x", "int('x')", "'%0999999999d' % 1",
+    "int('9' * 5000)", "10.0 ** 400",
 ])
 def test_evaluations_beyond_a_bound_or_failing_stop_with_an_evaluation_error(text):
     instance = Instance(n=5, items=[1], s="abcdefghij" * 10, missing_key={})
@@ -73,3 +74,11 @@ def test_locations_assign_below_a_variable_and_refuse_system_variables():
         compile_location("_event").assign(instance, 1)
     with pytest.raises(ExpressionError, match="not a place to assign"):
         compile_location("f(x)")
+
+
+def test_a_collection_made_into_text_is_cut_however_it_nests():
+    nested: list = []
+    for _ in range(60):
+        nested = [nested, nested]  # 2**60 leaves, in 60 lists
+    text = compile_expression("str(x)")(Instance(x=nested))
+    assert len(text) < 1_000

@@ -20,7 +20,7 @@ import itertools
 import re
 from typing import Any
 
-from shary.statechart.expressions import EvaluationError, Expression, Location
+from shary.statechart.expressions import EvaluationError, Expression, Location, show
 from shary.statechart.model import (
     PARENT,
     Assign,
@@ -44,7 +44,12 @@ INVOKE_TYPES = ("", "scxml", "http://www.w3.org/TR/scxml/", "http://www.w3.org/T
 ERROR_EXECUTION = "error.execution"
 _DELAY = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*(ms|s|min|h)?\s*$")
 _UNITS = {"ms": 0.001, "s": 1.0, "min": 60.0, "h": 3600.0, None: 1.0}
+MAX_ITERATIONS = 100_000
+"""Most rounds the ``foreach`` actions of one block may run, nested ones included: a
+foreach over 100,000 items inside another would otherwise run ten billion times."""
 _sessions = itertools.count(1)
+_rounds = [0, 0]
+"""How deep in foreach actions the engine is, and how many rounds they ran so far."""
 _send_ids = itertools.count(1)
 
 
@@ -169,27 +174,42 @@ def execute(instance: Any, action: Any) -> None:
                     raise Stopped(ERROR_EXECUTION)
                 return
     elif isinstance(action, Foreach):
-        array = action.array(instance)
-        if not isinstance(array, (list, tuple, dict)):
-            raise EvaluationError(f"{action.array.source!r} is a {type(array).__name__}, not "
-                                  "a list to iterate over")
-        for index, item in enumerate(list(array)):
-            action.item.assign(instance, item)
-            if action.index is not None:
-                action.index.assign(instance, index)
-            if not instance._run(action.actions):
-                raise Stopped(ERROR_EXECUTION)
+        _foreach(instance, action)
     elif isinstance(action, Block):
         instance._run(action.actions)
     elif isinstance(action, Log):
         value = action.expr(instance) if action.expr is not None else None
         if instance.listener is not None:
-            instance.listener.logged(instance, action.text if action.expr is None else
-                                     f"{action.text}: {value!r}" if action.text else repr(value))
+            shown = show(value) if not isinstance(value, str) else repr(value)
+            instance.listener.logged(instance, f"{action.text}: {shown}" if action.text
+                                     else shown)
     elif isinstance(action, CancelComputed):
         instance._cancel_send(str(action.id(instance)))
     elif isinstance(action, Send):
         _send(instance, action, action.computed)
+
+
+def _foreach(instance: Any, action: Foreach) -> None:
+    array = action.array(instance)
+    if not isinstance(array, (list, tuple, dict)):
+        raise EvaluationError(f"{action.array.source!r} is a {type(array).__name__}, not "
+                              "a list to iterate over")
+    if _rounds[0] == 0:
+        _rounds[1] = 0
+    _rounds[0] += 1
+    try:
+        for index, item in enumerate(list(array)):
+            _rounds[1] += 1
+            if _rounds[1] > MAX_ITERATIONS:
+                raise EvaluationError(f"foreach ran more than {MAX_ITERATIONS} rounds in one "
+                                      "block of actions")
+            action.item.assign(instance, item)
+            if action.index is not None:
+                action.index.assign(instance, index)
+            if not instance._run(action.actions):
+                raise Stopped(ERROR_EXECUTION)
+    finally:
+        _rounds[0] -= 1
 
 
 def values(instance: Any, pairs: tuple[tuple[str, Expression | Location], ...]) -> dict[str, Any]:

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import ast
 import operator
+import reprlib
 from collections.abc import Callable
 from typing import Any
 
@@ -94,9 +95,27 @@ def _shift(a: Any, b: Any) -> Any:
     return a << b
 
 
+SHOWN = reprlib.Repr()
+"""How a collection is written as text: cut to a few levels and items, so that a list
+holding itself a million times over cannot make a string of a terabyte."""
+SHOWN.maxlevel, SHOWN.maxlist, SHOWN.maxtuple, SHOWN.maxdict = 4, 50, 50, 50
+SHOWN.maxstring = SHOWN.maxother = 1_000
+
+
+def show(value: Any) -> str:
+    """A value as text, bounded (strings as they are, collections cut)."""
+    return value if isinstance(value, str) else SHOWN.repr(value)
+
+
 def _str(value: Any = "") -> str:
-    return _check(value if isinstance(value, str) else repr(value) if isinstance(
-        value, (list, tuple, dict)) else str(value))
+    return _check(show(value) if isinstance(value, (list, tuple, dict)) else
+                  value if isinstance(value, str) else str(value))
+
+
+def _modulo(a: Any, b: Any) -> Any:
+    if isinstance(a, str):  # printf-style formatting could ask for any width
+        raise EvaluationError("'%' does not format strings in an expression")
+    return a % b
 
 
 FUNCTIONS: dict[str, Callable[..., Any]] = {
@@ -108,7 +127,7 @@ FUNCTIONS: dict[str, Callable[..., Any]] = {
 
 _BINARY: dict[type, Callable[[Any, Any], Any]] = {
     ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: _times, ast.Div: operator.truediv,
-    ast.FloorDiv: operator.floordiv, ast.Mod: operator.mod, ast.Pow: _power,
+    ast.FloorDiv: operator.floordiv, ast.Mod: _modulo, ast.Pow: _power,
     ast.LShift: _shift, ast.RShift: operator.rshift, ast.BitAnd: operator.and_,
     ast.BitOr: operator.or_, ast.BitXor: operator.xor,
 }

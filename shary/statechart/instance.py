@@ -382,7 +382,8 @@ class SchemeInstance:
                     listener.finished(self, item)
                 if self.parent is not None:
                     self.parent._child_finished(self, item)
-        self._live = None
+        if live is not None:
+            self._live = None
 
     def _stop(self) -> None:
         """Finish: no more events, timers cancelled, invoked children cancelled."""
