@@ -36,9 +36,11 @@ class Instance:
     ("len(items) + max(1, 2)", 5), ("In('here') and not In('there')", True),
     ("null is None and true", True), ("1 < n <= 5", True), ("'x' in items", True),
     ("items[1:]", ["y", "z"]), ("str(n) + '!'", "5!"),
+    ("bound('n') and not bound('nothing') and not bound('unset')", True),
 ])
 def test_expressions_compute(text, value):
-    instance = Instance(n=5, items=["x", "y", "z"], _event={"data": {"answer": "yes"}})
+    instance = Instance(n=5, items=["x", "y", "z"], unset=None,
+                        _event={"data": {"answer": "yes"}})
     assert compile_expression(text)(instance) == value
 
 

@@ -15,7 +15,9 @@ loaded, with the column of the offending part.
   an item; no name or attribute may start with ``__``;
 * arithmetic ``+ - * / // % **``, comparisons (``in`` and ``not in`` too),
   ``and``, ``or``, ``not``, ``x if c else y``;
-* calls to the functions of :data:`FUNCTIONS` only, ``In('STATE')`` among them.
+* calls to the functions of :data:`FUNCTIONS` only, besides ``In('STATE')`` and
+  ``bound('NAME')`` (whether a variable of that name has a value: a name that
+  is not declared is no error there).
 
 Evaluation is bounded: there are no loops, an expression has at most
 :data:`MAX_SOURCE` characters and :data:`MAX_DEPTH` levels of nesting, and
@@ -123,7 +125,8 @@ FUNCTIONS: dict[str, Callable[..., Any]] = {
     "min": min, "max": max, "round": round,
     "list": lambda value=(): list(value),
 }
-"""The functions an expression may call (besides ``In``), all bounded in time and memory."""
+"""The functions an expression may call (besides ``In`` and ``bound``), all bounded in time
+and memory."""
 
 _BINARY: dict[type, Callable[[Any, Any], Any]] = {
     ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: _times, ast.Div: operator.truediv,
@@ -426,9 +429,16 @@ class _Compiler:
             state = arg.value
             self.states.add(state)
             return lambda instance: instance.is_active(state)
+        if name == "bound":
+            arg = node.args[0] if len(node.args) == 1 else None
+            if not (isinstance(arg, ast.Constant) and isinstance(arg.value, str)):
+                raise ExpressionError("bound() takes one variable name in quotes: "
+                                      "bound('NAME')", _col(node))
+            variable = arg.value
+            return lambda instance: instance.data.get(variable) is not None
         func = FUNCTIONS.get(name)
         if func is None:
             raise ExpressionError(f"unknown function {name!r}; an expression may call "
-                                  f"In, {', '.join(FUNCTIONS)}", _col(node))
+                                  f"In, bound, {', '.join(FUNCTIONS)}", _col(node))
         args = [self.node(a, depth) for a in node.args]
         return lambda instance: _check(func(*(a(instance) for a in args)))
