@@ -195,3 +195,20 @@ states:
 """)
     assert instance.configuration == ("b",)
     assert MAX_ITERATIONS - 1_000 < instance.data["n"] < MAX_ITERATIONS  # not 1000 * 1000
+
+
+def test_late_binding_sets_a_states_variables_when_it_is_first_entered():
+    instance = start("""
+scheme: late
+binding: late
+data: {seen: null}
+initial: a
+states:
+  a:
+    on: {go: {target: b, do: [{assign: seen, expr: "bound('answer')"}]}}
+  b:
+    data: {answer: 42}
+""")
+    assert instance.data["answer"] is None
+    instance.send("go")
+    assert instance.data["seen"] is False and instance.data["answer"] == 42

@@ -53,22 +53,28 @@ class DataReader:
         self.used = False
         """Whether the file uses the data model at all (``data:`` or any expression)."""
         self.declared: dict[str, None] = dict.fromkeys(SYSTEM_VARIABLES)
+        self.variables: list[Variable] = []
+        """Every variable, in document order (the scheme's, then each state's)."""
         self.compiled: list[tuple[Expression | Location, tuple]] = []
 
-    def variables(self, data: Any) -> DataModel | None:
-        """The variables under ``data:`` (None when the file has none and uses none)."""
+    def declare(self, data: Any, path: tuple = (), state: str | None = None) -> None:
+        """The variables under a ``data:`` (the scheme's, or a state's)."""
         if not isinstance(data, dict):
-            return None
+            return
         self.used = True
-        out = []
         for name, value in data.items():
             if not isinstance(name, str):
                 continue
-            path = ("data", name)
+            at = path + ("data", name)
             self.declared[name] = None
-            out.append(Variable(name, self.expression(value, path),
-                                self.builder.located.key_at(path)))
-        return DataModel(tuple(out))
+            self.variables.append(Variable(name, self.expression(value, at),
+                                           self.builder.located.key_at(at), state))
+
+    def model(self, binding: Any) -> DataModel | None:
+        """The scheme's data model (None when the file has none and uses none)."""
+        if not self.used:
+            return None
+        return DataModel(tuple(self.variables), binding == "late")
 
     def expression(self, value: Any, path: tuple) -> Expression | None:
         """A string compiled as an expression; any other YAML value stands for itself."""

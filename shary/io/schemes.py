@@ -31,7 +31,6 @@ from shary.statechart.model import (
     Action,
     Cancel,
     Coverage,
-    DataModel,
     Invoke,
     Log,
     Raise,
@@ -159,7 +158,7 @@ class SchemeBuilder:
                                 for k, v in own_acts.items()}, self.located.file))
         roles = data.get("roles")
         self.roles = dict(roles) if isinstance(roles, dict) and roles else dict(DEFAULT_ROLES)
-        datamodel = self.data_reader.variables(data.get("data"))
+        self.data_reader.declare(data.get("data"))
         root = State("", COMPOUND, mark=self.located.at(()))
         root.initial, root.initial_actions = self._initial(data.get("initial"), ("initial",))
         states = data.get("states")
@@ -168,8 +167,7 @@ class SchemeBuilder:
         name = data.get("scheme") if isinstance(data.get("scheme"), str) else "scheme"
         doc = data.get("doc") if isinstance(data.get("doc"), str) else ""
         self.data_reader.check_names(self.states)
-        if datamodel is None and self.data_reader.used:
-            datamodel = DataModel()
+        datamodel = self.data_reader.model(data.get("binding"))
         scheme = Scheme(name, root, self.states, self.roles, self.acts, doc, self.located.file,
                         datamodel)
         self._check_initial(root, ())
@@ -210,6 +208,8 @@ class SchemeBuilder:
             state.default, default_actions = self._initial(spec.get("default"),
                                                            spec_path + ("default",))
             state.initial_actions = state.initial_actions or default_actions
+            if "data" in spec:
+                self.data_reader.declare(spec["data"], spec_path, name)
             if "donedata" in spec:
                 state.donedata = self.data_reader.donedata(spec["donedata"],
                                                            spec_path + ("donedata",))

@@ -158,11 +158,18 @@ class _Translator:
 
     def scheme(self, root: Element) -> tuple[dict[str, Any], list[str]]:
         """The scheme of an ``<scxml>`` element, and the unreachable states left out."""
-        for attr in ("datamodel", "binding"):
-            if root.attrs.get(attr, "") not in ("", "null", "early",
-                                                *scxml_data.DATAMODELS):
-                self.refuse(root, f"{attr}={root.attrs[attr]!r} is not supported")
+        if root.attrs.get("datamodel", "") not in ("", "null", *scxml_data.DATAMODELS):
+            self.refuse(root, f"datamodel={root.attrs['datamodel']!r} is not supported")
+        if root.attrs.get("binding", "") not in ("", "early", "late"):
+            self.refuse(root, f"binding={root.attrs['binding']!r} is not supported")
         self.datamodel = root.attrs.get("datamodel", "") in scxml_data.DATAMODELS
+        self.late = False
+        """Late binding: a state's <datamodel> is set when the state is first entered."""
+        if root.attrs.get("binding") == "late":
+            if self.datamodel:
+                self.late = True
+            else:
+                self.refuse(root, "binding='late' is only for a chart with a data model")
         name = root.attrs.get("name") or os.path.splitext(os.path.basename(self.file))[0]
         states = self.children(root)
         out: dict[str, Any] = {"scheme": _safe_name(name),
@@ -173,11 +180,14 @@ class _Translator:
         elif states:
             out["initial"] = next(iter(states))
         for name in self.assigned:
-            self.data.setdefault(name, None)
+            if name not in self.declared:
+                self.data.setdefault(name, None)
         if self.datamodel:
             scxml_data.check_names(self, self.declared | set(self.data))
         if self.data:
             out["data"] = self.data
+        if self.late:
+            out["binding"] = "late"
         out["states"] = states
         if self.problems:
             raise FileError(self.problems)
@@ -196,7 +206,8 @@ class _Translator:
                     continue
                 states[ident] = self.state(child)
             elif child.tag == "datamodel" and self.datamodel:
-                scxml_data.data(self, child, self.data)
+                if not (self.late and element.tag != "scxml"):
+                    scxml_data.data(self, child, self.data)
             elif child.tag == "donedata" and self.datamodel and element.tag == "final":
                 continue
             elif child.tag in _NEEDS_DATAMODEL:
@@ -243,6 +254,14 @@ class _Translator:
             actions = [a for b in blocks for a in b]
             if actions:
                 spec["on_entry" if kind == "onentry" else "on_exit"] = actions
+        if self.late:
+            own: dict[str, Any] = {}
+            for child in element.children:
+                if child.tag == "datamodel":
+                    scxml_data.data(self, child, own)
+            if own:
+                spec["data"] = own
+                self.declared.update(own)
         on = self.transitions(element)
         if on:
             spec["on"] = on

@@ -185,6 +185,12 @@ class CompiledScheme:
             s.name: tuple((t.events[0], t.after) for t in s.transitions
                           if t.after is not None and t.events)
             for s in scheme.states.values()}
+        self.late: dict[str, tuple] = {}
+        """A late-binding scheme's variables by the state that declares them."""
+        if scheme.datamodel is not None and scheme.datamodel.late:
+            for variable in scheme.datamodel.variables:
+                if variable.state is not None:
+                    self.late[variable.state] = self.late.get(variable.state, ()) + (variable,)
         self._children: dict[int, CompiledScheme] = {}
         self._descriptors: list[str] | None = None
 

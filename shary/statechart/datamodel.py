@@ -101,17 +101,39 @@ def start(instance: Any, scheme: Scheme, given: dict[str, Any] | None) -> list[s
     instance.data = data
     errors = []
     assert scheme.datamodel is not None
+    late = scheme.datamodel.late
     for variable in scheme.datamodel.variables:
         if given and variable.name in given:
             data[variable.name] = given[variable.name]
             continue
         data[variable.name] = None
-        if variable.expr is not None:
+        if variable.expr is not None and not (late and variable.state is not None):
             try:
                 data[variable.name] = variable.expr(instance)
             except EvaluationError as err:
                 errors.append(str(err))
+    if late:
+        data[LATE] = set()
     return errors
+
+
+LATE = "#entered"
+"""Where a late-binding instance keeps the states whose variables it has set (a key no
+expression can name)."""
+
+
+def bind_late(instance: Any, state: str, variables: tuple) -> None:
+    """Set a state's own variables the first time it is entered (late binding)."""
+    entered = instance.data[LATE]
+    if state in entered:
+        return
+    entered.add(state)
+    for variable in variables:
+        if variable.expr is not None:
+            try:
+                instance.data[variable.name] = variable.expr(instance)
+            except EvaluationError as err:
+                instance._internal.append(error_event(str(err)))
 
 
 def take(instance: Any, event: Any, kind: str) -> None:

@@ -356,6 +356,8 @@ class SchemeInstance:
             if kind is ENTER:
                 if live is not None:
                     live.add(item.name)
+                    if item.name in self.definition.late:
+                        datamodel.bind_late(self, item.name, self.definition.late[item.name])
                 if listener is not None:
                     listener.entered(self, item, event)
                 if item.on_entry:

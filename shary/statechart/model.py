@@ -204,13 +204,17 @@ class Variable:
     name: str
     expr: Expression | None
     mark: tuple[int, int] = (1, 1)
+    state: str | None = None
+    """The state that declares it (None: the scheme)."""
 
 
 @dataclass(frozen=True)
 class DataModel:
-    """A scheme's variables, in document order, set when an instance starts."""
+    """A scheme's variables, in document order, set when an instance starts; with ``late``
+    binding, a state's own variables are set when the state is first entered instead."""
 
     variables: tuple[Variable, ...] = ()
+    late: bool = False
 
 
 @dataclass(frozen=True)
