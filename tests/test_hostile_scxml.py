@@ -34,7 +34,8 @@ EXPECTED = {
     "initial-bad-content": "<script> needs a data model",
     "expr-dunder": "the attribute '__bases__' is not allowed",
     "expr-script": "<script> is not supported",
-    "expr-ecmascript": "syntax error in expression 'x === 1'",
+    "expr-ecmascript": "cond= needs a data model",
+    "expr-syntax": "syntax error in expression 'x === 1'",
 }
 
 TRACE_EXPECTED = {

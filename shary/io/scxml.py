@@ -8,7 +8,7 @@ The data-model-free part of W3C SCXML maps one to one onto schemes:
 ``<initial>`` and history default transitions, and ``<invoke>`` of another
 SCXML chart (inline ``<content>`` or a ``src`` file below the chart's folder),
 written inline in the scheme.  A chart with ``datamodel="shary"`` (or
-``python``, ``ecmascript``) has its data model imported too
+``python``) has its data model imported too
 (:mod:`shary.io.scxml_data`); in one without, anything that needs a data
 model (``cond``, ``<assign>``, ``<if>``, ``<param>``, ``expr`` attributes …)
 is refused by name with its position, never half-translated, and so are, in
@@ -158,7 +158,8 @@ class _Translator:
 
     def scheme(self, root: Element) -> tuple[dict[str, Any], list[str]]:
         """The scheme of an ``<scxml>`` element, and the unreachable states left out."""
-        if root.attrs.get("datamodel", "") not in ("", "null", *scxml_data.DATAMODELS):
+        if root.attrs.get("datamodel", "") not in ("", "null", "ecmascript",
+                                                   *scxml_data.DATAMODELS):
             self.refuse(root, f"datamodel={root.attrs['datamodel']!r} is not supported")
         if root.attrs.get("binding", "") not in ("", "early", "late"):
             self.refuse(root, f"binding={root.attrs['binding']!r} is not supported")

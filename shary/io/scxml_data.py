@@ -1,8 +1,8 @@
 """Importing the data model of an SCXML chart: ``<datamodel>``, ``cond``, ``<assign>`` …
 
-A chart whose ``datamodel`` is ``shary`` (or ``ecmascript`` and ``python``,
-whose expressions are read as shary's where they are written alike) has its
-expressions carried over as they are: ``<data>`` into the scheme's ``data:``
+A chart whose ``datamodel`` is ``shary`` (or ``python``: shary's expressions
+are a subset of Python's, with the same meaning) has its expressions carried
+over as they are: ``<data>`` into the scheme's ``data:``
 (all of them, wherever declared, since SCXML binds them all when the chart
 starts), ``cond`` into a transition's ``cond``, and the executable content
 of the data model into the scheme's actions of the same meaning.  The scheme
@@ -27,8 +27,11 @@ from userfiles.schema import did_you_mean
 if TYPE_CHECKING:
     from shary.io.scxml import Element, _Translator
 
-DATAMODELS = ("shary", "python", "ecmascript")
-"""``datamodel=`` values whose expressions are imported (null has none)."""
+DATAMODELS = ("shary", "python")
+"""``datamodel=`` values whose expressions are imported.  ECMAScript is not among them:
+some of its expressions parse as Python's with another meaning (``++x`` is ``x + 1``
+there and ``x`` here, ``1 == '1'`` is true there), so a chart written for it is refused
+where it needs a data model rather than run with other answers."""
 _ROOT = re.compile(r"^\s*[A-Za-z][A-Za-z0-9_]*")
 _SEND_EXPRS = {"eventexpr": "eventexpr", "targetexpr": "targetexpr", "typeexpr": "typeexpr",
                "delayexpr": "delayexpr", "idlocation": "idlocation"}
