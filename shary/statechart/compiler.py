@@ -78,6 +78,7 @@ class StepTransition(FlatTransition):
         self.lazy = compiled.scheme.datamodel is not None and bool(names)
         """Guards over data are evaluated as SCXML does, in document order and only until
         one transition of each chain is enabled: a failing one raises ``error.execution``."""
+        self.by_name = dict(zip(names, self.condition_funcs, strict=True))
 
     def fire(self, instance: Any, event: Any) -> bool:
         """Take the microstep the guards select, if any (called by :meth:`SchemeEvent.trigger`)."""
@@ -98,7 +99,7 @@ class StepTransition(FlatTransition):
     def _lazy_key(self, instance: Any, event: Any) -> tuple[bool | None, ...]:
         """The truth of the guards a lazy selection reads (None for those it never reads)."""
         truth: dict[str, bool] = {}
-        funcs = dict(zip(self.condition_names, self.condition_funcs, strict=True))
+        funcs = self.by_name
         for chain in self.candidates:
             for t in chain:
                 name = t.condition

@@ -128,6 +128,8 @@ class SchemeInstance:
         self.data: dict[str, Any] | None = None
         """The variables of a scheme with a data model (None without one)."""
         self._live: set[str] | None = None
+        """During a microstep of a scheme with a data model, the states active at that
+        moment, as ``In()`` must see them between one state's exit and another's entry."""
 
     # -- queries ---------------------------------------------------------
 

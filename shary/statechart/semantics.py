@@ -9,9 +9,12 @@ only on the snapshot, the event name and the truth of the guards involved, a
 step is computed once and then replayed by every instance of the scheme: this
 is what :mod:`shary.statechart.compiler` caches.
 
-Guards are evaluated all at once before selection (rather than lazily, as
-SCXML does); with side-effect-free conditions, which is what conditions must
-be, the result is the same.
+Registered conditions are evaluated all at once before selection (rather than
+lazily, as SCXML does); with side-effect-free conditions, which is what
+conditions must be, the result is the same.  Guards over a data model are
+evaluated lazily, in document order, since one that fails raises
+``error.execution`` (:class:`~shary.statechart.compiler.StepTransition`): the
+selection reads only the guards evaluated, so the same steps serve both.
 """
 
 from __future__ import annotations
