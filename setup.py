@@ -16,7 +16,7 @@ INTERFACES = (Path(__file__).resolve().parent / "ros" / "shary_interfaces").as_u
 setup(extras_require={
     "test": ["pytest>=7", "pytest-timeout>=2.1", "ruff>=0.5", "hypothesis>=6", "selenium>=4.15",
              "cryptography>=41", "grimp>=3.5", "pytest-xdist>=3.5"],
-    "bench": ["gtpyhop>=1.4", "oxrdflib>=0.4"],
+    "bench": ["gtpyhop>=1.4", "oxrdflib>=0.4", "python-statemachine>=3.2,<4"],
     # ROS 2 Jazzy (LTS) from PyPI, pinned: a robot and shary must run the same distro
     # (docs/ros2.md).  test-msgs carries the action types the simulated robot serves;
     # shary-ros-interfaces, built from ros/shary_interfaces, the RunTask action.

@@ -32,6 +32,10 @@ EXPECTED = {
     "invoke-content-not-chart": "must hold one <scxml> chart",
     "invoke-inline-datamodel": "cond= needs a data model",
     "initial-bad-content": "<script> needs a data model",
+    "expr-dunder": "the attribute '__bases__' is not allowed",
+    "expr-script": "<script> is not supported",
+    "expr-ecmascript": "cond= needs a data model",
+    "expr-syntax": "syntax error in expression 'x === 1'",
 }
 
 TRACE_EXPECTED = {

@@ -10,7 +10,9 @@ from suites import absent, needs, suite
 
 from shary.io.schemes import parse_scheme
 from shary.io.scxml import import_scxml
+from shary.statechart.compiler import compile_scheme
 from shary.statechart.conformance import run_test
+from userfiles.errors import FileError
 from userfiles.yamlsafe import load_text
 
 SCION = suite("scion")
@@ -140,3 +142,43 @@ def test_conformance_command_reports_failures(shary, write, tmp_path: Path):
     assert status == 1
     assert "FAIL bad.scxml: refused: cond= needs a data model" in out
     assert out.strip().splitlines()[-1] == "0 passed, 1 failed"
+
+
+DATA_CHART = """\
+<scxml xmlns="http://www.w3.org/2005/07/scxml" datamodel="shary" initial="a">
+  <datamodel><data id="n" expr="0"/><data id="items">[1, 2, 3]</data></datamodel>
+  <state id="a">
+    <onentry>
+      <foreach array="items" item="i"><assign location="n" expr="n + i"/></foreach>
+      <if cond="n == 6"><send event="sum"><param name="total" expr="n"/></send>
+      <else/><raise event="wrong"/></if>
+    </onentry>
+    <transition event="sum" cond="_event.data.total == 6" target="done"/>
+    <transition event="*" target="fail"/>
+  </state>
+  <final id="done"><donedata><param name="total" expr="n"/></donedata></final>
+  <final id="fail"/>
+</scxml>
+"""
+
+
+def test_a_chart_with_a_data_model_imports_to_the_schemes_data_model_and_runs(write):
+    text = import_scxml(write("d.scxml", DATA_CHART))
+    document = load_text(text).data
+    assert document["data"] == {"n": "0", "items": "[1, 2, 3]"}
+    on_entry = document["states"]["a"]["on_entry"]
+    assert on_entry[0] == {"foreach": "items", "item": "i",
+                           "do": [{"assign": "n", "expr": "n + i"}]}
+    assert on_entry[1]["if"] == "n == 6" and on_entry[1]["else"] == [{"raise": "wrong"}]
+    assert on_entry[1]["then"] == [{"send": "sum", "params": {"total": "n"}}]
+    assert document["states"]["done"]["donedata"] == {"params": {"total": "n"}}
+    instance = compile_scheme(parse_scheme(load_text(text))).start()
+    assert instance.configuration == ("done",) and instance.data["n"] == 6
+
+
+def test_an_expression_of_a_chart_is_refused_at_its_element(write):
+    chart = DATA_CHART.replace('expr="n + i"', 'expr="n +"')
+    with pytest.raises(FileError) as err:
+        import_scxml(write("d.scxml", chart))
+    (problem,) = err.value.problems
+    assert problem.line == 5 and "syntax error in expression 'n +'" in problem.message

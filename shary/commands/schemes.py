@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import re
 from pathlib import Path
 from typing import Any
@@ -36,7 +37,8 @@ def add_simulate(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("simulate", help="run a scheme against a script of events and waits")
     p.add_argument("scheme", help="a built-in scheme name or a scheme file")
     p.add_argument("script", nargs="*", metavar="EVENT|WAIT",
-                   help="events to send (H-AGREE, done …) and waits on the clock (5s, 250ms)")
+                   help="events to send (H-AGREE, done …), with data as JSON after '=' "
+                   "(H-AGREE='{\"object\": \"cup\"}'), and waits on the clock (5s, 250ms)")
     add_json_flag(p, "the trace")
     p.set_defaults(func=cmd_simulate)
 
@@ -54,7 +56,14 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
     scheme = load_scheme(args.scheme)
     compiled = compile_scheme(scheme)
-    unknown = [w for w in args.script if not _WAIT.match(w) and not compiled.can_take(w)]
+    script: list[tuple[str, Any]] = []
+    for word in args.script:
+        name, given, data = word.partition("=")
+        try:
+            script.append((name, json.loads(data) if given else None))
+        except ValueError as err:
+            return error(f"the data of {name!r} is not JSON: {err}", json_mode=args.json)
+    unknown = [w for w, _ in script if not _WAIT.match(w) and not compiled.can_take(w)]
     if unknown:
         messages = [f"no state of {scheme.name} takes the event {word!r}"
                     f"{did_you_mean(word, compiled.descriptors())}" for word in unknown]
@@ -102,13 +111,15 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         _out.print(f"[bold]{scheme.name}[/bold]: {escape(scheme.doc.strip())}")
     try:
         instance = compiled.start(clock=clock, listener=Trace())
-        for word in args.script:
+        for word, data in script:
             if _WAIT.match(word):
                 note("wait", f"[dim]wait {word}[/dim]", wait=word)
                 clock.advance(seconds(word))
             else:
-                note("event", f"[yellow]<- {escape(word)}[/yellow]", event=word)
-                instance.send(word)
+                shown = word if data is None else f"{word} {json.dumps(data)}"
+                note("event", f"[yellow]<- {escape(shown)}[/yellow]", event=word,
+                     **({} if data is None else {"data": data}))
+                instance.send(word, data)
             if instance.finished:
                 break
     except LivelockError as err:
@@ -225,11 +236,12 @@ def cmd_import_scxml(args: argparse.Namespace) -> int:
 def add_conformance(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("conformance", help="run the statechart tests found under DIR: SCION "
                        "pairs and plain charts, or the W3C IRP's tests (a DIR with its "
-                       "manifest.xml) on the null data model")
+                       "manifest.xml) translated to shary's data model: the mandatory ones "
+                       "decide, the optional ones are reported")
     p.add_argument("folder", type=Path, metavar="DIR")
     p.add_argument("--only", type=Path, metavar="LIST",
                    help="run only the charts named in this file (paths relative to DIR), e.g. "
-                   "the suite's NO-DATAMODEL.txt: shary runs no scripts or data expressions")
+                   "the suite's NO-DATAMODEL.txt (the charts with no ECMAScript)")
     add_json_flag(p, "every test's outcome")
     p.set_defaults(func=cmd_conformance)
 
@@ -255,15 +267,32 @@ def cmd_conformance(args: argparse.Namespace) -> int:
         outcomes.append(outcome)
         if not outcome.passed and not args.json:
             _out.print(f"[red]FAIL[/red] {escape(outcome.name)}: {escape(outcome.reason)}")
+    optional = list(w3c.run_irp(folder, w3c.irp_tests(folder, "optional"))) \
+        if irp and args.only is None else []
     passed = sum(o.passed for o in outcomes)
     failed = len(outcomes) - passed
     if args.json:
-        emit_json({"folder": str(folder), "passed": passed, "failed": failed,
-                   "tests": [{"name": o.name, "passed": o.passed, "reason": o.reason}
-                             for o in outcomes]})
+        figures = {"folder": str(folder), "passed": passed, "failed": failed,
+                   "tests": _outcomes(outcomes)}
+        if optional:
+            figures["optional"] = {"passed": sum(o.passed for o in optional),
+                                   "failed": sum(not o.passed for o in optional),
+                                   "tests": _outcomes(optional)}
+        emit_json(figures)
     else:
+        for outcome in optional:
+            if not outcome.passed:
+                _out.print(f"[yellow]optional FAIL[/yellow] {escape(outcome.name)}: "
+                           f"{escape(outcome.reason)}")
         _out.print(f"{passed} passed, {failed} failed")
+        if optional:
+            ok = sum(o.passed for o in optional)
+            _out.print(f"optional tests: {ok} passed, {len(optional) - ok} failed")
         if failed and args.only is None and (folder / "NO-DATAMODEL.txt").is_file():
-            _out.print(f"[dim]shary runs no scripts or data expressions; the charts without "
-                       f"them: --only {escape(str(folder / 'NO-DATAMODEL.txt'))}[/dim]")
+            _out.print(f"[dim]shary reads no ECMAScript; the charts without it: "
+                       f"--only {escape(str(folder / 'NO-DATAMODEL.txt'))}[/dim]")
     return 0 if failed == 0 else 1
+
+
+def _outcomes(outcomes: list) -> list[dict]:
+    return [{"name": o.name, "passed": o.passed, "reason": o.reason} for o in outcomes]

@@ -17,11 +17,13 @@ import networkx as nx
 
 from shary import builtin
 from shary.io import invokes, schema
+from shary.io.scheme_data import DataReader
 from shary.statechart.acts import ACT_TYPES, ActRegistry, act_type, acts_from_data, builtin_acts
 from shary.statechart.conditions import ConditionRegistry
 from shary.statechart.model import (
     ATOMIC,
     COMPOUND,
+    EXPR_GUARD,
     FINAL,
     HISTORY,
     PARALLEL,
@@ -128,6 +130,7 @@ class SchemeBuilder:
         self.paths: dict[str, tuple] = {}
         self.order = 0
         self.transition_order = 0
+        self.data_reader = DataReader(self)
 
     def parse_child(self, located: yamlsafe.Located) -> Scheme:
         """A child scheme written inline in this one, checked with this scheme's acts,
@@ -155,6 +158,7 @@ class SchemeBuilder:
                                 for k, v in own_acts.items()}, self.located.file))
         roles = data.get("roles")
         self.roles = dict(roles) if isinstance(roles, dict) and roles else dict(DEFAULT_ROLES)
+        self.data_reader.declare(data.get("data"))
         root = State("", COMPOUND, mark=self.located.at(()))
         root.initial, root.initial_actions = self._initial(data.get("initial"), ("initial",))
         states = data.get("states")
@@ -162,7 +166,10 @@ class SchemeBuilder:
             self._children(root, states, ("states",))
         name = data.get("scheme") if isinstance(data.get("scheme"), str) else "scheme"
         doc = data.get("doc") if isinstance(data.get("doc"), str) else ""
-        scheme = Scheme(name, root, self.states, self.roles, self.acts, doc, self.located.file)
+        self.data_reader.check_names(self.states)
+        datamodel = self.data_reader.model(data.get("binding"))
+        scheme = Scheme(name, root, self.states, self.roles, self.acts, doc, self.located.file,
+                        datamodel)
         self._check_initial(root, ())
         for state in self.states.values():
             self._check_initial(state, self.paths[state.name])
@@ -201,13 +208,18 @@ class SchemeBuilder:
             state.default, default_actions = self._initial(spec.get("default"),
                                                            spec_path + ("default",))
             state.initial_actions = state.initial_actions or default_actions
+            if "data" in spec:
+                self.data_reader.declare(spec["data"], spec_path, name)
+            if "donedata" in spec:
+                state.donedata = self.data_reader.donedata(spec["donedata"],
+                                                           spec_path + ("donedata",))
             if spec.get("outcome") in ("done", "failed"):
                 state.outcome = spec["outcome"]
             if spec.get("history") in ("shallow", "deep"):
                 state.history = spec["history"]
             self._act(state, spec, spec_path)
-            state.on_entry = self._actions(spec.get("on_entry"), spec_path + ("on_entry",))
-            state.on_exit = self._actions(spec.get("on_exit"), spec_path + ("on_exit",))
+            state.on_entry = self.actions(spec.get("on_entry"), spec_path + ("on_entry",))
+            state.on_exit = self.actions(spec.get("on_exit"), spec_path + ("on_exit",))
             if isinstance(spec.get("on"), dict):
                 self._transitions(state, spec["on"], spec_path + ("on",))
             if "invoke" in spec:
@@ -248,7 +260,7 @@ class SchemeBuilder:
     def _initial(self, value: Any, path: tuple) -> tuple[tuple[str, ...], tuple[Action, ...]]:
         """Targets and actions of an ``initial`` or ``default`` (a name, a list, a transition)."""
         if isinstance(value, dict):
-            return self._targets(value.get("target")), self._actions(value.get("do"),
+            return self._targets(value.get("target")), self.actions(value.get("do"),
                                                                      path + ("do",))
         return self._targets(value), ()
 
@@ -275,8 +287,17 @@ class SchemeBuilder:
             self.invoke_ids[ident] = item_path
             child = invokes.child_scheme(self, item.get("scheme"), item_path + ("scheme",))
             if child is not None:
+                reader = self.data_reader
+                params = reader.named(item.get("params"), item_path + ("params",)) \
+                    + reader.namelist(item.get("namelist"), item_path + ("namelist",))
+                id_location = reader.location(item["idlocation"], item_path + ("idlocation",)) \
+                    if "idlocation" in item else None
                 out.append(Invoke(ident, child, item.get("autoforward") is True,
-                                  self.located.at(item_path)))
+                                  self.located.at(item_path), params,
+                                  self.actions(item.get("finalize"), item_path + ("finalize",)),
+                                  id_location,
+                                  reader.expression(item["typeexpr"], item_path + ("typeexpr",))
+                                  if "typeexpr" in item else None))
         state.invokes = tuple(out)
 
     def _targets(self, value: Any) -> tuple[str, ...]:
@@ -319,8 +340,17 @@ class SchemeBuilder:
                     t.target_mark = self.located.at(item_path + ("target",))
                     guard = item.get("guard")
                     t.guard = guard if isinstance(guard, str) and _GUARD.match(guard) else None
+                    if "cond" in item:
+                        if guard is not None:
+                            self.problem(item_path + ("cond",), "a transition takes 'guard' (a "
+                                         "registered condition) or 'cond' (an expression), not "
+                                         "both", key=True)
+                        t.cond = self.data_reader.expression(item["cond"],
+                                                             item_path + ("cond",))
+                        if t.cond is not None:
+                            t.guard = EXPR_GUARD + t.cond.source
                     t.internal = item.get("type") == "internal"
-                    t.actions = self._actions(item.get("do"), item_path + ("do",))
+                    t.actions = self.actions(item.get("do"), item_path + ("do",))
                 else:
                     continue
                 state.transitions.append(t)
@@ -345,16 +375,21 @@ class SchemeBuilder:
                     ok = False
         return ok
 
-    def _actions(self, value: Any, path: tuple) -> tuple[Action, ...]:
+    def actions(self, value: Any, path: tuple) -> tuple[Action, ...]:
         if not isinstance(value, list):
             return ()
         out: list[Action] = []
         for index, item in enumerate(value):
             if not isinstance(item, dict):
                 continue
-            if isinstance(item.get("raise"), str):
+            if any(k in item for k in ("assign", "if", "foreach", "block")) or "expr" in item \
+                    or "sendidexpr" in item:
+                found = self.data_reader.action(item, path + (index,))
+                if found is not None:
+                    out.append(found)
+            elif isinstance(item.get("raise"), str):
                 out.append(Raise(item["raise"]))
-            elif isinstance(item.get("send"), str):
+            elif "send" in item:
                 delay = item.get("delay")
                 try:
                     wait = seconds(delay) if isinstance(delay, str) else 0.0
@@ -364,7 +399,12 @@ class SchemeBuilder:
                 to = item.get("to") if isinstance(item.get("to"), str) else None
                 if to is not None and to != PARENT:
                     self.send_targets.append((to, path + (index, "to")))
-                out.append(Send(item["send"], wait, ident, to))
+                parts = self.data_reader.send_parts(item, path + (index,))
+                if not isinstance(item["send"], str) and (parts is None or parts.event is None):
+                    self.problem(path + (index,), "a send needs an event: 'send: EVENT' or "
+                                 "'eventexpr'")
+                    continue
+                out.append(Send(item["send"] or "", wait, ident, to, parts))
             elif isinstance(item.get("cancel"), str):
                 out.append(Cancel(item["cancel"]))
             elif isinstance(item.get("log"), str):
@@ -454,7 +494,8 @@ class SchemeBuilder:
         if t.in_state is not None and t.in_state not in self.states:
             self._at(at, f"guard 'in {t.in_state}' names an unknown state"
                      f"{did_you_mean(t.in_state, self.states)}")
-        elif t.condition is not None and t.in_state is None and self.conditions is not None \
+        elif t.condition is not None and t.in_state is None and t.cond is None \
+                and self.conditions is not None \
                 and t.condition not in self.conditions:
             self._at(at, f"guard names an unknown condition {t.condition!r}"
                      f"{did_you_mean(t.condition, self.conditions)}; known conditions: "

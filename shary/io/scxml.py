@@ -7,10 +7,12 @@ The data-model-free part of W3C SCXML maps one to one onto schemes:
 ``<cancel>``, ``<log label>``, in ``<onentry>``/``<onexit>`` and on
 ``<initial>`` and history default transitions, and ``<invoke>`` of another
 SCXML chart (inline ``<content>`` or a ``src`` file below the chart's folder),
-written inline in the scheme.  Anything that needs a data model or an outside
-processor (``cond``, ``<script>``, ``<assign>``, ``<if>``, ``<param>``,
-``expr`` attributes …) is refused by name with its position, never
-half-translated.
+written inline in the scheme.  A chart with ``datamodel="shary"`` (or
+``python``) has its data model imported too
+(:mod:`shary.io.scxml_data`); in one without, anything that needs a data
+model (``cond``, ``<assign>``, ``<if>``, ``<param>``, ``expr`` attributes …)
+is refused by name with its position, never half-translated, and so are, in
+every chart, ``<script>`` and what an outside processor would do.
 
 The XML is read with the standard library's expat, without DOCTYPE (so no
 entity is ever declared, expanded or fetched: no entity bombs, no external
@@ -34,6 +36,7 @@ from dataclasses import dataclass, field
 from typing import Any
 from urllib.parse import unquote, urlsplit
 
+from shary.io import scxml_data
 from shary.io.schemes import parse_scheme, unreachable
 from shary.statechart.model import PARENT, Coverage
 from userfiles.errors import FileError, Problem
@@ -67,6 +70,7 @@ class Element:
     line: int
     col: int
     children: list[Element] = field(default_factory=list)
+    text: str = ""
 
 
 def import_scxml(path: str | os.PathLike[str]) -> str:
@@ -110,7 +114,12 @@ def parse_xml(text: str, file: str, budget: list[int], root: str = "scxml") -> E
     def end(tag: str) -> None:
         stack.pop()
 
+    def characters(data: str) -> None:
+        if stack:
+            stack[-1].text += data
+
     parser.StartElementHandler = start
+    parser.CharacterDataHandler = characters
     parser.EndElementHandler = end
     parser.StartDoctypeDeclHandler = lambda *a: refuse("DOCTYPE declarations are not accepted")
     parser.EntityDeclHandler = lambda *a: refuse("entity declarations are not accepted")
@@ -133,15 +142,35 @@ class _Translator:
         self.budget = budget
         self.problems: list[Problem] = []
         self.generated = 0
+        self.datamodel = False
+        """Whether the chart has a data model whose expressions are imported."""
+        self.data: dict[str, Any] = {}
+        self.reads: list[tuple[frozenset[str], Element]] = []
+        """The variables each expression reads, and its element (checked at the end)."""
+        self.declared: set[str] = set()
+        """Variables a foreach declares (its item and index)."""
+        self.assigned: dict[str, None] = {}
+        """Variables assigned to: those the chart does not declare are declared unbound, as
+        an assignment in ECMAScript creates the variable it names."""
 
     def refuse(self, element: Element, message: str) -> None:
         self.problems.append(Problem(self.file, element.line, element.col, message))
 
     def scheme(self, root: Element) -> tuple[dict[str, Any], list[str]]:
         """The scheme of an ``<scxml>`` element, and the unreachable states left out."""
-        for attr in ("datamodel", "binding"):
-            if root.attrs.get(attr, "") not in ("", "ecmascript", "null", "early"):
-                self.refuse(root, f"{attr}={root.attrs[attr]!r} is not supported")
+        if root.attrs.get("datamodel", "") not in ("", "null", "ecmascript",
+                                                   *scxml_data.DATAMODELS):
+            self.refuse(root, f"datamodel={root.attrs['datamodel']!r} is not supported")
+        if root.attrs.get("binding", "") not in ("", "early", "late"):
+            self.refuse(root, f"binding={root.attrs['binding']!r} is not supported")
+        self.datamodel = root.attrs.get("datamodel", "") in scxml_data.DATAMODELS
+        self.late = False
+        """Late binding: a state's <datamodel> is set when the state is first entered."""
+        if root.attrs.get("binding") == "late":
+            if self.datamodel:
+                self.late = True
+            else:
+                self.refuse(root, "binding='late' is only for a chart with a data model")
         name = root.attrs.get("name") or os.path.splitext(os.path.basename(self.file))[0]
         states = self.children(root)
         out: dict[str, Any] = {"scheme": _safe_name(name),
@@ -151,6 +180,15 @@ class _Translator:
             out["initial"] = initial[0] if len(initial) == 1 else initial
         elif states:
             out["initial"] = next(iter(states))
+        for name in self.assigned:
+            if name not in self.declared:
+                self.data.setdefault(name, None)
+        if self.datamodel:
+            scxml_data.check_names(self, self.declared | set(self.data))
+        if self.data:
+            out["data"] = self.data
+        if self.late:
+            out["binding"] = "late"
         out["states"] = states
         if self.problems:
             raise FileError(self.problems)
@@ -168,8 +206,13 @@ class _Translator:
                     self.refuse(child, f"state id {ident!r} cannot be a scheme state name")
                     continue
                 states[ident] = self.state(child)
+            elif child.tag == "datamodel" and self.datamodel:
+                if not (self.late and element.tag != "scxml"):
+                    scxml_data.data(self, child, self.data)
+            elif child.tag == "donedata" and self.datamodel and element.tag == "final":
+                continue
             elif child.tag in _NEEDS_DATAMODEL:
-                self.refuse(child, f"<{child.tag}> needs a data model, which schemes do not have")
+                self.refuse(child, f"<{child.tag}> {_needs(child.tag)}")
             elif child.tag not in ("initial", "transition", "onentry", "onexit", "invoke"):
                 self.refuse(child, f"<{child.tag}> is not supported")
         return states
@@ -178,6 +221,9 @@ class _Translator:
         spec: dict[str, Any] = {}
         if element.tag == "final":
             spec["final"] = True
+            done = scxml_data.donedata(self, element) if self.datamodel else None
+            if done is not None:
+                spec["donedata"] = done
         elif element.tag == "parallel":
             spec["parallel"] = True
         elif element.tag == "history":
@@ -203,9 +249,20 @@ class _Translator:
         if initial and element.tag == "state":
             spec["initial"] = initial
         for kind in ("onentry", "onexit"):
-            actions = [a for c in element.children if c.tag == kind for a in self.actions(c)]
+            blocks = [self.actions(c) for c in element.children if c.tag == kind]
+            if self.datamodel and len(blocks) > 1:  # an error ends only its own handler
+                blocks = [[{"block": b}] for b in blocks if b]
+            actions = [a for b in blocks for a in b]
             if actions:
                 spec["on_entry" if kind == "onentry" else "on_exit"] = actions
+        if self.late:
+            own: dict[str, Any] = {}
+            for child in element.children:
+                if child.tag == "datamodel":
+                    scxml_data.data(self, child, own)
+            if own:
+                spec["data"] = own
+                self.declared.update(own)
         on = self.transitions(element)
         if on:
             spec["on"] = on
@@ -226,7 +283,12 @@ class _Translator:
         """An ``<invoke>`` of another SCXML chart, its child written inline."""
         out: dict[str, Any] = {}
         for attr, value in element.attrs.items():
-            if attr in ("typeexpr", "srcexpr", "idlocation", "namelist"):
+            if attr in ("typeexpr", "idlocation") and self.datamodel:
+                out[attr] = scxml_data.check(self, element, value, location=attr == "idlocation")
+            elif attr == "namelist" and self.datamodel:
+                out[attr] = [scxml_data.check(self, element, name, location=True)
+                             for name in value.split()]
+            elif attr in ("typeexpr", "srcexpr", "idlocation", "namelist"):
                 self.refuse(element, f"<invoke {attr}=…> needs a data model")
             elif attr == "type" and value not in _SCXML_TYPES:
                 self.refuse(element, f"<invoke type={value!r}>: only SCXML charts can be "
@@ -243,8 +305,14 @@ class _Translator:
             out["autoforward"] = True
         contents = [c for c in element.children if c.tag == "content"]
         for c in element.children:
-            if c.tag != "content" and not (c.tag == "finalize" and not c.children):
+            if self.datamodel and c.tag == "finalize" and c.children:
+                out["finalize"] = self.actions(c)
+            elif self.datamodel and c.tag == "param":
+                continue
+            elif c.tag != "content" and not (c.tag == "finalize" and not c.children):
                 self.refuse(c, f"<{c.tag}> in <invoke> needs a data model")
+        if self.datamodel and scxml_data.params(self, element):
+            out["params"] = scxml_data.params(self, element)
         if "src" in element.attrs and contents or len(contents) > 1:
             self.refuse(element, "<invoke> takes either src= or one <content>")
         elif contents:
@@ -311,27 +379,37 @@ class _Translator:
         on: dict[str, Any] = {}
         for t in (c for c in element.children if c.tag == "transition"):
             guard = None
+            cond = None
             if "cond" in t.attrs:
                 guard = _in_state(t.attrs["cond"])
-                if guard is None:
-                    self.refuse(t, "cond= needs a data model (only In('STATE') does not); "
-                                "use a scheme guard naming a registered condition instead")
+                if guard is None and self.datamodel:
+                    cond = scxml_data.check(self, t, t.attrs["cond"])
+                    if cond is None:
+                        continue
+                elif guard is None:
+                    self.refuse(t, "cond= needs a data model (only In('STATE') does not): "
+                                "datamodel=\"shary\" on <scxml>, or a scheme guard naming a "
+                                "registered condition")
                     continue
             for attr in t.attrs:
                 if attr not in ("event", "target", "type", "cond"):
                     self.refuse(t, f"transition attribute {attr!r} is not supported")
-            events = tuple(t.attrs["event"].split()) if "event" in t.attrs else None
+            events = tuple("*" if d == ".*" else d for d in t.attrs["event"].split()) \
+                if "event" in t.attrs else None
             if taken.covering(events) is not None:
                 continue  # an earlier transition takes all its events: it is never taken
-            if guard is None:
+            if guard is None and cond is None:
                 taken.add(events, t)
             targets = t.attrs.get("target", "").split()
             actions = self.actions(t)
             body: dict[str, Any] = {}
-            if len(targets) != 1 or actions or t.attrs.get("type") == "internal" or guard:
+            if len(targets) != 1 or actions or t.attrs.get("type") == "internal" or guard \
+                    or cond is not None:
                 body["target"] = _one_or_list(targets) if targets else None
                 if guard:
                     body["guard"] = guard
+                if cond is not None:
+                    body["cond"] = cond
                 if t.attrs.get("type") == "internal" and targets:
                     body["type"] = "internal"
                 if actions:
@@ -340,6 +418,13 @@ class _Translator:
             else:
                 value = _one_or_list(targets)
             key = " ".join(events) if events is not None else "always"
+            while key in on and key != next(reversed(on)):
+                # transitions on other events came between: a mapping cannot say that
+                # order with the same key twice, so the key repeats its first descriptor
+                # (same events, another key)
+                key = f"{key} {key.split()[0]}" if key != "always" else key
+                if key == "always":
+                    break
             if key in on:  # a guarded transition before it: the scheme lists both
                 on[key] = (on[key] if isinstance(on[key], list) else [on[key]]) + [value]
             else:
@@ -349,14 +434,24 @@ class _Translator:
     def actions(self, element: Element) -> list[dict[str, Any]]:
         out: list[dict[str, Any]] = []
         for a in element.children:
-            if a.tag in _NEEDS_DATAMODEL:
-                self.refuse(a, f"<{a.tag}> needs a data model, which schemes do not have")
+            if self.datamodel and a.tag in ("assign", "if", "foreach", "script"):
+                found = scxml_data.action(self, a)
+                if found is not None:
+                    out.append(found)
+            elif a.tag in _NEEDS_DATAMODEL:
+                self.refuse(a, f"<{a.tag}> {_needs(a.tag)}")
             elif a.tag not in _ACTIONS:
                 self.refuse(a, f"<{a.tag}> is not supported in executable content")
             elif a.tag == "raise":
                 out.append({"raise": a.attrs.get("event", "")})
             elif a.tag == "send":
                 out.append(self.send(a))
+            elif a.tag == "cancel" and self.datamodel and "sendidexpr" in a.attrs:
+                out.append({"cancel": None,
+                            "sendidexpr": scxml_data.check(self, a, a.attrs["sendidexpr"])})
+            elif a.tag == "log" and self.datamodel and "expr" in a.attrs:
+                out.append({"log": a.attrs.get("label", ""),
+                            "expr": scxml_data.check(self, a, a.attrs["expr"])})
             elif a.tag == "cancel":
                 if "sendid" not in a.attrs:
                     self.refuse(a, "<cancel> needs sendid= (sendidexpr needs a data model)")
@@ -368,6 +463,8 @@ class _Translator:
         return out
 
     def send(self, a: Element) -> dict[str, Any]:
+        if self.datamodel:
+            return self.send_data(a)
         for attr in a.attrs:
             if attr not in ("event", "delay", "id", "target", "type"):
                 self.refuse(a, f"<send {attr}=…> is not supported (it needs a data model)")
@@ -407,6 +504,26 @@ class _Translator:
             out["to"] = to
         return out
 
+    def send_data(self, a: Element) -> dict[str, Any]:
+        """A ``<send>`` of a chart with a data model: every part may be computed, and the
+        target is found when it runs (a wrong one is ``error.execution`` then, as SCXML says)."""
+        if "event" not in a.attrs and "eventexpr" not in a.attrs:
+            self.refuse(a, "<send> needs event= or eventexpr=")
+        out: dict[str, Any] = {"send": a.attrs.get("event")}
+        if "delay" in a.attrs:
+            match = _TIME.match(a.attrs["delay"])
+            if not match:
+                self.refuse(a, f"delay {a.attrs['delay']!r} is not a time (write 10ms or 1.5s)")
+            else:
+                number = match.group(1)
+                out["delay"] = (("0" + number) if number.startswith(".") else number) \
+                    + match.group(2)
+        for attr in ("id", "target", "type"):
+            if a.attrs.get(attr):
+                out[attr] = a.attrs[attr]
+        scxml_data.send(self, a, out)
+        return out
+
 
 def _prune_unreachable(document: dict[str, Any], file: str) -> list[str]:
     """Remove the states no run can enter (schemes refuse them); return their names."""
@@ -444,6 +561,13 @@ def _in_state(cond: str) -> str | None:
     """The guard of a ``cond`` the null data model has: ``In('S')`` is ``in S``; else None."""
     match = _IN.match(cond)
     return None if match is None else f"in {match.group(2)}"
+
+
+def _needs(tag: str) -> str:
+    """Why an element of the data model is refused in a chart without one."""
+    if tag == "script":
+        return "needs a data model with scripts; shary's has expressions only, no scripts"
+    return "needs a data model: datamodel=\"shary\" on <scxml> (see docs/conformance.md)"
 
 
 def _one_or_list(items: list[str]) -> Any:

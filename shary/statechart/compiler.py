@@ -28,10 +28,18 @@ from transitions import Event, Machine
 from transitions import State as FlatState
 from transitions import Transition as FlatTransition
 
+from shary.statechart import datamodel
 from shary.statechart.clock import Clock, SimulatedClock
 from shary.statechart.conditions import ConditionRegistry
 from shary.statechart.instance import SchemeInstance
-from shary.statechart.model import IN_STATE, Invoke, Scheme, Transition, descriptor_matches
+from shary.statechart.model import (
+    EXPR_GUARD,
+    IN_STATE,
+    Invoke,
+    Scheme,
+    Transition,
+    descriptor_matches,
+)
 from shary.statechart.semantics import EVENTLESS, Semantics, Snapshot, Step
 
 
@@ -66,12 +74,19 @@ class StepTransition(FlatTransition):
                     names.append(t.condition)
         self.condition_names = tuple(names)
         self.condition_funcs = tuple(compiled.condition(n) for n in names)
-        self.steps: dict[tuple[bool, ...], tuple[Step, str] | None] = {}
+        self.steps: dict[tuple[bool | None, ...], tuple[Step, str] | None] = {}
+        self.lazy = compiled.scheme.datamodel is not None and bool(names)
+        """Guards over data are evaluated as SCXML does, in document order and only until
+        one transition of each chain is enabled: a failing one raises ``error.execution``."""
+        self.by_name = dict(zip(names, self.condition_funcs, strict=True))
 
     def fire(self, instance: Any, event: Any) -> bool:
         """Take the microstep the guards select, if any (called by :meth:`SchemeEvent.trigger`)."""
         funcs = self.condition_funcs
-        key = tuple(bool(f(instance, event)) for f in funcs) if funcs else ()
+        if self.lazy:
+            key = self._lazy_key(instance, event)
+        else:
+            key = tuple(bool(f(instance, event)) for f in funcs) if funcs else ()
         try:
             step = self.steps[key]
         except KeyError:
@@ -81,7 +96,23 @@ class StepTransition(FlatTransition):
         instance._play(step[0], step[1], event)
         return True
 
-    def _compile(self, key: tuple[bool, ...]) -> tuple[Step, str] | None:
+    def _lazy_key(self, instance: Any, event: Any) -> tuple[bool | None, ...]:
+        """The truth of the guards a lazy selection reads (None for those it never reads)."""
+        truth: dict[str, bool] = {}
+        funcs = self.by_name
+        for chain in self.candidates:
+            for t in chain:
+                name = t.condition
+                if name is None:
+                    break
+                value = truth.get(name)
+                if value is None:
+                    value = truth[name] = bool(funcs[name](instance, event))
+                if value != t.negated:
+                    break
+        return tuple(truth.get(n) for n in self.condition_names)
+
+    def _compile(self, key: tuple[bool | None, ...]) -> tuple[Step, str] | None:
         semantics = self.compiled.semantics
         enabled = semantics.select(self.snapshot, self.candidates,
                                    dict(zip(self.condition_names, key, strict=True)))
@@ -134,9 +165,11 @@ class CompiledScheme:
     def __init__(self, scheme: Scheme, conditions: ConditionRegistry | None = None):
         self.scheme = scheme
         self.conditions = conditions or ConditionRegistry()
+        self.expressions = {t.guard: t.cond for s in scheme.states.values()
+                            for t in s.transitions if t.cond is not None}
         missing = sorted({t.condition for s in scheme.states.values() for t in s.transitions
                           if t.condition is not None and t.in_state is None
-                          and t.condition not in self.conditions})
+                          and t.cond is None and t.condition not in self.conditions})
         if missing:
             raise KeyError(f"scheme {scheme.name!r} uses conditions that are not registered: "
                            f"{', '.join(missing)}")
@@ -153,6 +186,12 @@ class CompiledScheme:
             s.name: tuple((t.events[0], t.after) for t in s.transitions
                           if t.after is not None and t.events)
             for s in scheme.states.values()}
+        self.late: dict[str, tuple] = {}
+        """A late-binding scheme's variables by the state that declares them."""
+        if scheme.datamodel is not None and scheme.datamodel.late:
+            for variable in scheme.datamodel.variables:
+                if variable.state is not None:
+                    self.late[variable.state] = self.late.get(variable.state, ()) + (variable,)
         self._children: dict[int, CompiledScheme] = {}
         self._descriptors: list[str] | None = None
 
@@ -192,6 +231,8 @@ class CompiledScheme:
         if name.startswith(IN_STATE):
             state = name[len(IN_STATE):]
             return lambda instance, event: state in instance.active
+        if name.startswith(EXPR_GUARD):
+            return datamodel.guard(self.expressions[name])
         return self.conditions[name]
 
     def flat_state(self, snapshot: Snapshot) -> ConfigurationState:

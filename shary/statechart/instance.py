@@ -16,9 +16,12 @@ from collections import deque
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
+from shary.statechart import datamodel
 from shary.statechart.clock import Clock, Timer
+from shary.statechart.datamodel import DataEvent
+from shary.statechart.expressions import EvaluationError
 from shary.statechart.model import PARENT, Cancel, Invoke, Log, Raise, Send, State
-from shary.statechart.semantics import ACTIONS, ENTER, EVENTLESS, INVOKE, RAISE, Step
+from shary.statechart.semantics import ACTIONS, DONE, ENTER, EVENTLESS, INVOKE, RAISE, Step
 from userfiles.errors import Problem
 
 if TYPE_CHECKING:
@@ -97,7 +100,8 @@ class SchemeInstance:
 
     __slots__ = ("definition", "state", "clock", "listener", "context", "finished", "parent",
                  "invoke_id", "_internal", "_external", "_busy", "_timers", "_frozen",
-                 "_to_invoke", "_invoked", "_echoes", "_echo_at", "_outbox", "__weakref__")
+                 "_to_invoke", "_invoked", "_echoes", "_echo_at", "_outbox", "data", "_live",
+                 "__weakref__")
 
     def __init__(self, definition: CompiledScheme, clock: Clock, listener: Any = None,
                  context: Any = None):
@@ -121,6 +125,11 @@ class SchemeInstance:
         self._echo_at = -1.0
         self._outbox: deque[Event] | None = None
         """Events for the parent, sent while it was idle: delivered when this step ends."""
+        self.data: dict[str, Any] | None = None
+        """The variables of a scheme with a data model (None without one)."""
+        self._live: set[str] | None = None
+        """During a microstep of a scheme with a data model, the states active at that
+        moment, as ``In()`` must see them between one state's exit and another's entry."""
 
     # -- queries ---------------------------------------------------------
 
@@ -135,7 +144,10 @@ class SchemeInstance:
         return self.definition.machine.states[self.state].active_names
 
     def is_active(self, name: str) -> bool:
-        return name in self.active
+        """Whether ``name`` is active; in the middle of a microstep of a scheme with a data
+        model, a state counts from just before its on_entry to just after its on_exit."""
+        live = self._live
+        return name in (live if live is not None else self.active)
 
     @property
     def invoke_path(self) -> str:
@@ -179,8 +191,16 @@ class SchemeInstance:
         """The invoked children still running."""
         return [c for kids in (self._invoked or {}).values() for _, c in kids if not c.finished]
 
-    def start(self) -> None:
-        """Enter the initial states and settle (called once by ``CompiledScheme.start``)."""
+    def start(self, given: dict[str, Any] | None = None) -> None:
+        """Enter the initial states and settle (called once by ``CompiledScheme.start``).
+
+        ``given`` are the values an invoking parent passes to variables of the
+        data model, if the scheme has one.
+        """
+        scheme = self.definition.scheme
+        if scheme.datamodel is not None:
+            for why in datamodel.start(self, scheme, given):
+                self._internal.append(datamodel.error_event(why))
         self._complete(lambda: self._play(self.definition.initial_step,
                                           self.definition.initial_name, None))
 
@@ -202,9 +222,14 @@ class SchemeInstance:
         if self._outbox:
             self._flush()
 
-    def send(self, name: str, data: Any = None) -> None:
-        """Deliver an outside event and run to completion (queued if the instance is busy)."""
-        event = Event(name, data)
+    def send(self, name: str, data: Any = None, *, event: Any = None) -> None:
+        """Deliver an outside event and run to completion (queued if the instance is busy).
+
+        ``event`` is an event made elsewhere (one with SCXML's fields, from
+        another scheme), to be delivered as it is.
+        """
+        if event is None:
+            event = Event(name, data)
         self._echoes = 0
         if self._busy:
             self._external.append(event)
@@ -228,6 +253,8 @@ class SchemeInstance:
             return
         if self._invoked:
             self._forward(event)
+        if self.data is not None:
+            datamodel.take(self, event, "external")
         events = self.definition.machine.events
         trigger = events.get(event.name) or self.definition.event(event.name)
         trigger.trigger(self, event)
@@ -247,6 +274,8 @@ class SchemeInstance:
             elif internal:
                 event = internal.popleft()
                 name = event.name
+                if self.data is not None:
+                    datamodel.take(self, event, "internal")
                 trigger = events.get(name) or self.definition.event(name)
                 trigger.trigger(self, event)
             else:
@@ -269,11 +298,18 @@ class SchemeInstance:
                   f"last in {', '.join(self.configuration) or 'no state'}"
         raise LivelockError(message, Problem(scheme.file, *where, message))
 
-    def _send_self(self, name: str, data: Any = None) -> None:
-        """Send an event the instance gives itself (a timer, a child's end): counted."""
+    def _send_self(self, event: Any, data: Any = None) -> None:
+        """Send an event the instance gives itself (a timer, a child's end): counted.
+
+        ``event`` is a name, or an event with SCXML's fields from the data model.
+        """
+        name = event if isinstance(event, str) else event.name
         self._echo(name)
         count = self._echoes
-        self.send(name, data)  # which resets the count, as an outside event does
+        if isinstance(event, str):  # which resets the count, as an outside event does
+            self.send(name, data)
+        else:
+            self.send(name, event=event)
         self._echoes = max(self._echoes, count)
 
     def _echo(self, event: str) -> None:
@@ -292,6 +328,12 @@ class SchemeInstance:
         machine)."""
         timers = self.definition.timers
         listener = self.listener
+        live = None
+        if self.data is not None:  # the states active before the step (none at the start)
+            exited = {s.name for s in step.exits}
+            live = self._live = set(self.active).difference(
+                item.name for kind, item in step.entries
+                if kind is ENTER and item.name not in exited)
         for state in step.exits:
             if state.invokes and self._to_invoke and state in self._to_invoke:
                 self._to_invoke.remove(state)  # left in the macrostep that entered it
@@ -302,6 +344,8 @@ class SchemeInstance:
                         pending.cancel()
             if state.on_exit:
                 self._run(state.on_exit)
+            if live is not None:
+                live.discard(state.name)
             if state.invokes and self._invoked and state.name in self._invoked:
                 for _, child in self._invoked.pop(state.name):
                     child.cancel()
@@ -312,6 +356,10 @@ class SchemeInstance:
         self.state = target
         for kind, item in step.entries:
             if kind is ENTER:
+                if live is not None:
+                    live.add(item.name)
+                    if item.name in self.definition.late:
+                        datamodel.bind_late(self, item.name, self.definition.late[item.name])
                 if listener is not None:
                     listener.entered(self, item, event)
                 if item.on_entry:
@@ -320,6 +368,10 @@ class SchemeInstance:
                     self._start_timer(name, delay, name)
             elif kind is RAISE:
                 self._internal.append(Event(item))
+            elif kind is DONE:
+                name, final = item
+                self._internal.append(DataEvent(name, datamodel.done_data(self, final.donedata),
+                                                type="internal"))
             elif kind is ACTIONS:
                 self._run(item)
             elif kind is INVOKE:
@@ -334,6 +386,8 @@ class SchemeInstance:
                     listener.finished(self, item)
                 if self.parent is not None:
                     self.parent._child_finished(self, item)
+        if live is not None:
+            self._live = None
 
     def _stop(self) -> None:
         """Finish: no more events, timers cancelled, invoked children cancelled."""
@@ -360,6 +414,10 @@ class SchemeInstance:
         compiled = self.definition
         for state in pending:
             for invoke in state.invokes:
+                given = datamodel.invoke_values(self, invoke) if self.data is not None \
+                    else None
+                if given is False:
+                    continue
                 child_def = compiled.child(invoke)
                 hook = getattr(self.listener, "invoking", None)
                 listener = hook(self, state, invoke) if hook is not None else None
@@ -369,7 +427,7 @@ class SchemeInstance:
                 if self._invoked is None:
                     self._invoked = {}
                 self._invoked.setdefault(state.name, []).append((invoke, child))
-                child.start()
+                child.start(given)
 
     def _forward(self, event: Event) -> None:
         """Pass an outside event on to the children invoked with ``autoforward``."""
@@ -378,7 +436,7 @@ class SchemeInstance:
         for children in list(self._invoked.values()):
             for invoke, child in children:
                 if invoke.autoforward and not child.finished:
-                    child.send(event.name, event.data)
+                    child.send(event.name, event=event)
 
     def _child_finished(self, child: SchemeInstance, state: State) -> None:
         """An invoked child reached a final state at its top: ``done.invoke.ID.OUTCOME``."""
@@ -389,9 +447,14 @@ class SchemeInstance:
                     self._invoked[name] = kept  # type: ignore[index]
                 else:
                     del self._invoked[name]  # type: ignore[union-attr]
-                child._post(Event(f"done.invoke.{child.invoke_id}.{state.outcome}",
-                                  {"invoke": child.invoke_id, "outcome": state.outcome,
-                                   "state": state.name}))
+                name = f"done.invoke.{child.invoke_id}.{state.outcome}"
+                if child.data is None and self.data is None:
+                    child._post(Event(name, {"invoke": child.invoke_id, "outcome": state.outcome,
+                                             "state": state.name}))
+                else:
+                    data = datamodel.done_data(child, state.donedata) if child.data is not None \
+                        else None
+                    child._post(DataEvent(name, data, invokeid=child.invoke_id))
                 return
 
     def _to_parent(self, event: Event) -> None:
@@ -430,8 +493,7 @@ class SchemeInstance:
         """Deliver the events kept for the parent (see :meth:`_post`)."""
         outbox, parent = self._outbox, self.parent
         while outbox and parent is not None and not parent.finished:
-            event = outbox.popleft()
-            parent._send_self(event.name, event.data)
+            parent._send_self(outbox.popleft())
         self._outbox = None
 
     def _to_child(self, ident: str, event: Event) -> None:
@@ -439,7 +501,7 @@ class SchemeInstance:
         for children in (self._invoked or {}).values():
             for invoke, child in children:
                 if invoke.id == ident and not child.finished:
-                    child.send(event.name, event.data)
+                    child.send(event.name, event=event)
                     return
         self._internal.append(Event("error.communication", {"to": ident}))
 
@@ -464,7 +526,7 @@ class SchemeInstance:
         self._internal.clear()
         self._external.clear()
 
-    def _start_timer(self, key: str, delay: float, event: str, to: str | None = None) -> None:
+    def _start_timer(self, key: str, delay: float, event: Any, to: str | None = None) -> None:
         if self._timers is None:
             self._timers = {}
         previous = self._timers.pop(key, None)
@@ -472,16 +534,17 @@ class SchemeInstance:
             previous.cancel()
         self._timers[key] = self.clock.call_later(delay, self._fire, key, event, to)
 
-    def _fire(self, key: str, event: str, to: str | None) -> None:
+    def _fire(self, key: str, event: Any, to: str | None) -> None:
         if self._timers is not None:
             self._timers.pop(key, None)
         if to is None:
             self._send_self(event)
             return
+        made = Event(event) if isinstance(event, str) else event
         if self._busy:
-            self._deliver(to, Event(event))
+            self._deliver(to, made)
         else:  # a step of this instance: it may raise error.communication
-            self._complete(lambda: self._deliver(to, Event(event)))
+            self._complete(lambda: self._deliver(to, made))
 
     def _deliver(self, to: str, event: Event) -> None:
         if to == PARENT:
@@ -489,11 +552,28 @@ class SchemeInstance:
         else:
             self._to_child(to, event)
 
-    def _run(self, actions: tuple) -> None:
+    def _dispatch(self, event: Any, delay: float, ident: str | None, to: str | None) -> None:
+        """Send an event made by the data model: after ``delay``, to ``to`` or to itself."""
+        if delay > 0:
+            self._start_timer(ident or f"send-{next(_send_ids)}", delay, event, to)
+        elif to is not None:
+            self._deliver(to, event)
+        else:
+            self._echo(event.name)
+            self._external.append(event)
+
+    def _cancel_send(self, ident: str) -> None:
+        pending = self._timers.pop(ident, None) if self._timers else None
+        if pending is not None:
+            pending.cancel()
+
+    def _run(self, actions: tuple) -> bool:
+        """Run actions in order; False when one failed (``error.execution`` is then queued)."""
         for action in actions:
             if isinstance(action, Raise):
-                self._internal.append(Event(action.event))
-            elif isinstance(action, Send):
+                self._internal.append(Event(action.event) if self.data is None else
+                                      DataEvent(action.event, type="internal"))
+            elif isinstance(action, Send) and action.computed is None and self.data is None:
                 if action.delay > 0:
                     key = action.id or f"send-{next(_send_ids)}"
                     self._start_timer(key, action.delay, action.event, action.to)
@@ -503,8 +583,15 @@ class SchemeInstance:
                     self._echo(action.event)
                     self._external.append(Event(action.event))
             elif isinstance(action, Cancel):
-                pending = self._timers.pop(action.id, None) if self._timers else None
-                if pending is not None:
-                    pending.cancel()
-            elif isinstance(action, Log) and self.listener is not None:
-                self.listener.logged(self, action.text)
+                self._cancel_send(action.id)
+            elif isinstance(action, Log) and action.expr is None:
+                if self.listener is not None:
+                    self.listener.logged(self, action.text)
+            else:
+                try:
+                    datamodel.execute(self, action)
+                except EvaluationError as err:
+                    if not isinstance(err, datamodel.Stopped):
+                        self._internal.append(datamodel.error_event(str(err)))
+                    return False
+        return True

@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from shary.statechart.acts import ActRegistry, ActType
+from shary.statechart.expressions import Expression, Location
 
 ATOMIC, COMPOUND, PARALLEL, FINAL, HISTORY = "atomic", "compound", "parallel", "final", "history"
 
@@ -102,11 +103,38 @@ class Send:
     delay: float = 0.0
     id: str | None = None
     to: str | None = None
+    computed: SendParts | None = None
+    """What the data model computes when the send runs (None: a fixed send, as above)."""
+
+
+@dataclass(frozen=True)
+class SendParts:
+    """The parts of a send that the data model computes, as SCXML's ``<send>`` has them.
+
+    ``target`` is an SCXML target (``#_parent``, ``#_ID``, ``#_internal``,
+    ``#_scxml_SESSION``); a computed one overrides the send's ``to``.
+    """
+
+    event: Expression | None = None
+    target: str | None = None
+    target_expr: Expression | None = None
+    type: str | None = None
+    type_expr: Expression | None = None
+    delay_expr: Expression | None = None
+    id_location: Location | None = None
+    type_expr: Expression | None = None
+    """The invoke's type, computed when it starts: a scheme's, or the invoke fails."""
+    params: tuple[tuple[str, Expression | Location], ...] = ()
+    namelist: tuple[Location, ...] = ()
+    content: Expression | None = None
 
 
 IN_STATE = "in "
 """A guard ``in STATE`` holds while STATE is active: SCXML's ``In()``, the one predicate of
 its null data model, needs no registered condition (it reads the configuration only)."""
+EXPR_GUARD = "="
+"""How a guard over the data model starts (``=`` and its text), to key it apart from
+registered conditions, which are names."""
 PARENT = "parent"
 """The ``to:`` of a send that goes to the invoking scheme (no invoke id may take this name)."""
 
@@ -120,12 +148,81 @@ class Cancel:
 
 @dataclass(frozen=True)
 class Log:
-    """Tell the instance's listener something (for traces and tests)."""
+    """Tell the instance's listener something (for traces and tests), with a value if any."""
 
     text: str
+    expr: Expression | None = None
 
 
-Action = Raise | Send | Cancel | Log
+@dataclass(frozen=True)
+class Assign:
+    """Set a variable (or a key or item below one) of the data model."""
+
+    location: Location
+    expr: Expression
+
+
+@dataclass(frozen=True)
+class If:
+    """Run the actions of the first branch whose condition holds (None: ``else``)."""
+
+    branches: tuple[tuple[Expression | None, tuple[Action, ...]], ...]
+
+
+@dataclass(frozen=True)
+class Foreach:
+    """Run actions once per item of a list (or tuple), with the item and its index set."""
+
+    array: Expression
+    item: Location
+    index: Location | None
+    actions: tuple[Action, ...]
+
+
+@dataclass(frozen=True)
+class Block:
+    """Actions that an error stops without stopping the actions around them (SCXML's
+    separate ``<onentry>`` handlers of one state)."""
+
+    actions: tuple[Action, ...]
+
+
+@dataclass(frozen=True)
+class CancelComputed:
+    """Cancel a delayed send whose id an expression computes."""
+
+    id: Expression
+
+
+Action = Raise | Send | Cancel | Log | Assign | If | Foreach | Block | CancelComputed
+
+
+@dataclass(frozen=True)
+class Variable:
+    """A variable of the data model and how it starts (None: unbound until assigned)."""
+
+    name: str
+    expr: Expression | None
+    mark: tuple[int, int] = (1, 1)
+    state: str | None = None
+    """The state that declares it (None: the scheme)."""
+
+
+@dataclass(frozen=True)
+class DataModel:
+    """A scheme's variables, in document order, set when an instance starts; with ``late``
+    binding, a state's own variables are set when the state is first entered instead."""
+
+    variables: tuple[Variable, ...] = ()
+    late: bool = False
+
+
+@dataclass(frozen=True)
+class DoneData:
+    """The data of a final state's done event: named values, or one value (``content``)."""
+
+    params: tuple[tuple[str, Expression | Location], ...] = ()
+    content: Expression | None = None
 
 
 @dataclass(frozen=True)
@@ -144,6 +241,13 @@ class Invoke:
     scheme: Scheme
     autoforward: bool = False
     mark: tuple[int, int] = (1, 1)
+    params: tuple[tuple[str, Expression | Location], ...] = ()
+    """Values the child's variables of those names start with (params and namelist)."""
+    finalize: tuple[Action, ...] = ()
+    """Actions run on each event from the child, before the parent takes it."""
+    id_location: Location | None = None
+    type_expr: Expression | None = None
+    """The invoke's type, computed when it starts: a scheme's, or the invoke fails."""
 
 
 @dataclass(eq=False)
@@ -154,6 +258,8 @@ class Transition:
     events: tuple[str, ...] | None
     targets: tuple[str, ...] = ()
     guard: str | None = None
+    cond: Expression | None = None
+    """A guard over the data model (``guard`` is then its key for the compiler)."""
     internal: bool = False
     actions: tuple[Action, ...] = ()
     after: float | None = None
@@ -188,7 +294,8 @@ class Transition:
             trigger = self.events[0].split("@")[0] if self.events else ""
         else:
             trigger = " ".join(self.events) if self.events is not None else "always"
-        text = trigger + (f" [{self.guard}]" if self.guard else "")
+        guard = self.cond.source if self.cond is not None else self.guard
+        text = trigger + (f" [{guard}]" if guard else "")
         if self.actions:
             text += " / " + "; ".join(_action_label(a) for a in self.actions)
         return text
@@ -202,6 +309,16 @@ def _action_label(action: Action) -> str:
             + (f" after {action.delay:g}s" if action.delay else "")
     if isinstance(action, Cancel):
         return f"cancel {action.id}"
+    if isinstance(action, Assign):
+        return f"{action.location.source} = {action.expr.source}"
+    if isinstance(action, If):
+        return f"if {action.branches[0][0].source if action.branches[0][0] else ''}"
+    if isinstance(action, Foreach):
+        return f"foreach {action.item.source} in {action.array.source}"
+    if isinstance(action, CancelComputed):
+        return f"cancel {action.id.source}"
+    if isinstance(action, Block):
+        return "; ".join(_action_label(a) for a in action.actions)
     return f"log {action.text!r}"
 
 
@@ -227,6 +344,7 @@ class State:
     initial_actions: tuple[Action, ...] = ()
     """Actions of the initial transition (or of a history's default transition)."""
     invokes: tuple[Invoke, ...] = ()
+    donedata: DoneData | None = None
     order: int = 0
     depth: int = 0
     mark: tuple[int, int] = (1, 1)
@@ -275,6 +393,8 @@ class Scheme:
     acts: ActRegistry
     doc: str = ""
     file: str = "<string>"
+    datamodel: DataModel | None = None
+    """The variables; None for a scheme without a data model (which runs without one)."""
 
     def state(self, name: str) -> State:
         return self.states[name]

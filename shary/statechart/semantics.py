@@ -9,9 +9,12 @@ only on the snapshot, the event name and the truth of the guards involved, a
 step is computed once and then replayed by every instance of the scheme: this
 is what :mod:`shary.statechart.compiler` caches.
 
-Guards are evaluated all at once before selection (rather than lazily, as
-SCXML does); with side-effect-free conditions, which is what conditions must
-be, the result is the same.
+Registered conditions are evaluated all at once before selection (rather than
+lazily, as SCXML does); with side-effect-free conditions, which is what
+conditions must be, the result is the same.  Guards over a data model are
+evaluated lazily, in document order, since one that fails raises
+``error.execution`` (:class:`~shary.statechart.compiler.StepTransition`): the
+selection reads only the guards evaluated, so the same steps serve both.
 """
 
 from __future__ import annotations
@@ -23,9 +26,11 @@ from shary.statechart.model import COMPOUND, FINAL, HISTORY, PARALLEL, Scheme, S
 EVENTLESS = "<eventless>"
 """Name of the event under which a compiled scheme looks for eventless transitions."""
 
-ENTER, ACTIONS, INVOKE, RAISE, FINISH = "enter", "actions", "invoke", "raise", "finish"
+ENTER, ACTIONS, INVOKE, RAISE, DONE, FINISH = "enter", "actions", "invoke", "raise", "done", \
+    "finish"
 """Kinds of a step's entries: a state entered, default-entry content to run, a state
-whose invokes start at the end of the macrostep, an internal event, the end of the run."""
+whose invokes start at the end of the macrostep, an internal event, a ``done.state`` event
+whose data the final state computes, the end of the run."""
 
 
 @dataclass(frozen=True)
@@ -191,8 +196,8 @@ class Semantics:
             parent = state.parent
             assert parent is not None
             found = history.get(state)
-            if found is None and state.initial_actions:
-                content[parent] = state.initial_actions
+            if found is None and state.initial_actions:  # after the initial transition's
+                content[parent] = content.get(parent, ()) + state.initial_actions
             restored = sorted(found, key=_order) if found is not None \
                 else self.history_default(state)
             for s in restored:
@@ -262,7 +267,8 @@ class Semantics:
             if parent is self.root:
                 entries.append((FINISH, s))
                 continue
-            entries.append((RAISE, f"done.state.{parent.name}"))
+            done = f"done.state.{parent.name}"
+            entries.append((DONE, (done, s)) if s.donedata is not None else (RAISE, done))
             grand = parent.parent
             if grand is not None and grand.kind == PARALLEL and all(
                     _in_final(c, active) for c in grand.proper_children()):
