@@ -244,11 +244,11 @@ def test_a_partner_who_never_looks_back_does_not_keep_the_run_going():
 
 
 def test_what_a_partner_who_left_missed_is_tried_once_the_plan_is_over():
-    """Found by ``shary fuzz stack --replay 128``: Carol walks to the door after her
-    last pick; the robot's last actions are NOT_SEEN in her view, it calls her at the
-    end of the plan and gives up.  That is all it can do: the invariant now reads the
-    ``belief ... why=untold`` row the end's inform writes (it counted only a failed
-    plan as over)."""
+    """Found by ``shary fuzz stack --replay 128``: Carol walks out after her last
+    pick; the robot's last actions are NOT_SEEN in her view, and the inform at the end
+    of the plan ends untold (she has left: she is not called).  That is all it can do:
+    the invariant now reads the ``belief ... why=untold`` row the end's inform writes
+    (it counted only a failed plan as over)."""
     state, _, violations = run_text("stack-nominal", STACK.format(
         name="partner-left", partner="carol", wait="4.4s", profile=(
             "{choices: [placement_2], delay: 3.9, "

@@ -38,8 +38,8 @@ The invariants:
     (``looksAt`` rows); a task of the robot alone (a clean-up's "I have
     cleared the yellow bottle away.") tells no one in particular.  Except a
     call for attention ("Excuse me, Alice."), the stated reason of a verdict
-    already reached (a GIVE-UP, a failed plan) and the goodbye to a person
-    walking out (FAREWELL), which are said whoever listens.  The
+    already reached (a GIVE-UP, a failed plan's ANNOUNCE) and the goodbye to a
+    person walking out (FAREWELL), which are said whoever listens.  The
     seam-welding site's people are reached through their proxies (a remote IVA
     has no gaze): not checked there.
 ``not-seen``
@@ -47,6 +47,11 @@ The invariants:
     robot told them), or the plan failed, or the plan ended and the robot's inform
     to them after its end gave up (a ``belief`` row ``why=untold``: they did not
     attend, e.g. they had left) (stack only).
+
+The invariants that see conversations (``order``, ``belief``,
+``no-call-while-looking``, ``after-farewell``, ``reason-heard``) read the same
+rows; they are in :mod:`sim.fuzz.conversations`, and :data:`INVARIANTS` lists
+them all.
 """
 
 from __future__ import annotations
@@ -56,17 +61,24 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..weld.executors import BAD, SOUND
+from .conversations import (
+    ATTENTION_CALL,
+    CONVERSING,
+    after_farewell,
+    belief,
+    no_call_while_looking,
+    order,
+    reason_heard,
+)
 
 __all__ = ["INVARIANTS", "Invariant", "Run", "verdict"]
 
 Row = tuple[float, str, "str | None", "str | None", dict[str, Any]]
 
-ATTENTION_CALL = "Excuse me"
-"""How a call for attention begins (shary/dialogue/attention.py): said to be looked at."""
-CLOSING_ACTS = frozenset({"GIVE-UP", "FAREWELL"})
+CLOSING_ACTS = frozenset({"GIVE-UP", "FAREWELL", "ANNOUNCE"})
 """Acts whose sentence closes something whoever listens: the stated reason of a task
-given up, the goodbye as a person walks out (shary/dialogue/sessions.py: leaving
-closes the session)."""
+given up or of a failed plan (ANNOUNCE), the goodbye as a person walks out
+(shary/dialogue/sessions.py: leaving closes the session)."""
 
 
 @dataclass
@@ -321,4 +333,15 @@ INVARIANTS = (
               ("stack", "living-room")),
     Invariant("not-seen", "every NOT_SEEN is told, or the plan ended and telling failed",
               _not_seen_told, ("stack",)),
+    # the conversations (sim/fuzz/conversations.py)
+    Invariant("order", "past events are told in the order they happened", order,
+              CONVERSING),
+    Invariant("belief", "what was told is EXECUTED in the listener's view", belief,
+              ("stack",)),
+    Invariant("no-call-while-looking", "nobody is called while looking at the robot",
+              no_call_while_looking, CONVERSING),
+    Invariant("after-farewell", "nothing said to, nor goal kept for, someone who left",
+              after_farewell, CONVERSING),
+    Invariant("reason-heard", "a failure's reason is said to someone there, or logged "
+              "unheard", reason_heard, CONVERSING),
 )

@@ -15,7 +15,8 @@ to do).  Its profile (a scenario's ``shared-plan: partner:``) says:
 * ``before``: ``{TASK: [[Pick, obj], [Place, obj, support]]}``, actions of their
   own they do when the task TASK is due, before it (the robot's turn taken, an
   unexpected action);
-* ``leave``: ``{after: TASK}``, walk to the door once that task is done.
+* ``leave``: ``{after: TASK}``, walk out of the door once that task is done (out of
+  the robot's perception: their session closes).
 """
 
 from __future__ import annotations
@@ -148,4 +149,4 @@ class StackPartner:
     def _leave(self) -> None:
         self.handled.update(self.follower.plan.primitive)  # gone: they do nothing more
         self.person.look("away")
-        self.person._run(self.person.walk_to("door"))
+        self.person._run(self.person.leaving())
