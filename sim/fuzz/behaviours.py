@@ -22,7 +22,8 @@ written:
   perception noise and action faults;
 * **weld** (docs/teams.md, ``behaviour:``): each person's reply to
   assignments (accept, refuse, ignore) and to questions (answer, refuse,
-  ignore) and its delay, their answers, how long they work, the quality of
+  ignore) and its delay, their answers, how long they take to mount a panel
+  (the site's mount lasts at least that), the quality of
   each weld the torch lays (a bad one fails its inspection), an operator
   taking control of a robot for a while (``script``), and, in one run in six,
   a member (robot or person) killed at a random time: no file key says that
@@ -290,8 +291,9 @@ def _weld(rng: random.Random, seed: int) -> Variation:
         if not spec.get("remote"):
             reply = rng.choices(["accept", "refuse", "ignore"], [0.7, 0.15, 0.15])[0]
             behaviour["assignments"] = {"reply": reply, "after": _span(rng, 0.5, 8)}
-            if rng.random() < 0.3:
-                behaviour["works"] = _span(rng, 1, 20)
+            if rng.random() < 0.3:  # a mount's physics takes about 15 s: longer, or not
+                behaviour["works"] = {"mount-panel": _span(rng, 5, 90)}
+                told.append(f"{name} mounts in {'-'.join(behaviour['works']['mount-panel'])}")
             told.append(f"{name} {reply}s assignments")
         reply = rng.choices(["answer", "refuse", "ignore"], [0.7, 0.15, 0.15])[0]
         behaviour["questions"] = {"reply": reply, "after": _span(rng, 1, 30)}
