@@ -12,7 +12,7 @@ from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
 from sim.fuzz.behaviours import ROBOT_TASKS, draw, stack_partner
-from sim.fuzz.campaign import campaign, command, judge
+from sim.fuzz.campaign import campaign, command, judge, run_one
 from sim.run import run_scenario
 from sim.scenario import builtin_scenarios, load_scenario
 
@@ -24,7 +24,7 @@ def run_text(base: str, text: str, family: str = "living-room", seed: int = 0
     return judge(family, scenario, run_scenario(scenario, seed=seed))
 
 
-CAMPAIGNS = [("living-room", 30, 1), ("weld", 24, 1), ("stack", 24, 5)]
+CAMPAIGNS = [("living-room", 30, 1), ("weld", 24, 1), ("stack", 24, 5), ("dialogue", 24, 1)]
 """(family, runs, first seed): a short campaign each, a few seconds a run at most."""
 
 
@@ -39,7 +39,7 @@ def test_a_short_campaign_violates_no_invariant(family, runs, seed):
 
 def test_a_seed_draws_one_behaviour_a_user_could_write():
     """The same seed draws the same document, and the readers accept it as a file."""
-    for family in ("stack", "living-room", "weld"):
+    for family in ("stack", "living-room", "weld", "dialogue"):
         first, again = draw(family, 7), draw(family, 7)
         assert first.text() == again.text() and first.team_text() == again.team_text()
         assert first.load().name == f"{first.base}-fuzz-7"
@@ -366,3 +366,29 @@ def test_a_helper_killed_while_carrying_puts_the_panel_down_and_helps_no_more():
     assert failed == ["EVA2 left: P4 was put down",
                       "EVA2 has left the site: nobody to carry P4 with"]
     assert violations == {} and state == "failed" and "mount-P4" in reason
+
+
+DIALOGUE_FOUND = {
+    8: "two informs to Alice at once (the scenario's and the robot's answer to her plan "
+       "change): the newer look took the head from the older, whose sentence was lost and "
+       "its goal failed without a word; two looks at one target no longer take the head "
+       "from each other (shary/kernel/arbiter.py)",
+    10: "a goal she asked for again once back was counted as outliving her goodbye "
+        "(after-farewell now judges the goals there when she left)",
+    48: "\"All right, I will stop and put the yellow bottle back.\" said to Bob's back "
+        "after his CANCEL: a stop is said to a partner who attends, else the robot turns "
+        "to them in silence",
+    135: "\"Yes, I will do that.\" said 14 s after Bob asked, to his back: an agreement "
+         "is said to a partner who attends, else the robot turns to them in silence",
+    49: "her own CANCEL, on the phone: the goal failed without a stated reason (the "
+        "verdict reads her CANCEL) and \"All right, I will stop.\" was said to her back",
+    156: "\"Hello, Bob.\" said as he took a call: GREET watches his look until it speaks",
+}
+"""Seeds of ``shary fuzz dialogue`` that violated an invariant, and why, now fixed."""
+
+
+@pytest.mark.parametrize("seed", sorted(DIALOGUE_FOUND))
+def test_a_dialogue_campaign_finding_holds_every_invariant(seed):
+    outcome = run_one("dialogue", seed)
+    assert outcome.violations == {}, DIALOGUE_FOUND[seed]
+

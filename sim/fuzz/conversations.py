@@ -28,8 +28,8 @@ act (as ``told-unseen`` reads it); a person is *gone* from the robot's goodbye
     A failure's reason is said while the person is there, or logged as
     ``unheard`` when they are not: each ``plan-end`` sentence is said (before
     they leave) or logged unheard, and each goal with a person that ends failed
-    or cancelled has the robot speaking to them at its end, or an ``unheard``
-    row for them.
+    or cancelled (not on their own CANCEL: the reason is theirs) has the robot
+    speaking to them at its end, or an ``unheard`` row for them.
 """
 
 from __future__ import annotations
@@ -106,11 +106,11 @@ def _gone(farewells: list[tuple[float, str, float | None]], person: str, t: floa
                for at, who, back in farewells)
 
 
-def _goal_people(run: Run) -> dict[int, tuple[str, set[str]]]:
-    """Goal id -> its task name and the people among its arguments."""
+def _goal_people(run: Run) -> dict[int, tuple[str, set[str], float]]:
+    """Goal id -> its task name, the people among its arguments, when it was added."""
     return {d["goal"]: (str(d.get("name")), {str(v) for v in (d.get("args") or {}).values()
-                                            if v in run.people})
-            for _, _, _, _, d in run.of("goal-added")}
+                                            if v in run.people}, t)
+            for t, _, _, _, d in run.of("goal-added")}
 
 
 def after_farewell(run: Run) -> str | None:
@@ -122,10 +122,10 @@ def after_farewell(run: Run) -> str | None:
         if gone and name != "session":
             return f"said {data.get('text')!r} at {t:.1f}s to {gone[0]}, who had left"
     over = {d["goal"]: t for t, _, _, _, d in run.of("goal-over")}
-    for goal, (name, people) in _goal_people(run).items():
+    for goal, (name, people, added) in _goal_people(run).items():
         end = over.get(goal, run.end)
-        for at, who, back in farewells:
-            if who in people and (back is None or back > at + GRACE) and end > at + GRACE:
+        for at, who, _ in farewells:  # a goal they ask for once back is a new one
+            if who in people and added <= at and end > at + GRACE:
                 return (f"goal {goal} ({name}) with {who} lasted until {end:.1f}s, "
                         f"after their goodbye at {at:.1f}s")
     return None
@@ -147,10 +147,13 @@ def reason_heard(run: Run) -> str | None:
             return f"the plan's reason {text!r} ({t:.1f}s) neither said nor logged unheard"
     people = _goal_people(run)
     acts = [(t, task) for t, _, task, a, _ in run.of("act") if a == run.robot]
+    cancels = [(t, who) for t, _, _, who, d in run.of("act-received")
+               if d.get("act") == "CANCEL"]
     for t, _, task, _, data in run.of("goal-over"):
-        name, with_ = people.get(data.get("goal"), ("", set()))
-        if data.get("outcome") == "done" or not with_:
-            continue
+        name, with_, added = people.get(data.get("goal"), ("", set(), 0.0))
+        if data.get("outcome") == "done" or not with_ or any(
+                who in with_ and added <= at <= t + 1e-9 for at, who in cancels):
+            continue  # nobody to tell, or they cancelled it: the reason is theirs
         since = max((at for at, node in acts if node == task and at <= t + 1e-9), default=t)
         spoken = any(since - 1e-9 <= at <= t + 1e-9 and not any(
             _gone(farewells, p, at) for p in with_) for at, _ in said)
