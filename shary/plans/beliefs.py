@@ -138,6 +138,9 @@ class HumanBeliefs:
 
         def said(run: Any) -> None:
             self._speaking.discard(human)
+            if run.outcome != "done" and self._sees(human, missed.about):
+                self._inform(human, True)  # they looked back as it gave up: tell them now
+                return
             if run.outcome != "done":  # not heard: it stays NOT_SEEN, said when they look back
                 if follower.finished is not None:  # ... if they ever do: say why it stays
                     self.sup.record("belief", task=missed.fact, agent=human,
