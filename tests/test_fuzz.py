@@ -410,3 +410,13 @@ def test_a_stack_campaign_finding_holds_every_invariant(seed):
     outcome = run_one("stack", seed)
     assert outcome.violations == {}, STACK_FOUND[seed]
 
+
+def test_an_operator_killed_while_driving_a_robot_gives_it_back_to_its_goals():
+    """Found by ``shary fuzz weld --replay 385``: IVA took control of K-10 at 21.1 s and
+    was killed at 21.4 s; nobody was left to hand K-10 back, its goals waited under the
+    dead operator's hold and the run reached its timeout.  A robot whose operator is
+    killed is in system mode again (``shary/team/team.py``, ``Team.kill``)."""
+    outcome = run_one("weld", 385)
+    assert outcome.violations == {}
+    assert outcome.verdict is not None
+

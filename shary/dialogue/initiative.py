@@ -286,9 +286,14 @@ def stop_task(run: TaskRun, recipe: Recipe) -> list[Step]:
     wanted = _task_object(run)
     holding = wanted is not None and run.sup.facts.holds(run.robot, "isHolding", wanted)
     if holding:
-        thing = Referrer.for_perspective(run.sup.facts, "robot").describe(
-            wanted, by_name=True).text()
-        words = f"All right, I will stop and put {thing} back."
+        described = Referrer.for_perspective(run.sup.facts, "robot").describe(
+            wanted, by_name=True)
+        thing = described.text(people={run.robot: "me",
+                                        str(run.roles.get("partner")): "you"})
+        # a long phrase after the particle ("put back the green cube in my hand"), a
+        # short one before it ("put the yellow bottle back"), as English places them
+        words = (f"All right, I will stop and put back {thing}." if described.relations
+                 else f"All right, I will stop and put {thing} back.")
     else:
         words = "All right, I will stop."
     steps = [say("stop", words) if _listening(run) else look("stop", str(run.roles["partner"]))]
