@@ -124,7 +124,7 @@ class HumanBeliefs:
         glance (``attentive``) only if they look at the robot or the task; otherwise
         through an ``inform`` task (:func:`shary.dialogue.attention.tell`), which waits
         for their attention, calls them by name, or gives up without speaking."""
-        from shary.dialogue.attention import tell
+        from shary.dialogue.attention import departed, tell
 
         pending = self.unseen.get(human)
         if not pending or human in self._speaking:
@@ -138,7 +138,8 @@ class HumanBeliefs:
 
         def said(run: Any) -> None:
             self._speaking.discard(human)
-            if run.outcome != "done" and self._sees(human, missed.about):
+            if run.outcome != "done" and self._sees(human, missed.about) \
+                    and not departed(self.sup, human):
                 self._inform(human, True)  # they looked back as it gave up: tell them now
                 return
             if run.outcome != "done":  # not heard: it stays NOT_SEEN, said when they look back
