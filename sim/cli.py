@@ -361,7 +361,8 @@ def add_fuzz(sub: argparse._SubParsersAction) -> None:
                        "people who behave at random, and check that the supervisor never "
                        "stalls, lies or speaks to no one")
     p.add_argument("family", choices=FAMILIES, help="the scenarios varied: stack (the shared "
-                   "plan), living-room (give and clean up), weld (the HRI/OS team)")
+                   "plan), living-room (give and clean up), weld (the HRI/OS team), dialogue "
+                   "(requests, cancels, sessions, informs)")
     p.add_argument("--runs", type=int, default=20, metavar="N", help="how many runs (default 20)")
     p.add_argument("--seed", type=int, default=1, metavar="S",
                    help="the first run's seed; run i has seed S+i (default 1)")

@@ -364,7 +364,7 @@ class Person:
         elif step.put is not None:
             activity = self._put(step.put, step.on or "coffee-table")
         elif step.leave:
-            activity = Sequence([self.walk_to("door"), Instant(self._exit, "leave")], "leave")
+            activity = self.leaving()
         if activity is None:
             self._current_step = None
             self._next_script_step()
@@ -392,6 +392,10 @@ class Person:
         return self._logged(Sequence([self._reach(spot), Instant(let_go, f"put {obj}"),
                                       self._reach(None)], f"put {obj} on {furniture}"),
                             "place", object=obj, on=furniture)
+
+    def leaving(self) -> Activity:
+        """Walk to the door and out of it (out of the robot's perception: it says goodbye)."""
+        return Sequence([self.walk_to("door"), Instant(self._exit, "leave")], "leave")
 
     def _exit(self) -> None:
         """Out of the door: out of the room and of the robot's perception."""

@@ -331,10 +331,13 @@ class _Reading:
                 if full is not None:
                     shared["problem"] = str(full)
             away = (shared.get("profile") or {}).get("look-away")
-            if away is not None and ("during" in away) == ("at" in away):
-                problem(("shared-plan", "profile", "look-away"), "look-away needs when: "
-                        "during (a robot task's label) or at (seconds after the start), "
-                        "one of them")
+            aways = away if isinstance(away, list) else [] if away is None else [away]
+            for i, each in enumerate(aways):
+                if ("during" in each) == ("at" in each):
+                    where = ("shared-plan", "profile", "look-away")
+                    problem(where + ((i,) if isinstance(away, list) else ()),
+                            "look-away needs when: during (a robot task's label) or at "
+                            "(seconds after the start), one of them")
             shared["decision-wait"] = reader.duration(("shared-plan", "decision-wait"),
                                                       shared.get("decision-wait", 6.0))
         return Scenario(

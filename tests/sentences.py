@@ -4,7 +4,8 @@ A campaign of headless runs: the stack scenarios with partner profiles
 recombined from the documented keys (the choice at each decision, a delay
 that makes her late, a look-away during one of the robot's actions), the
 living-room scenarios with each shipped person profile and two seeds, and the
-weld scenarios.  What the robots say in them (``speech`` reports of a robot,
+weld scenarios, and forty conversations drawn by ``shary fuzz dialogue``.  What the
+robots say in them (``speech`` reports of a robot,
 never a person's) is kept once each per family, sorted: ``tests/data/sentences.txt``,
 which ``tests/test_sentences.py`` regenerates and compares, and which a person
 reads as a native speaker would when it changes.
@@ -44,19 +45,26 @@ away while the robot picks or places (told when she looks back), and she is late
 own tasks (asked for them)."""
 
 FAMILIES: dict[str, list[str]] = {
-    "stack": ["stack-not-seen"],
+    "stack": ["stack-not-seen", "stack-failure-said-on-the-phone",
+              "stack-told-across-a-replan", "stack-partner-walks-out"],
     "living-room": ["give-bottle", "give-bottle-abandoned", "give-bottle-unanswered",
                     "give-bottle-refused", "give-red-cup", "clean-up", "clean-up-unreachable",
                     "person-asks-for-bottle", "person-cancels", "person-modifies-plan",
                     "request-ambiguous-cube", "request-unknown-object",
                     "serve-drink-initiative", "session-greeting-farewell",
-                    "explore-new-objects", "inform-after-look-back"],
+                    "explore-new-objects", "inform-after-look-back",
+                    "give-bottle-walks-out"],
     "weld": ["weld-question-expires"],
+    "dialogue": [],
 }
 """The shipped scenarios of each family run as they are.  Only runs that say something
 new are kept (the campaign runs in the suite): the other stack scenarios, the other
 weld scenarios (with seeds 0-2, their robots only ask "Is this seam okay?") and the
 seeds other than 0 (they move timings, not words) said nothing more when tried."""
+
+DIALOGUE_SEEDS = range(1, 41)
+"""Runs of ``shary fuzz dialogue`` whose drawn conversations (requests, cancels, plan
+changes, sessions closed and opened again, a bystander) are read here too."""
 
 PROFILES = {"clean-up-unreachable": ["phone-call", "refuser"],
             "give-red-cup": ["phone-call-forever", "refuser"]}
@@ -94,6 +102,14 @@ def runs(folder: Path, family: str) -> Iterator[Path]:
             yield variant("stack-nominal", f"stack-profile-{i + 1}", partner)
     for name in FAMILIES[family]:
         yield folder / f"{name}.yaml"
+    if family == "dialogue":
+        from sim.fuzz.behaviours import draw
+
+        for seed in DIALOGUE_SEEDS:
+            drawn = draw("dialogue", seed)
+            path = folder / f"{drawn.scenario['scenario']}.yaml"
+            path.write_text(drawn.text(), "utf-8")
+            yield path
     if family == "living-room":
         for base, profiles in PROFILES.items():
             for profile in profiles:

@@ -18,9 +18,9 @@ def test_schemes_lists_the_builtins(shary):
     status, out, _ = shary("schemes")
     assert status == 0
     names = [line.split()[0] for line in out.splitlines()]
-    assert names == ["ask-help", "disambiguate", "give-object-attentive", "give-object",
-                     "inform", "perform", "plan-requested", "robot-task", "session",
-                     "shared-plan-task", "task-requested"]
+    assert names == ["announce", "ask-help", "disambiguate", "give-object-attentive",
+                     "give-object", "inform", "perform", "plan-requested", "robot-task",
+                     "session", "shared-plan-task", "task-requested"]
 
 
 @pytest.mark.parametrize("command", ["schemes", "scenarios"])
@@ -204,8 +204,7 @@ def _json(shary, *args, status=0):
 
 def test_json_schemes_and_scenarios(shary):
     schemes = _json(shary, "schemes", "--json")["schemes"]
-    assert [s["name"] for s in schemes][:3] == ["ask-help", "disambiguate",
-                                                "give-object-attentive"]
+    assert [s["name"] for s in schemes][:3] == ["announce", "ask-help", "disambiguate"]
     assert set(schemes[0]) == {"name", "summary", "doc", "file"}
     scenarios = _json(shary, "scenarios", "--json")["scenarios"]
     assert "give-bottle" in [s["name"] for s in scenarios]

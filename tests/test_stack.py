@@ -14,10 +14,12 @@ STACK = sorted(p.stem for p in SCENARIOS_DIR.glob("stack-*.yaml"))
 
 
 def test_the_seven_stack_scenarios_and_the_regressions_are_shipped():
-    assert STACK == ["stack-flicker", "stack-human-chooses-placement",
-                     "stack-human-leaves-it-to-robot", "stack-human-unexpected-action",
-                     "stack-inform-during-pick", "stack-look-back-when-due",
-                     "stack-nominal", "stack-not-seen", "stack-place-fails-twice"]
+    assert STACK == ["stack-failure-said-on-the-phone", "stack-flicker",
+                     "stack-human-chooses-placement", "stack-human-leaves-it-to-robot",
+                     "stack-human-unexpected-action", "stack-inform-during-pick",
+                     "stack-inform-waits-for-the-head", "stack-look-back-when-due",
+                     "stack-nominal", "stack-not-seen", "stack-partner-walks-out",
+                     "stack-place-fails-twice", "stack-told-across-a-replan"]
 
 
 LOOK_BACK_AT = [2.0 * i for i in range(12)]
@@ -73,14 +75,16 @@ def test_a_shared_plan_section_with_mistakes_is_refused_at_its_lines(tmp_path):
     assert "the partner 'bob' is not one of the scenario's people" in outcome.err
 
 
-def test_a_partner_who_leaves_is_asked_for_their_task_and_the_plan_fails(tmp_path):
+def test_a_partner_who_leaves_is_not_called_for_their_task_and_the_plan_fails(tmp_path):
+    """She walks out: the robot says goodbye, her task becomes NOT_STARTING, and the
+    ask ends at once untold (nobody is called in an empty room): the plan fails."""
     path = tmp_path / "stack-leaves.yaml"
     path.write_text((SCENARIOS_DIR / "stack-nominal.yaml").read_text()
                     .replace("scenario: stack-nominal", "scenario: stack-leaves")
                     .replace("delay: 1}", 'delay: 1, leave: {after: "Place(alice, red_cube_2"}}')
                     .split("expect:")[0] + "expect:\n  plan: [started, failed]\n"
                     "  task-states: [[pr2, \"Pick(alice, stick)\", NOT_STARTING]]\n"
-                    "  said: [\"Excuse me, Alice\"]\n")
+                    "  said: [\"Goodbye, Alice.\"]\n  no-acts: [CALL-ATTENTION]\n")
     result = run_scenario(path)
     assert result.passed, result.differences
 

@@ -194,3 +194,28 @@ def test_an_ambiguous_request_is_asked_back_to_the_speaker(tmp_path: Path) -> No
     assert spatial[0].data["choices"][0] == "P3" and "which panel" in spatial[0].data["question"]
     assert spatial[1].data["referent"] == "P3"
     assert spatial[1].data["point"] == pytest.approx([2.97, PANEL_Y - 0.02, 0.58], abs=0.01)
+
+
+def _mount_seconds(result, task: str) -> float:
+    """How long the team's ``task`` ran: from its ``task-running`` row to its ``task-done``."""
+    times = {kind: t for t, kind, name, _, _ in result.events
+             if name == task and kind in ("task-running", "task-done")}
+    return times["task-done"] - times["task-running"]
+
+
+def test_how_long_a_person_works_is_how_long_the_site_takes_to_mount_their_panel(tmp_path):
+    """``works:`` is the person's behaviour: a mount the world performs (carry, tack) is
+    over no sooner than it says, not only when the physics is done."""
+    from sim.weld.scenario import load_weld_scenario
+
+    path = builtin_scenarios()["weld-nominal"]
+    team = (path.parent / "weld" / "nominal.team.yaml").read_text()
+    quick = run_scenario(load_weld_scenario(path))
+    slow_team = team.replace("      assignments: {reply: accept, after: 1s}\n",
+                             "      assignments: {reply: accept, after: 1s}\n"
+                             "      works: {mount-panel: 90s}\n", 1)
+    assert slow_team != team
+    slow = run_scenario(load_weld_scenario(path, team_text=slow_team))
+    assert _mount_seconds(quick, "mount-P3") < 60
+    assert _mount_seconds(slow, "mount-P3") >= 90
+    assert slow.passed, slow.differences

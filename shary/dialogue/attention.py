@@ -11,7 +11,11 @@ already, and otherwise when the fact appears.
 
 :func:`tell` is how any part of the robot says something unprompted (the
 dialogue's "I found no such thing", JAHRVIS's informs of what a person did not
-see): it starts an ``inform`` task.
+see): it starts an ``inform`` task.  :func:`announce` is how it says why it
+stops (a failed shared plan): that is said whoever listens, since the verdict
+is reached and waiting for a glance could last for ever (an ``announce``
+task).  Neither speaks to a person who has left (:func:`departed`): an
+inform ends at once untold, an announcement is logged as an ``unheard`` row.
 """
 
 from __future__ import annotations
@@ -27,6 +31,9 @@ if TYPE_CHECKING:
     from shary.kernel.supervisor import Supervisor, TaskRun
 
 INFORM_TASK = "inform"
+ANNOUNCE_TASK = "announce"
+LEFT = "left"
+"""The event that tells a task its person has left (``schemes/inform.yaml``)."""
 ATTENDS = "looksAt"
 
 
@@ -43,8 +50,28 @@ def call_attention(run: TaskRun, recipe: Recipe) -> list[Step]:
                                        after=("look",))]
 
 
+def departed(sup: Supervisor, person: str) -> bool:
+    """Whether ``person`` has left the robot (their session closed, or they are perceived
+    no more), when the robot keeps sessions (:mod:`shary.dialogue.sessions`)."""
+    sessions = sup.dialogue.sessions
+    return sessions is not None and sessions.gone(person)
+
+
 def tell(sup: Supervisor, partner: str, text: str,
          on_finish: Callable[[TaskRun], Any] | None = None) -> TaskRun:
     """Say ``text`` to ``partner`` once they attend (an ``inform`` task; its outcome is
-    ``done`` when it was said, ``failed`` when the partner never attended)."""
-    return sup.start_task(INFORM_TASK, {"partner": partner, "text": text}, on_finish=on_finish)
+    ``done`` when it was said, ``failed`` when the partner never attended, at once when
+    they have left: nobody is called in an empty room)."""
+    run = sup.start_task(INFORM_TASK, {"partner": partner, "text": text}, on_finish=on_finish)
+    if departed(sup, partner):
+        run.deliver(LEFT)
+    return run
+
+
+def announce(sup: Supervisor, partner: str, text: str) -> TaskRun | None:
+    """Say ``text`` to ``partner`` whoever listens (an ``announce`` task), or, when they
+    have left, log it as ``unheard`` and say nothing."""
+    if departed(sup, partner):
+        sup.record("unheard", agent=partner, text=text, why=f"{partner} has left")
+        return None
+    return sup.start_task(ANNOUNCE_TASK, {"partner": partner, "text": text})

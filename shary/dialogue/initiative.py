@@ -32,7 +32,7 @@ from shary.dialogue import attention, disambiguation, negotiation, sessions
 from shary.dialogue.disambiguation import Question
 from shary.dialogue.reg import PerspectiveIndex, Referrer
 from shary.dialogue.requests import Grammar, Query, Request, Resolution, resolve
-from shary.dialogue.steps import say
+from shary.dialogue.steps import look, say
 from shary.kernel.recipes import ROBOT_PARAM, Recipe, Step, Term
 
 if TYPE_CHECKING:
@@ -257,7 +257,8 @@ def _task_object(run: TaskRun) -> str | None:
 
 def reply_task(run: TaskRun, recipe: Recipe) -> list[Step]:
     """REPLY-TASK: refuse (R-DISAGREE) when the hand holds something the task is not
-    about, saying so; agree otherwise (the act is ``done``)."""
+    about, saying so; agree otherwise (the act is ``done``), aloud to a partner who
+    attends."""
     facts, robot = run.sup.facts, run.robot
     held = sorted(str(o) for o in facts.objects(robot, "isHolding"))
     wanted = _task_object(run)
@@ -266,20 +267,36 @@ def reply_task(run: TaskRun, recipe: Recipe) -> list[Step]:
         held = Referrer.for_perspective(facts, "robot").describe(busy[0], by_name=True).text()
         return [say("refuse", f"Sorry, I cannot: my hand is busy with {held}.",
                     emit="R-DISAGREE")]
+    if not _listening(run):  # asked, then turned away (a call, the door): they will see it
+        return [look("agree", str(run.roles["partner"]))]
     return [say("agree", "Yes, I will do that.")]
 
 
+def _listening(run: TaskRun) -> bool:
+    """Whether the partner attends to the robot (or the task has none): words that are no
+    news to them (a yes, an agreed stop) are said only then, else the robot turns to them
+    in silence, as the END-TASK recipes do."""
+    partner = run.roles.get("partner")
+    return partner is None or attention.attending(run.sup.facts, str(partner), run.robot)
+
+
 def stop_task(run: TaskRun, recipe: Recipe) -> list[Step]:
-    """STOP-TASK: put back the task's object if the robot holds it, and say so."""
+    """STOP-TASK: put back the task's object if the robot holds it, and say so (to a
+    partner who attends: they cancelled, so it is no news to one who looks away)."""
     wanted = _task_object(run)
     holding = wanted is not None and run.sup.facts.holds(run.robot, "isHolding", wanted)
     if holding:
-        thing = Referrer.for_perspective(run.sup.facts, "robot").describe(
-            wanted, by_name=True).text()
-        words = f"All right, I will stop and put {thing} back."
+        described = Referrer.for_perspective(run.sup.facts, "robot").describe(
+            wanted, by_name=True)
+        thing = described.text(people={run.robot: "me",
+                                        str(run.roles.get("partner")): "you"})
+        # a long phrase after the particle ("put back the green cube in my hand"), a
+        # short one before it ("put the yellow bottle back"), as English places them
+        words = (f"All right, I will stop and put back {thing}." if described.relations
+                 else f"All right, I will stop and put {thing} back.")
     else:
         words = "All right, I will stop."
-    steps = [say("stop", words)]
+    steps = [say("stop", words) if _listening(run) else look("stop", str(run.roles["partner"]))]
     if holding and "put-back" in run.sup.library.atomic:
         steps.append(Step("put-back", "put-back", None, {"object": Term("const", wanted)},
                           None, ("stop",)))

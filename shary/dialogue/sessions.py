@@ -14,7 +14,12 @@ opens and closes them from the robot's perception:
 - **leaving** closes it: the robot perceives the person no more (no fact of
   where they are, ``isAt``, nor of where they look, ``looksAt``) for
   :attr:`Sessions.leave_after` seconds; the robot says goodbye.  Looking away,
-  on the phone, is not leaving: the person is still there;
+  on the phone, is not leaving: the person is still there.  From the goodbye
+  on, nothing waits for them and nothing is said to them (:meth:`Sessions.gone`):
+  the goals with them end at once, cancelled with that reason (an ``unheard``
+  row: there is nobody to tell it to), the tasks that would speak to them
+  (an ``inform``) hear ``left``, and a joint subtask with them (their help
+  asked for) is cancelled: the task that needed it fails over it, without them;
 - :meth:`Sessions.start` opens, without a greeting, a session with every
   person already attending to the robot when the robot starts (a scenario
   begins with the interaction going on, as SHARY's do).
@@ -34,7 +39,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from shary.dialogue.attention import ATTENDS, attending
+from shary.dialogue.attention import ATTENDS, LEFT, attending
 from shary.dialogue.steps import say
 from shary.dialogue.verbalize import proper
 from shary.kernel.agenda import ChronicleRecognizer
@@ -87,6 +92,8 @@ class Sessions:
         self.open: dict[str, TaskRun] = {}
         """Person -> their session's task run, while it is open (farewell included)."""
         self._leaving: dict[str, Any] = {}
+        self._gone: set[str] = set()
+        """People who left (their session closed by leaving) and have not come back."""
         self.subscriptions = [
             sup.facts.subscribe(self._on_fact, predicate=p, perspective=perspective)
             for p in (ATTENDS, AT)]
@@ -138,6 +145,7 @@ class Sessions:
     def begin(self, person: str, greet: bool = True) -> TaskRun:
         """Open a session with ``person`` (greeting them unless told not to)."""
         greeting = f"Hello, {proper(person)}." if greet else ""
+        self._gone.discard(person)
         self.sup.record("session-open", agent=person, greeted=greet)
         run = self.sup.start_task(SESSION_TASK, {"partner": person, "greeting": greeting},
                                   background=True, on_finish=lambda r: self._over(person, r))
@@ -190,7 +198,31 @@ class Sessions:
         if self.open.get(person) is session and not session.ended \
                 and not self.tracked(person):
             self.sup.record("chronicle", chronicle="leaving", bindings={"person": person})
-            session.deliver("left")
+            self._gone.add(person)
+            session.deliver(LEFT)
+            self._release(person)
+
+    def gone(self, person: str) -> bool:
+        """Whether ``person`` left (the robot said goodbye) and has not come back."""
+        return person in self._gone
+
+    def _release(self, person: str) -> None:
+        """``person`` left: the goals with them end now, and the tasks that would still
+        speak to them hear it (an inform ends untold)."""
+        from shary.kernel.agenda import OVER
+
+        reason = f"{person} left"
+        for goal in [g for g in self.sup.agenda.goals
+                     if g.state not in OVER and person in self.involved(g)]:
+            self.sup.record("unheard", agent=person, text=reason, why=reason)
+            self.sup.agenda.cancel(goal, reason)
+        for run in self.sup.tasks_with(person):
+            if run.expects(LEFT):
+                run.deliver(LEFT)
+            elif run.parent is not None and run.node in self.sup.runs:
+                # a joint subtask with them (asking their help): it fails now, and the
+                # task that needed it decides what comes next, without them
+                self.sup.cancel_task(run.node, reason)
 
     # -- the agenda ------------------------------------------------------------------------
 
@@ -222,8 +254,11 @@ class Sessions:
         self._held.pop(goal.id, None)
         absent = sorted(p for p in self.involved(goal) if not self.is_open(p))
         if goal.state == PENDING and absent:
-            self.sup.agenda.cancel(goal, f"{' and '.join(absent)} did not come to interact "
-                                         f"within {self.wait_for:g} s")
+            reason = (f"{' and '.join(absent)} did not come to interact within "
+                      f"{self.wait_for:g} s")
+            for person in absent:  # never in a session: nobody there to say it to
+                self.sup.record("unheard", agent=person, text=reason, why=reason)
+            self.sup.agenda.cancel(goal, reason)
 
     def _act(self, run: TaskRun, state: Any, agent: str) -> None:
         if run.type.name == SESSION_TASK:

@@ -19,7 +19,10 @@ and the world's executors for the atomic tasks that move the head or an arm:
   task tree (the act x task that looks then speaks, the robot action) or the
   node itself when it has no parent.  A request below a held aim waits and is
   served (its result sent) when that aim ends; a request that is superseded
-  while the head moves for it is told ``cancelled``; when a held aim ends,
+  while the head moves for it is told ``cancelled`` (unless the newer looks at the
+  same target: the head goes on, and the newer is served once it is there, so two
+  tasks turning to one person never take the head from each other); when a held
+  aim ends,
   the head goes back to the best aim still held (the previous aim restored);
 * **an arm** runs one motion at a time: a second request waits until the
   first has ended, and is told ``cancelled`` if it is cancelled meanwhile.
@@ -193,6 +196,9 @@ class BodyArbiter:
                 self._log("wait", aim, behind=best.owner)
         if best is self._moving:
             return
+        if self._moving is not None and self._moving.waiting and \
+                self._moving.request.args.get("target") == best.request.args.get("target"):
+            return  # the head goes there already: the newer is served once it is there
         if self._moving is not None:
             moving = self._moving
             self._moving = None

@@ -175,6 +175,10 @@ class Supervisor:
         run.start()
         return run
 
+    def tasks_with(self, agent: str) -> list[TaskRun]:
+        """The tasks running now in which ``agent`` plays a role (background ones too)."""
+        return [run for run in self._by_agent.get(agent, {}).values() if not run.ended]
+
     def cancel_task(self, node: str, reason: str) -> None:
         """Cancel a running task from outside (an operator): it stops, and its parent act or
         its goal hears that it failed (raise KeyError when no such task runs)."""
@@ -500,6 +504,8 @@ class TaskRun(SchemeListener):
         self.acts.clear()
         self.ended = True
         self.outcome = "cancelled"
+        if self.instance is not None:  # its timers too: a give-up due in 30 s must not come
+            self.instance.cancel()
         self.sup.record("task-end", task=self.node, name=self.type.name, outcome="cancelled",
                         reason=reason)
         self.sup.forget(self)

@@ -75,6 +75,8 @@ class PlanFollower:
         (what a simulated partner follows)."""
         self.root = sup.tree.add(TASK, f"{name}: {plan.problem}")
         self.generation = 0
+        self.beliefs = HumanBeliefs(self)
+        """What each human is estimated to believe, across replans."""
         self._load(plan)
 
     def _load(self, plan: SharedPlan) -> None:
@@ -94,7 +96,6 @@ class PlanFollower:
         self.states = TaskStates(self.sup, [self.sup.robot, *self.humans], names,
                                  prefix=prefix,
                                  changed=self._changed)
-        self.beliefs = HumanBeliefs(self)
 
     # -- the follower's life ----------------------------------------------------------
 
@@ -134,8 +135,10 @@ class PlanFollower:
             self.on_done(outcome)
 
     def _say_why(self, task: int | None) -> None:
-        """A plan that fails says so to its partners, with the task it failed on."""
-        from shary.dialogue.attention import tell
+        """A plan that fails says so to its partners, with the task it failed on, whoever
+        listens: the verdict is reached, and a partner on the phone would otherwise never
+        hear why (an announcement, not an inform that waits for a glance)."""
+        from shary.dialogue.attention import announce
 
         for human in self.humans:
             text = "I cannot go on with our task, so I stop here."
@@ -150,7 +153,7 @@ class PlanFollower:
                 except (ValueError, KeyError):
                     pass
             self.sup.record("plan-end", agent=human, text=text)
-            tell(self.sup, human, text)
+            announce(self.sup, human, text)
 
     # -- what is due -----------------------------------------------------------------
 
@@ -347,7 +350,6 @@ class PlanFollower:
             self._finish("failed", reason, task)
             return
         self.hpm.stop()
-        self.beliefs.stop()
         self.states.stop()
         for looked in list(self.recovery.looks):
             self.recovery.over(looked)

@@ -116,6 +116,11 @@ class TaskStates(SchemeListener):
             self.changed(task, view, name)
 
     def stop(self) -> None:
-        """Stop every timer (a plan replaced or over)."""
-        for instance in self._instances.values():
-            instance.cancel()
+        """Stop every timer (a plan replaced or over); a task NOT_SEEN in a human's view
+        stays so, to become EXECUTED there when they are told (what they missed does not
+        go away with the plan: :mod:`shary.plans.beliefs`).  The follower hears of no
+        change any more: its task numbers are the next plan's."""
+        self.changed = None
+        for key, instance in self._instances.items():
+            if self._state[key] != "NOT_SEEN":
+                instance.cancel()

@@ -182,11 +182,15 @@ class Team:
         react as a distributed team's conductor makes them react to a lost liveliness
         token (:mod:`shary.transport.distributed`): the Task Manager takes back the task
         it was offered or ran (``agent-lost``) and the Interaction Manager reroutes the
-        questions it held and the help it gave."""
+        questions it held and the help it gave; a robot it was driving is in system
+        mode again (its own goals go on: nobody is left to hand it back)."""
         self.record("agent-killed", agent=name)
         self.port.down.add(name)
         self.tasks.agent_lost(name)
         self.interaction.agent_lost(name)
+        for agent in self.agents.values():  # an operator gone hands nothing back: take it
+            if getattr(agent, "controller", None) == name:
+                agent.hand_back(name)
 
     # -- running ------------------------------------------------------------------------
 

@@ -10,7 +10,9 @@ written:
 * **stack** (docs/jahrvis.md, ``shared-plan: profile:``): the partner's name,
   the option taken or ``wait`` at each decision, the ``delay`` before acting,
   the ``decision-wait``, a ``look-away`` during any task of the robot for any
-  duration (past the timeout: never back), an action of their own ``before``
+  duration (past the timeout: never back), sometimes a second one later (as
+  she may be told what she missed), and one as a failing action is replanned,
+  an action of their own ``before``
   a task (useful, or one that keeps the robot's cube), ``leave`` after a task;
   the scenario's perception noise (``flicker`` of holds and looks, ``hold``)
   and action ``faults``;
@@ -22,7 +24,8 @@ written:
   perception noise and action faults;
 * **weld** (docs/teams.md, ``behaviour:``): each person's reply to
   assignments (accept, refuse, ignore) and to questions (answer, refuse,
-  ignore) and its delay, their answers, how long they work, the quality of
+  ignore) and its delay, their answers, how long they take to mount a panel
+  (the site's mount lasts at least that), the quality of
   each weld the torch lays (a bad one fails its inspection), an operator
   taking control of a robot for a while (``script``), and, in one run in six,
   a member (robot or person) killed at a random time: no file key says that
@@ -53,7 +56,7 @@ from ..scenario import builtin_scenarios, load_scenario
 
 __all__ = ["FAMILIES", "Variation", "draw", "stack_partner"]
 
-FAMILIES = ("stack", "living-room", "weld")
+FAMILIES = ("stack", "living-room", "weld", "dialogue")
 
 PARTNERS = ("alice", "bob", "carol", "dana")
 """Names a stack partner may have (the plan's human takes the name)."""
@@ -80,6 +83,15 @@ ROBOT_ACTIONS = ("navigate", "pick", "move-arm", "give", "put-back", "dump", "lo
 LOOKS = ("phone", "away", "store-table")
 KILL_CHANCE = 1 / 6
 """How often a weld run has a member killed (robot or person, at 1–60 s)."""
+DIALOGUE_BASES = ("person-asks-for-bottle", "person-cancels", "person-modifies-plan",
+                  "session-greeting-farewell", "request-ambiguous-cube",
+                  "request-unknown-object", "inform-after-look-back", "give-bottle",
+                  "serve-drink-initiative")
+"""The conversations varied: requests, cancels, plan changes, sessions, informs."""
+REQUESTS = (("give-object", "Jido, could you give me the yellow bottle?"),
+            ("clean-up", "Jido, could you clean up the orange bottle?"))
+"""What a person may ask for on their own (a sentence the robot reads)."""
+BYSTANDER_AT = ("sofa-end", "store-side", "coffee-east")
 WELD_BASES = ("weld-nominal", "weld-human-refuses", "weld-human-supports-robot",
               "weld-question-expires")
 
@@ -131,6 +143,8 @@ def draw(family: str, seed: int) -> Variation:
         return _living_room(rng, seed)
     if family == "weld":
         return _weld(rng, seed)
+    if family == "dialogue":
+        return _dialogue(rng, seed)
     raise KeyError(family)
 
 
@@ -170,11 +184,17 @@ def _stack(rng: random.Random, seed: int) -> Variation:
         choices.append(rng.choice(["placement_1", "placement_2", "wait", "Pick", "Place"]))
     profile: dict[str, Any] = {"choices": choices, "delay": _seconds(rng, 0, 4)}
     told.append(f"choices {'/'.join(choices) or 'default'}, delay {profile['delay']:g}s")
+    aways: list[dict[str, Any]] = []
     if rng.random() < 0.6:
         during = rng.choice(ROBOT_TASKS)
         seconds = rng.choice([_seconds(rng, 0.2, 8), _seconds(rng, 8, 30), 600])
-        profile["look-away"] = {"during": during, "for": seconds}
+        aways.append({"during": during, "for": seconds})
         told.append(f"looks away during {during}… for {seconds:g}s")
+        if seconds < 600 and rng.random() < 0.35:
+            # again, as she may be told what she missed (an inform under way) or later
+            at, more = _seconds(rng, 2, 40), _seconds(rng, 0.2, 8)
+            aways.append({"at": at, "for": more})
+            told.append(f"looks away at {at:g}s for {more:g}s")
     if rng.random() < 0.15:
         before = rng.choice(BEFORE)
         profile["before"] = before
@@ -184,12 +204,21 @@ def _stack(rng: random.Random, seed: int) -> Variation:
         after = rng.choice(HUMAN_TASKS).format(h=partner)
         profile["leave"] = {"after": after}
         told.append(f"leaves after {after}…")
-    data = stack_partner(partner, profile, _seconds(rng, 2, 8))
-    _noise(rng, data, told, ("isHolding", "looksAt"))
+    faults = None
     if rng.random() < 0.2:
         action, times = rng.choice(["pick", "place"]), rng.randint(1, 3)
-        data["faults"] = [{"action": action, "reason": f"the {action} slipped", "times": times}]
+        faults = [{"action": action, "reason": f"the {action} slipped", "times": times}]
         told.append(f"{action} fails {times}x")
+        if times >= 2 and rng.random() < 0.5:  # away while it fails and is replanned
+            seconds = _seconds(rng, 1, 12)
+            aways.append({"during": f"{action.capitalize()}(pr2", "for": seconds})
+            told.append(f"looks away as the {action} fails, for {seconds:g}s")
+    if aways:
+        profile["look-away"] = aways[0] if len(aways) == 1 else aways
+    data = stack_partner(partner, profile, _seconds(rng, 2, 8))
+    _noise(rng, data, told, ("isHolding", "looksAt"))
+    if faults:
+        data["faults"] = faults
     return _finish("stack", seed, "stack-nominal", data, told)
 
 
@@ -290,8 +319,9 @@ def _weld(rng: random.Random, seed: int) -> Variation:
         if not spec.get("remote"):
             reply = rng.choices(["accept", "refuse", "ignore"], [0.7, 0.15, 0.15])[0]
             behaviour["assignments"] = {"reply": reply, "after": _span(rng, 0.5, 8)}
-            if rng.random() < 0.3:
-                behaviour["works"] = _span(rng, 1, 20)
+            if rng.random() < 0.3:  # a mount's physics takes about 15 s: longer, or not
+                behaviour["works"] = {"mount-panel": _span(rng, 5, 90)}
+                told.append(f"{name} mounts in {'-'.join(behaviour['works']['mount-panel'])}")
             told.append(f"{name} {reply}s assignments")
         reply = rng.choices(["answer", "refuse", "ignore"], [0.7, 0.15, 0.15])[0]
         behaviour["questions"] = {"reply": reply, "after": _span(rng, 1, 30)}
@@ -321,3 +351,84 @@ def _weld(rng: random.Random, seed: int) -> Variation:
         kill = (rng.choice(members), _seconds(rng, 1, 60))
         told.append(f"{kill[0]} killed at {kill[1]:g}s")
     return _finish("weld", seed, base, data, told, team, kill)
+
+
+# --------------------------------------------------------------------------- dialogue
+
+def _profile(spec: dict[str, Any]) -> dict[str, Any]:
+    """A person's profile as a document (a shipped profile's name read from its file)."""
+    profile = spec.get("profile") or {}
+    if isinstance(profile, str):
+        path = builtin_scenarios()["give-bottle"].parent.parent / "profiles" / f"{profile}.yaml"
+        profile = {k: v for k, v in yamlsafe.load_file(path).data.items()
+                   if k not in ("profile", "doc")}
+    return dict(profile)
+
+
+def _dialogue(rng: random.Random, seed: int) -> Variation:
+    """A conversation scenario with its person's behaviour drawn (docs/communication.md,
+    docs/simulation.md): what they ask and when, their answers (yes, no, silence, late),
+    a CANCEL or a change of plan at any moment of the task, phone calls, leaving and
+    coming back (sessions close and open), a bystander who looks at the robot, flicker."""
+    base = rng.choice(DIALOGUE_BASES)
+    data = _base(base)
+    people = {name: dict(spec) for name, spec in data["people"].items()}
+    name = next(iter(people))
+    profile = _profile(people[name])
+    told: list[str] = [base]
+    answers = dict(profile.get("answers") or {})
+    for act in ("ASK-TASK", "ASK-HELP"):
+        if rng.random() < 0.6:
+            answers[act] = _answers(rng, act, told)
+    profile["answers"] = answers
+    base_script = list(profile.get("script") or [])
+    asked = [str(step["task"]) for step in base_script if step.get("task")]
+    asked += [str(goal["task"]) for goal in data.get("goals") or []]
+    added: list[tuple[float, list[dict[str, Any]]]] = []
+    """Steps drawn, each group at its time (a step's ``at`` is absolute: they are kept in
+    the order of their times, after what the base scenario's person does)."""
+    if rng.random() < 0.3:
+        task, words = rng.choice(REQUESTS)
+        at = _seconds(rng, 0.5, 30)
+        added.append((at, [{"at": f"{at:g}s", "say": words}]))
+        asked.append(task)
+        told.append(f"asks {task} at {at:g}s")
+    if asked and rng.random() < 0.35:
+        at = _seconds(rng, 0.5, 45)  # any phase: asking, fetching, handing over, after
+        added.append((at, [{"at": f"{at:g}s", "act": "CANCEL", "task": rng.choice(asked),
+                            "say": "Actually, never mind."}]))
+        told.append(f"cancels at {at:g}s")
+    if rng.random() < 0.2:
+        at = _seconds(rng, 1, 30)
+        added.append((at, [{"at": f"{at:g}s", "say": "I'll take the orange bottle myself."}]))
+        told.append(f"takes a step on at {at:g}s")
+    if rng.random() < 0.2:
+        at = _seconds(rng, 1, 40)
+        group: list[dict[str, Any]] = [{"at": f"{at:g}s", "leave": True}]
+        told.append(f"leaves at {at:g}s")
+        if rng.random() < 0.5:
+            back = _seconds(rng, 2, 20)
+            group += [{"after": f"{back:g}s", "walk": "sofa-end"},
+                      {"after": "0.5s", "look": "robot"}]
+            told.append(f"comes back {back:g}s later")
+        added.append((at, group))
+    if rng.random() < 0.3:
+        when = ({"robot-starts": rng.choice(ROBOT_ACTIONS)} if rng.random() < 0.6
+                else {"at": f"{_seconds(rng, 0, 40):g}s"})
+        seconds = rng.choice([f"{_seconds(rng, 0.5, 8):g}s", f"{_seconds(rng, 8, 40):g}s",
+                              "never"])
+        profile["distractions"] = [{"when": when, "look": "phone", "for": seconds}]
+        told.append(f"phone call for {seconds}")
+    script = base_script + [step for _, group in sorted(added, key=lambda g: g[0])
+                            for step in group]
+    if script:
+        profile["script"] = script
+    people[name] = {**people[name], "profile": profile}
+    if rng.random() < 0.3:
+        at = rng.choice(BYSTANDER_AT)
+        people["dana"] = {"at": at, "profile": {"attention": "robot"}}
+        told.append(f"dana looks at the robot from {at}")
+    data["people"] = people
+    _noise(rng, data, told, ("looksAt",))
+    data["timeout"] = "300s"
+    return _finish("dialogue", seed, base, data, told)

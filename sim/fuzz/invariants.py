@@ -4,8 +4,10 @@ Each invariant reads one run (:class:`Run`: its context-log rows, what the world
 makes true at the end, the scenario) and says whether it held, and if not,
 what it saw, in one line.  A run's **verdict** is the outcome the supervisor
 reached: the shared plan's last ``shared-plan`` row (``achieved``, ``failed``)
-for the stack family, every goal's ``goal-over`` for the living room (all
-``done``: achieved), the team goal's ``goal-over`` for the seam-welding site.
+for the stack family, every goal's ``goal-over`` for the living room and the
+dialogue family (all ``done``: achieved; a conversation in which nothing the
+robot could take on was asked, "I found no such thing", is achieved), the team
+goal's ``goal-over`` for the seam-welding site.
 
 The invariants:
 
@@ -38,8 +40,8 @@ The invariants:
     (``looksAt`` rows); a task of the robot alone (a clean-up's "I have
     cleared the yellow bottle away.") tells no one in particular.  Except a
     call for attention ("Excuse me, Alice."), the stated reason of a verdict
-    already reached (a GIVE-UP, a failed plan) and the goodbye to a person
-    walking out (FAREWELL), which are said whoever listens.  The
+    already reached (a GIVE-UP, a failed plan's ANNOUNCE) and the goodbye to a
+    person walking out (FAREWELL), which are said whoever listens.  The
     seam-welding site's people are reached through their proxies (a remote IVA
     has no gaze): not checked there.
 ``not-seen``
@@ -47,6 +49,11 @@ The invariants:
     robot told them), or the plan failed, or the plan ended and the robot's inform
     to them after its end gave up (a ``belief`` row ``why=untold``: they did not
     attend, e.g. they had left) (stack only).
+
+The invariants that see conversations (``order``, ``belief``,
+``no-call-while-looking``, ``after-farewell``, ``reason-heard``) read the same
+rows; they are in :mod:`sim.fuzz.conversations`, and :data:`INVARIANTS` lists
+them all.
 """
 
 from __future__ import annotations
@@ -56,17 +63,24 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..weld.executors import BAD, SOUND
+from .conversations import (
+    ATTENTION_CALL,
+    CONVERSING,
+    after_farewell,
+    belief,
+    no_call_while_looking,
+    order,
+    reason_heard,
+)
 
 __all__ = ["INVARIANTS", "Invariant", "Run", "verdict"]
 
 Row = tuple[float, str, "str | None", "str | None", dict[str, Any]]
 
-ATTENTION_CALL = "Excuse me"
-"""How a call for attention begins (shary/dialogue/attention.py): said to be looked at."""
-CLOSING_ACTS = frozenset({"GIVE-UP", "FAREWELL"})
+CLOSING_ACTS = frozenset({"GIVE-UP", "FAREWELL", "ANNOUNCE"})
 """Acts whose sentence closes something whoever listens: the stated reason of a task
-given up, the goodbye as a person walks out (shary/dialogue/sessions.py: leaving
-closes the session)."""
+given up or of a failed plan (ANNOUNCE), the goodbye as a person walks out
+(shary/dialogue/sessions.py: leaving closes the session)."""
 
 
 @dataclass
@@ -92,7 +106,7 @@ class Invariant:
     says: str
     check: Callable[[Run], str | None]
     """The violation seen, in one line, or None when the invariant held."""
-    families: tuple[str, ...] = ("stack", "living-room", "weld")
+    families: tuple[str, ...] = ("stack", "living-room", "weld", "dialogue")
 
 
 # -------------------------------------------------------------------------- verdicts
@@ -122,11 +136,17 @@ def _goals_verdict(run: Run) -> tuple[str | None, str]:
     goals = {d["goal"]: d for _, _, _, _, d in run.of("goal-added")}
     over = {d["goal"]: (t, task, d["outcome"], str(d.get("reason") or ""))
             for t, _, task, _, d in run.of("goal-over")}
+    if not goals and run.family == "dialogue":
+        return "achieved", ""  # nothing was asked that the robot could take on
     if not goals or set(goals) - set(over):
         return None, ""
     declined = {task: f"{who} said no" for _, _, task, who, d in run.of("act-received")
                 if d.get("act") == "H-DISAGREE"}
-    failed = [(t, task, logged) for t, task, outcome, logged in over.values()
+    cancelled = {d.get("name"): f"{who} cancelled it" for _, _, _, who, d
+                 in run.of("act-received") if d.get("act") == "CANCEL"}
+    names = {d["goal"]: d["name"] for _, _, _, _, d in run.of("goal-over")}
+    failed = [(t, task, logged or cancelled.get(names.get(goal), ""))
+              for goal, (t, task, outcome, logged) in over.items()
               if outcome != "done" or task in declined]
     if not failed:
         return "achieved", ""
@@ -244,9 +264,31 @@ def _facts_agree(run: Run) -> str | None:
     missing = _effects(run)
     if state == "achieved" and missing:
         return "achieved, but " + "; ".join(missing)
-    if state == "failed" and not _effects(run, strict=True) and not _unseen_undone(run):
+    if state == "failed" and not _effects(run, strict=True) and not _unseen_undone(run) \
+            and not _failed_unshown(run):
         return "failed, but everything it was to do is done"
     return None
+
+
+SHOWN = ("give-object", "clean-up")
+"""The goals whose outcome the living room shows (a hand holding, a bin holding)."""
+
+
+def _failed_unshown(run: Run) -> list[int]:
+    """The failed goals whose failure the world cannot contradict: an inform or another
+    goal it shows nothing of, or one whose effect another goal brought about (she said
+    no to the bottle, then asked for it herself)."""
+    if run.family not in ("living-room", "dialogue"):
+        return []
+    goals = {d["goal"]: (d["name"], tuple(sorted((d.get("args") or {}).items())))
+             for _, _, _, _, d in run.of("goal-added")}
+    declined = {task for _, _, task, _, d in run.of("act-received")
+                if d.get("act") == "H-DISAGREE"}
+    done = {goals.get(d["goal"]) for _, _, task, _, d in run.of("goal-over")
+            if d["outcome"] == "done" and task not in declined}
+    return [d["goal"] for _, _, task, _, d in run.of("goal-over")
+            if (d["outcome"] != "done" or task in declined)
+            and (goals.get(d["goal"], ("",))[0] not in SHOWN or goals.get(d["goal"]) in done)]
 
 
 PHYSICAL = ("mount-panel", "weld-seam")
@@ -318,7 +360,18 @@ INVARIANTS = (
     Invariant("no-ongoing", "no task left ONGOING or running at the end", _nothing_ongoing),
     Invariant("facts", "the world's facts agree with the verdict", _facts_agree),
     Invariant("told-unseen", "nothing told to a person who is not looking", _told_unseen,
-              ("stack", "living-room")),
+              ("stack", "living-room", "dialogue")),
     Invariant("not-seen", "every NOT_SEEN is told, or the plan ended and telling failed",
               _not_seen_told, ("stack",)),
+    # the conversations (sim/fuzz/conversations.py)
+    Invariant("order", "past events are told in the order they happened", order,
+              CONVERSING),
+    Invariant("belief", "what was told is EXECUTED in the listener's view", belief,
+              ("stack",)),
+    Invariant("no-call-while-looking", "nobody is called while looking at the robot",
+              no_call_while_looking, CONVERSING),
+    Invariant("after-farewell", "nothing said to, nor goal kept for, someone who left",
+              after_farewell, CONVERSING),
+    Invariant("reason-heard", "a failure's reason is said to someone there, or logged "
+              "unheard", reason_heard, CONVERSING),
 )

@@ -11,11 +11,13 @@ to do).  Its profile (a scenario's ``shared-plan: partner:``) says:
 * ``look-away``: ``{during: TASK, for: SECONDS}``, look away when the robot's
   task whose label starts with TASK begins, and look back after SECONDS; or
   ``{at: SECONDS, for: SECONDS}``, look away that long after the plan starts
-  (whatever is under way then);
+  (whatever is under way then); or a list of them, each happening once (two
+  look-aways in one plan);
 * ``before``: ``{TASK: [[Pick, obj], [Place, obj, support]]}``, actions of their
   own they do when the task TASK is due, before it (the robot's turn taken, an
   unexpected action);
-* ``leave``: ``{after: TASK}``, walk to the door once that task is done.
+* ``leave``: ``{after: TASK}``, walk out of the door once that task is done (out of
+  the robot's perception: their session closes).
 """
 
 from __future__ import annotations
@@ -39,7 +41,10 @@ class StackPartner:
         self.follower = follower
         self.choices = [str(c) for c in profile.get("choices", ())]
         self.delay = float(profile.get("delay", 1.0))
-        self.look_away = profile.get("look-away")
+        away = profile.get("look-away")
+        self.look_aways: list[dict[str, Any]] = [dict(a) for a in (
+            away if isinstance(away, list) else [away] if away else [])]
+        """The look-aways still to come (each happens once)."""
         self.before = {str(k): [list(map(str, a)) for a in v]
                        for k, v in (profile.get("before") or {}).items()}
         self.leave = (profile.get("leave") or {}).get("after")
@@ -48,8 +53,9 @@ class StackPartner:
         self.timers: list[Any] = []
         """What they mean to do later (act, look back, leave): cancelled by :meth:`stop`."""
         follower.watchers.append(self.plan_event)
-        if self.look_away and "at" in self.look_away:
-            self._later(float(self.look_away["at"]), self._look_away)
+        for away in self.look_aways:
+            if "at" in away:
+                self._later(float(away["at"]), self._look_away, away)
 
     @property
     def name(self) -> str:
@@ -70,21 +76,21 @@ class StackPartner:
     def plan_event(self, event: str, task: int) -> None:
         """The follower's news: a task ``due`` or ``started`` by the robot, ``done``."""
         label = self.follower.plan.primitive[task].label()
-        if event == "started" and self.look_away and "during" in self.look_away and \
-                label.startswith(str(self.look_away["during"])):
-            self._look_away()
+        during = next((a for a in self.look_aways if "during" in a
+                       and label.startswith(str(a["during"]))), None)
+        if event == "started" and during is not None:
+            self._look_away(during)
         elif event == "done" and self.leave and label.startswith(str(self.leave)):
             self._later(self.delay, self._leave)
         elif event == "due":
             self._later(self.delay, self._consider)
 
-    def _look_away(self) -> None:
-        if self.look_away is None:
+    def _look_away(self, away: dict[str, Any]) -> None:
+        if away not in self.look_aways:
             return
+        self.look_aways.remove(away)
         self.person.look("away")
-        seconds = float(self.look_away.get("for", 5.0))
-        self._later(seconds, self.person.look, "robot")
-        self.look_away = None
+        self._later(float(away.get("for", 5.0)), self.person.look, "robot")
 
     def _consider(self) -> None:
         follower = self.follower
@@ -148,4 +154,4 @@ class StackPartner:
     def _leave(self) -> None:
         self.handled.update(self.follower.plan.primitive)  # gone: they do nothing more
         self.person.look("away")
-        self.person._run(self.person.walk_to("door"))
+        self.person._run(self.person.leaving())

@@ -11,7 +11,8 @@ the team through the message port (:mod:`shary.team.world` is the other side):
   inspection's verdict is kept as a fact (``SEAM verdict sound|unsure``), which
   the robots' recipes choose by;
 - an ``Assignment`` from a person is their work on site (``mount-panel``:
-  they carry the panel and tack it, and physics has the last word);
+  they carry the panel and tack it, and physics has the last word; it is over
+  no sooner than their behaviour's ``works`` says, when the team file gives it);
 - a ``QUERY`` for ``attach``: what a question carries (for ``seam-okay``, a
   picture of the seam from the robot's camera, its path and its bytes);
 - ``SUBSCRIBE``: the facts it perceives (:class:`~sim.weld.perception.SitePerception`:
@@ -169,7 +170,16 @@ class WeldWorld:
                         f"{panel} with")
             return
 
+        start, works = self.loop.now(), self._works(message.sender, MOUNT)
+
         def over() -> None:
+            if message.id not in self.work:
+                return  # stopped: one of them left
+            more = start + works - self.loop.now()
+            if more > 0 and self.site.mounted(panel):
+                # tacked; they go on working on it as long as their behaviour says
+                self.loop.call_later(more, over)
+                return
             self.work.pop(message.id, None)
             if self.site.mounted(panel):
                 self._reply(message, "done")
@@ -184,6 +194,20 @@ class WeldWorld:
             self._reply(message, "failed", str(err.args[0]))
         except TypeError:
             self._reply(message, "failed", f"no such helper: {message.args.get('helper')!r}")
+
+    def _works(self, person: str, skill: str) -> float:
+        """How long ``person`` takes over a task of ``skill`` by their behaviour's
+        ``works`` (drawn on the loop's seeded generator), or 0: the physics alone
+        decides (carrying and tacking take what they take)."""
+        agent = self.scenario.team.agents.get(person)
+        behaviour = agent.behaviour if agent is not None else None
+        if behaviour is None:
+            return 0.0
+        delay = behaviour.works.get(skill) or behaviour.works.get("*")
+        if delay is None:
+            return 0.0
+        low, high = delay
+        return low if high <= low else self.loop.random.uniform(low, high)
 
     def left(self, name: str) -> None:
         """``name`` left the site (their process died): the work they took part in stops
