@@ -110,6 +110,8 @@ def test_several_fit_the_robot_asks_and_gives_the_one_meant(world):
     assert said(world)[1] == "All right, the green cube on the shelf."
     goal = world.sup.agenda.goals[0]
     assert goal.args["object"] == "cube-b"
+    # the thing understood reached the scheme as its event's data, and the scheme kept it
+    assert task.instance.data["choice"] == "cube-b"
 
 
 def test_an_answer_that_fits_nothing_is_asked_again_then_given_up(world):

@@ -89,8 +89,9 @@ def chosen_by(answer: Any, q: Question, facts: Any) -> str | None:
 
 
 def understand_which(run: TaskRun, recipe: Recipe) -> list[Step]:
-    """The SAY-WHICH recipe: the thing the answer picks out is the choice (``chosen``);
-    otherwise the robot says it did not understand (``unclear``)."""
+    """The SAY-WHICH recipe: the thing the answer picks out is the choice (``chosen``,
+    the thing its event's data: the scheme keeps it); otherwise the robot says it did not
+    understand (``unclear``)."""
     q = _question(run)
     heard = run.entered_data.get("SAY-WHICH") or {}
     answer = heard.get("data") if isinstance(heard, dict) else None
@@ -100,4 +101,5 @@ def understand_which(run: TaskRun, recipe: Recipe) -> list[Step]:
         return [say("unclear", "Sorry, I did not understand which one.", emit="unclear")]
     q.chosen = found
     described = q.resolution.descriptions[list(q.resolution.candidates).index(found)]
-    return [say("understood", f"All right, {described.text()}.", emit="chosen")]
+    return [say("understood", f"All right, {described.text()}.", emit="chosen",
+                emit_data={"thing": found})]

@@ -2,12 +2,17 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 from shary.kernel.recipes import Step, Term
 
 
-def say(name: str, text: str, emit: str | None = None, after: tuple[str, ...] = ()) -> Step:
-    """A step that says ``text`` aloud (the ``speak`` atomic task)."""
-    return Step(name, "speak", None, {"text": Term("const", text)}, None, after, emit)
+def say(name: str, text: str, emit: str | None = None, after: tuple[str, ...] = (),
+        emit_data: dict[str, Any] | None = None) -> Step:
+    """A step that says ``text`` aloud (the ``speak`` atomic task), then emits ``emit``
+    carrying ``emit_data``."""
+    return Step(name, "speak", None, {"text": Term("const", text)}, None, after, emit,
+                emit_data)
 
 
 def look(name: str, target: str, after: tuple[str, ...] = ()) -> Step:

@@ -197,7 +197,7 @@ class ActTask:
             run.state = DONE
             sup.tree.set_state(run.node, DONE)
             if run.step.emit:
-                self.run.deliver_soon(run.step.emit)
+                self.run.deliver_soon(run.step.emit, run.step.emit_data)
             self._advance()
             return
         retry = self.recipe.retry if self.recipe else None

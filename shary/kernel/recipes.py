@@ -142,6 +142,9 @@ class Step:
     by: Term | None
     after: tuple[str, ...]
     emit: str | None = None
+    emit_data: dict[str, Any] | None = field(default=None, compare=False)
+    """What the event ``emit`` carries to the scheme when the step is done (its
+    ``_event.data``): a thing the step found out, for the scheme's data model."""
 
 
 @dataclass(frozen=True)
