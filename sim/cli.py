@@ -19,7 +19,7 @@ from userfiles import yamlsafe
 from userfiles.errors import FileError
 from userfiles.schema import did_you_mean
 
-from .results import earlier_run, wrote
+from .results import earlier_run, tell_run, wrote
 
 
 def add_scenarios(sub: argparse._SubParsersAction) -> None:
@@ -100,21 +100,7 @@ def cmd_run(args: argparse.Namespace) -> int:
                               report=None if args.quiet or args.json else ConsoleReport(_out))
     except RuntimeError as err:
         return error(str(err), json_mode=args.json, status=1)
-    if args.json:
-        document: dict[str, Any] = result.summary()
-        document["out"] = str(out)
-        document["replaced_earlier_run"] = replacing is not None
-        emit_json(document)
-        return 0 if result.passed else 1
-    verdict = "[bold green]PASSED[/bold green]" if result.passed else "[bold red]FAILED[/bold red]"
-    _out.print(f"{verdict} {result.scenario}: {result.simulated_seconds:.1f} s simulated in "
-               f"{result.wall_seconds:.2f} s (x{result.real_time_factor:.0f} real time), "
-               f"seed {result.seed}")
-    for difference in result.differences:
-        _out.print(f"  - {escape(difference)}")
-    if not args.quiet:
-        _out.print(wrote(out, result.outputs))
-    return 0 if result.passed else 1
+    return tell_run(result, out, replacing, json_mode=args.json, quiet=args.quiet)
 
 
 def add_serve(sub: argparse._SubParsersAction) -> None:

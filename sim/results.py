@@ -11,7 +11,8 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from shary.log.terminal import escape
+from shary.log.terminal import emit_json, escape
+from shary.log.terminal import out as _out
 
 CHUNK = 0.1
 """Simulated seconds advanced between two looks at whether the run is over (so the
@@ -102,3 +103,27 @@ def earlier_run(out: Path) -> str | None:
     when = time.strftime("%Y-%m-%d %H:%M", time.localtime(log.stat().st_mtime))
     return (f"{out}/ holds an earlier run (of {when}): this run replaces its files "
             f"(--out DIR keeps runs apart)")
+
+
+def tell_run(result: RunResult, out: Path, replacing: str | None, *, json_mode: bool,
+             quiet: bool) -> int:
+    """What ``shary run`` prints at a run's end, in one process or over ROS 2: its summary
+    as JSON, or the verdict, why it failed and (unless quiet) the files written; the exit
+    status (1 when the scenario's expectations are not met)."""
+    if json_mode:
+        emit_json({**result.summary(), "out": str(out),
+                   "replaced_earlier_run": replacing is not None})
+        return 0 if result.passed else 1
+    verdict = "[bold green]PASSED[/bold green]" if result.passed else "[bold red]FAILED[/bold red]"
+    if result.over == "ros2":
+        said = (f"{result.scenario} over ROS 2: {result.simulated_seconds:.1f} s on the wall "
+                f"clock")
+    else:
+        said = (f"{result.scenario}: {result.simulated_seconds:.1f} s simulated in "
+                f"{result.wall_seconds:.2f} s (x{result.real_time_factor:.0f} real time)")
+    _out.print(f"{verdict} {said}, seed {result.seed}")
+    for difference in result.differences:
+        _out.print(f"  - {escape(difference)}")
+    if not quiet:
+        _out.print(wrote(out, result.outputs))
+    return 0 if result.passed else 1

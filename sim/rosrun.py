@@ -27,11 +27,11 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from shary.log.terminal import emit_json, error, escape
+from shary.log.terminal import error, escape
 from shary.log.terminal import out as _out
 
 from .narration import Report
-from .results import RunResult, wrote
+from .results import RunResult, tell_run
 
 WAIT_FOR_ROBOT = 30.0
 """Wall seconds ``shary run --ros`` waits for the robot's facts and action servers."""
@@ -130,18 +130,7 @@ def cmd_run_ros(args: argparse.Namespace, path: Path, out: Path, replacing: str 
                               if talk else None)
     if isinstance(result, str):
         return error(result, json_mode=args.json, status=1)
-    if args.json:
-        emit_json({**result.summary(), "out": str(out),
-                   "replaced_earlier_run": replacing is not None})
-        return 0 if result.passed else 1
-    verdict = "[bold green]PASSED[/bold green]" if result.passed else "[bold red]FAILED[/bold red]"
-    _out.print(f"{verdict} {result.scenario} over ROS 2: {result.simulated_seconds:.1f} s on "
-               f"the wall clock, seed {result.seed}")
-    for difference in result.differences:
-        _out.print(f"  - {escape(difference)}")
-    if not args.quiet:
-        _out.print(wrote(out, result.outputs))
-    return 0 if result.passed else 1
+    return tell_run(result, out, replacing, json_mode=args.json, quiet=args.quiet)
 
 
 def _with_world(args: argparse.Namespace, path: Path, out: Path) -> int:
