@@ -92,33 +92,28 @@ def serve() -> None:
         handle.succeed()
         return NestedMessage.Result()
 
-    def long(handle: Any) -> Any:
-        print("goal", flush=True)
-        while rclpy.ok() and not handle.is_cancel_requested:
-            time.sleep(0.002)
-        if handle.is_cancel_requested:
-            handle.canceled()
-        else:  # shutting down
-            handle.abort()
-        return NestedMessage.Result()
+    def until_cancelled(said: str) -> Any:
+        """A goal that runs until cancelled, printing ``said`` as it starts."""
+        def execute(handle: Any) -> Any:
+            print(said, flush=True)
+            while rclpy.ok() and not handle.is_cancel_requested:
+                time.sleep(0.002)
+            if handle.is_cancel_requested:
+                handle.canceled()
+            else:  # shutting down
+                handle.abort()
+            return NestedMessage.Result()
+        return execute
 
-    def cancel(handle: Any) -> Any:
-        print("cancel", time.time(), flush=True)
-        return CancelResponse.ACCEPT
+    def cancel_printing(said: str) -> Any:
+        """A cancel request accepted, printing ``said`` and when it came."""
+        def accept(handle: Any) -> Any:
+            print(said, time.time(), flush=True)
+            return CancelResponse.ACCEPT
+        return accept
 
-    def stoppable(handle: Any) -> Any:
-        print("stop-goal", flush=True)
-        while rclpy.ok() and not handle.is_cancel_requested:
-            time.sleep(0.002)
-        if handle.is_cancel_requested:
-            handle.canceled()
-        else:  # shutting down
-            handle.abort()
-        return NestedMessage.Result()
-
-    def stop_cancel(handle: Any) -> Any:
-        print("stop-cancel", time.time(), flush=True)
-        return CancelResponse.ACCEPT
+    long, cancel = until_cancelled("goal"), cancel_printing("cancel")
+    stoppable, stop_cancel = until_cancelled("stop-goal"), cancel_printing("stop-cancel")
 
     running = {"base": 0, "head": 0}
     overlaps = {"base": 0, "head": 0}

@@ -96,7 +96,9 @@ def test_a_cancel_that_is_not_answered_is_waited_for_up_to_its_deadline(spawn, w
     assert states[-1] == "unconfirmed"
 
 
-def test_the_run_task_client_is_answered_when_shary_stops(spawn, write, tmp_path):
+def _a_client_s_task_running(spawn, write, tmp_path):
+    """A server whose goals run until cancelled, a plain ``~/run_task`` client, and
+    ``shary ros``, with the client's task g1 running at the server."""
     server = spawn("tests/ros_servers.py", "long")
     client = spawn("tests/ros_client.py")
     server.wait_for("ready")
@@ -105,6 +107,11 @@ def test_the_run_task_client_is_answered_when_shary_stops(spawn, write, tmp_path
     shary.wait_for("shary is node /shary on robot jido (stop); Ctrl-C stops it")
     client.send("goal g1 move-for-manipulate place=kitchen")
     server.wait_for("running long")
+    return server, client, shary
+
+
+def test_the_run_task_client_is_answered_when_shary_stops(spawn, write, tmp_path):
+    server, client, shary = _a_client_s_task_running(spawn, write, tmp_path)
     shary.popen.send_signal(signal.SIGTERM)
     client.wait_for("result g1 ABORTED cancelled|shary stopped by SIGTERM")
     assert shary.popen.wait(30) == 0
@@ -112,14 +119,7 @@ def test_the_run_task_client_is_answered_when_shary_stops(spawn, write, tmp_path
 
 
 def test_a_cancelled_run_task_goal_cancels_its_robot_goal(spawn, write, tmp_path):
-    server = spawn("tests/ros_servers.py", "long")
-    client = spawn("tests/ros_client.py")
-    server.wait_for("ready")
-    client.wait_for("ready")
-    shary = shary_ros(spawn, write, tmp_path)
-    shary.wait_for("shary is node /shary on robot jido (stop); Ctrl-C stops it")
-    client.send("goal g1 move-for-manipulate place=kitchen")
-    server.wait_for("running long")
+    server, client, shary = _a_client_s_task_running(spawn, write, tmp_path)
     client.send("cancel g1")
     client.wait_for("result g1 CANCELED cancelled|cancelled by the client of ~/run_task")
     server.wait_for("canceled long")

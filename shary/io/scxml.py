@@ -491,18 +491,22 @@ class _Translator:
             return {"raise": a.attrs.get("event", "")}
         out: dict[str, Any] = {"send": a.attrs.get("event", "")}
         if "delay" in a.attrs:
-            match = _TIME.match(a.attrs["delay"])
-            if not match:
-                self.refuse(a, f"delay {a.attrs['delay']!r} is not a time (write 10ms or 1.5s)")
-            else:
-                number = match.group(1)
-                out["delay"] = (("0" + number) if number.startswith(".") else number) \
-                    + match.group(2)
+            self.delay(a, out)
         if "id" in a.attrs:
             out["id"] = a.attrs["id"]
         if to is not None:
             out["to"] = to
         return out
+
+    def delay(self, a: Element, out: dict[str, Any]) -> None:
+        """A ``<send>``'s ``delay`` in the scheme's spelling (``.5s`` -> ``0.5s``), or
+        refused when it is not a time."""
+        match = _TIME.match(a.attrs["delay"])
+        if not match:
+            self.refuse(a, f"delay {a.attrs['delay']!r} is not a time (write 10ms or 1.5s)")
+            return
+        number = match.group(1)
+        out["delay"] = (("0" + number) if number.startswith(".") else number) + match.group(2)
 
     def send_data(self, a: Element) -> dict[str, Any]:
         """A ``<send>`` of a chart with a data model: every part may be computed, and the
@@ -511,13 +515,7 @@ class _Translator:
             self.refuse(a, "<send> needs event= or eventexpr=")
         out: dict[str, Any] = {"send": a.attrs.get("event")}
         if "delay" in a.attrs:
-            match = _TIME.match(a.attrs["delay"])
-            if not match:
-                self.refuse(a, f"delay {a.attrs['delay']!r} is not a time (write 10ms or 1.5s)")
-            else:
-                number = match.group(1)
-                out["delay"] = (("0" + number) if number.startswith(".") else number) \
-                    + match.group(2)
+            self.delay(a, out)
         for attr in ("id", "target", "type"):
             if a.attrs.get(attr):
                 out[attr] = a.attrs[attr]
