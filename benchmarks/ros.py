@@ -205,8 +205,14 @@ class Child:
         self.popen.stdin.flush()
 
     def stop(self) -> None:
+        """End the child; one that does not end on SIGTERM within 10 s (seen once on a
+        loaded machine, its servers' threads still polling) is killed."""
         self.popen.terminate()
-        self.popen.wait(10)
+        try:
+            self.popen.wait(10)
+        except subprocess.TimeoutExpired:
+            self.popen.kill()
+            self.popen.wait()
 
 
 # -- the measures ---------------------------------------------------------------------------
