@@ -105,11 +105,13 @@ class Perception:
         # order subscribers hear them, and which fact each noise draw falls on) must
         # not depend on the process's string hashing
         seen = dict.fromkeys(self._facts(now))
+        flickered = False
         for predicate, p in sorted(self.noise.flicker.items()):
             for fact in [f for f in seen if f[1] == predicate]:
                 if self.rng.random() < p:
                     del seen[fact]
                     self.misses += 1
+                    flickered = True
         for fact in seen:
             self.missing_since.pop(fact, None)
             if fact not in self.published:
@@ -121,9 +123,10 @@ class Perception:
                 self.facts.remove(*fact, perspective=self.perspective)
                 del self.published[fact]
                 del self.missing_since[fact]
-        if self.missing_since and self._recheck is None and not self.sim.busy:
+        if (self.missing_since or flickered) and self._recheck is None and not self.sim.busy:
             # nothing ticks while the world is still: keep looking at the tick's rate
-            # until every missing fact is back or gone
+            # until every missing fact is back or gone, and every fact a flicker hid
+            # (one never seen yet included) has been seen
             self._recheck = self.sim.loop.call_later(TICK, self._look_again)
 
     def _look_again(self) -> None:

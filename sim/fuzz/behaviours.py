@@ -43,8 +43,9 @@ behaviour and runs it with the same seed.
 
 from __future__ import annotations
 
+import copy
 import random
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -54,7 +55,7 @@ from userfiles import yamlsafe
 
 from ..scenario import builtin_scenarios, load_scenario
 
-__all__ = ["FAMILIES", "Variation", "draw", "stack_partner"]
+__all__ = ["FAMILIES", "Drawn", "Variation", "draw", "stack_partner"]
 
 FAMILIES = ("stack", "living-room", "weld", "dialogue")
 
@@ -69,6 +70,14 @@ starts when the first task so labelled starts."""
 HUMAN_TASKS = ("Pick({h}, red_cube_2)", "Place({h}, red_cube_2", "Pick({h}, stick)",
                "PlaceStick({h}", "Pick({h}, blue_cube_2)", "Place({h}, blue_cube_2")
 """Beginnings of the partner's task labels ({h}: their name): leave after one."""
+PARTNER_DELAY = 1.0
+"""Seconds a stack partner waits before acting, unless their profile says
+(sim/stack/partner.py): a delay drawn equal to it is not a key."""
+DECISION_WAIT = 6.0
+"""Seconds the robot waits for a decision of the partner's, unless the scenario says."""
+GLANCE = 1.0
+"""The shortest look-away drawn: the robot's perception keeps a fact 0.5 s after it is
+last seen (0.8 s with some noise drawn), so a shorter glance is not noticed at all."""
 BEFORE = (
     # the documented unexpected but useful action: her blue cube on the green one
     {"Place(pr2, green_cube, blue_cube_2)": [["Pick", "blue_cube_1"],
@@ -79,7 +88,21 @@ BEFORE = (
     {"Pick(pr2, green_cube)": [["Pick", "green_cube"]]},
 )
 LIVING_BASES = ("give-bottle", "give-bottle", "clean-up-unreachable", "clean-up")
-ROBOT_ACTIONS = ("navigate", "pick", "move-arm", "give", "put-back", "dump", "look-at")
+ASKED = {"give-bottle": ("ASK-TASK",), "serve-drink-initiative": ("ASK-TASK",),
+         "person-modifies-plan": ("ASK-HELP",), "request-ambiguous-cube": ("ASK-HELP",),
+         "clean-up-unreachable": ("ASK-HELP",)}
+"""What the robot asks the person in each base scenario (answers are drawn for these)."""
+ACTIONS = {"give-bottle": ("pick", "navigate", "give", "move-arm"),
+           "clean-up": ("pick", "navigate", "dump"),
+           "clean-up-unreachable": ("pick", "navigate", "dump")}
+"""The robot's actions in each living-room base scenario (the ones a fault may hit)."""
+UNASKED_TAKE = 1.0
+"""Seconds a person takes to take what is held out, unless their profile says
+(sim/humans.py, ``Profile.takes``)."""
+ROBOT_ACTIONS = ("give", "look-at", "move-arm", "look-at", "give", "look-at", "move-arm")
+"""Robot actions towards a person (their name among its arguments), which a distraction
+may wait for (``when: {robot-starts: …}``, sim/people.py); the repeated ones are the
+likelier."""
 LOOKS = ("phone", "away", "store-table")
 KILL_CHANCE = 1 / 6
 """How often a weld run has a member killed (robot or person, at 1–60 s)."""
@@ -94,6 +117,49 @@ REQUESTS = (("give-object", "Jido, could you give me the yellow bottle?"),
 BYSTANDER_AT = ("sofa-end", "store-side", "coffee-east")
 WELD_BASES = ("weld-nominal", "weld-human-refuses", "weld-human-supports-robot",
               "weld-question-expires")
+
+
+Where = tuple["str | int", ...]
+"""A place in a variation's documents: ``("scenario", key, …)`` or ``("team", key, …)``
+(list items by index), or ``("kill",)`` for :attr:`Variation.kill`."""
+
+
+@dataclass(frozen=True)
+class Drawn:
+    """One key a campaign drew: what the run's story says of it and where it is.
+
+    Taking it away (:meth:`Variation.without`) must change the run: the
+    ``keys-matter`` invariant (:mod:`sim.fuzz.keys`) checks it, so a key that the
+    simulation ignores, or one drawn equal to what the person does anyway, is found
+    rather than reported as tested."""
+
+    says: str
+    where: tuple[Where, ...]
+    """The places it takes in the documents (a group of script steps takes several)."""
+    rest: bool = False
+    """A list item whose removal also removes the items after it: the k-th answer to
+    an act (and later ones) is taken away, so the person does what they do unasked."""
+    cue: tuple[Any, ...] = ()
+    """When its moment comes, as :func:`sim.fuzz.keys.reached` reads it from the rows
+    (empty: from the start): an answer to the third ASK-TASK has none in a run where
+    the robot asked once."""
+    unasked: Any = None
+    """What takes its place when it is taken away (None: nothing, the reader's default):
+    a first answer drawn gives way to the base profile's own answer to that act."""
+
+
+class _Story:
+    """The behaviour drawn, told in a few words, and the keys it drew (:class:`Drawn`)."""
+
+    def __init__(self, *parts: str) -> None:
+        self.parts = list(parts)
+        self.keys: list[Drawn] = []
+
+    def __call__(self, says: str, *where: Where, rest: bool = False,
+                 cue: tuple[Any, ...] = (), unasked: Any = None) -> None:
+        self.parts.append(says)
+        if where:
+            self.keys.append(Drawn(says, where, rest, cue, unasked))
 
 
 @dataclass(frozen=True)
@@ -111,6 +177,8 @@ class Variation:
     """The behaviour drawn, in a few words (for the tables)."""
     kill: tuple[str, float] | None = None
     """A weld team member killed, and when (seconds into the run), or None."""
+    keys: tuple[Drawn, ...] = ()
+    """The profile, scenario and team keys drawn (the base scenario's own are not)."""
 
     @property
     def path(self) -> Path:
@@ -132,6 +200,29 @@ class Variation:
 
             return load_weld_scenario(self.path, text=self.text(), team_text=self.team_text())
         return load_scenario(self.path, text=self.text())
+
+    def without(self, key: Drawn) -> Variation:
+        """This variation with ``key`` taken away (what the person or site does without
+        it: the profile's, scenario's or team's default)."""
+        if key.where == (("kill",),):
+            return replace(self, kill=None, keys=())
+        docs = {"scenario": copy.deepcopy(self.scenario), "team": copy.deepcopy(self.team)}
+        # list items from the last, so that an index still names the item drawn
+        for where in sorted(key.where, key=lambda w: w[-1] if isinstance(w[-1], int) else -1,
+                            reverse=True):
+            *parents, last = where
+            holders: list[Any] = [docs]
+            for part in parents:
+                holders.append(holders[-1][part])
+            if isinstance(last, int) and key.rest:
+                del holders[-1][last:]
+            elif key.unasked is not None:
+                holders[-1][last] = copy.deepcopy(key.unasked)
+            else:
+                del holders[-1][last]
+            if isinstance(holders[-1], list) and not holders[-1]:  # no empty lists left
+                del holders[-2][parents[-1]]
+        return replace(self, scenario=docs["scenario"], team=docs["team"], keys=())
 
 
 def draw(family: str, seed: int) -> Variation:
@@ -178,67 +269,90 @@ def stack_partner(partner: str, profile: dict[str, Any], decision_wait: float = 
 
 def _stack(rng: random.Random, seed: int) -> Variation:
     partner = rng.choice(PARTNERS)
-    told = [partner]
+    story = _Story(partner)
+    profile_at = ("scenario", "shared-plan", "profile")
     choices = []
     for _ in range(rng.randint(0, 4)):
         choices.append(rng.choice(["placement_1", "placement_2", "wait", "Pick", "Place"]))
+    for i, choice in enumerate(choices):  # the i-th decision's answer, and those after
+        # the plan's first option is what she takes anyway: such a word only keeps the
+        # place of the later ones (her first decision is where to put her red cube,
+        # the later ones whether to fetch a blue cube or wait)
+        if choice == "wait" or (i == 0 and choice == "placement_2"):
+            story(f"decision {i + 1}: {choice}", (*profile_at, "choices", i), rest=True,
+                  cue=("decided", partner, i + 1))
     profile: dict[str, Any] = {"choices": choices, "delay": _seconds(rng, 0, 4)}
-    told.append(f"choices {'/'.join(choices) or 'default'}, delay {profile['delay']:g}s")
-    aways: list[dict[str, Any]] = []
+    if profile["delay"] != PARTNER_DELAY:
+        story(f"delay {profile['delay']:g}s", (*profile_at, "delay"), cue=("acted", partner))
+    aways: list[tuple[dict[str, Any], str]] = []
     if rng.random() < 0.6:
         during = rng.choice(ROBOT_TASKS)
-        seconds = rng.choice([_seconds(rng, 0.2, 8), _seconds(rng, 8, 30), 600])
-        aways.append({"during": during, "for": seconds})
-        told.append(f"looks away during {during}… for {seconds:g}s")
+        seconds = rng.choice([max(GLANCE, _seconds(rng, 0.2, 8)), _seconds(rng, 8, 30), 600])
+        aways.append(({"during": during, "for": seconds},
+                      f"looks away during {during}… for {seconds:g}s"))
         if seconds < 600 and rng.random() < 0.35:
             # again, as she may be told what she missed (an inform under way) or later
-            at, more = _seconds(rng, 2, 40), _seconds(rng, 0.2, 8)
-            aways.append({"at": at, "for": more})
-            told.append(f"looks away at {at:g}s for {more:g}s")
+            at, more = _seconds(rng, 2, 40), max(GLANCE, _seconds(rng, 0.2, 8))
+            aways.append(({"at": at, "for": more}, f"looks away at {at:g}s for {more:g}s"))
     if rng.random() < 0.15:
         before = rng.choice(BEFORE)
         profile["before"] = before
         (task, actions), = before.items()
-        told.append(f"before {task}: {' '.join('+'.join(a) for a in actions)}")
+        story(f"before {task}: {' '.join('+'.join(a) for a in actions)}",
+              (*profile_at, "before"), cue=("due-for", task, profile["delay"]))
     if rng.random() < 0.1:
         after = rng.choice(HUMAN_TASKS).format(h=partner)
         profile["leave"] = {"after": after}
-        told.append(f"leaves after {after}…")
+        story(f"leaves after {after}…", (*profile_at, "leave"), cue=("done", after))
     faults = None
     if rng.random() < 0.2:
         action, times = rng.choice(["pick", "place"]), rng.randint(1, 3)
         faults = [{"action": action, "reason": f"the {action} slipped", "times": times}]
-        told.append(f"{action} fails {times}x")
+        story(f"{action} fails {times}x", ("scenario", "faults"), cue=("exec", action))
         if times >= 2 and rng.random() < 0.5:  # away while it fails and is replanned
             seconds = _seconds(rng, 1, 12)
-            aways.append({"during": f"{action.capitalize()}(pr2", "for": seconds})
-            told.append(f"looks away as the {action} fails, for {seconds:g}s")
-    if aways:
-        profile["look-away"] = aways[0] if len(aways) == 1 else aways
-    data = stack_partner(partner, profile, _seconds(rng, 2, 8))
-    _noise(rng, data, told, ("isHolding", "looksAt"))
+            aways.append(({"during": f"{action.capitalize()}(pr2", "for": seconds},
+                          f"looks away as the {action} fails, for {seconds:g}s"))
+    moments = tuple((a.get("during", a.get("at")), a["for"]) for a, _ in aways)
+    for i, (away, says) in enumerate(aways):
+        cue = ("away", i, moments, partner, "pr2")
+        if len(aways) == 1:
+            profile["look-away"] = away
+            story(says, (*profile_at, "look-away"), cue=cue)
+        else:
+            profile.setdefault("look-away", []).append(away)
+            story(says, (*profile_at, "look-away", i), cue=cue)
+    decide = _seconds(rng, 2, 8)
+    if decide != DECISION_WAIT:
+        story(f"decides within {decide:g}s", ("scenario", "shared-plan", "decision-wait"),
+              cue=("undecided", partner))
+    data = stack_partner(partner, profile, decide)
+    _noise(rng, data, story, ("isHolding", "looksAt"))
     if faults:
         data["faults"] = faults
-    return _finish("stack", seed, "stack-nominal", data, told)
+    return _finish("stack", seed, "stack-nominal", data, story)
 
 
-def _noise(rng: random.Random, data: dict[str, Any], told: list[str],
+def _noise(rng: random.Random, data: dict[str, Any], story: _Story,
            predicates: tuple[str, ...]) -> None:
     if rng.random() < 0.25:
         predicate = rng.choice(predicates)
         p = round(rng.uniform(0.05, 0.35), 2)
-        hold = rng.choice([0, 0.3, 0.5, 0.8])
+        # below the perception's own hold (0.5 s), which would filter most flicker out
+        hold = rng.choice([0, 0.3, 0.2, 0.4])
         data["noise"] = {"hold": f"{hold:g}s", "flicker": {predicate: p}}
-        told.append(f"{predicate} flickers {p:g} (hold {hold:g}s)")
+        story(f"{predicate} flickers {p:g} (hold {hold:g}s)", ("scenario", "noise"),
+              cue=("blink", predicate))
 
 
-def _finish(family: str, seed: int, base: str, data: dict[str, Any], told: list[str],
+def _finish(family: str, seed: int, base: str, data: dict[str, Any], story: _Story,
             team: dict[str, Any] | None = None,
             kill: tuple[str, float] | None = None) -> Variation:
+    told = "; ".join(story.parts)
     data["scenario"] = f"{base}-fuzz-{seed}"
-    data["doc"] = f"shary fuzz {family} --seed {seed}: " + "; ".join(told)
+    data["doc"] = f"shary fuzz {family} --seed {seed}: " + told
     data["expect"] = {}  # a campaign checks its invariants, not a scenario's outcome
-    return Variation(family, seed, base, data, team, "; ".join(told), kill)
+    return Variation(family, seed, base, data, team, told, kill, tuple(story.keys))
 
 
 # ------------------------------------------------------------------------ living room
@@ -246,14 +360,18 @@ def _finish(family: str, seed: int, base: str, data: dict[str, Any], told: list[
 def _living_room(rng: random.Random, seed: int) -> Variation:
     base = rng.choice(LIVING_BASES)
     data = _base(base)
-    told: list[str] = []
-    profile: dict[str, Any] = {"answers": {act: _answers(rng, act, told)
-                                           for act in ("ASK-TASK", "ASK-HELP")}}
+    story = _Story()
+    at = ("scenario", "people", "alice", "profile")
+    unasked = _profile(data["people"]["alice"]).get("answers") or {}
+    asked = ASKED.get(base, ())
+    answers = {act: _answers(rng, act, story, "alice", unasked.get(act), act in asked)
+               for act in ("ASK-TASK", "ASK-HELP")}
+    profile: dict[str, Any] = {"answers": {act: a for act, a in answers.items() if a}}
     if rng.random() < 0.1:
         profile["attention"] = rng.choice(LOOKS[1:])
-        told.append(f"looks at {profile['attention']}")
+        story(f"looks at {profile['attention']}", (*at, "attention"))
     distractions = []
-    for _ in range(rng.choices([0, 1, 2], [0.4, 0.45, 0.15])[0]):
+    for i in range(rng.choices([0, 1, 2], [0.4, 0.45, 0.15])[0]):
         when = ({"robot-starts": rng.choice(ROBOT_ACTIONS)} if rng.random() < 0.6
                 else {"at": f"{_seconds(rng, 0, 40):g}s"})
         seconds = rng.choice([f"{_seconds(rng, 0.5, 8):g}s", f"{_seconds(rng, 8, 40):g}s",
@@ -263,43 +381,74 @@ def _living_room(rng: random.Random, seed: int) -> Variation:
                              "look": look, "for": seconds})
         cue = (f"when {when['robot-starts']} starts" if "robot-starts" in when
                else f"at {when['at']}")
-        told.append(f"looks at {look} for {seconds} {cue}")
+        story(f"looks at {look} for {seconds} {cue}", (*at, "distractions", i),
+              cue=_when(when, "alice"))
     if distractions:
         profile["distractions"] = distractions
-    if rng.random() < 0.1:
-        profile["takes"] = None
-        told.append("never takes")
-    else:
-        profile["takes"] = {"after": _span(rng, 0.2, 3)}
-    profile["helps"] = rng.random() < 0.85
-    if not profile["helps"]:
-        told.append("does not help")
-    profile["speed"] = round(rng.uniform(0.5, 1.3), 2)
-    if rng.random() < 0.1:
-        at = _seconds(rng, 1, 40)
-        profile["script"] = [{"at": f"{at:g}s", "leave": True}]
-        told.append(f"leaves at {at:g}s")
+    takes = None if rng.random() < 0.1 else {"after": _span(rng, 0.2, 3)}
+    if rng.random() >= 0.85 and "ASK-HELP" in asked:  # helping is what a person does unasked
+        profile["helps"] = False
+        story("does not help", (*at, "helps"), cue=("agreed", "ASK-HELP", "alice"))
+    speed = round(rng.uniform(0.5, 1.3), 2)
+    if rng.random() < 0.1:  # she walks only to leave: her pace is drawn for that walk
+        leave = _seconds(rng, 1, 40)
+        profile["script"] = [{"at": f"{leave:g}s", "leave": True}]
+        story(f"leaves at {leave:g}s", (*at, "script"), cue=("at", leave))
+        profile["speed"] = speed
+        story(f"walks at {speed:g} m/s", (*at, "speed"), cue=("at", leave))
+    if "give" in ACTIONS[base]:  # what is held out to her, taken or not (before she leaves)
+        profile["takes"] = takes
+        soonest = min(float(takes["after"][0].rstrip("s")), UNASKED_TAKE) if takes \
+            else UNASKED_TAKE  # when the earlier of her take and the default one comes
+        story(f"takes after {'-'.join(takes['after'])}" if takes else "never takes",
+              (*at, "takes"), cue=("offered", "alice", soonest,
+                                   leave if "script" in profile else None))
     data["people"] = {"alice": {"at": "sofa-seat", "profile": profile}}
-    _noise(rng, data, told, ("looksAt", "isHolding"))
+    _noise(rng, data, story, ("looksAt", "isHolding"))
     if rng.random() < 0.2:
-        action, times = rng.choice(["pick", "navigate", "give", "dump", "move-arm"]), \
-            rng.randint(1, 2)
+        action, times = rng.choice(ACTIONS[base]), rng.randint(1, 2)
         data["faults"] = [{"action": action, "reason": f"the {action} went wrong",
                            "times": times}]
-        told.append(f"{action} fails {times}x")
+        story(f"{action} fails {times}x", ("scenario", "faults"), cue=("exec", action))
     data["timeout"] = "300s"
-    return _finish("living-room", seed, base, data, told)
+    return _finish("living-room", seed, base, data, story)
 
 
-def _answers(rng: random.Random, act: str, told: list[str]) -> list[dict[str, Any]]:
-    """One to three answers to ``act`` (the first time, the second …)."""
-    out = []
+def _when(when: dict[str, Any], person: str) -> tuple[Any, ...]:
+    """The cue of a distraction's ``when``: a robot action towards ``person``, or a time."""
+    if "robot-starts" in when:
+        return ("starts", when["robot-starts"], person)
+    return ("at", float(str(when["at"]).rstrip("s")))
+
+
+def _answers(rng: random.Random, act: str, story: _Story, person: str,
+             unasked: dict[str, Any] | None, asked: bool) -> list[dict[str, Any]]:
+    """One to three answers of ``person`` to ``act`` (the first time, the second …);
+    ``unasked`` is their base profile's answer to it, what they do without one drawn;
+    none are kept where the robot does not ask it (``asked`` false).
+
+    The robot asks again only after silence or an answer too late for it: answers after
+    one that settles it are drawn (the seed's stream stays the same) but not kept, and
+    a first answer that is what they do anyway (silence, where their profile has none)
+    is not kept either: neither could change the run."""
+    at = ("scenario", "people", person, "profile", "answers")
+    out: list[dict[str, Any]] = []
+    settled = False
     for _ in range(rng.choices([1, 2, 3], [0.7, 0.2, 0.1])[0]):
         reply = rng.choices(["H-AGREE", "H-DISAGREE", None], [0.65, 0.15, 0.2])[0]
         late = rng.random() < 0.15
         after = _span(rng, 10, 40) if late else _span(rng, 0.3, 3)
+        if not asked or settled or (not out and reply is None and unasked is None):
+            continue
+        settled = reply is not None and not late
+        i = len(out)
         out.append({"reply": reply, "after": after})
-        told.append(f"{act} -> {reply or 'silence'}{' late' if late else ''}")
+        cue = ("asked", act, person, i + 1)
+        says = f"{act} -> {reply or 'silence'}{' late' if late else ''}"
+        if i == 0:  # without it, they answer as their profile says
+            story(says, (*at, act), cue=cue, unasked=unasked)
+        else:
+            story(says, (*at, act, i), rest=True, cue=cue)
     return out
 
 
@@ -310,47 +459,63 @@ def _weld(rng: random.Random, seed: int) -> Variation:
     data = _base(base)
     team_path = builtin_scenarios()[base].parent / data["team"]
     team = dict(yamlsafe.load_file(team_path).data)
-    told: list[str] = []
+    story = _Story()
     agents = {name: dict(spec) for name, spec in team["agents"].items()}
     for name, spec in agents.items():
         if spec.get("kind") != "human":
             continue
+        at = ("team", "agents", name, "behaviour")
         behaviour: dict[str, Any] = {}
         if not spec.get("remote"):
             reply = rng.choices(["accept", "refuse", "ignore"], [0.7, 0.15, 0.15])[0]
             behaviour["assignments"] = {"reply": reply, "after": _span(rng, 0.5, 8)}
-            if rng.random() < 0.3:  # a mount's physics takes about 15 s: longer, or not
-                behaviour["works"] = {"mount-panel": _span(rng, 5, 90)}
-                told.append(f"{name} mounts in {'-'.join(behaviour['works']['mount-panel'])}")
-            told.append(f"{name} {reply}s assignments")
+            if rng.random() < 0.3:  # longer than the site's own mount (about 15 s), which
+                # a person's pace can slow but not hasten
+                behaviour["works"] = {"mount-panel": _span(rng, 20, 90)}
+                story(f"{name} mounts in {'-'.join(behaviour['works']['mount-panel'])}",
+                      (*at, "works"), cue=("row", "message", name,
+                                           {"to": "world", "skill": "mount-panel"}))
+            story(f"{name} {reply}s assignments", (*at, "assignments"),
+                  cue=("row", "message", "tasks", {"to": name, "type": "assignment"}))
         reply = rng.choices(["answer", "refuse", "ignore"], [0.7, 0.15, 0.15])[0]
         behaviour["questions"] = {"reply": reply, "after": _span(rng, 1, 30)}
+        asked = ("row", "message", None, {"to": name, "type": "question"})
+        story(f"{name} {reply}s questions", (*at, "questions"), cue=asked)
         if "answer" in spec.get("skills", ()):
             answer = rng.choice(["yes", "no"])
-            behaviour["answers"] = {"seam-okay": answer}
-            told.append(f"{name} {reply}s questions ({answer})")
+            if answer == "no":  # yes is what a person answers unasked (shary/team/proxy.py)
+                behaviour["answers"] = {"seam-okay": answer}
+                story(f"{name} answers {answer}", (*at, "answers"),
+                      cue=("row", "answer", name, {}))
         spec["behaviour"] = behaviour
     team["agents"] = agents
     welds = {}
+    welded = {str(spec.get("with", {}).get("seam")) for spec in
+              (team.get("goal") or {}).get("tasks", {}).values() if spec.get("do") == "weld-seam"}
     for seam in ("P1-P2", "P2-P3", "P3-P4"):
         if rng.random() < 0.4:
-            welds[seam] = [round(rng.uniform(0.3, 1.0), 2) for _ in range(rng.randint(1, 3))]
-            told.append(f"{seam} welds {'/'.join(f'{q:g}' for q in welds[seam])}")
+            beads = [round(rng.uniform(0.3, 1.0), 2) for _ in range(rng.randint(1, 3))]
+            if seam not in welded:  # drawn all the same, so that a seed keeps its stream
+                continue
+            welds[seam] = beads
+            story(f"{seam} welds {'/'.join(f'{q:g}' for q in welds[seam])}",
+                  ("scenario", "welds", seam),
+                  cue=("row", "exec-request", None, {"atomic": "weld", "args": {"seam": seam}}))
     if welds:
         data["welds"] = {**(data.get("welds") or {}), **welds}
     if "IVA" in agents and rng.random() < 0.2:
-        at = _seconds(rng, 1, 30)
-        back = round(at + _seconds(rng, 1, 30), 1)
-        data["script"] = [{"at": f"{at:g}s", "by": "IVA", "take-control": "K-10"},
+        at_ = _seconds(rng, 1, 30)
+        back = round(at_ + _seconds(rng, 1, 30), 1)
+        data["script"] = [{"at": f"{at_:g}s", "by": "IVA", "take-control": "K-10"},
                           {"at": f"{back:g}s", "by": "IVA", "hand-back": "K-10"}]
-        told.append(f"IVA holds K-10 {at:g}-{back:g}s")
+        story(f"IVA holds K-10 {at_:g}-{back:g}s", ("scenario", "script"), cue=("at", at_))
     data["timeout"] = "8min"
     kill = None
     if rng.random() < KILL_CHANCE:
         members = [n for n, spec in agents.items() if spec.get("kind") in ("robot", "human")]
         kill = (rng.choice(members), _seconds(rng, 1, 60))
-        told.append(f"{kill[0]} killed at {kill[1]:g}s")
-    return _finish("weld", seed, base, data, told, team, kill)
+        story(f"{kill[0]} killed at {kill[1]:g}s", ("kill",), cue=("at", kill[1]))
+    return _finish("weld", seed, base, data, story, team, kill)
 
 
 # --------------------------------------------------------------------------- dialogue
@@ -374,61 +539,70 @@ def _dialogue(rng: random.Random, seed: int) -> Variation:
     data = _base(base)
     people = {name: dict(spec) for name, spec in data["people"].items()}
     name = next(iter(people))
+    at = ("scenario", "people", name, "profile")
     profile = _profile(people[name])
-    told: list[str] = [base]
+    story = _Story(base)
     answers = dict(profile.get("answers") or {})
     for act in ("ASK-TASK", "ASK-HELP"):
         if rng.random() < 0.6:
-            answers[act] = _answers(rng, act, told)
+            drawn = _answers(rng, act, story, name, answers.get(act),
+                             act in ASKED.get(base, ()))
+            if drawn:
+                answers[act] = drawn
     profile["answers"] = answers
     base_script = list(profile.get("script") or [])
     asked = [str(step["task"]) for step in base_script if step.get("task")]
     asked += [str(goal["task"]) for goal in data.get("goals") or []]
-    added: list[tuple[float, list[dict[str, Any]]]] = []
-    """Steps drawn, each group at its time (a step's ``at`` is absolute: they are kept in
-    the order of their times, after what the base scenario's person does)."""
+    added: list[tuple[float, list[dict[str, Any]], list[tuple[str, slice, float]]]] = []
+    """Steps drawn, each group at its time with what the story says of its steps (a
+    step's ``at`` is absolute: they are kept in the order of their times, after what the
+    base scenario's person does)."""
     if rng.random() < 0.3:
         task, words = rng.choice(REQUESTS)
-        at = _seconds(rng, 0.5, 30)
-        added.append((at, [{"at": f"{at:g}s", "say": words}]))
+        when = _seconds(rng, 0.5, 30)
+        added.append((when, [{"at": f"{when:g}s", "say": words}],
+                      [(f"asks {task} at {when:g}s", slice(0, 1), when)]))
         asked.append(task)
-        told.append(f"asks {task} at {at:g}s")
     if asked and rng.random() < 0.35:
-        at = _seconds(rng, 0.5, 45)  # any phase: asking, fetching, handing over, after
-        added.append((at, [{"at": f"{at:g}s", "act": "CANCEL", "task": rng.choice(asked),
-                            "say": "Actually, never mind."}]))
-        told.append(f"cancels at {at:g}s")
+        when = _seconds(rng, 0.5, 45)  # any phase: asking, fetching, handing over, after
+        added.append((when, [{"at": f"{when:g}s", "act": "CANCEL", "task": rng.choice(asked),
+                              "say": "Actually, never mind."}],
+                      [(f"cancels at {when:g}s", slice(0, 1), when)]))
     if rng.random() < 0.2:
-        at = _seconds(rng, 1, 30)
-        added.append((at, [{"at": f"{at:g}s", "say": "I'll take the orange bottle myself."}]))
-        told.append(f"takes a step on at {at:g}s")
+        when = _seconds(rng, 1, 30)
+        added.append((when, [{"at": f"{when:g}s", "say": "I'll take the orange bottle myself."}],
+                      [(f"takes a step on at {when:g}s", slice(0, 1), when)]))
     if rng.random() < 0.2:
-        at = _seconds(rng, 1, 40)
-        group: list[dict[str, Any]] = [{"at": f"{at:g}s", "leave": True}]
-        told.append(f"leaves at {at:g}s")
+        when = _seconds(rng, 1, 40)
+        group: list[dict[str, Any]] = [{"at": f"{when:g}s", "leave": True}]
+        says = [(f"leaves at {when:g}s", slice(0, 3), when)]
         if rng.random() < 0.5:
             back = _seconds(rng, 2, 20)
             group += [{"after": f"{back:g}s", "walk": "sofa-end"},
                       {"after": "0.5s", "look": "robot"}]
-            told.append(f"comes back {back:g}s later")
-        added.append((at, group))
+            says.append((f"comes back {back:g}s later", slice(1, 3), when + back))
+        added.append((when, group, says))
+    script = list(base_script)
+    for _, group, says in sorted(added, key=lambda g: g[0]):
+        steps = range(len(script), len(script) + len(group))
+        for text, part, moment in says:
+            story(text, *((*at, "script", i) for i in steps[part]), cue=("at", moment))
+        script += group
     if rng.random() < 0.3:
         when = ({"robot-starts": rng.choice(ROBOT_ACTIONS)} if rng.random() < 0.6
                 else {"at": f"{_seconds(rng, 0, 40):g}s"})
         seconds = rng.choice([f"{_seconds(rng, 0.5, 8):g}s", f"{_seconds(rng, 8, 40):g}s",
                               "never"])
         profile["distractions"] = [{"when": when, "look": "phone", "for": seconds}]
-        told.append(f"phone call for {seconds}")
-    script = base_script + [step for _, group in sorted(added, key=lambda g: g[0])
-                            for step in group]
+        story(f"phone call for {seconds}", (*at, "distractions"), cue=_when(when, name))
     if script:
         profile["script"] = script
     people[name] = {**people[name], "profile": profile}
     if rng.random() < 0.3:
-        at = rng.choice(BYSTANDER_AT)
-        people["dana"] = {"at": at, "profile": {"attention": "robot"}}
-        told.append(f"dana looks at the robot from {at}")
+        where = rng.choice(BYSTANDER_AT)
+        people["dana"] = {"at": where, "profile": {"attention": "robot"}}
+        story(f"dana looks at the robot from {where}", ("scenario", "people", "dana"))
     data["people"] = people
-    _noise(rng, data, told, ("looksAt",))
+    _noise(rng, data, story, ("looksAt",))
     data["timeout"] = "300s"
-    return _finish("dialogue", seed, base, data, told)
+    return _finish("dialogue", seed, base, data, story)

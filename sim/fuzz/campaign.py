@@ -24,6 +24,7 @@ from typing import Any
 
 from .behaviours import Variation, draw
 from .invariants import INVARIANTS, Run, verdict
+from .keys import keys_matter
 
 __all__ = ["Campaign", "Outcome", "campaign", "command", "judge", "run_one"]
 
@@ -43,12 +44,17 @@ class Outcome:
     """Invariant name -> what was seen (only the invariants violated)."""
     checked: tuple[str, ...] = ()
     """The invariants that apply to this run's family."""
+    keys: int = 0
+    """How many keys were drawn for this run."""
+    unreached: int = 0
+    """How many of them never had their moment in it (:mod:`sim.fuzz.keys`)."""
 
     def as_dict(self) -> dict[str, Any]:
         return {"seed": self.seed, "base": self.base, "behaviour": self.behaviour,
                 "verdict": self.verdict, "reason": self.reason or None,
                 "simulated_seconds": round(self.simulated_seconds, 2),
-                "wall_seconds": round(self.wall_seconds, 3), "violations": self.violations}
+                "wall_seconds": round(self.wall_seconds, 3), "violations": self.violations,
+                "keys": self.keys, "keys_unreached": self.unreached}
 
 
 @dataclass
@@ -77,6 +83,8 @@ class Campaign:
             "wall_seconds": round(self.wall_seconds, 2),
             "simulated_seconds": round(sum(o.simulated_seconds for o in self.outcomes), 1),
             "verdicts": verdicts,
+            "keys": {"drawn": sum(o.keys for o in self.outcomes),
+                     "unreached": sum(o.unreached for o in self.outcomes)},
             "invariants": [{"name": i.name, "says": i.says,
                             "checked": sum(i.name in o.checked for o in self.outcomes),
                             "violated": sum(i.name in o.violations for o in self.outcomes)}
@@ -123,8 +131,26 @@ def run_one(family: str, seed: int, *, out: Path | None = None, report: Any = No
     rows = result.events if out is None else [
         (e.time, e.kind, e.task, e.agent, e.data) for e in read_events(out / "log.sqlite")]
     state, reason, violations = judge(family, scenario, result, rows)
+    # every key drawn must change the run: compared row by row with runs in memory (a
+    # run written to a folder is made again in memory for that)
+    same = result if out is None else _in_memory(variation, seed)
+    seen, unreached = keys_matter(variation, same.events, same.truth)
+    if seen is not None:
+        violations["keys-matter"] = seen
     return Outcome(seed, variation.base, variation.story, state, reason,
-                   result.simulated_seconds, time.perf_counter() - wall, violations, checked)
+                   result.simulated_seconds, time.perf_counter() - wall, violations, checked,
+                   len(variation.keys), unreached)
+
+
+def _in_memory(variation: Variation, seed: int) -> Any:
+    from ..run import run_scenario
+
+    scenario = variation.load()
+    if variation.kill is not None:
+        from ..weld.run import run_weld
+
+        return run_weld(scenario, seed=seed, kill=variation.kill)
+    return run_scenario(scenario, seed=seed)
 
 
 def judge(family: str, scenario: Any, result: Any, rows: list[Any] | None = None
@@ -141,7 +167,7 @@ def judge(family: str, scenario: Any, result: Any, rows: list[Any] | None = None
     state, reason = verdict(run)
     violations = {}
     for invariant in INVARIANTS:
-        if family in invariant.families:
+        if family in invariant.families and invariant.check is not None:
             seen = invariant.check(run)
             if seen is not None:
                 violations[invariant.name] = seen

@@ -104,8 +104,9 @@ class Run:
 class Invariant:
     name: str
     says: str
-    check: Callable[[Run], str | None]
-    """The violation seen, in one line, or None when the invariant held."""
+    check: Callable[[Run], str | None] | None
+    """The violation seen, in one line, or None when the invariant held; None for one
+    the campaign judges itself, running again (``keys-matter``, :mod:`sim.fuzz.keys`)."""
     families: tuple[str, ...] = ("stack", "living-room", "weld", "dialogue")
 
 
@@ -374,4 +375,6 @@ INVARIANTS = (
               after_farewell, CONVERSING),
     Invariant("reason-heard", "a failure's reason is said to someone there, or logged "
               "unheard", reason_heard, CONVERSING),
+    # the generator's: every key drawn changes the run (sim/fuzz/keys.py)
+    Invariant("keys-matter", "every key drawn changes the run it is drawn for", None),
 )

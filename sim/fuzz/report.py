@@ -69,6 +69,10 @@ def print_campaign(out: Any, result: Campaign) -> None:
                         str(checked - violated),
                         f"[red]{violated}[/red]" if violated else "[green]0[/green]")
     out.print(summary)
+    keys = document["keys"]
+    out.print(f"keys drawn: {keys['drawn']}, each run again without it (keys-matter); "
+              f"{keys['unreached']} never had their moment (the people did something "
+              f"else first)")
     for invariant, counts in zip(INVARIANTS, document["invariants"], strict=True):
         if not counts["violated"]:
             continue
