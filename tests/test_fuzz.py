@@ -415,6 +415,10 @@ DIALOGUE_FOUND = {
     49: "her own CANCEL, on the phone: the goal failed without a stated reason (the "
         "verdict reads her CANCEL) and \"All right, I will stop.\" was said to her back",
     156: "\"Hello, Bob.\" said as he took a call: GREET watches his look until it speaks",
+    23: "\"Actually, never mind.\" on the phone, for the clean-up she had asked: the robot "
+        "stopped in silence and the goal ended failed with no reason (a goal its person "
+        "cancels now ends \"cancelled by alice\", shary/kernel/agenda.py), and its plan "
+        "had been proposed as she looked away",
 }
 """Seeds of ``shary fuzz dialogue`` that violated an invariant, and why, now fixed."""
 

@@ -238,6 +238,7 @@ class Initiative:
             return False
         run = goal.run
         if run is not None and not run.ended and run.expects("CANCEL"):
+            run.stopped_by = f"cancelled by {agent}"
             run.deliver("CANCEL", {"agent": agent})
         else:
             sup.agenda.cancel(goal, f"cancelled by {agent}")

@@ -192,8 +192,10 @@ class TaskAgenda:
         if goal.state in OVER:
             return
         goal.state = DONE if run.outcome == "done" else FAILED
+        because = {"reason": run.stopped_by} if goal.state == FAILED and run.stopped_by \
+            else {}
         self.sup.record("goal-over", task=run.node, goal=goal.id, name=goal.task,
-                        outcome=run.outcome)
+                        outcome=run.outcome, **because)
         for listener in self.listeners:
             listener(goal)
         self._schedule()

@@ -270,6 +270,8 @@ class Supervisor:
             if run.ended or run.paused or (task is not None and run.node != task):
                 continue
             if run.expects(act):
+                if act == "CANCEL":
+                    run.stopped_by = f"cancelled by {agent}"
                 run.deliver(act, {"agent": agent, "data": data})
                 taken = True
         if not taken and task is None:
@@ -371,6 +373,9 @@ class TaskRun(SchemeListener):
         self.ended = False
         self.paused = False
         self.outcome: str | None = None
+        self.stopped_by: str | None = None
+        """Who asked it to stop (a person's CANCEL, which its scheme answers): the reason
+        its goal gives when it then ends undone."""
 
     def __repr__(self) -> str:
         return f"<TaskRun {self.type.name} {self.node} {self.outcome or 'running'}>"
