@@ -88,10 +88,9 @@ BEFORE = (
     {"Pick(pr2, green_cube)": [["Pick", "green_cube"]]},
 )
 LIVING_BASES = ("give-bottle", "give-bottle", "clean-up-unreachable", "clean-up")
-ASKED = {"give-bottle": ("ASK-TASK",), "serve-drink-initiative": ("ASK-TASK",),
-         "person-modifies-plan": ("ASK-HELP",), "request-ambiguous-cube": ("ASK-HELP",),
-         "clean-up-unreachable": ("ASK-HELP",)}
-"""What the robot asks the person in each base scenario (answers are drawn for these)."""
+ASKED = {"give-bottle": ("ASK-TASK",), "clean-up-unreachable": ("ASK-HELP",), "clean-up": ()}
+"""What the robot asks the person in each living-room base scenario (answers are kept for
+these; in a conversation, what the person asks for decides it)."""
 ACTIONS = {"give-bottle": ("pick", "navigate", "give", "move-arm"),
            "clean-up": ("pick", "navigate", "dump"),
            "clean-up-unreachable": ("pick", "navigate", "dump")}
@@ -99,7 +98,7 @@ ACTIONS = {"give-bottle": ("pick", "navigate", "give", "move-arm"),
 UNASKED_TAKE = 1.0
 """Seconds a person takes to take what is held out, unless their profile says
 (sim/humans.py, ``Profile.takes``)."""
-ROBOT_ACTIONS = ("give", "look-at", "move-arm", "look-at", "give", "look-at", "move-arm")
+ROBOT_ACTIONS = ("give", "look-at", "move-arm", "give", "look-at", "move-arm", "look-at")
 """Robot actions towards a person (their name among its arguments), which a distraction
 may wait for (``when: {robot-starts: …}``, sim/people.py); the repeated ones are the
 likelier."""
@@ -363,7 +362,7 @@ def _living_room(rng: random.Random, seed: int) -> Variation:
     story = _Story()
     at = ("scenario", "people", "alice", "profile")
     unasked = _profile(data["people"]["alice"]).get("answers") or {}
-    asked = ASKED.get(base, ())
+    asked = ASKED[base]
     answers = {act: _answers(rng, act, story, "alice", unasked.get(act), act in asked)
                for act in ("ASK-TASK", "ASK-HELP")}
     profile: dict[str, Any] = {"answers": {act: a for act, a in answers.items() if a}}
@@ -422,33 +421,32 @@ def _when(when: dict[str, Any], person: str) -> tuple[Any, ...]:
 
 
 def _answers(rng: random.Random, act: str, story: _Story, person: str,
-             unasked: dict[str, Any] | None, asked: bool) -> list[dict[str, Any]]:
-    """One to three answers of ``person`` to ``act`` (the first time, the second …);
-    ``unasked`` is their base profile's answer to it, what they do without one drawn;
-    none are kept where the robot does not ask it (``asked`` false).
+             unasked: dict[str, Any] | None, asked: bool = True) -> list[dict[str, Any]]:
+    """One to three answers of ``person`` to ``act`` (the first time, the second …; the
+    last repeats); ``unasked`` is their base profile's answer to it, what they do
+    without one drawn; none are kept where the robot does not ask it (``asked`` false:
+    drawn all the same, so that a seed keeps its stream).
 
-    The robot asks again only after silence or an answer too late for it: answers after
-    one that settles it are drawn (the seed's stream stays the same) but not kept, and
-    a first answer that is what they do anyway (silence, where their profile has none)
-    is not kept either: neither could change the run."""
+    A silence that is what they do anyway (the first, where their profile has no answer;
+    a later one after a silence, the last answer repeating) is no key: it only keeps
+    the place of the answers after it."""
     at = ("scenario", "people", person, "profile", "answers")
     out: list[dict[str, Any]] = []
-    settled = False
-    for _ in range(rng.choices([1, 2, 3], [0.7, 0.2, 0.1])[0]):
+    for i in range(rng.choices([1, 2, 3], [0.7, 0.2, 0.1])[0]):
         reply = rng.choices(["H-AGREE", "H-DISAGREE", None], [0.65, 0.15, 0.2])[0]
         late = rng.random() < 0.15
         after = _span(rng, 10, 40) if late else _span(rng, 0.3, 3)
-        if not asked or settled or (not out and reply is None and unasked is None):
+        if not asked:
             continue
-        settled = reply is not None and not late
-        i = len(out)
         out.append({"reply": reply, "after": after})
-        cue = ("asked", act, person, i + 1)
         says = f"{act} -> {reply or 'silence'}{' late' if late else ''}"
-        if i == 0:  # without it, they answer as their profile says
-            story(says, (*at, act), cue=cue, unasked=unasked)
+        if i > 0 and (reply is not None or out[-2]["reply"] is not None):
+            story(says, (*at, act, i), rest=True, cue=("asked", act, person, i + 1))
+        elif i == 0 and (reply is not None or unasked is not None):  # without it: their
+            # profile's own answer
+            story(says, (*at, act), cue=("asked", act, person, 1), unasked=unasked)
         else:
-            story(says, (*at, act, i), rest=True, cue=cue)
+            story(says)
     return out
 
 
@@ -545,10 +543,7 @@ def _dialogue(rng: random.Random, seed: int) -> Variation:
     answers = dict(profile.get("answers") or {})
     for act in ("ASK-TASK", "ASK-HELP"):
         if rng.random() < 0.6:
-            drawn = _answers(rng, act, story, name, answers.get(act),
-                             act in ASKED.get(base, ()))
-            if drawn:
-                answers[act] = drawn
+            answers[act] = _answers(rng, act, story, name, answers.get(act))
     profile["answers"] = answers
     base_script = list(profile.get("script") or [])
     asked = [str(step["task"]) for step in base_script if step.get("task")]
