@@ -440,11 +440,14 @@ def _answers(rng: random.Random, act: str, story: _Story, person: str,
             continue
         out.append({"reply": reply, "after": after})
         says = f"{act} -> {reply or 'silence'}{' late' if late else ''}"
+        # a late answer may come after the robot stopped asking: its moment is its coming
+        cue = ("answered", act, person, reply) if late and reply else \
+            ("asked", act, person, i + 1)
         if i > 0 and (reply is not None or out[-2]["reply"] is not None):
-            story(says, (*at, act, i), rest=True, cue=("asked", act, person, i + 1))
+            story(says, (*at, act, i), rest=True, cue=cue)
         elif i == 0 and (reply is not None or unasked is not None):  # without it: their
             # profile's own answer
-            story(says, (*at, act), cue=("asked", act, person, 1), unasked=unasked)
+            story(says, (*at, act), cue=cue, unasked=unasked)
         else:
             story(says)
     return out

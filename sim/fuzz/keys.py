@@ -91,8 +91,9 @@ def reached(cue: tuple[Any, ...], rows: list[Any]) -> bool:
     ``("asked", ACT, PERSON, K)``
         the robot said ACT to the end K times in tasks with PERSON in a role (a question
         cut short, the person turning away, is not heard: it is asked again);
-    ``("agreed", ACT, PERSON)``
-        PERSON said yes (H-AGREE) in a task where the robot began ACT;
+    ``("agreed", ACT, PERSON)``, ``("answered", ACT, PERSON, REPLY)``
+        PERSON said yes (H-AGREE), or REPLY, in a task where the robot began ACT, while
+        it still listened (a late answer to a question given up is not heard);
     ``("starts", ATOMIC, PERSON)``
         the robot started ATOMIC with PERSON among its arguments;
     ``("offered", PERSON, SECONDS, UNTIL)``
@@ -129,14 +130,15 @@ def reached(cue: tuple[Any, ...], rows: list[Any]) -> bool:
         return bool(rows) and rows[-1][0] > args[0]
     if what == "asked":
         return _said(rows, args[0], args[1]) >= args[2]
-    if what == "agreed":
+    if what in ("agreed", "answered"):
         act, person = args[0], args[1]
+        reply = "H-AGREE" if what == "agreed" else args[2]
         tasks = {r[2] for r in rows if r[1] == "task-start"
                  and person in (r[4].get("roles") or {}).values()}
         asking = {r[2] for r in rows if r[1] == "act" and r[4].get("act") == act
                   and r[2] in tasks}
         return any(r[1] == "act-received" and r[3] == person
-                   and r[4].get("act") == "H-AGREE" and r[2] in asking for r in rows)
+                   and r[4].get("act") == reply and r[2] in asking for r in rows)
     if what in ("starts", "exec"):
         return any(r[1] == "exec-request" and r[4].get("atomic") == args[0]
                    and (what == "exec" or args[1] in r[4].get("args", {}).values())
