@@ -155,10 +155,10 @@ def test_the_example_of_docs_schemes_md_runs_as_shown(tmp_path, shary):
 
 
 @pytest.mark.parametrize(("script", "acts", "end"), [
-    ("disambiguate done SAY-WHICH unclear SAY-WHICH unclear done",
+    ("disambiguate attended SAY-WHICH unclear SAY-WHICH unclear done",
      ["WAIT-ATTENTION", "ASK-WHICH", "SAY-WHICH", "ASK-WHICH", "SAY-WHICH", "GIVE-UP"],
      "unresolved"),
-    ("disambiguate done SAY-WHICH unclear SAY-WHICH chosen",
+    ("disambiguate attended SAY-WHICH unclear SAY-WHICH chosen",
      ["WAIT-ATTENTION", "ASK-WHICH", "SAY-WHICH", "ASK-WHICH", "SAY-WHICH"], "chosen"),
     ("inform 10s done 10s done",
      ["WAIT-ATTENTION", "CALL-ATTENTION", "WAIT-ATTENTION", "GIVE-UP"], "untold"),

@@ -67,6 +67,56 @@ def test_inform_calls_the_partner_then_gives_up_without_telling(world):
     assert run.outcome == "failed"
 
 
+def test_a_question_waits_until_the_partner_looks_then_asks(world):
+    world.facts.remove("alice", "looksAt", "jido")
+    world.give()
+    world.run(5)
+    assert said(world) == []  # "Shall I give you …?" is not asked of someone looking away
+    world.facts.add("alice", "looksAt", "jido")
+    world.run(2)
+    assert said(world) == ["Shall I give you the bottle?"]
+
+
+def test_a_question_nobody_attends_to_calls_then_gives_up_saying_why(world):
+    world.facts.remove("alice", "looksAt", "jido")
+    run = world.give()
+    world.run(40)
+    assert said(world) == ["Excuse me, Alice.",
+                           "You are busy, so I will not give you the bottle."]
+    assert run.outcome == "failed"
+
+
+class GoToTable:
+    """A planner whose plan for anything is to go to the table."""
+
+    domain = planner.load_domain("living-room")
+
+    def plan_steps(self, spec, args, facts, assigned=()):
+        from shary.kernel.recipes import Step, Term
+
+        return [Step("go", "navigate", None, {"place": Term("const", "table")}, None, ())]
+
+
+def test_a_plan_is_proposed_to_the_person_who_asked_once_they_look(world):
+    world.sup.planners["*"] = GoToTable()
+    world.sup.dialogue.hear("alice", "Jido, could you clean up the yellow bottle?")
+    world.facts.remove("alice", "looksAt", "jido")  # she asked, then took a call
+    world.run(15)
+    assert said(world) == ["Excuse me, Alice."]  # no yes, no plan to her back
+    world.facts.add("alice", "looksAt", "jido")
+    world.run(1)
+    assert said(world)[-1].startswith("Here is my plan.")
+
+
+def test_a_plan_nobody_looks_to_hear_is_given_up_saying_why(world):
+    world.sup.planners["*"] = GoToTable()
+    world.sup.dialogue.hear("alice", "Jido, could you clean up the yellow bottle?")
+    world.facts.remove("alice", "looksAt", "jido")
+    world.run(40)
+    assert said(world) == ["Excuse me, Alice.", "You are busy, so I will leave it."]
+    assert world.sup.agenda.goals[0].run.outcome == "failed"
+
+
 # -- person-initiated acts -------------------------------------------------------------
 
 def test_a_persons_request_starts_the_task_with_its_requested_variant(world):

@@ -419,6 +419,37 @@ DIALOGUE_FOUND = {
         "stopped in silence and the goal ended failed with no reason (a goal its person "
         "cancels now ends \"cancelled by alice\", shary/kernel/agenda.py), and its plan "
         "had been proposed as she looked away",
+    **dict.fromkeys(
+        (28, 31, 105, 230, 257, 265, 277, 387, 438),
+        "\"Here is my plan. … Is that all right?\" said to the back of the person who had "
+        "asked for the clean-up (turned away, on the phone, walking out): PROPOSE-PLAN is "
+        "said to a partner who attends, else the robot turns to them and waits for their "
+        "look (WAIT-ATTENTION, then a call), and gives up saying why if it never comes"),
+    **dict.fromkeys(
+        (243, 303, 469),
+        "\"All right: you will pick up the orange bottle. I will plan again.\" said to her "
+        "back as she went to pick it up: the acknowledgement of MODIFY-PLAN is said to a "
+        "partner who attends, else the robot turns to them in silence"),
+    443: "the plan proposal said to her back (as 438), then \"Can you give me the orange "
+         "bottle?\" as she looked away when ASK-HELP began: ASK-HELP asks only a helper "
+         "who attends, and waits for them again otherwise",
+    **dict.fromkeys(
+        (50, 401, 434, 435),
+        "\"Shall I give you …?\" asked of someone on the phone or whose gaze flickered "
+        "away as the robot turned to them: ASK-TASK asks only a partner who attends, "
+        "and otherwise waits for their look, calls them, or gives up saying why"),
+    417: "\"Do you mean …?\" asked as her gaze flickered away while the robot turned to "
+         "her: the wait for her attention starts again when she looks away during it",
+    **dict.fromkeys(
+        (356, 357),
+        "\"All right, the green cube on the store table.\" said to her looking at the "
+        "store table: the acknowledgement of her answer is said only to a partner who "
+        "attends, else the robot turns to her in silence"),
+    318: "\"I gave you the yellow bottle.\" said as her gaze flickered away: the END-TASK "
+         "of a hand-over speaks only to a partner who attends, else turns to them",
+    59: "\"I have cleared the orange bottle away.\" said to the back of the person who "
+        "had asked for the clean-up: its END-TASK speaks only to the person who asked "
+        "($initiator) if they attend, else turns to them",
 }
 """Seeds of ``shary fuzz dialogue`` that violated an invariant, and why, now fixed."""
 

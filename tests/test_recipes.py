@@ -255,3 +255,25 @@ def test_custom_act_of_a_scheme_runs_end_to_end(tmp_path):
     files = sorted(folder.glob("*.yaml"))
     assert main(["validate", *map(str, files)]) == 0
     assert main(["run", str(folder / "scenario.yaml"), "--out", str(tmp_path), "--quiet"]) == 0
+
+
+def test_initiator_is_implicit_and_names_nobody_in_a_task_nobody_asked_for(shary, write):
+    """``$initiator`` is the person who asked for a task: every recipe may name it, no task
+    declares it, and a condition about it holds nothing, negated or not, when nobody
+    asked (so a recipe for the asker is not chosen for the robot's own goal)."""
+    from shary.kernel.recipes import Condition, Pattern
+
+    path = write("asker.yaml", BASE.replace("params: [person]", "params: [person, initiator]")
+                 + "recipes:\n  - task: greet\n    act: ASK-TASK\n    when:\n"
+                   "      - not: [$initiator, looksAt, $robot]\n")
+    ((_, _, msg),) = _problems(shary, path)
+    assert msg == "'initiator' is implicit: every task has it"
+    world = World()
+    looks = Pattern(Term("param", "initiator"), Term("const", "looksAt"),
+                    Term("param", "robot"))
+    for negated in (False, True):
+        assert not world.sup.holds((Condition(looks, negated),), {"robot": "jido"})
+    asked = {"robot": "jido", "initiator": "alice"}
+    assert world.sup.holds((Condition(looks),), asked)  # the scripted Alice looks at Jido
+    world.facts.remove("alice", "looksAt", "jido")
+    assert world.sup.holds((Condition(looks, True),), asked)

@@ -25,13 +25,15 @@ from typing import TYPE_CHECKING, Any
 
 from shary.dialogue.steps import look, say
 from shary.dialogue.verbalize import proper
-from shary.kernel.recipes import Recipe, Step
+from shary.kernel.recipes import INITIATOR_PARAM, Recipe, Step
 
 if TYPE_CHECKING:
     from shary.kernel.supervisor import Supervisor, TaskRun
 
 INFORM_TASK = "inform"
 ANNOUNCE_TASK = "announce"
+ATTENTION_LOST = "attention-lost"
+"""The event that sends a scheme back to waiting for its partner's attention."""
 LEFT = "left"
 """The event that tells a task its person has left (``schemes/inform.yaml``)."""
 ATTENDS = "looksAt"
@@ -42,10 +44,38 @@ def attending(facts: Any, person: str, robot: str, perspective: str = "robot") -
     return facts.holds(person, ATTENDS, robot, perspective)
 
 
+def listening(run: TaskRun) -> bool:
+    """Whether the task's partner attends to the robot (or the task has none): what the
+    robot says to them is said only then."""
+    partner = run.roles.get("partner")
+    return partner is None or attending(run.sup.facts, str(partner), run.robot)
+
+
+def if_attending(run: TaskRun, sentence: Step) -> Step:
+    """``sentence`` when the partner attends; else a turn of the head to them, silent,
+    that emits what the sentence would have: nothing is said to a person who does not
+    attend, and the scheme goes on as if it had been (an acknowledgement is no news to
+    them), as the END-TASK recipes do."""
+    if listening(run):
+        return sentence
+    return look(sentence.name, str(run.roles["partner"]), sentence.after, sentence.emit,
+                sentence.emit_data)
+
+
+def await_attention(run: TaskRun, name: str) -> list[Step]:
+    """Instead of a question or a proposal to a partner who does not attend: the robot
+    turns to them without a word, and its scheme waits for their attention
+    (``attention-lost``) before asking; nothing (go on and ask) when they attend."""
+    if listening(run):
+        return []
+    return [look(name, str(run.roles["partner"]), emit=ATTENTION_LOST)]
+
+
 def call_attention(run: TaskRun, recipe: Recipe) -> list[Step]:
     """CALL-ATTENTION: another modality than waiting for a glance: look at the partner
-    and call them by name ("Excuse me, Alice.")."""
-    partner = str(run.env["partner"])
+    and call them by name ("Excuse me, Alice."); the partner is the task's, or the person
+    who asked for it."""
+    partner = str(run.env.get("partner") or run.env[INITIATOR_PARAM])
     return [look("look", partner), say("call", f"Excuse me, {proper(partner)}.",
                                        after=("look",))]
 

@@ -18,7 +18,10 @@ question once the partner attends, and understands the answer: a sentence
 :class:`Question` holds one such dialogue; the task's ``question`` argument
 names it, and its recipes' functions (:func:`ask_which`,
 :func:`understand_which`) read it.  Understanding the answer records the
-choice on the question; whoever asked reads it when the task ends.
+choice on the question; whoever asked reads it when the task ends.  What the robot
+says is said to a partner who attends: the question waits for them again when they
+looked away, the acknowledgement ("All right, the one on the store table.") is left
+unsaid (the robot turns to them).
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from shary.dialogue import attention
 from shary.dialogue.reg import RELATIONS, PerspectiveIndex
 from shary.dialogue.requests import Query, Resolution, interpret_answer
 from shary.dialogue.steps import say
@@ -68,8 +72,10 @@ def _question(run: TaskRun) -> Question:
 
 
 def ask_which(run: TaskRun, recipe: Recipe) -> list[Step]:
-    """The ASK-WHICH recipe: ask the question (the partner attends: the scheme waited)."""
-    return [say("ask", str(_question(run).resolution.question))]
+    """The ASK-WHICH recipe: ask the question once the partner attends (the scheme waited;
+    one who looked away since is waited for again)."""
+    return attention.await_attention(run, "ask") or [
+        say("ask", str(_question(run).resolution.question))]
 
 
 def chosen_by(answer: Any, q: Question, facts: Any) -> str | None:
@@ -98,8 +104,9 @@ def understand_which(run: TaskRun, recipe: Recipe) -> list[Step]:
     q.answers.append(answer)
     found = chosen_by(answer, q, run.sup.facts)
     if found is None:
-        return [say("unclear", "Sorry, I did not understand which one.", emit="unclear")]
+        return [attention.if_attending(
+            run, say("unclear", "Sorry, I did not understand which one.", emit="unclear"))]
     q.chosen = found
     described = q.resolution.descriptions[list(q.resolution.candidates).index(found)]
-    return [say("understood", f"All right, {described.text()}.", emit="chosen",
-                emit_data={"thing": found})]
+    return [attention.if_attending(run, say("understood", f"All right, {described.text()}.",
+                                            emit="chosen", emit_data={"thing": found}))]

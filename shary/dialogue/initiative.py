@@ -32,7 +32,7 @@ from shary.dialogue import attention, disambiguation, negotiation, sessions
 from shary.dialogue.disambiguation import Question
 from shary.dialogue.reg import PerspectiveIndex, Referrer
 from shary.dialogue.requests import Grammar, Query, Request, Resolution, resolve
-from shary.dialogue.steps import look, say
+from shary.dialogue.steps import say
 from shary.kernel.recipes import ROBOT_PARAM, Recipe, Step, Term
 
 if TYPE_CHECKING:
@@ -268,17 +268,8 @@ def reply_task(run: TaskRun, recipe: Recipe) -> list[Step]:
         held = Referrer.for_perspective(facts, "robot").describe(busy[0], by_name=True).text()
         return [say("refuse", f"Sorry, I cannot: my hand is busy with {held}.",
                     emit="R-DISAGREE")]
-    if not _listening(run):  # asked, then turned away (a call, the door): they will see it
-        return [look("agree", str(run.roles["partner"]))]
-    return [say("agree", "Yes, I will do that.")]
-
-
-def _listening(run: TaskRun) -> bool:
-    """Whether the partner attends to the robot (or the task has none): words that are no
-    news to them (a yes, an agreed stop) are said only then, else the robot turns to them
-    in silence, as the END-TASK recipes do."""
-    partner = run.roles.get("partner")
-    return partner is None or attention.attending(run.sup.facts, str(partner), run.robot)
+    # asked, then turned away (a call, the door): they will see it
+    return [attention.if_attending(run, say("agree", "Yes, I will do that."))]
 
 
 def stop_task(run: TaskRun, recipe: Recipe) -> list[Step]:
@@ -297,7 +288,7 @@ def stop_task(run: TaskRun, recipe: Recipe) -> list[Step]:
                  else f"All right, I will stop and put {thing} back.")
     else:
         words = "All right, I will stop."
-    steps = [say("stop", words) if _listening(run) else look("stop", str(run.roles["partner"]))]
+    steps = [attention.if_attending(run, say("stop", words))]
     if holding and "put-back" in run.sup.library.atomic:
         steps.append(Step("put-back", "put-back", None, {"object": Term("const", wanted)},
                           None, ("stop",)))

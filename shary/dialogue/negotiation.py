@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any, NamedTuple
 
+from shary.dialogue import attention
 from shary.dialogue.steps import say
 from shary.kernel.recipes import Recipe, Step
 
@@ -105,7 +106,11 @@ def _planned_recipe(run: TaskRun) -> Recipe | None:
 
 
 def propose_plan(run: TaskRun, recipe: Recipe) -> list[Step]:
-    """PROPOSE-PLAN: plan the task as REALIZE-TASK would, and say the plan."""
+    """PROPOSE-PLAN: plan the task as REALIZE-TASK would, and say the plan, to a partner
+    who attends (one who looks away is waited for first: a proposal asks them)."""
+    unheard = attention.await_attention(run, "plan")
+    if unheard:
+        return unheard
     planned = _planned_recipe(run)
     if planned is None:
         return [say("nothing", "I will do it myself.")]
@@ -159,16 +164,20 @@ def _domain_action(run: TaskRun, name: str) -> str | None:
 
 
 def modify_plan(run: TaskRun, recipe: Recipe) -> list[Step]:
-    """MODIFY-PLAN: keep the person's step as an assignment, and say so."""
+    """MODIFY-PLAN: keep the person's step as an assignment, and say so to a partner who
+    attends (one who said it and turned away, to do that step, is not spoken to: the
+    new plan's proposal waits for their attention)."""
     found = assignment_of(run, run.entered_data.get("MODIFY-PLAN"))
     if found is None:
-        return [say("unclear", "Sorry, I did not understand what you want to change.")]
+        return [attention.if_attending(
+            run, say("unclear", "Sorry, I did not understand what you want to change."))]
     assignment, words = found
     run.assigned.append(assignment)
     run.sup.record("plan-assigned", task=run.node, agent=assignment.agent,
                    action=assignment.action, things=list(assignment.things))
-    return [say("noted", f"All right: {words[:1].lower()}{words[1:]} I will plan again."
-                if words else "All right, I will plan again.")]
+    return [attention.if_attending(
+        run, say("noted", f"All right: {words[:1].lower()}{words[1:]} I will plan again."
+                 if words else "All right, I will plan again."))]
 
 
 def constrain_running(run: TaskRun, assignment: Any) -> None:

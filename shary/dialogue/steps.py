@@ -15,6 +15,10 @@ def say(name: str, text: str, emit: str | None = None, after: tuple[str, ...] = 
                 emit_data)
 
 
-def look(name: str, target: str, after: tuple[str, ...] = ()) -> Step:
-    """A step that turns the robot's head to ``target``."""
-    return Step(name, "look-at", None, {"target": Term("const", target)}, None, after)
+def look(name: str, target: str, after: tuple[str, ...] = (), emit: str | None = None,
+         emit_data: dict[str, Any] | None = None) -> Step:
+    """A step that turns the robot's head to ``target``, then emits ``emit`` carrying
+    ``emit_data`` (what a sentence would have emitted, when it is not said to someone
+    who does not attend)."""
+    return Step(name, "look-at", None, {"target": Term("const", target)}, None, after, emit,
+                emit_data)

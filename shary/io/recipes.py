@@ -22,6 +22,7 @@ from shary.io import schema
 from shary.io.schemes import load_scheme
 from shary.kernel.recipes import (
     ANY_TASK,
+    INITIATOR_PARAM,
     ROBOT_PARAM,
     AtomicTask,
     Chronicle,
@@ -138,9 +139,10 @@ class _Builder:
             reader.problem(path, f"task {name!r} is declared twice", key=True)
             return
         params = tuple(_strings(spec.get("params")))
-        if ROBOT_PARAM in params:
-            reader.problem(path + ("params",), f"'{ROBOT_PARAM}' is implicit: every "
-                         "task has it")
+        for implicit in (ROBOT_PARAM, INITIATOR_PARAM):
+            if implicit in params:
+                reader.problem(path + ("params",), f"'{implicit}' is implicit: every "
+                             "task has it")
         env = {ROBOT_PARAM, *params}
         raw = spec.get("scheme")
         if isinstance(raw, str):
@@ -223,7 +225,7 @@ class _Builder:
             names = ", ".join(c.scheme.name for c in task.schemes)
             reader.problem(path + ("act",), f"no state of the scheme(s) of task "
                          f"{task_name!r} ({names}) carries out {act!r}")
-        env = {ROBOT_PARAM, *task.params}
+        env = {ROBOT_PARAM, INITIATOR_PARAM, *task.params}
         steps = self._steps(reader, path + ("steps",), spec.get("steps"), env)
         monitors = tuple(self._monitor(reader, path + ("monitors", i), m, env)
                          for i, m in enumerate(spec.get("monitors") or [])

@@ -39,6 +39,12 @@ ANY_TASK = "*"
 ROBOT_PARAM = "robot"
 """Every task has this parameter: the robot whose supervisor runs it."""
 
+INITIATOR_PARAM = "initiator"
+"""Every recipe may name this parameter: the person who asked for the task (they play the
+human roles its parameters leave free, as a clean-up someone asked for has them).  It is
+unbound in a task nobody asked for, and a condition about it then holds nothing, negated
+or not: a recipe for the person who asked is not chosen when there is none."""
+
 
 @dataclass(frozen=True)
 class Term:

@@ -31,6 +31,7 @@ from shary.kernel.acttask import ActTask, StepRun
 from shary.kernel.executors import ExecutorRegistry, Outcome, Reporter, Request, record_outcome
 from shary.kernel.loop import EventLoop
 from shary.kernel.recipes import (
+    INITIATOR_PARAM,
     ROBOT_PARAM,
     Condition,
     PlanSpec,
@@ -200,9 +201,13 @@ class Supervisor:
         return found
 
     def holds(self, conditions: tuple[Condition, ...], env: dict[str, Any]) -> bool:
-        """Whether facts satisfy conditions (the robot's perspective; ``_`` object: any)."""
+        """Whether facts satisfy conditions (the robot's perspective; ``_`` object: any).
+        A condition whose subject is unbound (``$initiator`` of a task nobody asked for)
+        is about no one: it fails, negated or not."""
         for condition in conditions:
             s, p, o = condition.pattern.resolve(env)
+            if s is None:
+                return False
             if o is None:
                 found = bool(self.facts.objects(s, p))
             else:
@@ -355,6 +360,8 @@ class TaskRun(SchemeListener):
             self.node = sup.tree.add(TASK, task_type.name, parent_node, args=args or None)
         self.scheme = scheme or sup.choose_scheme(task_type, self.env)
         self.initiator = initiator
+        if initiator is not None:  # recipes may name the person who asked ($initiator)
+            self.env.setdefault(INITIATOR_PARAM, initiator)
         self.roles = {role: _role_agent(role, task_type.roles.get(role), self.env)
                       for role in self.scheme.roles}
         if initiator is not None:  # the asker plays the human roles no parameter fills
