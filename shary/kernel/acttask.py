@@ -197,7 +197,7 @@ class ActTask:
             run.state = DONE
             sup.tree.set_state(run.node, DONE)
             if run.step.emit:
-                self.run.deliver_soon(run.step.emit, run.step.emit_data)
+                self.run.deliver_soon(run.step.emit, run.step.emit_data, self)
             self._advance()
             return
         retry = self.recipe.retry if self.recipe else None
@@ -263,7 +263,7 @@ class ActTask:
         self.over = True
         self._detach()
         self.sup.tree.set_state(self.node, state, reason or None)
-        self.run.deliver_soon(event, {"reason": reason} if reason else None)
+        self.run.deliver_soon(event, {"reason": reason} if reason else None, self)
 
     # -- monitors ------------------------------------------------------------
 
@@ -271,23 +271,43 @@ class ActTask:
         env = self.run.env
         s, p, o = monitor.pattern.resolve(env)
         perspective = monitor.perspective.resolve(env) if monitor.perspective else None
+        pending: dict[tuple[Any, ...], Any] = {}  # fact -> its timer, while it must last
+
+        def fire(event: Any) -> None:
+            fact = (event.subject, event.predicate, event.object)
+            pending.pop(fact, None)
+            if self.over or subscription not in self.subscriptions:
+                return
+            self.sup.record("monitor", task=self.node, monitor=monitor.name,
+                            emit=monitor.emit, fact=list(fact))
+            if monitor.emit in ("done", "failed") and not self.steps:
+                # a watching act ends by what it watched for: done or failed, not cut
+                self._finish(DONE if monitor.emit == "done" else FAILED, monitor.emit,
+                             f"{' '.join(map(str, fact))} {event.kind}")
+            else:
+                self.run.deliver_soon(monitor.emit, {"fact": fact}, self)
 
         def react(event: Any) -> None:
-            if not self.over:
+            if monitor.lasting <= 0:
+                fire(event)
+            elif not self.over:
                 fact = (event.subject, event.predicate, event.object)
-                self.sup.record("monitor", task=self.node, monitor=monitor.name,
-                                emit=monitor.emit, fact=list(fact))
-                if monitor.emit in ("done", "failed") and not self.steps:
-                    # a watching act ends by what it watched for: done or failed, not cut
-                    self._finish(DONE if monitor.emit == "done" else FAILED, monitor.emit,
-                                 f"{' '.join(map(str, fact))} {event.kind}")
-                else:
-                    self.run.deliver_soon(monitor.emit, {"fact": fact})
+                if fact not in pending:
+                    pending[fact] = self.sup.loop.call_later(monitor.lasting, fire, event)
+
+        def undone(event: Any) -> None:
+            timer = pending.pop((event.subject, event.predicate, event.object), None)
+            if timer is not None:
+                timer.cancel()
 
         subscription = self.sup.facts.subscribe(
             react, subject=s, predicate=p, object=o, perspective=perspective,
             kind=monitor.change)
         self.subscriptions.append(subscription)
+        if monitor.lasting > 0:  # the change undone before it lasted: forgotten
+            self.subscriptions.append(self.sup.facts.subscribe(
+                undone, subject=s, predicate=p, object=o, perspective=perspective,
+                kind="added" if monitor.change == "removed" else "removed"))
         if monitor.until is not None:
             self.until.setdefault(monitor.until, []).append(subscription)
 

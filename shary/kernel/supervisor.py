@@ -410,8 +410,15 @@ class TaskRun(SchemeListener):
         self.sup.record("event", task=self.node, event=event)
         self.instance.send(event, data)
 
-    def deliver_soon(self, event: str, data: Any = None) -> None:
-        self.sup.loop.call_soon(self.deliver, event, data)
+    def deliver_soon(self, event: str, data: Any = None, act: ActTask | None = None) -> None:
+        """Deliver ``event`` once the current one is handled; an event of ``act``'s (its
+        step's emit, its end, a monitor's) is dropped if the act has been left by then:
+        a step whose emit took the scheme elsewhere must not also end the act there."""
+        self.sup.loop.call_soon(self._deliver_of, event, data, act)
+
+    def _deliver_of(self, event: str, data: Any, act: ActTask | None) -> None:
+        if act is None or self.acts.get(act.state.name) is act:
+            self.deliver(event, data)
 
     # -- the scheme's listener -----------------------------------------------------
 
