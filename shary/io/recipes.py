@@ -422,8 +422,7 @@ class _Builder:
             self._check_term(reader, path + ("perspective",), perspective, env)
         name = spec.get("name") or f"{change}-{pattern.predicate}"
         until = str(spec["until"]) if "until" in spec else None
-        return Monitor(name, change, pattern, str(spec.get("emit", "")), perspective, until,
-                       _duration(spec.get("for")) or 0.0)
+        return Monitor(name, change, pattern, str(spec.get("emit", "")), perspective, until)
 
     def _pattern(self, reader: Reader, path: tuple, raw: Any, env: set[str],
                  variables: set[str] | None = None) -> Pattern:

@@ -271,43 +271,23 @@ class ActTask:
         env = self.run.env
         s, p, o = monitor.pattern.resolve(env)
         perspective = monitor.perspective.resolve(env) if monitor.perspective else None
-        pending: dict[tuple[Any, ...], Any] = {}  # fact -> its timer, while it must last
-
-        def fire(event: Any) -> None:
-            fact = (event.subject, event.predicate, event.object)
-            pending.pop(fact, None)
-            if self.over or subscription not in self.subscriptions:
-                return
-            self.sup.record("monitor", task=self.node, monitor=monitor.name,
-                            emit=monitor.emit, fact=list(fact))
-            if monitor.emit in ("done", "failed") and not self.steps:
-                # a watching act ends by what it watched for: done or failed, not cut
-                self._finish(DONE if monitor.emit == "done" else FAILED, monitor.emit,
-                             f"{' '.join(map(str, fact))} {event.kind}")
-            else:
-                self.run.deliver_soon(monitor.emit, {"fact": fact}, self)
 
         def react(event: Any) -> None:
-            if monitor.lasting <= 0:
-                fire(event)
-            elif not self.over:
+            if not self.over:
                 fact = (event.subject, event.predicate, event.object)
-                if fact not in pending:
-                    pending[fact] = self.sup.loop.call_later(monitor.lasting, fire, event)
-
-        def undone(event: Any) -> None:
-            timer = pending.pop((event.subject, event.predicate, event.object), None)
-            if timer is not None:
-                timer.cancel()
+                self.sup.record("monitor", task=self.node, monitor=monitor.name,
+                                emit=monitor.emit, fact=list(fact))
+                if monitor.emit in ("done", "failed") and not self.steps:
+                    # a watching act ends by what it watched for: done or failed, not cut
+                    self._finish(DONE if monitor.emit == "done" else FAILED, monitor.emit,
+                                 f"{' '.join(map(str, fact))} {event.kind}")
+                else:
+                    self.run.deliver_soon(monitor.emit, {"fact": fact}, self)
 
         subscription = self.sup.facts.subscribe(
             react, subject=s, predicate=p, object=o, perspective=perspective,
             kind=monitor.change)
         self.subscriptions.append(subscription)
-        if monitor.lasting > 0:  # the change undone before it lasted: forgotten
-            self.subscriptions.append(self.sup.facts.subscribe(
-                undone, subject=s, predicate=p, object=o, perspective=perspective,
-                kind="added" if monitor.change == "removed" else "removed"))
         if monitor.until is not None:
             self.until.setdefault(monitor.until, []).append(subscription)
 

@@ -165,9 +165,6 @@ class Monitor:
     until: str | None = None
     """A step of the recipe: the monitor is dropped when that step starts (a look-away
     matters to an inform until its sentence begins, not while it is said)."""
-    lasting: float = 0.0
-    """Seconds the change must last to count (``for:``): a change undone sooner is
-    forgotten, so a glance away, or a blink of the perception, does not stop a task."""
 
 
 @dataclass(frozen=True)
