@@ -120,7 +120,10 @@ def test_dot_edges_attach_to_compound_states_at_their_borders():
     assert drawn["attention-lost", "s_suspended"][1]["ltail"] == "cluster_engaged"
     # into the deep history state inside engaged, not to engaged itself
     assert "lhead" not in drawn["attention-back", "s_resume"][1]
-    assert drawn[None, "s_ask"][0] == "init_root"
+    # the question is a compound (its wait, call and ask bounded together): the root's
+    # initial point goes into it, and its own to ask
+    assert drawn[None, "init_s_asking"][0] == "init_root"
+    assert drawn[None, "s_ask"][0] == "init_s_asking"
     assert drawn[None, "init_s_engaged"] == ("init_s_realize", {"lhead": "cluster_engaged"})
 
 

@@ -90,7 +90,7 @@ def test_a_plain_rclpy_client_asks_for_a_task_and_gets_the_verdict(write, ros_do
     # the robot spoke through its binding; the tools saw the task's states
     assert heard(robot, "heard /jido/say")
     states = heard(robot, "heard /shary/active_state")
-    assert states[0] == "give-object n1: ask" and states[-1] == "give-object n1: ended"
+    assert states[0] == "give-object n1: asking" and states[-1] == "give-object n1: ended"
     assert "give-object n1: realize, engaged, handover" in states
     run_until(loop, lambda: any("shary/give-object" in d and "|0|ended: done" in d
                                 for d in heard(robot, "heard /diagnostics")))
