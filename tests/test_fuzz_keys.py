@@ -91,11 +91,15 @@ def test_each_cue_reads_its_moment_from_the_rows():
     assert reached(("asked", "ASK-TASK", "alice", 1), give)
     assert not reached(("asked", "ASK-TASK", "alice", 2), give)
     assert not reached(("asked", "ASK-HELP", "alice", 1), give)
+    assert reached(("answered", "ASK-TASK", "alice", 1, "H-AGREE"), give)
+    assert not reached(("answered", "ASK-TASK", "alice", 2, "H-AGREE"), give)  # asked once
+    assert not reached(("answered", "ASK-TASK", "alice", 1, "H-DISAGREE"), give)
     assert reached(("starts", "give", "alice"), give)
     assert not reached(("starts", "pick", "alice"), give)  # a pick is not towards her
     assert reached(("exec", "navigate"), give) and not reached(("exec", "dump"), give)
     assert reached(("offered", "alice", 0.5, None), give)
     assert not reached(("offered", "alice", 0.5, 1.0), give)  # she walked out first
+    assert not reached(("offered", "alice", 1e3, None), give)  # she took it long before
     assert not reached(("blink", "isHolding"), give)  # no noise: nothing blinks
     help_ = run_scenario(builtin_scenarios()["clean-up-unreachable"], seed=1).events
     assert reached(("agreed", "ASK-HELP", "alice"), help_)

@@ -53,6 +53,7 @@ import yaml
 
 from userfiles import yamlsafe
 
+from ..humans import WALK_SPEED
 from ..scenario import builtin_scenarios, load_scenario
 
 __all__ = ["FAMILIES", "Drawn", "Variation", "draw", "stack_partner"]
@@ -393,8 +394,9 @@ def _living_room(rng: random.Random, seed: int) -> Variation:
         leave = _seconds(rng, 1, 40)
         profile["script"] = [{"at": f"{leave:g}s", "leave": True}]
         story(f"leaves at {leave:g}s", (*at, "script"), cue=("at", leave))
-        profile["speed"] = speed
-        story(f"walks at {speed:g} m/s", (*at, "speed"), cue=("at", leave))
+        if speed != WALK_SPEED:  # the pace they walk at unless their profile says
+            profile["speed"] = speed
+            story(f"walks at {speed:g} m/s", (*at, "speed"), cue=("at", leave))
     if "give" in ACTIONS[base]:  # what is held out to her, taken or not (before she leaves)
         profile["takes"] = takes
         soonest = min(float(takes["after"][0].rstrip("s")), UNASKED_TAKE) if takes \
@@ -441,7 +443,7 @@ def _answers(rng: random.Random, act: str, story: _Story, person: str,
         out.append({"reply": reply, "after": after})
         says = f"{act} -> {reply or 'silence'}{' late' if late else ''}"
         # a late answer may come after the robot stopped asking: its moment is its coming
-        cue = ("answered", act, person, reply) if late and reply else \
+        cue = ("answered", act, person, i + 1, reply) if late and reply else \
             ("asked", act, person, i + 1)
         if i > 0 and (reply is not None or out[-2]["reply"] is not None):
             story(says, (*at, act, i), rest=True, cue=cue)

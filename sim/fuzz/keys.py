@@ -34,10 +34,13 @@ from typing import Any
 
 from .behaviours import Drawn, Variation
 
-__all__ = ["BLINK", "Follower", "keys_matter", "reached", "same_without"]
+__all__ = ["BLINK", "TIE", "Follower", "keys_matter", "reached", "same_without"]
 
 BLINK = 0.35
 """Seconds within which a fact dropped and seen again is a blink of the perception."""
+TIE = 0.2
+"""Seconds by which a moment must pass a deadline to count: two things due at one
+instant (a take and a turn of the head) may come in either order."""
 
 
 class _Diverged(Exception):
@@ -91,9 +94,11 @@ def reached(cue: tuple[Any, ...], rows: list[Any]) -> bool:
     ``("asked", ACT, PERSON, K)``
         the robot said ACT to the end K times in tasks with PERSON in a role (a question
         cut short, the person turning away, is not heard: it is asked again);
-    ``("agreed", ACT, PERSON)``, ``("answered", ACT, PERSON, REPLY)``
-        PERSON said yes (H-AGREE), or REPLY, in a task where the robot began ACT, while
-        it still listened (a late answer to a question given up is not heard);
+    ``("agreed", ACT, PERSON)``
+        PERSON said yes (H-AGREE) in a task where the robot began ACT;
+    ``("answered", ACT, PERSON, K, REPLY)``
+        the robot said ACT to PERSON to the end K times and then heard their REPLY
+        (a late answer to a question given up is not heard);
     ``("starts", ATOMIC, PERSON)``
         the robot started ATOMIC with PERSON among its arguments;
     ``("offered", PERSON, SECONDS, UNTIL)``
@@ -129,10 +134,16 @@ def reached(cue: tuple[Any, ...], rows: list[Any]) -> bool:
     if what == "at":
         return bool(rows) and rows[-1][0] > args[0]
     if what == "asked":
-        return _said(rows, args[0], args[1]) >= args[2]
-    if what in ("agreed", "answered"):
+        return len(_said(rows, args[0], args[1])) >= args[2]
+    if what == "answered":
+        act, person, k, reply = args
+        said = _said(rows, act, person)
+        return len(said) >= k and any(
+            r[1] == "act-received" and r[3] == person and r[4].get("act") == reply
+            and r[0] >= said[k - 1] for r in rows)
+    if what == "agreed":
         act, person = args[0], args[1]
-        reply = "H-AGREE" if what == "agreed" else args[2]
+        reply = "H-AGREE"
         tasks = {r[2] for r in rows if r[1] == "task-start"
                  and person in (r[4].get("roles") or {}).values()}
         asking = {r[2] for r in rows if r[1] == "act" and r[4].get("act") == act
@@ -176,14 +187,14 @@ def reached(cue: tuple[Any, ...], rows: list[Any]) -> bool:
                and str(r[4].get("name", "")).startswith(args[0]) for r in rows)
 
 
-def _said(rows: list[Any], act: str, person: str) -> int:
-    """How many times the robot said ``act`` to the end in a task with ``person`` in a
+def _said(rows: list[Any], act: str, person: str) -> list[float]:
+    """When the robot finished saying ``act`` to the end in a task with ``person`` in a
     role: its sentence (the first after the act began, the robot's last act) done."""
     tasks = set()
     last: tuple[str, Any] | None = None  # the robot's last act and its task
     saying: dict[str, bool] = {}  # speak request -> it says ``act`` to them
-    said = 0
-    for _, kind, task, _, data in rows:
+    said: list[float] = []
+    for t, kind, task, _, data in rows:
         if kind == "task-start" and person in (data.get("roles") or {}).values():
             tasks.add(task)
         elif kind == "act":
@@ -191,8 +202,9 @@ def _said(rows: list[Any], act: str, person: str) -> int:
         elif kind == "exec-request" and data.get("atomic") == "speak" and last is not None:
             saying[str(data.get("request"))] = last[0] == act and last[1] in tasks
             last = None  # one sentence an act
-        elif kind == "exec-result" and saying.pop(str(data.get("request")), False):
-            said += data.get("status") == "done"
+        elif kind == "exec-result" and saying.pop(str(data.get("request")), False) \
+                and data.get("status") == "done":
+            said.append(t)
     return said
 
 
@@ -242,10 +254,10 @@ def _offered_seen(rows: list[Any], person: str, seconds: float, until: float | N
         if gaze.target in giving.values():
             since = t if since is None else since
         elif since is not None:
-            if t - since >= seconds:
+            if t - since > seconds + TIE:
                 return True
             since = None
-    return since is not None and rows[-1][0] - since >= seconds
+    return since is not None and rows[-1][0] - since > seconds + TIE
 
 
 def _due_for(rows: list[Any], label: str, seconds: float) -> bool:
