@@ -299,7 +299,7 @@ def _stack(rng: random.Random, seed: int) -> Variation:
         profile["before"] = before
         (task, actions), = before.items()
         story(f"before {task}: {' '.join('+'.join(a) for a in actions)}",
-              (*profile_at, "before"), cue=("due-for", task, profile["delay"]))
+              (*profile_at, "before"), cue=("due-for", task, profile["delay"], partner))
     if rng.random() < 0.1:
         after = rng.choice(HUMAN_TASKS).format(h=partner)
         profile["leave"] = {"after": after}

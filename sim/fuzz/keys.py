@@ -118,9 +118,10 @@ def reached(cue: tuple[Any, ...], rows: list[Any]) -> bool:
         a decision of PERSON's waited for an action that did not begin in time;
     ``("done", LABEL)``
         a plan task whose label begins with LABEL was executed;
-    ``("due-for", LABEL, SECONDS)``
+    ``("due-for", LABEL, SECONDS, PERSON)``
         a task of the robot's whose label begins with LABEL stayed due or under way for
-        SECONDS (a partner acting before it looks at what is due after their delay);
+        SECONDS (a partner acting before it looks at what is due after their delay),
+        PERSON not yet walking out;
     ``("away", I, MOMENTS, PERSON, ROBOT)``
         the I-th of PERSON's look-aways came while ROBOT saw them look at it, and not
         while another of theirs lasted (a look-away at a look-away is nothing new);
@@ -180,7 +181,7 @@ def reached(cue: tuple[Any, ...], rows: list[Any]) -> bool:
         return any(r[1] == "plan-match" and r[3] == args[0]
                    and str(r[4].get("why", "")).startswith("no action started") for r in rows)
     if what == "due-for":
-        return _due_for(rows, args[0], args[1])
+        return _due_for(rows, *args)
     if what == "away":
         return _away_seen(rows, *args)
     return any(r[1] == "plan-task" and r[4].get("state") == "EXECUTED"
@@ -260,7 +261,13 @@ def _offered_seen(rows: list[Any], person: str, seconds: float, until: float | N
     return since is not None and rows[-1][0] - since > seconds + TIE
 
 
-def _due_for(rows: list[Any], label: str, seconds: float) -> bool:
+def _due_for(rows: list[Any], label: str, seconds: float, person: str) -> bool:
+    out = next((r[0] for r in rows if r[1] == "person-action" and r[3] == person
+                and r[4].get("args", {}).get("to") == "door"), None)
+    if out is not None:
+        rows = [r for r in rows if r[0] < out]
+        if not rows:
+            return False
     due: dict[str, float] = {}  # task -> since when it is due (or under way)
     for t, kind, task, _, data in rows:
         if kind != "plan-task" or not str(data.get("name", "")).startswith(label):
