@@ -247,6 +247,11 @@ def _seconds(rng: random.Random, low: float, high: float) -> float:
     return round(rng.uniform(low, high), 1)
 
 
+def _upper(span: list[str]) -> float:
+    """The upper bound of a drawn span, in seconds."""
+    return float(span[-1].rstrip("s"))
+
+
 def _span(rng: random.Random, low: float, high: float) -> list[str]:
     a = _seconds(rng, low, high)
     return [f"{a:g}s", f"{a + _seconds(rng, 0, 2):g}s"]
@@ -475,14 +480,17 @@ def _weld(rng: random.Random, seed: int) -> Variation:
             if rng.random() < 0.3:  # longer than the site's own mount (about 15 s), which
                 # a person's pace can slow but not hasten
                 behaviour["works"] = {"mount-panel": _span(rng, 20, 90)}
-                story(f"{name} mounts in {'-'.join(behaviour['works']['mount-panel'])}",
-                      (*at, "works"), cue=("row", "message", name,
-                                           {"to": "world", "skill": "mount-panel"}))
+                works = behaviour["works"]["mount-panel"]
+                story(f"{name} mounts in {'-'.join(works)}", (*at, "works"),
+                      cue=("row", "message", name, {"to": "world", "skill": "mount-panel"},
+                           (name, _upper(works))))
             story(f"{name} {reply}s assignments", (*at, "assignments"),
-                  cue=("row", "message", "tasks", {"to": name, "type": "assignment"}))
+                  cue=("row", "message", "tasks", {"to": name, "type": "assignment"},
+                       (name, _upper(behaviour["assignments"]["after"]))))
         reply = rng.choices(["answer", "refuse", "ignore"], [0.7, 0.15, 0.15])[0]
         behaviour["questions"] = {"reply": reply, "after": _span(rng, 1, 30)}
-        asked = ("row", "message", None, {"to": name, "type": "question"})
+        asked = ("row", "message", None, {"to": name, "type": "question"},
+                 (name, _upper(behaviour["questions"]["after"])))
         story(f"{name} {reply}s questions", (*at, "questions"), cue=asked)
         if "answer" in spec.get("skills", ()):
             answer = rng.choice(["yes", "no"])

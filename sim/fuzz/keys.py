@@ -111,8 +111,10 @@ def reached(cue: tuple[Any, ...], rows: list[Any]) -> bool:
         own look-away lasts longer, sim/fuzz/behaviours.py's ``GLANCE``);
     ``("exec", ATOMIC)``
         the robot started ATOMIC;
-    ``("row", KIND, AGENT, DATA)``
-        a row of KIND (by AGENT, unless None) whose data has DATA's items;
+    ``("row", KIND, AGENT, DATA)``, ``("row", KIND, AGENT, DATA, (MEMBER, SECONDS))``
+        a row of KIND (by AGENT, unless None) whose data has DATA's items (and MEMBER
+        not killed within SECONDS of it: a person killed before they reply, or while
+        they mount a panel, does neither);
     ``("decided", PERSON, K)``, ``("acted", PERSON)``, ``("undecided", PERSON)``
         in a shared plan, K decisions of PERSON's were taken, PERSON began an action,
         a decision of PERSON's waited for an action that did not begin in time;
@@ -170,9 +172,14 @@ def reached(cue: tuple[Any, ...], rows: list[Any]) -> bool:
                     return True
         return False
     if what == "row":
-        kind, agent, data = args
+        kind, agent, data = args[:3]
+        killed = None
+        if len(args) > 3:
+            member, within = args[3]
+            killed = next((r[0] - within for r in rows
+                           if r[1] == "agent-killed" and r[3] == member), None)
         return any(r[1] == kind and (agent is None or r[3] == agent) and _holds(r[4], data)
-                   for r in rows)
+                   and (killed is None or r[0] < killed) for r in rows)
     if what == "decided":
         return sum(r[1] == "plan-decision" and r[3] == args[0] for r in rows) >= args[1]
     if what == "acted":
