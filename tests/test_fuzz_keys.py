@@ -149,3 +149,13 @@ def test_a_person_whose_first_look_a_flicker_hides_is_still_seen():
     assert any(r[1] == "fact-added" and r[4]["s"] == "alice" and r[4]["p"] == "looksAt"
                for r in result.events)
     assert keys_matter(variation, result.events, result.truth)[0] is None
+
+
+def test_a_member_killed_before_replying_never_has_the_moment():
+    """Weld seed 241: IVA is asked at 34 s and killed at 38 s, before the reply drawn
+    (1–30 s): the reply's moment never came, so it is not run again (nor a violation)."""
+    variation = draw("weld", 241)
+    result = _run(variation)
+    replies, = (k for k in variation.keys if k.says == "IVA answers questions")
+    assert not reached(replies.cue, result.events)
+    assert keys_matter(variation, result.events, result.truth) == (None, 1)
