@@ -8,8 +8,9 @@ import dataclasses
 
 import pytest
 
-from sim.fuzz.behaviours import Drawn, draw
+from sim.fuzz.behaviours import draw
 from sim.fuzz.campaign import run_one
+from sim.fuzz.drawn import Drawn
 from sim.fuzz.keys import Follower, keys_matter, reached, same_without
 from sim.run import run_scenario
 from sim.scenario import builtin_scenarios

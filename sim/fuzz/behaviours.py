@@ -55,8 +55,9 @@ from userfiles import yamlsafe
 
 from ..humans import WALK_SPEED
 from ..scenario import builtin_scenarios, load_scenario
+from .drawn import Drawn, Story
 
-__all__ = ["FAMILIES", "Drawn", "Variation", "draw", "stack_partner"]
+__all__ = ["FAMILIES", "Variation", "draw", "stack_partner"]
 
 FAMILIES = ("stack", "living-room", "weld", "dialogue")
 
@@ -117,49 +118,6 @@ REQUESTS = (("give-object", "Jido, could you give me the yellow bottle?"),
 BYSTANDER_AT = ("sofa-end", "store-side", "coffee-east")
 WELD_BASES = ("weld-nominal", "weld-human-refuses", "weld-human-supports-robot",
               "weld-question-expires")
-
-
-Where = tuple["str | int", ...]
-"""A place in a variation's documents: ``("scenario", key, …)`` or ``("team", key, …)``
-(list items by index), or ``("kill",)`` for :attr:`Variation.kill`."""
-
-
-@dataclass(frozen=True)
-class Drawn:
-    """One key a campaign drew: what the run's story says of it and where it is.
-
-    Taking it away (:meth:`Variation.without`) must change the run: the
-    ``keys-matter`` invariant (:mod:`sim.fuzz.keys`) checks it, so a key that the
-    simulation ignores, or one drawn equal to what the person does anyway, is found
-    rather than reported as tested."""
-
-    says: str
-    where: tuple[Where, ...]
-    """The places it takes in the documents (a group of script steps takes several)."""
-    rest: bool = False
-    """A list item whose removal also removes the items after it: the k-th answer to
-    an act (and later ones) is taken away, so the person does what they do unasked."""
-    cue: tuple[Any, ...] = ()
-    """When its moment comes, as :func:`sim.fuzz.keys.reached` reads it from the rows
-    (empty: from the start): an answer to the third ASK-TASK has none in a run where
-    the robot asked once."""
-    unasked: Any = None
-    """What takes its place when it is taken away (None: nothing, the reader's default):
-    a first answer drawn gives way to the base profile's own answer to that act."""
-
-
-class _Story:
-    """The behaviour drawn, told in a few words, and the keys it drew (:class:`Drawn`)."""
-
-    def __init__(self, *parts: str) -> None:
-        self.parts = list(parts)
-        self.keys: list[Drawn] = []
-
-    def __call__(self, says: str, *where: Where, rest: bool = False,
-                 cue: tuple[Any, ...] = (), unasked: Any = None) -> None:
-        self.parts.append(says)
-        if where:
-            self.keys.append(Drawn(says, where, rest, cue, unasked))
 
 
 @dataclass(frozen=True)
@@ -274,7 +232,7 @@ def stack_partner(partner: str, profile: dict[str, Any], decision_wait: float = 
 
 def _stack(rng: random.Random, seed: int) -> Variation:
     partner = rng.choice(PARTNERS)
-    story = _Story(partner)
+    story = Story(partner)
     profile_at = ("scenario", "shared-plan", "profile")
     choices = []
     for _ in range(rng.randint(0, 4)):
@@ -338,7 +296,7 @@ def _stack(rng: random.Random, seed: int) -> Variation:
     return _finish("stack", seed, "stack-nominal", data, story)
 
 
-def _noise(rng: random.Random, data: dict[str, Any], story: _Story,
+def _noise(rng: random.Random, data: dict[str, Any], story: Story,
            predicates: tuple[str, ...]) -> None:
     if rng.random() < 0.25:
         predicate = rng.choice(predicates)
@@ -350,7 +308,7 @@ def _noise(rng: random.Random, data: dict[str, Any], story: _Story,
               cue=("blink", predicate))
 
 
-def _finish(family: str, seed: int, base: str, data: dict[str, Any], story: _Story,
+def _finish(family: str, seed: int, base: str, data: dict[str, Any], story: Story,
             team: dict[str, Any] | None = None,
             kill: tuple[str, float] | None = None) -> Variation:
     told = "; ".join(story.parts)
@@ -365,7 +323,7 @@ def _finish(family: str, seed: int, base: str, data: dict[str, Any], story: _Sto
 def _living_room(rng: random.Random, seed: int) -> Variation:
     base = rng.choice(LIVING_BASES)
     data = _base(base)
-    story = _Story()
+    story = Story()
     at = ("scenario", "people", "alice", "profile")
     unasked = _profile(data["people"]["alice"]).get("answers") or {}
     asked = ASKED[base]
@@ -427,7 +385,7 @@ def _when(when: dict[str, Any], person: str) -> tuple[Any, ...]:
     return ("at", float(str(when["at"]).rstrip("s")))
 
 
-def _answers(rng: random.Random, act: str, story: _Story, person: str,
+def _answers(rng: random.Random, act: str, story: Story, person: str,
              unasked: dict[str, Any] | None, asked: bool = True) -> list[dict[str, Any]]:
     """One to three answers of ``person`` to ``act`` (the first time, the second …; the
     last repeats); ``unasked`` is their base profile's answer to it, what they do
@@ -467,7 +425,7 @@ def _weld(rng: random.Random, seed: int) -> Variation:
     data = _base(base)
     team_path = builtin_scenarios()[base].parent / data["team"]
     team = dict(yamlsafe.load_file(team_path).data)
-    story = _Story()
+    story = Story()
     agents = {name: dict(spec) for name, spec in team["agents"].items()}
     for name, spec in agents.items():
         if spec.get("kind") != "human":
@@ -552,7 +510,7 @@ def _dialogue(rng: random.Random, seed: int) -> Variation:
     name = next(iter(people))
     at = ("scenario", "people", name, "profile")
     profile = _profile(people[name])
-    story = _Story(base)
+    story = Story(base)
     answers = dict(profile.get("answers") or {})
     for act in ("ASK-TASK", "ASK-HELP"):
         if rng.random() < 0.6:

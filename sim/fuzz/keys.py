@@ -32,7 +32,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from .behaviours import Drawn, Variation
+from .behaviours import Variation
+from .drawn import Drawn
 
 __all__ = ["BLINK", "TIE", "Follower", "keys_matter", "reached", "same_without"]
 
