@@ -17,11 +17,7 @@ from sim.scenario import builtin_scenarios
 
 
 def _run(variation):
-    if variation.kill is not None:
-        from sim.weld.run import run_weld
-
-        return run_weld(variation.load(), seed=variation.seed, kill=variation.kill)
-    return run_scenario(variation.load(), seed=variation.seed)
+    return variation.run()
 
 
 def test_a_key_the_simulation_ignores_is_a_violation():

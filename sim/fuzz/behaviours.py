@@ -159,6 +159,21 @@ class Variation:
             return load_weld_scenario(self.path, text=self.text(), team_text=self.team_text())
         return load_scenario(self.path, text=self.text())
 
+    def run(self, seed: int | None = None, **options: Any) -> Any:
+        """Run the variation headless (with its seed unless told) and return the
+        :class:`~sim.results.RunResult`; ``options`` (``out``, ``report``, ``console``)
+        go to :func:`sim.run.run_scenario`, or to the seam-welding site's run with the
+        member :attr:`kill` names killed."""
+        scenario = self.load()
+        seed = self.seed if seed is None else seed
+        if self.kill is not None:
+            from ..weld.run import run_weld
+
+            return run_weld(scenario, seed=seed, kill=self.kill, **options)
+        from ..run import run_scenario
+
+        return run_scenario(scenario, seed=seed, **options)
+
     def without(self, key: Drawn) -> Variation:
         """This variation with ``key`` taken away (what the person or site does without
         it: the profile's, scenario's or team's default)."""

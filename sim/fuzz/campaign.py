@@ -108,20 +108,12 @@ def run_one(family: str, seed: int, *, out: Path | None = None, report: Any = No
     its story."""
     from shary.log.contextlog import read_events
 
-    from ..run import run_scenario
-
     variation = variation or draw(family, seed)
     checked = tuple(i.name for i in INVARIANTS if family in i.families)
     wall = time.perf_counter()
     try:
         scenario = variation.load()
-        if variation.kill is not None:
-            from ..weld.run import run_weld
-
-            result = run_weld(scenario, seed=seed, out=out, report=report,
-                              kill=variation.kill)
-        else:
-            result = run_scenario(scenario, seed=seed, out=out, report=report)
+        result = variation.run(seed, out=out, report=report)
     except Exception as err:  # a crash is a finding, reported like the others
         where = traceback.extract_tb(err.__traceback__)[-1]
         what = (f"raised {type(err).__name__}: {err} "
@@ -133,24 +125,13 @@ def run_one(family: str, seed: int, *, out: Path | None = None, report: Any = No
     state, reason, violations = judge(family, scenario, result, rows)
     # every key drawn must change the run: compared row by row with runs in memory (a
     # run written to a folder is made again in memory for that)
-    same = result if out is None else _in_memory(variation, seed)
+    same = result if out is None else variation.run(seed)
     seen, unreached = keys_matter(variation, same.events, same.truth)
     if seen is not None:
         violations["keys-matter"] = seen
     return Outcome(seed, variation.base, variation.story, state, reason,
                    result.simulated_seconds, time.perf_counter() - wall, violations, checked,
                    len(variation.keys), unreached)
-
-
-def _in_memory(variation: Variation, seed: int) -> Any:
-    from ..run import run_scenario
-
-    scenario = variation.load()
-    if variation.kill is not None:
-        from ..weld.run import run_weld
-
-        return run_weld(scenario, seed=seed, kill=variation.kill)
-    return run_scenario(scenario, seed=seed)
 
 
 def judge(family: str, scenario: Any, result: Any, rows: list[Any] | None = None

@@ -322,19 +322,9 @@ def same_without(variation: Variation, key: Drawn, rows: list[Any],
                  truth: frozenset[Any]) -> bool:
     """Whether the run of ``variation`` without ``key`` is the same as the one with it
     (whose logged ``rows`` and end ``truth`` are given)."""
-    from ..run import run_scenario
-
-    other = variation.without(key)
     follower = Follower(rows)
     try:
-        scenario = other.load()
-        if other.kill is not None:
-            from ..weld.run import run_weld
-
-            result = run_weld(scenario, seed=variation.seed, console=follower,
-                              kill=other.kill)
-        else:
-            result = run_scenario(scenario, seed=variation.seed, console=follower)
+        result = variation.without(key).run(console=follower)
     except _Diverged:
         return False
     return (not follower.differs and follower.seen == len(rows)
