@@ -99,13 +99,13 @@ def setup(tasks: int):
     # One robot has one arm: its arbiter (shary/kernel/arbiter.py) runs one motion and queues the
     # others, so most cancels end a queued motion and never reach the executor.  A cancel
     # is counted (and timed) where the engine hands it to the body's owner.
-    arbiter = sup.executors.arbiter
-    cancel_move = arbiter.cancel_move
+    owner = sup.executors.arbiter.serial("move-arm")
+    cancel = owner.cancel
 
     def counted(request: Request, inner: object) -> None:
         arm.body_cancel(request)
-        cancel_move(request, inner)
-    arbiter.cancel_move = counted
+        cancel(request, inner)
+    owner.cancel = counted
     people = [f"person{i}" for i in range(tasks)]
     for person in people:
         facts.add(person, "looksAt", "jido")

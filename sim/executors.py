@@ -106,7 +106,7 @@ class _HeadTurn(Activity):
 class RobotExecutors:
     """The robot's executors (see the module's docstring)."""
 
-    def __init__(self, sim: Simulation, say: Callable[[str, str], Any],
+    def __init__(self, sim: Simulation, say: Callable[..., Any],
                  learned: Callable[[str, str, Any], Any] | None = None,
                  progress: Callable[[str, str, str], Any] | None = None):
         self.sim = sim
@@ -244,7 +244,7 @@ class RobotExecutors:
     def _speak(self, running: _Running, text: str) -> Activity:
         text = spoken(str(text))
         seconds = 0.4 + len(text.split()) / WORDS_PER_SECOND
-        self.say(self.robot, text)
+        self.say(self.robot, text, running.request.id)
         self.speaking = True
 
         def heard() -> None:

@@ -270,7 +270,9 @@ class RosWorld:
         if publisher is not None:
             publisher.publish(String(data=sentence))
 
-    def say(self, who: str, text: str) -> None:
+    def say(self, who: str, text: str, request: str | None = None) -> None:
+        """``who`` says ``text``: told to the run's story (the robot's own sentences are
+        logged by its ROS executors, as it sends them)."""
         self.report(self.loop.now(), who, "speech", text)
 
     # -- perception out, and the clock -------------------------------------------------

@@ -326,8 +326,11 @@ class _Run:
 
     # -- during the run ------------------------------------------------------------
 
-    def say(self, who: str, text: str) -> None:
-        self.sup.record("speech", agent=who, text=text)
+    def say(self, who: str, text: str, request: str | None = None) -> None:
+        """``who`` says ``text`` (``request``: the robot's ``speak`` request saying it, which
+        ends when the sentence has been said)."""
+        extra = {"request": request} if request is not None else {}
+        self.sup.record("speech", agent=who, text=text, **extra)
         self.report(self.loop.now(), who, "speech", text)
 
     def learned(self, s: str, p: str, o: Any) -> None:

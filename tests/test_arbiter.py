@@ -1,5 +1,5 @@
 """The body's arbiter: one head aim served at a time by priority, the previous aim
-restored, superseded requests told cancelled, one arm motion at a time."""
+restored, superseded requests told cancelled, one arm motion and one sentence at a time."""
 
 from __future__ import annotations
 
@@ -19,8 +19,10 @@ class Body:
         self.loop = EventLoop()
         self.tree = TaskTree()
         self.rows: list[dict] = []
-        self.executor = ScriptedExecutor(self.loop, {"look-at": look, "pick": pick})
-        self.registry = ExecutorRegistry({"look-at": self.executor, "pick": self.executor})
+        self.executor = ScriptedExecutor(self.loop, {"look-at": look, "pick": pick,
+                                                     "speak": 1.5})
+        self.registry = ExecutorRegistry(dict.fromkeys(("look-at", "pick", "speak"),
+                                                       self.executor))
         self.registry.arbiter = BodyArbiter(self.tree, self.loop,
                                             lambda kind, **row: self.rows.append(row))
         self.results: list[tuple[float, str, str]] = []
@@ -117,3 +119,30 @@ def test_a_waiting_arm_motion_cancelled_is_told_so_and_never_starts():
     body.loop.advance(5.0)
     assert ("late", "cancelled") in [(i, s) for _, i, s in body.results]
     assert len(body.executor.started) == 1
+
+
+def test_one_sentence_at_a_time_the_later_said_when_the_earlier_has_been():
+    body = Body()
+    first = body.ask("speak", "I have put the yellow bottle away.", body.node(), TASK)
+    look = body.ask("look-at", "alice", body.node(), TASK)
+    second = body.ask("speak", "Goodbye, Alice.", body.node(), TASK)
+    body.loop.advance(0.1)
+    # the head is free to turn while the robot speaks; the second sentence waits
+    assert [a for _, a, _ in body.executor.started] == ["speak", "look-at"]
+    assert {"part": "voice", "action": "wait", "atomic": "speak", "behind": first}.items() \
+        <= body.rows[-1].items()
+    body.loop.advance(5.0)
+    assert [i for _, i, s in body.results] == [look, first, second]
+    starts = [t for t, a, _ in body.executor.started if a == "speak"]
+    assert starts == [0.0, 1.5]
+
+
+def test_a_waiting_sentence_cancelled_is_never_said():
+    body = Body()
+    body.ask("speak", "All right, I will stop.", body.node(), TASK)
+    request = Request("late", "speak", {"text": "Sorry?"}, "pr2", body.node(), TASK)
+    body.registry.dispatch(request, body._reporter, lambda *a, **k: None)
+    body.registry.get("speak").cancel(request)
+    body.loop.advance(5.0)
+    assert ("late", "cancelled") in [(i, s) for _, i, s in body.results]
+    assert [a for _, a, _ in body.executor.started] == ["speak"]

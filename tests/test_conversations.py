@@ -163,3 +163,15 @@ def test_reason_heard_sees_a_reason_neither_said_nor_logged():
     assert _check("reason-heard", _run([end, said])) is None
     unheard = (5, "unheard", None, "alice", {"text": "I cannot go on."})
     assert _check("reason-heard", _run([end, unheard])) is None
+
+
+def test_one_voice_sees_a_sentence_begun_over_another():
+    stop = (12.0, "speech", None, "pr2", {"text": "All right, I will stop.", "request": "r7"})
+    sorry = (15.0, "speech", None, "pr2", {"text": "Sorry?", "request": "r9"})
+    said = (16.7, "exec-result", "n9", "pr2", {"request": "r7", "status": "done"})
+    assert "while still saying 'All right, I will stop.'" in _check(
+        "one-voice", _run([stop, sorry, said], "dialogue"))
+    later = (16.7, "speech", None, "pr2", {"text": "Sorry?", "request": "r9"})
+    assert _check("one-voice", _run([stop, said, later], "dialogue")) is None
+    cut = (15.0, "exec-cancel", "n9", "pr2", {"request": "r7"})
+    assert _check("one-voice", _run([stop, cut, sorry], "dialogue")) is None

@@ -415,6 +415,10 @@ DIALOGUE_FOUND = {
     49: "her own CANCEL, on the phone: the goal failed without a stated reason (the "
         "verdict reads her CANCEL) and \"All right, I will stop.\" was said to her back",
     156: "\"Hello, Bob.\" said as he took a call: GREET watches his look until it speaks",
+    21: "\"Sorry, I did not understand what to change.\" begun 3 s into \"All right, I will "
+        "stop and put the yellow bottle back.\": two tasks spoke at once (as seed 8's "
+        "answer over its inform); the voice now says one sentence at a time "
+        "(shary/kernel/arbiter.py)",
     23: "\"Actually, never mind.\" on the phone, for the clean-up she had asked: the robot "
         "stopped in silence and the goal ended failed with no reason (a goal its person "
         "cancels now ends \"cancelled by alice\", shary/kernel/agenda.py), and its plan "

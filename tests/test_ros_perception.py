@@ -65,7 +65,8 @@ def test_facts_in_stale_facts_out_speech_in_and_out(write, ros_domain, spawn):
         run_until(loop, lambda: "heard /robot/say Here is your bottle." in robot.lines)
         assert [o.status for o in outcomes] == ["done"]
         # the log says what the robot said, as a simulated run's does (a scenario's `said`)
-        assert ("speech", {"agent": "jido", "text": "Here is your bottle."}) in rows
+        assert ("speech", {"agent": "jido", "text": "Here is your bottle.", "request": "r1"}) \
+            in rows
 
 
 def test_a_burst_of_perception_becomes_facts_message_by_message(write, ros_domain, spawn):

@@ -1,4 +1,4 @@
-"""One owner for the robot's head and arms: requests arbitrated by priority.
+"""One owner for the robot's head, arms and voice: requests arbitrated by priority.
 
 Looking is a resource.  The plan manager watches the object of the partner's
 next action (:mod:`shary.plans.robot`), a robot action first looks at what it
@@ -10,7 +10,7 @@ without memory, the last one wins for good and the plan's watch is lost (the
 robot keeps looking at the person it spoke to and never perceives her place).
 
 :class:`BodyArbiter` sits between :class:`~shary.kernel.executors.ExecutorRegistry`
-and the world's executors for the atomic tasks that move the head or an arm:
+and the world's executors for the atomic tasks that move the head or an arm, or speak:
 
 * **the head** serves one *aim* at a time, the one of highest priority
   (:attr:`~shary.kernel.executors.Request.priority`: 1 a plan watching, 2 a task's
@@ -25,7 +25,11 @@ and the world's executors for the atomic tasks that move the head or an arm:
   aim ends,
   the head goes back to the best aim still held (the previous aim restored);
 * **an arm** runs one motion at a time: a second request waits until the
-  first has ended, and is told ``cancelled`` if it is cancelled meanwhile.
+  first has ended, and is told ``cancelled`` if it is cancelled meanwhile;
+* **the voice** says one sentence at a time, in the same way: two tasks that speak
+  at once (a person's request answered while an inform is said, a goodbye while a
+  give-up's reason is said) would talk over each other, so the later sentence waits
+  until the earlier one has been said.
 
 Every decision is a ``body`` row of the context log (``part``, ``action``:
 serve, wait, supersede, restore, release; ``target``, ``priority``,
@@ -44,7 +48,7 @@ from shary.kernel.executors import Outcome, Reporter, Request
 from shary.kernel.tasktree import ACT as ACT_NODE
 from shary.kernel.tasktree import FINISHED
 
-__all__ = ["ACT", "ARM_TASKS", "HEAD_TASKS", "TASK", "WATCH", "BodyArbiter"]
+__all__ = ["ACT", "ARM_TASKS", "HEAD_TASKS", "TASK", "VOICE_TASKS", "WATCH", "BodyArbiter"]
 
 WATCH, TASK, ACT = 1, 2, 3
 """Request priorities: a plan watching, a task's step (look at the person spoken to), a
@@ -53,6 +57,9 @@ perceives the effect it then reports)."""
 HEAD_TASKS = frozenset({"look-at"})
 ARM_TASKS = frozenset({"move-arm", "pick", "place", "dump", "give", "put-back"})
 """The core library's atomic tasks that move the arm (recipes/core.yaml)."""
+VOICE_TASKS = frozenset({"speak"})
+SERIAL_PARTS = {**dict.fromkeys(ARM_TASKS, "arm"), **dict.fromkeys(VOICE_TASKS, "voice")}
+"""The parts that serve one request at a time, first come first served, by atomic task."""
 
 
 @dataclass
@@ -70,7 +77,7 @@ class _Aim:
 
 
 class BodyArbiter:
-    """Arbitrates the head and the arms (see the module's documentation).
+    """Arbitrates the head, the arms and the voice (see the module's documentation).
 
     ``tree`` is the supervisor's task tree (whose nodes own the aims), ``loop``
     its event loop and ``record`` its log.
@@ -95,20 +102,14 @@ class BodyArbiter:
         self._reached: _Aim | None = None  # the aim the head last reached
         self._told: set[str] = set()  # requests already answered (superseded)
         self._head: Any = None
-        self._arm_queue: dict[str, tuple[Request, Reporter, Any]] = {}
-        """Motions waiting for the arm, by request id, oldest first: a dict, so that a
-        cancel or the next start costs the same however many wait (a supervisor with
-        thousands of tasks, benchmarks/kernel.py)."""
-        self._arm_busy: Request | None = None
-        self._arm_requesters: dict[str, Reporter] = {}
+        self._serial = {part: _Serial(part, record, loop) for part in set(SERIAL_PARTS.values())}
         self._ports: dict[int, _Port] = {}
         self._reporter = Reporter(self._head_outcome, loop.call_soon)
-        self._arm_reporter = Reporter(self._arm_outcome, loop.call_soon)
         tree.watchers.append(self._node_changed)
 
     def port(self, atomic: str, inner: Any) -> Any:
         """The executor the registry hands out for ``atomic`` (``inner`` behind it)."""
-        if atomic not in HEAD_TASKS and atomic not in ARM_TASKS:
+        if atomic not in HEAD_TASKS and atomic not in SERIAL_PARTS:
             return inner
         found = self._ports.get(id(inner))
         if found is None:
@@ -268,38 +269,58 @@ class BodyArbiter:
             self._suspects[node] = None
             self.loop.call_soon(self._serve)
 
-    # -- the arms ---------------------------------------------------------------------
+    # -- the arms and the voice ------------------------------------------------------
 
-    def move(self, request: Request, reporter: Reporter, inner: Any) -> None:
-        self._arm_requesters[request.id] = reporter
-        if self._arm_busy is None:
-            self._arm_start(request, inner)
+    def serial(self, atomic: str) -> _Serial:
+        """The part that serves ``atomic``'s requests one at a time (an arm, the voice)."""
+        return self._serial[SERIAL_PARTS[atomic]]
+
+
+class _Serial:
+    """A part that serves one request at a time: a second waits until the first has
+    ended, and is told ``cancelled`` if it is cancelled meanwhile."""
+
+    def __init__(self, part: str, record: Callable[..., Any], loop: Any):
+        self.part = part
+        self.record = record
+        self.queue: dict[str, tuple[Request, Reporter, Any]] = {}
+        """Requests waiting, by request id, oldest first: a dict, so that a cancel or the
+        next start costs the same however many wait (a supervisor with thousands of tasks,
+        benchmarks/kernel.py)."""
+        self.busy: Request | None = None
+        self.requesters: dict[str, Reporter] = {}
+        self.reporter = Reporter(self._outcome, loop.call_soon)
+
+    def start(self, request: Request, reporter: Reporter, inner: Any) -> None:
+        self.requesters[request.id] = reporter
+        if self.busy is None:
+            self._start(request, inner)
         else:
-            self.record("body", task=request.node, agent=request.agent, part="arm",
-                        action="wait", atomic=request.atomic, behind=self._arm_busy.id)
-            self._arm_queue[request.id] = (request, reporter, inner)
+            self.record("body", task=request.node, agent=request.agent, part=self.part,
+                        action="wait", atomic=request.atomic, behind=self.busy.id)
+            self.queue[request.id] = (request, reporter, inner)
 
-    def _arm_start(self, request: Request, inner: Any) -> None:
-        self._arm_busy = request
-        inner.start(request, self._arm_reporter)
+    def _start(self, request: Request, inner: Any) -> None:
+        self.busy = request
+        inner.start(request, self.reporter)
 
-    def _arm_outcome(self, outcome: Outcome) -> None:
-        if self._arm_busy is not None and self._arm_busy.id == outcome.request.id:
-            self._arm_busy = None
-        reporter = self._arm_requesters.pop(outcome.request.id, None)
+    def _outcome(self, outcome: Outcome) -> None:
+        if self.busy is not None and self.busy.id == outcome.request.id:
+            self.busy = None
+        reporter = self.requesters.pop(outcome.request.id, None)
         if reporter is not None:
             _report(reporter, outcome)
-        if self._arm_busy is None and self._arm_queue:
-            request, _, inner = self._arm_queue.pop(next(iter(self._arm_queue)))
-            self.record("body", task=request.node, agent=request.agent, part="arm",
+        if self.busy is None and self.queue:
+            request, _, inner = self.queue.pop(next(iter(self.queue)))
+            self.record("body", task=request.node, agent=request.agent, part=self.part,
                         action="serve", atomic=request.atomic)
-            self._arm_start(request, inner)
+            self._start(request, inner)
 
-    def cancel_move(self, request: Request, inner: Any) -> None:
-        queued = self._arm_queue.pop(request.id, None)
+    def cancel(self, request: Request, inner: Any) -> None:
+        queued = self.queue.pop(request.id, None)
         if queued is not None:
-            self._arm_requesters.pop(request.id, None)
-            queued[1].cancelled(request, "cancelled before the arm was free")
+            self.requesters.pop(request.id, None)
+            queued[1].cancelled(request, f"cancelled before the {self.part} was free")
             return
         inner.cancel(request)
 
@@ -314,7 +335,8 @@ def _report(reporter: Reporter, outcome: Outcome) -> None:
 
 
 class _Port:
-    """What the registry hands out in place of an executor that moves the head or an arm."""
+    """What the registry hands out in place of an executor that moves the head or an arm,
+    or speaks."""
 
     def __init__(self, arbiter: BodyArbiter, inner: Any):
         self.arbiter = arbiter
@@ -324,11 +346,11 @@ class _Port:
         if request.atomic in HEAD_TASKS:
             self.arbiter.look(request, reporter, self.inner)
         else:
-            self.arbiter.move(request, reporter, self.inner)
+            self.arbiter.serial(request.atomic).start(request, reporter, self.inner)
 
     def cancel(self, request: Request) -> None:
         if request.atomic in HEAD_TASKS:
             self.arbiter.cancel_look(request)
         else:
-            self.arbiter.cancel_move(request, self.inner)
+            self.arbiter.serial(request.atomic).cancel(request, self.inner)
 

@@ -158,7 +158,8 @@ class RosExecutors:
             return
         goal = _Goal(request, reporter, task, message, self.loop.now())
         if request.atomic == "speak":  # what the robot says, as in a simulated run's log
-            self.record("speech", agent=request.agent, text=str(request.args.get("text", "")))
+            self.record("speech", agent=request.agent, text=str(request.args.get("text", "")),
+                        request=request.id)
         if task.kind == "topic":
             self._entities[request.atomic].publish(message)
             self._end(goal, "done", "succeeded", f"published on {task.name}")

@@ -30,6 +30,10 @@ act (as ``told-unseen`` reads it); a person is *gone* from the robot's goodbye
     they leave) or logged unheard, and each goal with a person that ends failed
     or cancelled (not on their own CANCEL: the reason is theirs) has the robot
     speaking to them at its end, or an ``unheard`` row for them.
+``one-voice``
+    The robot says one sentence at a time: no sentence begins while another is
+    being said (from its ``speech`` row until its ``speak`` request ends, said or
+    cancelled).
 """
 
 from __future__ import annotations
@@ -41,7 +45,7 @@ if TYPE_CHECKING:
     from .invariants import Row, Run
 
 __all__ = ["ATTENTION_CALL", "CONVERSING", "GRACE", "after_farewell", "belief",
-           "no_call_while_looking", "order", "reason_heard"]
+           "no_call_while_looking", "one_voice", "order", "reason_heard"]
 
 ATTENTION_CALL = "Excuse me"
 """How a call for attention begins (shary/dialogue/attention.py): said to be looked at."""
@@ -247,4 +251,21 @@ def belief(run: Run) -> str | None:
         if any(t > since for t in looked.get(str(person), [])):
             return (f"{task} ended NOT_SEEN in {person}'s view although they looked at "
                     f"{run.robot} after missing it")
+    return None
+
+
+def one_voice(run: Run) -> str | None:
+    sentences: list[tuple[float, str, str]] = []  # (began, request, text)
+    ended: dict[str, float] = {}
+    for t, kind, _, agent, data in run.rows:
+        if kind == "speech" and agent == run.robot and data.get("request") is not None:
+            sentences.append((t, str(data["request"]), str(data.get("text", ""))))
+        elif kind in ("exec-result", "exec-cancel") and data.get("request") is not None:
+            ended.setdefault(str(data["request"]), t)
+    for i, (began, request, text) in enumerate(sentences):
+        end = ended.get(request, run.end)
+        later = next(((t, said) for t, _, said in sentences[i + 1:] if t < end), None)
+        if later is not None:
+            return (f"began {later[1]!r} at {later[0]:.1f}s while still saying {text!r} "
+                    f"(from {began:.1f}s to {end:.1f}s)")
     return None

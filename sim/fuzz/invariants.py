@@ -51,7 +51,7 @@ The invariants:
     attend, e.g. they had left) (stack only).
 
 The invariants that see conversations (``order``, ``belief``,
-``no-call-while-looking``, ``after-farewell``, ``reason-heard``) read the same
+``no-call-while-looking``, ``after-farewell``, ``reason-heard``, ``one-voice``) read the same
 rows; they are in :mod:`sim.fuzz.conversations`, and :data:`INVARIANTS` lists
 them all.
 """
@@ -69,6 +69,7 @@ from .conversations import (
     after_farewell,
     belief,
     no_call_while_looking,
+    one_voice,
     order,
     reason_heard,
 )
@@ -375,6 +376,7 @@ INVARIANTS = (
               after_farewell, CONVERSING),
     Invariant("reason-heard", "a failure's reason is said to someone there, or logged "
               "unheard", reason_heard, CONVERSING),
+    Invariant("one-voice", "the robot says one sentence at a time", one_voice, CONVERSING),
     # the generator's: every key drawn changes the run (sim/fuzz/keys.py)
     Invariant("keys-matter", "every key drawn changes the run it is drawn for", None),
 )
