@@ -86,6 +86,26 @@ def test_a_question_nobody_attends_to_calls_then_gives_up_saying_why(world):
     assert run.outcome == "failed"
 
 
+def test_a_call_for_help_nobody_attends_to_calls_then_gives_up_saying_why(world):
+    world.facts.remove("alice", "looksAt", "jido")
+    run = world.sup.start_task("ask-help", {"helper": "alice", "object": "bottle"})
+    world.run(9)
+    assert said(world) == []  # no "Can you give me …?" to someone looking away
+    world.run(40)
+    assert said(world) == ["Excuse me, Alice.", "You are busy, so I will do without the bottle."]
+    assert run.outcome == "failed"
+
+
+def test_a_helper_called_by_name_who_looks_is_asked(world):
+    world.facts.remove("alice", "looksAt", "jido")
+    world.sup.start_task("ask-help", {"helper": "alice", "object": "bottle"})
+    world.run(12)
+    assert said(world) == ["Excuse me, Alice."]
+    world.facts.add("alice", "looksAt", "jido")
+    world.run(3)
+    assert said(world) == ["Excuse me, Alice.", "Can you give me the bottle?"]
+
+
 class GoToTable:
     """A planner whose plan for anything is to go to the table."""
 
@@ -181,6 +201,15 @@ def test_silence_to_the_question_gives_up(world):
     world.sup.dialogue.hear("alice", "give me the green cube")
     world.run(30)
     assert said(world)[-1].startswith("I did not understand which one you meant")
+
+
+def test_which_one_is_not_asked_of_someone_looking_away_who_is_called_then_given_up(world):
+    world.sup.dialogue.hear("alice", "give me the green cube")
+    world.facts.remove("alice", "looksAt", "jido")  # she asked, then took a call
+    world.run(40)
+    assert said(world) == ["Excuse me, Alice.",
+                           "You are busy, so I will not ask which one you meant."]
+    assert world.sup.agenda.goals == []
 
 
 def test_a_sentence_the_robot_cannot_read_is_answered(world):

@@ -72,10 +72,10 @@ def await_attention(run: TaskRun, name: str) -> list[Step]:
 
 
 def call_attention(run: TaskRun, recipe: Recipe) -> list[Step]:
-    """CALL-ATTENTION: another modality than waiting for a glance: look at the partner
-    and call them by name ("Excuse me, Alice."); the partner is the task's, or the person
-    who asked for it."""
-    partner = str(run.env.get("partner") or run.env[INITIATOR_PARAM])
+    """CALL-ATTENTION: another modality than waiting for a glance: look at the person
+    and call them by name ("Excuse me, Alice."); the person is the task's partner, its
+    helper (ask-help), or the person who asked for it."""
+    partner = str(run.env.get("partner") or run.env.get("helper") or run.env[INITIATOR_PARAM])
     return [look("look", partner), say("call", f"Excuse me, {proper(partner)}.",
                                        after=("look",))]
 
