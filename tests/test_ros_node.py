@@ -98,7 +98,8 @@ def test_a_plain_rclpy_client_asks_for_a_task_and_gets_the_verdict(write, ros_do
                                 for d in heard(robot, "heard /diagnostics")))
     run_until(loop, lambda: [[t["outcome"] for t in json.loads(last)["tasks"].values()]
                              for last in heard(robot, "heard /shary/snapshot")[-1:]] == [["done"]])
-    assert any(m.startswith("jido: ") for m in heard(robot, "heard /shary/markers"))
+    run_until(loop, lambda: any(m.startswith("jido: ")
+                                for m in heard(robot, "heard /shary/markers")))
 
     node.close()
     left = {t for t in threading.enumerate() if t.name != "test-reader"}
