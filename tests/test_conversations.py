@@ -175,3 +175,23 @@ def test_one_voice_sees_a_sentence_begun_over_another():
     assert _check("one-voice", _run([stop, said, later], "dialogue")) is None
     cut = (15.0, "exec-cancel", "n9", "pr2", {"request": "r7"})
     assert _check("one-voice", _run([stop, cut, sorry], "dialogue")) is None
+
+
+def test_a_sentence_is_judged_with_the_people_of_the_task_that_said_it():
+    """A sentence that waited for the voice is said after another task's act: it is
+    said to the people of its own task (its speak request's place in the tree)."""
+    def inform(node, act, step, partner, t):
+        return [(t, "task-start", node, "pr2", {"name": "inform",
+                                                "roles": {"partner": partner, "robot": "pr2"}}),
+                (t, "node", act, "pr2", {"parent": node, "node_kind": "act", "act": "INFORM"}),
+                (t, "node", step, "pr2", {"parent": act, "node_kind": "atomic"}),
+                (t, "act", node, "pr2", {"act": "INFORM"})]
+    rows = [*inform("n1", "n2", "n3", "alice", 0),
+            (0, "exec-request", "n3", "pr2", {"atomic": "speak", "request": "r1"}),
+            _look(0.5), *inform("n4", "n5", "n6", "bob", 1)]
+    said = (2, "speech", None, "pr2", {"text": "The bottle is in the trash.", "request": "r1"})
+    run = _run([*rows, said], people=("alice", "bob"))
+    assert _check("told-unseen", run) is None
+    unknown = (2, "speech", None, "pr2", {"text": "The bottle is in the trash."})
+    assert "bob not looking" in _check("told-unseen", _run([*rows, unknown],
+                                                           people=("alice", "bob")))

@@ -67,6 +67,17 @@ def test_inform_calls_the_partner_then_gives_up_without_telling(world):
     assert run.outcome == "failed"
 
 
+def test_a_sentence_waiting_for_the_voice_is_not_said_to_someone_who_looked_away(world):
+    world.executor.durations["speak"] = 5.0
+    first = tell(world.sup, "alice", "The bottle is in the trash.")
+    second = tell(world.sup, "alice", "The cube is on the shelf.")
+    world.run(5)  # the second sentence waits for the voice; she looks away meanwhile
+    world.facts.remove("alice", "looksAt", "jido")
+    world.run(30)
+    assert said(world) == ["The bottle is in the trash.", "Excuse me, Alice."]
+    assert (first.outcome, second.outcome) == ("done", "failed")
+
+
 def test_a_question_waits_until_the_partner_looks_then_asks(world):
     world.facts.remove("alice", "looksAt", "jido")
     world.give()

@@ -60,7 +60,9 @@ class ActTask:
         self.steps: dict[str, StepRun] = {}
         self.subscriptions: list[Any] = []
         self.until: dict[str, list[Any]] = {}
-        """Step name -> the monitors that stop when it starts (``until:``)."""
+        """Step name -> the monitors that stop when it starts (``until:``): a subtask when
+        it is launched, an atomic task when its request begins (it may wait for the voice
+        or an arm, :mod:`shary.kernel.arbiter`)."""
         self.started = False
         self.replans = 0
         self.completes = False
@@ -161,18 +163,22 @@ class ActTask:
         run.state = ONGOING
         run.attempts += 1
         sup.tree.set_state(run.node, ONGOING)
-        for subscription in self.until.pop(run.step.name, ()):
-            sup.facts.unsubscribe(subscription)
-            self.subscriptions.remove(subscription)
         env = self.run.env
         args = {k: t.resolve(env) for k, t in run.step.args.items()}
         agent = run.step.by.resolve(env) if run.step.by is not None else self.run.robot
         if run.step.task is not None:
+            self.begun(run)
             if run.step.by is not None:
                 args[ROBOT_PARAM] = agent  # the subtask's performer plays its robot role
             run.child = sup.start_task(run.step.task, args, parent=self, step=run)
             return
         run.request = sup.execute(run.step.atomic or "", args, str(agent), run.node, self)
+
+    def begun(self, run: StepRun) -> None:
+        """A step starts in the world: the monitors that watch until it starts stop."""
+        for subscription in self.until.pop(run.step.name, ()):
+            self.sup.facts.unsubscribe(subscription)
+            self.subscriptions.remove(subscription)
 
     def _interrupt(self, run: StepRun, state: str, reason: str) -> None:
         run.state = state

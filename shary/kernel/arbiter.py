@@ -283,25 +283,32 @@ class _Serial:
     def __init__(self, part: str, record: Callable[..., Any], loop: Any):
         self.part = part
         self.record = record
-        self.queue: dict[str, tuple[Request, Reporter, Any]] = {}
-        """Requests waiting, by request id, oldest first: a dict, so that a cancel or the
-        next start costs the same however many wait (a supervisor with thousands of tasks,
-        benchmarks/kernel.py)."""
+        self.loop = loop
+        self.queue: dict[str, tuple[Request, Any]] = {}
+        """Requests waiting (and their executor), by request id, oldest first: a dict, so
+        that a cancel or the next start costs the same however many wait (a supervisor
+        with thousands of tasks, benchmarks/kernel.py)."""
         self.busy: Request | None = None
+        """The request the part serves: begun, or served and about to begin."""
+        self.begun = False
         self.requesters: dict[str, Reporter] = {}
         self.reporter = Reporter(self._outcome, loop.call_soon)
 
     def start(self, request: Request, reporter: Reporter, inner: Any) -> None:
         self.requesters[request.id] = reporter
         if self.busy is None:
-            self._start(request, inner)
+            self.busy, self.begun = request, False
+            self._begin(request, inner)
         else:
             self.record("body", task=request.node, agent=request.agent, part=self.part,
                         action="wait", atomic=request.atomic, behind=self.busy.id)
-            self.queue[request.id] = (request, reporter, inner)
+            self.queue[request.id] = (request, inner)
 
-    def _start(self, request: Request, inner: Any) -> None:
-        self.busy = request
+    def _begin(self, request: Request, inner: Any) -> None:
+        if self.busy is not request or self.begun:
+            return  # cancelled after it was served, before it began
+        self.begun = True
+        self.requesters[request.id].begun(request)
         inner.start(request, self.reporter)
 
     def _outcome(self, outcome: Outcome) -> None:
@@ -310,17 +317,27 @@ class _Serial:
         reporter = self.requesters.pop(outcome.request.id, None)
         if reporter is not None:
             _report(reporter, outcome)
-        if self.busy is None and self.queue:
-            request, _, inner = self.queue.pop(next(iter(self.queue)))
-            self.record("body", task=request.node, agent=request.agent, part=self.part,
-                        action="serve", atomic=request.atomic)
-            self._start(request, inner)
+        self._next()
+
+    def _next(self) -> None:
+        if self.busy is not None or not self.queue:
+            return
+        request, inner = self.queue.pop(next(iter(self.queue)))
+        self.record("body", task=request.node, agent=request.agent, part=self.part,
+                    action="serve", atomic=request.atomic)
+        self.busy, self.begun = request, False
+        # it begins once the outcome just reported is delivered: the log says the
+        # earlier sentence ended before the next one begins
+        self.loop.call_soon(self._begin, request, inner)
 
     def cancel(self, request: Request, inner: Any) -> None:
-        queued = self.queue.pop(request.id, None)
-        if queued is not None:
-            self.requesters.pop(request.id, None)
-            queued[1].cancelled(request, f"cancelled before the {self.part} was free")
+        if request.id in self.queue or (self.busy is request and not self.begun):
+            self.queue.pop(request.id, None)
+            if self.busy is request:
+                self.busy = None
+            self.requesters.pop(request.id).cancelled(
+                request, f"cancelled before the {self.part} was free")
+            self._next()
             return
         inner.cancel(request)
 
@@ -338,12 +355,16 @@ class _Port:
     """What the registry hands out in place of an executor that moves the head or an arm,
     or speaks."""
 
+    tells_begun = True
+    """A request may wait here: the port tells its reporter when it begins."""
+
     def __init__(self, arbiter: BodyArbiter, inner: Any):
         self.arbiter = arbiter
         self.inner = inner
 
     def start(self, request: Request, reporter: Reporter) -> None:
         if request.atomic in HEAD_TASKS:
+            reporter.begun(request)  # a look is one aim among others from its request on
             self.arbiter.look(request, reporter, self.inner)
         else:
             self.arbiter.serial(request.atomic).start(request, reporter, self.inner)

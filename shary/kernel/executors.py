@@ -9,6 +9,13 @@ An executor receives a :class:`Request` and a :class:`Reporter`; it must
 report exactly one outcome per request — done, failed (with a reason) or
 cancelled — and stop at once when cancelled.  Reports are queued on the
 supervisor's event loop, so an executor may report from inside ``start``.
+
+A request *begins* when the world's executor gets it: at once, or, for a part of
+the body several ask for (the voice, an arm), when the body's arbiter serves it
+(:mod:`shary.kernel.arbiter`).  The reporter is told (:meth:`Reporter.begun`), so that
+what watches until a step starts (a recipe monitor's ``until:``) watches while the
+request waits: an inform's sentence that waits for the voice is still not said to
+someone who looks away meanwhile.
 """
 
 from __future__ import annotations
@@ -43,12 +50,22 @@ class Outcome:
 
 
 class Reporter:
-    """Passed to executors; queues outcomes on the supervisor's loop."""
+    """Passed to executors; queues outcomes on the supervisor's loop, and tells at once
+    when a request begins (``begun``)."""
+
+    _begun: Callable[[Request], None] | None = None
 
     def __init__(self, deliver: Callable[[Outcome], None],
-                 call_soon: Callable[..., None]):
+                 call_soon: Callable[..., None],
+                 begun: Callable[[Request], None] | None = None):
         self._deliver = deliver
         self._call_soon = call_soon
+        self._begun = begun
+
+    def begun(self, request: Request) -> None:
+        """``request`` reaches the world's executor now (told before it starts there)."""
+        if self._begun is not None:
+            self._begun(request)
 
     def done(self, request: Request, **result: Any) -> None:
         self._call_soon(self._deliver, Outcome(request, "done", "", result))
@@ -66,6 +83,9 @@ class Executor(Protocol):
     def start(self, request: Request, reporter: Reporter) -> None: ...
 
     def cancel(self, request: Request) -> None: ...
+
+    # An executor that may hold a request before it begins (the body's arbiter) says so
+    # with a true ``tells_begun`` and calls ``reporter.begun`` itself.
 
 
 class ExecutorRegistry:
@@ -109,6 +129,8 @@ class ExecutorRegistry:
         elif executor is None:
             reporter.failed(request, f"no executor is registered for {request.atomic!r}")
         else:
+            if not getattr(executor, "tells_begun", False):  # the world's own: begins now
+                reporter.begun(request)
             executor.start(request, reporter)
 
 

@@ -92,7 +92,7 @@ class Supervisor:
         self._compiled: dict[int, CompiledScheme] = {}
         self._requests: dict[str, tuple[StepRun, ActTask]] = {}
         self._request_ids = itertools.count(1)
-        self.reporter = Reporter(self._outcome, self.loop.call_soon)
+        self.reporter = Reporter(self._outcome, self.loop.call_soon, self._begun)
         self.act_listeners: list[Callable[[TaskRun, State, str], Any]] = []
         """Told when an act starts (task run, its state, the agent): what people around
         the robot see and hear it begin — simulated people answer from here."""
@@ -306,6 +306,12 @@ class Supervisor:
         executor = self.executors.get(request.atomic)
         if executor is not None:
             executor.cancel(request)
+
+    def _begun(self, request: Request) -> None:
+        found = self._requests.get(request.id)
+        if found is not None:
+            run, act = found
+            act.begun(run)
 
     def _outcome(self, outcome: Outcome) -> None:
         record_outcome(self.record, outcome)

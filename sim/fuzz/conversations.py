@@ -4,8 +4,8 @@ The invariants of :mod:`sim.fuzz.invariants` judge outcomes (a verdict, the
 world, nothing left under way); these judge the dialogue that led there, from
 the same context-log rows (:class:`~sim.fuzz.invariants.Run`).  Where a person
 looks is the robot's perception (``looksAt`` rows of its perspective); who a
-sentence is said to is the people in the roles of the task of the robot's last
-act (as ``told-unseen`` reads it); a person is *gone* from the robot's goodbye
+sentence is said to is the people in the roles of the task whose act said it
+(:func:`said_in`, as ``told-unseen`` reads it); a person is *gone* from the robot's goodbye
 (the ``FAREWELL`` act of their session) until a session with them opens again.
 
 ``order``
@@ -39,13 +39,14 @@ act (as ``told-unseen`` reads it); a person is *gone* from the robot's goodbye
 from __future__ import annotations
 
 from collections.abc import Iterator
+from itertools import pairwise
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from .invariants import Row, Run
 
 __all__ = ["ATTENTION_CALL", "CONVERSING", "GRACE", "after_farewell", "belief",
-           "no_call_while_looking", "one_voice", "order", "reason_heard"]
+           "no_call_while_looking", "one_voice", "order", "reason_heard", "said_in"]
 
 ATTENTION_CALL = "Excuse me"
 """How a call for attention begins (shary/dialogue/attention.py): said to be looked at."""
@@ -58,6 +59,25 @@ CONVERSING = ("stack", "living-room", "dialogue")
 are reached through their proxies)."""
 
 
+def said_in(run: Run) -> dict[str, tuple[str | None, str]]:
+    """Each robot ``speak`` request -> the task it is said in and the act that says it,
+    read from the task tree's ``node`` rows: a sentence that waits for the voice is said
+    after other tasks have acted, so the robot's last act is not always its own."""
+    parents: dict[str | None, str | None] = {}
+    acts: dict[str | None, str] = {}
+    found: dict[str, tuple[str | None, str]] = {}
+    for _, kind, task, _, data in run.rows:
+        if kind == "node":
+            parents[task] = data.get("parent")
+            if data.get("node_kind") == "act":
+                acts[task] = str(data.get("act", ""))
+        elif kind == "exec-request" and data.get("atomic") == "speak":
+            act = parents.get(task)
+            if act in acts:
+                found[str(data.get("request"))] = (parents.get(act), acts[act])
+    return found
+
+
 def _speaking(run: Run) -> Iterator[tuple[Row, list[str], set[tuple[str, str]], str]]:
     """Each robot speech row, with the people it is said to, who looks at what then (in
     the robot's perception) and the name of the task it is said in."""
@@ -65,6 +85,7 @@ def _speaking(run: Run) -> Iterator[tuple[Row, list[str], set[tuple[str, str]], 
     roles: dict[str | None, list[str]] = {}
     names: dict[str | None, str] = {}
     speaking = None
+    saying = said_in(run)
     for row in run.rows:
         _, kind, task, agent, data = row
         if kind in ("fact-added", "fact-removed") and data.get("p") == "looksAt" \
@@ -78,7 +99,8 @@ def _speaking(run: Run) -> Iterator[tuple[Row, list[str], set[tuple[str, str]], 
         elif kind == "act" and agent == run.robot:
             speaking = task
         elif kind == "speech" and agent == run.robot:
-            yield row, roles.get(speaking, []), set(looks), names.get(speaking, "")
+            task = saying.get(str(data.get("request")), (speaking, ""))[0]
+            yield row, roles.get(task, []), set(looks), names.get(task, "")
 
 
 def no_call_while_looking(run: Run) -> str | None:
@@ -262,10 +284,11 @@ def one_voice(run: Run) -> str | None:
             sentences.append((t, str(data["request"]), str(data.get("text", ""))))
         elif kind in ("exec-result", "exec-cancel") and data.get("request") is not None:
             ended.setdefault(str(data["request"]), t)
-    for i, (began, request, text) in enumerate(sentences):
+    # in the order they began: a sentence begun over an earlier one means the one right
+    # after that earlier one was too
+    for (began, request, text), (then, _, said) in pairwise(sentences):
         end = ended.get(request, run.end)
-        later = next(((t, said) for t, _, said in sentences[i + 1:] if t < end), None)
-        if later is not None:
-            return (f"began {later[1]!r} at {later[0]:.1f}s while still saying {text!r} "
+        if then < end:
+            return (f"began {said!r} at {then:.1f}s while still saying {text!r} "
                     f"(from {began:.1f}s to {end:.1f}s)")
     return None

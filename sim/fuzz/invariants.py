@@ -35,8 +35,9 @@ The invariants:
 ``told-unseen``
     Nothing is told to a person who is not looking: each robot sentence said
     in a task with people in its roles (the partner of a give, the helper of
-    an ask-help, the person an inform is for; the task of the robot's last
-    act) is said while one of them is perceived looking at the robot
+    an ask-help, the person an inform is for; the task whose act said it,
+    :func:`~sim.fuzz.conversations.said_in`) is said while one of them is
+    perceived looking at the robot
     (``looksAt`` rows); a task of the robot alone (a clean-up's "I have
     cleared the yellow bottle away.") tells no one in particular.  Except a
     call for attention ("Excuse me, Alice."), the stated reason of a verdict
@@ -72,6 +73,7 @@ from .conversations import (
     one_voice,
     order,
     reason_heard,
+    said_in,
 )
 
 __all__ = ["INVARIANTS", "Invariant", "Run", "verdict"]
@@ -314,6 +316,7 @@ def _told_unseen(run: Run) -> str | None:
     looks: set[tuple[str, str]] = set()
     roles: dict[str | None, list[str]] = {}
     act, speaking, plan_over = "", None, False
+    saying = said_in(run)
     for t, kind, task, agent, data in run.rows:
         if kind in ("fact-added", "fact-removed") and data.get("p") == "looksAt" \
                 and data.get("s") in run.people:
@@ -327,8 +330,9 @@ def _told_unseen(run: Run) -> str | None:
             plan_over = True
         elif kind == "speech" and agent == run.robot:
             text = str(data.get("text", ""))
-            told = roles.get(speaking, [])
-            if not told or text.startswith(ATTENTION_CALL) or act in CLOSING_ACTS \
+            said, by = saying.get(str(data.get("request")), (speaking, act))
+            told = roles.get(said, [])
+            if not told or text.startswith(ATTENTION_CALL) or by in CLOSING_ACTS \
                     or plan_over:
                 continue
             if not any((p, run.robot) in looks for p in told):
