@@ -3,6 +3,7 @@ tested: timings are the scripts' business)."""
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -69,3 +70,15 @@ def test_the_scenarios_benchmark_stops_at_a_scenario_that_fails(tmp_path):
     assert "scenario " + str(scenario) + " failed" in done.stderr
     assert "expected the run to be over within 1s" in done.stderr
     assert done.stdout == ""
+
+
+def test_the_kernel_benchmark_runs_its_chain_and_counts_the_tasks_given_up():
+    """``benchmarks/kernel.py`` on a small world: every look away of a partner whose task is
+    still there stops its arm (the script asserts it), and partners who kept looking away
+    are counted, not taken for a lost cancel."""
+    done = subprocess.run([sys.executable, "benchmarks/kernel.py", "--json", "--tasks", "20",
+                           "--changes", "600", "--repeat", "2"], cwd=ROOT, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    figures = json.loads(done.stdout.splitlines()[-1])
+    assert figures["tasks"] == 20 and figures["given_up"] > 0
