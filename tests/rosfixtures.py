@@ -66,6 +66,15 @@ class Process:
                 raise AssertionError(f"{line!r} never came; the process said: {self.lines}")
             time.sleep(0.01)
 
+    def exit_status(self, timeout: float) -> int:
+        """The process's exit status once it ends, or a failure after ``timeout`` seconds
+        that says what it printed (where it was when it did not end)."""
+        try:
+            return self.popen.wait(timeout)
+        except subprocess.TimeoutExpired:
+            raise AssertionError(f"still running after {timeout:g} s; the process said: "
+                                 f"{self.lines}") from None
+
     def send(self, line: str) -> None:
         assert self.popen.stdin is not None
         self.popen.stdin.write(line + "\n")

@@ -24,7 +24,7 @@ def test_the_node_stops_cleanly_on_ctrl_c(spawn):
     process = spawn("-m", "shary", "ros", BINDING)
     process.wait_for("shary is node /shary on robot jido (jido-sim); Ctrl-C stops it")
     process.popen.send_signal(signal.SIGINT)
-    assert process.popen.wait(20) == 0
+    assert process.exit_status(20) == 0
     process._reader.join(5)
     assert process.lines[-1] == "shary stopped"
     assert not any("Traceback" in line for line in process.lines)
@@ -40,7 +40,7 @@ def test_the_node_plans_the_recipes_that_need_the_planner(spawn, tmp_path):
     log = tmp_path / "log.sqlite"
     process = spawn("-m", "shary", "ros", BINDING, "--task", "fetch",
                     "--with", "object=yellow-bottle", "--seconds", "2", "--log", str(log))
-    assert process.popen.wait(30) == 0
+    assert process.exit_status(30) == 0
     reasons = [row.data["reason"] for row in read_events(log, kind="recipe-failed")]
     assert reasons and not any("needs a planner" in reason for reason in reasons)
     assert any("plan" in reason for reason in reasons)

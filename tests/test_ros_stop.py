@@ -48,7 +48,7 @@ def test_a_signal_cancels_the_goal_in_flight_and_ends_the_task(spawn, write, tmp
     shary = shary_ros(spawn, write, tmp_path, "long", "3s", *TASK)
     server.wait_for("running long")
     shary.popen.send_signal(how)
-    assert shary.popen.wait(30) == 0, shary.lines
+    assert shary.exit_status(30) == 0, shary.lines
     # the server ended the goal as cancelled before shary went
     assert "canceled long" in server.lines and executing(server, "long") == 0
     shary._reader.join(5)
@@ -74,7 +74,7 @@ def test_a_second_ctrl_c_exits_at_once_saying_what_it_left(spawn, write, tmp_pat
     shary.popen.send_signal(signal.SIGINT)
     server.wait_for("cancel-requested hang")
     shary.popen.send_signal(signal.SIGINT)
-    assert shary.popen.wait(20) == 1, shary.lines
+    assert shary.exit_status(20) == 1, shary.lines
     shary._reader.join(5)
     assert "abandoned the stop: left 1 robot goal(s) whose cancel was not answered: " \
         "navigate on /test/hang (r1)" in shary.lines
@@ -89,7 +89,7 @@ def test_a_cancel_that_is_not_answered_is_waited_for_up_to_its_deadline(spawn, w
     shary = shary_ros(spawn, write, tmp_path, "hang", "1s", *TASK)
     server.wait_for("running hang")
     shary.popen.send_signal(signal.SIGTERM)
-    assert shary.popen.wait(30) == 0, shary.lines
+    assert shary.exit_status(30) == 0, shary.lines
     shary._reader.join(5)
     assert "  navigate on /test/hang (r1): unconfirmed" in shary.lines
     states = [e.data["state"] for e in read_events(tmp_path / "log.sqlite", kind="ros-cancel")]
@@ -114,7 +114,7 @@ def test_the_run_task_client_is_answered_when_shary_stops(spawn, write, tmp_path
     server, client, shary = _a_client_s_task_running(spawn, write, tmp_path)
     shary.popen.send_signal(signal.SIGTERM)
     client.wait_for("result g1 ABORTED cancelled|shary stopped by SIGTERM")
-    assert shary.popen.wait(30) == 0
+    assert shary.exit_status(30) == 0
     assert executing(server, "long") == 0
 
 
@@ -125,7 +125,7 @@ def test_a_cancelled_run_task_goal_cancels_its_robot_goal(spawn, write, tmp_path
     server.wait_for("canceled long")
     assert executing(server, "long") == 0
     shary.popen.send_signal(signal.SIGINT)
-    assert shary.popen.wait(30) == 0
+    assert shary.exit_status(30) == 0
     # the client was answered once the server had ended the robot's goal
     rows = [(e.kind, e.data) for e in read_events(tmp_path / "log.sqlite")
             if e.kind in ("ros-cancel", "run-task")]

@@ -26,7 +26,7 @@ def over_ros(spawn, tmp_path, scenario: str, *, quiet: bool = True):
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
     assert status == (0 if summary["passed"] else 1), run.lines
     # served to the end, and that one run only: it stops once the supervisor has left
-    assert world.popen.wait(30) == 0, world.lines
+    assert world.exit_status(30) == 0, world.lines
     assert world.lines[-2:] == [
         f"the supervisor left: this world served its run (for another, start 'shary world "
         f"--ros {scenario}' again)", "the world stopped"], world.lines
@@ -101,7 +101,7 @@ def test_a_world_killed_mid_run_fails_the_run_at_once(spawn, tmp_path):
         assert time.monotonic() < end and world.popen.poll() is None, world.lines
         time.sleep(0.05)
     world.popen.send_signal(signal.SIGKILL)
-    assert run.popen.wait(60) == 1, run.lines
+    assert run.exit_status(60) == 1, run.lines
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
     gone = "the robot's node /jido_sim is gone (its liveliness on /jido/facts lapsed: lease 1 s)"
     assert summary["outcome"] == "failed"
@@ -119,7 +119,7 @@ def test_a_world_killed_mid_run_fails_the_run_at_once(spawn, tmp_path):
 def test_the_supervisor_says_when_no_robot_answers(spawn, tmp_path):
     run = spawn("-m", "shary", "run", "give-bottle", "--ros", "--wait", "1", "--out",
                 str(tmp_path / "run"))
-    assert run.popen.wait(60) == 1
+    assert run.exit_status(60) == 1
     assert any("no simulated robot answered on ROS 2 within 1 s" in line
                and "shary world --ros give-bottle" in line for line in run.lines), run.lines
 
