@@ -3,6 +3,7 @@ restored, superseded requests told cancelled, one arm motion and one sentence at
 
 from __future__ import annotations
 
+import pytest
 from scripted import ScriptedExecutor
 
 from shary.kernel.arbiter import ACT, TASK, WATCH, BodyArbiter
@@ -110,15 +111,20 @@ def test_one_arm_motion_at_a_time():
     assert starts[1] >= 2.0
 
 
-def test_a_waiting_arm_motion_cancelled_is_told_so_and_never_starts():
+@pytest.mark.parametrize("atomic, first, late", [
+    ("pick", {"object": "red_cube_1"}, {"object": "blue_cube_1"}),
+    ("speak", {"text": "All right, I will stop."}, {"text": "Sorry?"})])
+def test_a_waiting_motion_or_sentence_cancelled_is_told_so_and_never_starts(atomic, first,
+                                                                             late):
     body = Body(pick=2.0)
-    body.ask("pick", "red_cube_1", body.node(), TASK)
-    request = Request("late", "pick", {"object": "blue_cube_1"}, "pr2", body.node(), TASK)
+    body.registry.dispatch(Request("first", atomic, first, "pr2", body.node(), TASK),
+                           body._reporter, lambda *a, **k: None)
+    request = Request("late", atomic, late, "pr2", body.node(), TASK)
     body.registry.dispatch(request, body._reporter, lambda *a, **k: None)
-    body.registry.get("pick").cancel(request)
+    body.registry.get(atomic).cancel(request)
     body.loop.advance(5.0)
     assert ("late", "cancelled") in [(i, s) for _, i, s in body.results]
-    assert len(body.executor.started) == 1
+    assert [a for _, a, _ in body.executor.started] == [atomic]
 
 
 def test_one_sentence_at_a_time_the_later_said_when_the_earlier_has_been():
@@ -135,14 +141,3 @@ def test_one_sentence_at_a_time_the_later_said_when_the_earlier_has_been():
     assert [i for _, i, s in body.results] == [look, first, second]
     starts = [t for t, a, _ in body.executor.started if a == "speak"]
     assert starts == [0.0, 1.5]
-
-
-def test_a_waiting_sentence_cancelled_is_never_said():
-    body = Body()
-    body.ask("speak", "All right, I will stop.", body.node(), TASK)
-    request = Request("late", "speak", {"text": "Sorry?"}, "pr2", body.node(), TASK)
-    body.registry.dispatch(request, body._reporter, lambda *a, **k: None)
-    body.registry.get("speak").cancel(request)
-    body.loop.advance(5.0)
-    assert ("late", "cancelled") in [(i, s) for _, i, s in body.results]
-    assert [a for _, a, _ in body.executor.started] == ["speak"]

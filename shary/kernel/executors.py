@@ -78,14 +78,15 @@ class Reporter:
 
 
 class Executor(Protocol):
-    """What the world implements for each atomic task it can perform."""
+    """What the world implements for each atomic task it can perform.
+
+    A request begins as the executor gets it, unless the executor may hold it first
+    (the body's arbiter's port): such an executor has a true ``tells_begun`` attribute
+    and calls ``reporter.begun`` itself."""
 
     def start(self, request: Request, reporter: Reporter) -> None: ...
 
     def cancel(self, request: Request) -> None: ...
-
-    # An executor that may hold a request before it begins (the body's arbiter) says so
-    # with a true ``tells_begun`` and calls ``reporter.begun`` itself.
 
 
 class ExecutorRegistry:
